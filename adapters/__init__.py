@@ -1,0 +1,1 @@
+"""Engine adapters: one module per engine (the run-matrix issue defines the contract)."""

@@ -1,0 +1,238 @@
+"""Validation cases: ``Case``, ``Tolerance`` and the registry filled by ``@case``.
+
+A case is made by a factory function decorated ``@case(tags=..., units=...)``;
+its keyword parameters (all with defaults) give variants for free::
+
+    @case(tags=("jointed",), units={"length": "m"})
+    def pivoted_rod(length=1.0, ...) -> Case: ...
+
+    make_case("pivoted_rod", length=2.0)
+
+Every module in the ``cases`` package is imported by ``load_cases()`` (no
+import list to maintain), and third-party packages can add cases through the
+entry-point group ``dalembert.cases``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import inspect
+import json
+import math
+import pkgutil
+from dataclasses import asdict, dataclass, field, is_dataclass
+from typing import Callable
+
+import numpy as np
+
+from dalembert.registry import Registry
+from dalembert.scene import SceneError
+
+__all__ = ["Tolerance", "Case", "CaseFactory", "case", "make_case", "load_cases", "CASES", "parse_param"]
+
+CASES = Registry("case")
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """A bound with its reason: ``value`` in the unit of the quantity it bounds."""
+
+    value: float
+    reason: str
+
+
+@dataclass(frozen=True, eq=False)
+class Case:
+    """A named, versioned validation problem.
+
+    Attributes
+    ----------
+    name : str
+    scene : Scene
+    t_final : float — horizon (s)
+    sample_times : tuple of float — strictly increasing, from 0 to ``t_final`` (s)
+    exact : callable or None — ``exact(t) -> Trajectory``, the closed-form truth at
+        times ``t`` (ndarray (n,), s); None when the truth is the reference solver
+    conserved : tuple of str — invariants the physics conserves (names in
+        ``dalembert.invariants.CONSERVED``)
+    tolerances : dict name -> Tolerance — agreement bounds with the truth:
+        ``position`` (m), ``orientation`` (rad), ``velocity`` (m/s),
+        ``angular_velocity`` (rad/s), ``joint`` (rad), and per conserved quantity
+        its relative drift
+    tags : tuple of str
+    params : dict — the factory's keyword arguments that made this case
+    """
+
+    name: str
+    scene: object
+    t_final: float
+    sample_times: tuple
+    exact: Callable | None = None
+    conserved: tuple = ()
+    tolerances: dict = field(default_factory=dict)
+    tags: tuple = ()
+    params: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        object.__setattr__(self, "t_final", float(self.t_final))
+        object.__setattr__(self, "sample_times", tuple(float(t) for t in np.ravel(self.sample_times)))
+        problems = []
+        if not (math.isfinite(self.t_final) and self.t_final > 0.0):
+            problems.append(f"t_final: must be a positive duration (s), got {self.t_final!r}")
+        ts = np.array(self.sample_times)
+        if len(ts) < 2:
+            problems.append("sample_times: need at least the start and the end")
+        elif not np.all(np.isfinite(ts)):
+            problems.append("sample_times: contains NaN or inf")
+        else:
+            if not np.all(np.diff(ts) > 0.0):
+                k = int(np.argmin(np.diff(ts) > 0.0))
+                problems.append(f"sample_times: not strictly increasing at index {k + 1} "
+                                f"({ts[k]!r} then {ts[k + 1]!r}) — sort them and drop duplicates")
+            if ts[0] != 0.0:
+                problems.append(f"sample_times: must start at 0 (the initial state), got {ts[0]!r}")
+            if ts[-1] != self.t_final:
+                problems.append(f"sample_times: must end at t_final = {self.t_final!r}, got {ts[-1]!r}")
+        for name, tol in self.tolerances.items():
+            if not (isinstance(tol, Tolerance) and math.isfinite(tol.value) and tol.value > 0.0):
+                problems.append(f"tolerances[{name!r}]: must be a Tolerance with a positive value")
+        if problems:
+            raise SceneError(f"case {self.name!r}", problems)
+
+    @property
+    def times(self):
+        """Sample times as ndarray (n,), s."""
+        return np.array(self.sample_times)
+
+    @property
+    def version(self):
+        """Content hash (12 hex digits) of everything that defines the problem."""
+        payload = {
+            "name": self.name,
+            "scene": _canonical(self.scene),
+            "t_final": self.t_final,
+            "sample_times": self.sample_times,
+            "params": _canonical(self.params),
+        }
+        text = json.dumps(payload, sort_keys=True, default=repr)
+        return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
+def _canonical(obj):
+    if is_dataclass(obj):
+        return {k: _canonical(v) for k, v in asdict(obj).items()}
+    if isinstance(obj, dict):
+        return {str(k): _canonical(v) for k, v in sorted(obj.items())}
+    if isinstance(obj, (list, tuple)):
+        return [_canonical(v) for v in obj]
+    if isinstance(obj, float):
+        return repr(obj)  # round-trip exact
+    return obj
+
+
+@dataclass(frozen=True)
+class CaseFactory:
+    """A registered case family: the factory, its tags and parameter units."""
+
+    name: str
+    func: Callable
+    tags: tuple
+    units: dict
+
+    @property
+    def params(self):
+        """Keyword parameters and their defaults, as a dict."""
+        return {p.name: p.default for p in inspect.signature(self.func).parameters.values()}
+
+    @property
+    def summary(self):
+        """First paragraph of the factory's docstring, on one line."""
+        doc = inspect.getdoc(self.func) or ""
+        return " ".join(doc.split("\n\n")[0].split())
+
+    def __call__(self, **params):
+        known = self.params
+        unknown = sorted(set(params) - set(known))
+        if unknown:
+            from dalembert.registry import suggest
+
+            raise SceneError(f"case {self.name!r}", [
+                f"parameter {k!r}: unknown{suggest(k, known)}" for k in unknown])
+        made = self.func(**params)
+        merged = {**known, **params}
+        return Case(made.name, made.scene, made.t_final, made.sample_times, made.exact, made.conserved,
+                    made.tolerances, tuple(sorted(set(made.tags) | set(self.tags))), merged)
+
+
+def case(tags=(), units=None):
+    """Register a case factory under its function name.
+
+    Every parameter must have a default (a case runs without arguments).
+    """
+
+    def register(func):
+        sig = inspect.signature(func)
+        missing = [p.name for p in sig.parameters.values() if p.default is inspect.Parameter.empty]
+        if missing:
+            raise TypeError(f"case {func.__name__!r}: parameters {missing} need defaults")
+        CASES.register(func.__name__, CaseFactory(func.__name__, func, tuple(tags), dict(units or {})))
+        return func
+
+    return register
+
+
+_LOADED = False
+
+
+def load_cases():
+    """Import every module of the ``cases`` package and entry point ``dalembert.cases``."""
+    global _LOADED
+    if _LOADED:
+        return CASES
+    import cases as package
+
+    for info in pkgutil.iter_modules(package.__path__):
+        importlib.import_module(f"{package.__name__}.{info.name}")
+    from importlib.metadata import entry_points
+
+    for ep in entry_points(group="dalembert.cases"):
+        ep.load()
+    _LOADED = True
+    return CASES
+
+
+def make_case(name, **params):
+    """Build the registered case ``name`` with keyword ``params`` overriding defaults."""
+    return load_cases()[name](**params)
+
+
+def parse_param(factory, text):
+    """Parse ``KEY=VALUE`` for ``factory``, typed after the parameter's default.
+
+    Vectors are comma-separated numbers (``omega0=0,1,1``).
+    """
+    if "=" not in text:
+        raise ValueError(f"--param {text!r}: write KEY=VALUE")
+    key, value = text.split("=", 1)
+    defaults = factory.params
+    if key not in defaults:
+        from dalembert.registry import suggest
+
+        raise ValueError(f"--param {key!r}: case {factory.name!r} has no such parameter{suggest(key, defaults)}")
+    default = defaults[key]
+    try:
+        if isinstance(default, bool):
+            if value.lower() not in ("true", "false", "1", "0"):
+                raise ValueError
+            return key, value.lower() in ("true", "1")
+        if isinstance(default, int):
+            return key, int(value)
+        if isinstance(default, float):
+            return key, float(value)
+        if isinstance(default, tuple):
+            return key, tuple(float(v) for v in value.split(","))
+        return key, value
+    except ValueError:
+        raise ValueError(f"--param {key}={value!r}: expected {type(default).__name__} "
+                         f"like {default!r}") from None

@@ -1,0 +1,237 @@
+"""Invariants computed by the harness from scene + trajectory, never taken from an engine.
+
+Series functions return one value per sample; ``drift(name, ...)`` turns a
+conserved quantity into one number: its largest change from the initial value,
+relative to a scale stated per quantity (``CONSERVED``).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+from scipy.integrate import cumulative_simpson
+
+from dalembert import spatial
+from dalembert.scene import WORLD
+
+__all__ = [
+    "CONSERVED",
+    "kinetic_energy",
+    "potential_energy",
+    "load_power",
+    "load_work",
+    "total_energy",
+    "energy_balance",
+    "linear_momentum",
+    "angular_momentum",
+    "angular_momentum_com",
+    "orthonormality_error",
+    "quaternion_norm_error",
+    "joint_residual",
+    "pairwise_distance_change",
+    "drift",
+    "summary",
+]
+
+
+def _R(traj, name):
+    """Unit rotation ``R_WB`` (n, 3, 3) for physics (the attitude's direction, not its drift)."""
+    return spatial.quat_to_matrix(spatial.quat_normalize(traj.bodies[name].quaternion))
+
+
+def kinetic_energy(scene, traj):
+    """``sum 1/2 m v.v + 1/2 w_B . I w_B`` (J), shape (n,)."""
+    total = np.zeros(len(traj.t))
+    for body in scene.bodies:
+        b = traj.bodies[body.name]
+        w_B = b.angular_velocity_body
+        total += 0.5 * body.mass * np.einsum("ni,ni->n", b.velocity, b.velocity)
+        total += 0.5 * np.einsum("ni,ij,nj->n", w_B, body.inertia_matrix, w_B)
+    return total
+
+
+def potential_energy(scene, traj):
+    """Gravitational potential ``-sum m g . p`` (J, zero at the world origin), shape (n,)."""
+    g = np.array(scene.gravity)
+    return -sum(body.mass * traj.bodies[body.name].position @ g for body in scene.bodies)
+
+
+def load_power(scene, traj):
+    """Power of the applied loads (W), shape (n,): ``F.v_point + tau.w``, world axes."""
+    power = np.zeros(len(traj.t))
+    for ld in scene.loads:
+        b = traj.bodies[ld.body]
+        R = _R(traj, ld.body)
+        vec = np.array(ld.vector)
+        vec_W = np.einsum("nij,j->ni", R, vec) if ld.frame == "body" else np.broadcast_to(vec, (len(traj.t), 3))
+        if ld.kind == "force":
+            r_W = np.einsum("nij,j->ni", R, np.array(ld.point))
+            v_point = b.velocity + np.cross(b.angular_velocity, r_W)
+            power += np.einsum("ni,ni->n", vec_W, v_point)
+        else:
+            power += np.einsum("ni,ni->n", vec_W, b.angular_velocity)
+    return power
+
+
+def load_work(scene, traj):
+    """Work done by the applied loads since ``t[0]`` (J), shape (n,).
+
+    Cumulative Simpson quadrature of the sampled power: error O(h^4) in the
+    sample interval h, exact for power polynomial of degree <= 2 in t.
+    """
+    if not scene.loads:
+        return np.zeros(len(traj.t))
+    return cumulative_simpson(load_power(scene, traj), x=traj.t, initial=0.0)
+
+
+def total_energy(scene, traj):
+    """Kinetic + potential energy (J), shape (n,)."""
+    return kinetic_energy(scene, traj) + potential_energy(scene, traj)
+
+
+def energy_balance(scene, traj):
+    """Kinetic + potential energy minus the work of the loads (J), shape (n,): constant."""
+    return total_energy(scene, traj) - load_work(scene, traj)
+
+
+def linear_momentum(scene, traj):
+    """``sum m v`` (kg m/s), world, shape (n, 3)."""
+    return sum(body.mass * traj.bodies[body.name].velocity for body in scene.bodies)
+
+
+def angular_momentum_com(scene, traj):
+    """Spin angular momentum ``sum R I R^T w`` about each body's COM (kg m^2/s), world, shape (n, 3)."""
+    total = np.zeros((len(traj.t), 3))
+    for body in scene.bodies:
+        R = _R(traj, body.name)
+        I_W = R @ body.inertia_matrix @ np.swapaxes(R, 1, 2)
+        total += np.einsum("nij,nj->ni", I_W, traj.bodies[body.name].angular_velocity)
+    return total
+
+
+def angular_momentum(scene, traj):
+    """Angular momentum about the world origin (kg m^2/s), world, shape (n, 3)."""
+    orbital = sum(body.mass * np.cross(traj.bodies[body.name].position, traj.bodies[body.name].velocity)
+                  for body in scene.bodies)
+    return orbital + angular_momentum_com(scene, traj)
+
+
+def orthonormality_error(scene, traj):
+    """``max_bodies |R R^T - I|`` (max-abs entry) of each body's attitude as stored, shape (n,).
+
+    A quaternion of norm ``s`` gives ``|s^4 - 1|``; a rotation matrix its own drift.
+    """
+    err = np.zeros(len(traj.t))
+    for body in scene.bodies:
+        R = traj.bodies[body.name].rotation_matrix
+        err = np.maximum(err, np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max(axis=(1, 2)))
+    return err
+
+
+def quaternion_norm_error(scene, traj):
+    """``max_bodies ||q| - 1|``, shape (n,)."""
+    return np.max([np.abs(np.linalg.norm(traj.bodies[b.name].quaternion, axis=1) - 1.0) for b in scene.bodies],
+                  axis=0)
+
+
+def joint_residual(scene, traj):
+    """Largest violation of any joint (m for points, rad for axes), shape (n,).
+
+    Per non-free joint: distance between the joint point as placed by the
+    parent and by the child; for revolute joints also the angle between the
+    axis as carried by each side; for welds the relative rotation angle.
+    """
+    n = len(traj.t)
+    err = np.zeros(n)
+    for j in scene.joints:
+        if j.kind == "free":
+            continue
+        if j.parent == WORLD:
+            p_P, R_P = np.zeros((n, 3)), np.broadcast_to(np.eye(3), (n, 3, 3))
+        else:
+            p_P, R_P = traj.bodies[j.parent].position, _R(traj, j.parent)
+        p_C, R_C = traj.bodies[j.child].position, _R(traj, j.child)
+        x_P = p_P + np.einsum("nij,j->ni", R_P, np.array(j.parent_point))
+        x_C = p_C + np.einsum("nij,j->ni", R_C, np.array(j.child_point))
+        err = np.maximum(err, np.linalg.norm(x_P - x_C, axis=1))
+        R_WJp = R_P @ spatial.quat_to_matrix(j.parent_quat)
+        R_WJc = R_C @ spatial.quat_to_matrix(j.child_quat)
+        if j.kind == "revolute":
+            a = np.array(j.axis) / np.linalg.norm(j.axis)
+            a_P, a_C = R_WJp @ a, R_WJc @ a
+            err = np.maximum(err, np.arctan2(np.linalg.norm(np.cross(a_P, a_C), axis=1),
+                                             np.einsum("ni,ni->n", a_P, a_C)))
+        elif j.kind == "weld":
+            err = np.maximum(err, spatial.rotation_angle(spatial.matrix_to_quat(R_WJp),
+                                                         spatial.matrix_to_quat(R_WJc)))
+    return err
+
+
+def pairwise_distance_change(scene, traj):
+    """Largest change of any distance between two particles of one body (m), shape (n,).
+
+    Uses each body's attitude as stored (a drifting quaternion norm or matrix
+    stretches the body); zero for scenes without particles.
+    """
+    err = np.zeros(len(traj.t))
+    for body in scene.bodies:
+        if len(body.particles) < 2:
+            continue
+        u = np.array([p for _, p in body.particles])
+        R = traj.bodies[body.name].rotation_matrix
+        x = traj.bodies[body.name].position[:, None, :] + np.einsum("nij,kj->nki", R, u)
+        i, k = np.array(list(itertools.combinations(range(len(u)), 2))).T
+        d = np.linalg.norm(x[:, i] - x[:, k], axis=2)
+        err = np.maximum(err, np.abs(d - np.linalg.norm(u[i] - u[k], axis=1)).max(axis=1))
+    return err
+
+
+def _rel_drift_scalar(x, scale):
+    return float(np.max(np.abs(x - x[0])) / scale) if scale > 0 else float(np.max(np.abs(x - x[0])))
+
+
+def _rel_drift_vector(x):
+    scale = float(np.max(np.linalg.norm(x, axis=1)))
+    d = float(np.max(np.linalg.norm(x - x[0], axis=1)))
+    return d / scale if scale > 0 else d
+
+
+# name -> (series, how its drift is scaled)
+CONSERVED = {
+    "energy": "relative to max(|E(0)|, max kinetic energy)",
+    "energy_balance": "relative to the max kinetic energy: E - W(loads) is constant",
+    "linear_momentum": "absolute (kg m/s) when it is zero, else relative to max |p|",
+    "angular_momentum": "relative to max |L| (about the world origin)",
+    "angular_momentum_com": "relative to max |L| (spin about the COMs)",
+    "pairwise_distance": "absolute, m",
+}
+
+
+def drift(name, scene, traj):
+    """Drift of the conserved quantity ``name`` (see ``CONSERVED``) over the whole trajectory."""
+    if name == "energy":
+        E = total_energy(scene, traj)
+        return _rel_drift_scalar(E, max(abs(E[0]), float(np.max(kinetic_energy(scene, traj)))))
+    if name == "energy_balance":
+        return _rel_drift_scalar(energy_balance(scene, traj), float(np.max(kinetic_energy(scene, traj))))
+    if name == "linear_momentum":
+        return _rel_drift_vector(linear_momentum(scene, traj))
+    if name == "angular_momentum":
+        return _rel_drift_vector(angular_momentum(scene, traj))
+    if name == "angular_momentum_com":
+        return _rel_drift_vector(angular_momentum_com(scene, traj))
+    if name == "pairwise_distance":
+        return float(np.max(pairwise_distance_change(scene, traj)))
+    raise KeyError(f"unknown conserved quantity {name!r} — known: {sorted(CONSERVED)}")
+
+
+def summary(scene, traj, conserved=()):
+    """Dict of invariant figures: ``drift:<name>`` per conserved quantity, plus
+    ``orthonormality``, ``quaternion_norm`` and, for jointed scenes, ``joint_residual`` (maxima)."""
+    out = {f"drift:{name}": drift(name, scene, traj) for name in conserved}
+    out["orthonormality"] = float(np.max(orthonormality_error(scene, traj)))
+    out["quaternion_norm"] = float(np.max(quaternion_norm_error(scene, traj)))
+    if any(j.kind != "free" for j in scene.joints):
+        out["joint_residual"] = float(np.max(joint_residual(scene, traj)))
+    return out

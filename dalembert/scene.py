@@ -1,0 +1,439 @@
+"""Engine-neutral description of a multibody system: bodies, joints, loads, gravity.
+
+Specs are frozen dataclasses holding plain tuples (arrays live only in
+``Trajectory``). A ``Scene`` validates itself on construction: every problem is
+collected and reported at once, each naming its field and the fix, before
+anything runs.
+
+Frames: the body frame B of every body has its origin at the centre of mass;
+``Body.inertia`` is the tensor about the COM expressed in B. A joint connects a
+frame fixed in the parent (``parent_point``, ``parent_quat``, in parent body
+coordinates, or world coordinates when the parent is ``"world"``) to a frame
+fixed in the child (``child_point``, ``child_quat``, in child body coordinates).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dalembert.registry import suggest
+
+__all__ = ["WORLD", "JOINT_KINDS", "Body", "Joint", "Load", "Scene", "SceneError", "mass_properties"]
+
+WORLD = "world"
+
+# Per joint kind: (size of q0, size of v0). Coordinates:
+#   free     q = (x, y, z, qw, qx, qy, qz): COM position (m) and attitude q_WB of
+#            the child in world; v = (vx, vy, vz, wx, wy, wz): COM velocity in
+#            world (m/s) and angular velocity w_WB_B in the child body frame (rad/s).
+#   revolute q = (angle,) (rad) about `axis` in the joint frame; v = (rate,) (rad/s).
+#   ball     q = quaternion of the child joint frame in the parent joint frame;
+#            v = relative angular velocity in the child joint frame (rad/s).
+#   weld     no coordinates.
+JOINT_KINDS = {"free": (7, 6), "revolute": (1, 1), "ball": (4, 3), "weld": (0, 0)}
+LOAD_KINDS = ("force", "torque")
+LOAD_FRAMES = ("world", "body")
+
+# |q| may differ from 1 by this much (roundoff in user-typed decimals is ~1e-16;
+# anything larger is a real mistake, not roundoff).
+QUAT_NORM_TOL = 1e-9
+# Inertia symmetry and the triangle inequality are checked to this relative
+# tolerance: tensors computed from point masses carry roundoff of a few ulps.
+INERTIA_REL_TOL = 1e-12
+# A free body's smallest principal moment below this fraction of the largest is
+# treated as singular: the rotation about that axis is then undetermined
+# (seed 002, "degenerate case": all particles on one line).
+SINGULAR_INERTIA_RATIO = 1e-14
+
+
+class SceneError(ValueError):
+    """A scene or case is invalid; ``problems`` lists every issue found."""
+
+    def __init__(self, where, problems):
+        self.problems = list(problems)
+        lines = "\n".join(f"  - {p}" for p in self.problems)
+        super().__init__(f"{where}: {len(self.problems)} problem(s)\n{lines}")
+
+
+def _vec(x, n=None):
+    t = tuple(float(v) for v in np.ravel(np.asarray(x, dtype=float)))
+    if n is not None and len(t) != n:
+        return t  # the length problem is reported by validate()
+    return t
+
+
+def mass_properties(masses, positions):
+    """Total mass, centre of mass and inertia about it of a set of point masses.
+
+    The inertia operator of seed 002, eq. 13: ``A = sum_i m_i (|u_i|^2 1 - u_i u_i^T)``
+    with ``u_i`` the position relative to the centre of mass.
+
+    Parameters
+    ----------
+    masses : array_like, shape (n,)
+        Point masses (kg).
+    positions : array_like, shape (n, 3)
+        Positions (m) in any frame F.
+
+    Returns
+    -------
+    mass : float (kg)
+    com : ndarray, shape (3,) — centre of mass in F (m)
+    inertia : ndarray, shape (3, 3) — about the COM, axes of F (kg m^2)
+    """
+    m = np.asarray(masses, dtype=float)
+    p = np.asarray(positions, dtype=float)
+    total = float(m.sum())
+    com = (m[:, None] * p).sum(axis=0) / total
+    u = p - com
+    inertia = np.einsum("i,ij,ik->jk", m, u, u)
+    inertia = np.trace(inertia) * np.eye(3) - inertia
+    return total, com, inertia
+
+
+@dataclass(frozen=True)
+class Body:
+    """A rigid body.
+
+    Attributes
+    ----------
+    name : str
+    mass : float — kg
+    inertia : tuple of 3 tuples of 3 floats — about the COM, in B (kg m^2)
+    particles : tuple of (mass, (x, y, z)) — for bodies made of point masses:
+        each particle's mass (kg) and position relative to the COM in B (m).
+        Used by invariants (pairwise distances), not by the dynamics.
+    """
+
+    name: str
+    mass: float
+    inertia: tuple
+    particles: tuple = ()
+
+    def __post_init__(self):
+        object.__setattr__(self, "mass", float(self.mass))
+        I = np.asarray(self.inertia, dtype=float)
+        object.__setattr__(self, "inertia", tuple(tuple(float(v) for v in row) for row in np.atleast_2d(I)))
+        object.__setattr__(
+            self, "particles", tuple((float(m), _vec(u, 3)) for m, u in self.particles)
+        )
+
+    @property
+    def inertia_matrix(self):
+        """Inertia about the COM in B, ndarray (3, 3), kg m^2."""
+        return np.array(self.inertia, dtype=float)
+
+    @classmethod
+    def from_point_masses(cls, name, masses, positions):
+        """Rigid body of point masses; returns ``(body, com)``.
+
+        Parameters
+        ----------
+        masses : array_like, shape (n,) — kg
+        positions : array_like, shape (n, 3) — m, in a frame F whose axes become B's
+
+        Returns
+        -------
+        body : Body — body frame at the COM with the axes of F
+        com : ndarray, shape (3,) — where the COM is in F (m)
+        """
+        mass, com, inertia = mass_properties(masses, positions)
+        rel = np.asarray(positions, dtype=float) - com
+        return cls(name, mass, inertia, tuple(zip(np.asarray(masses, float), rel))), com
+
+    @classmethod
+    def cylinder(cls, name, mass, length, radius, axis=0):
+        """Solid cylinder (a rod when ``radius << length``) along body axis ``axis`` (0, 1, 2)."""
+        I = np.full(3, mass * (3.0 * radius**2 + length**2) / 12.0)
+        I[axis] = 0.5 * mass * radius**2
+        return cls(name, mass, np.diag(I))
+
+    @classmethod
+    def box(cls, name, mass, size):
+        """Solid cuboid with edge lengths ``size = (sx, sy, sz)`` (m) along the body axes."""
+        sx, sy, sz = size
+        return cls(name, mass, np.diag([sy**2 + sz**2, sx**2 + sz**2, sx**2 + sy**2]) * mass / 12.0)
+
+
+@dataclass(frozen=True)
+class Joint:
+    """The joint of ``child`` to its ``parent`` (a body name or ``"world"``).
+
+    See ``JOINT_KINDS`` for the coordinates ``q0``/``v0`` of each kind. ``axis``
+    (revolute only) is expressed in the joint frame and need not be unit length.
+    """
+
+    kind: str
+    parent: str
+    child: str
+    q0: tuple = ()
+    v0: tuple = ()
+    axis: tuple | None = None
+    parent_point: tuple = (0.0, 0.0, 0.0)
+    parent_quat: tuple = (1.0, 0.0, 0.0, 0.0)
+    child_point: tuple = (0.0, 0.0, 0.0)
+    child_quat: tuple = (1.0, 0.0, 0.0, 0.0)
+
+    def __post_init__(self):
+        for name in ("q0", "v0", "parent_point", "parent_quat", "child_point", "child_quat"):
+            object.__setattr__(self, name, _vec(getattr(self, name)))
+        if self.axis is not None:
+            object.__setattr__(self, "axis", _vec(self.axis))
+
+    @property
+    def name(self):
+        """A joint is named after its child (every body has exactly one joint)."""
+        return self.child
+
+
+@dataclass(frozen=True)
+class Load:
+    """A constant force or torque on ``body``.
+
+    ``vector`` (N or N m) is expressed in ``frame``: ``"world"`` (fixed
+    direction) or ``"body"`` (turns with the body: a follower load). ``point``
+    is where a force acts, relative to the COM in body coordinates (m).
+    """
+
+    body: str
+    kind: str
+    vector: tuple
+    frame: str
+    point: tuple = (0.0, 0.0, 0.0)
+
+    def __post_init__(self):
+        object.__setattr__(self, "vector", _vec(self.vector))
+        object.__setattr__(self, "point", _vec(self.point))
+
+    @property
+    def effect(self):
+        """Effect tag, e.g. ``load:follower_force`` or ``load:world_torque``."""
+        return f"load:{'follower' if self.frame == 'body' else 'world'}_{self.kind}"
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A multibody system. ``gravity`` (m/s^2, world) is required, never defaulted.
+
+    Validated on construction (``SceneError`` lists every problem).
+    """
+
+    name: str
+    bodies: tuple
+    joints: tuple
+    gravity: tuple
+    loads: tuple = field(default=())
+
+    def __post_init__(self):
+        object.__setattr__(self, "bodies", tuple(self.bodies))
+        object.__setattr__(self, "joints", tuple(self.joints))
+        object.__setattr__(self, "loads", tuple(self.loads))
+        object.__setattr__(self, "gravity", _vec(self.gravity))
+        self.validate()
+
+    # -------------------------------------------------------------- queries
+    def body(self, name):
+        """The body called ``name``."""
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        raise KeyError(name)
+
+    def joint(self, child):
+        """The joint whose child is ``child``."""
+        for j in self.joints:
+            if j.child == child:
+                return j
+        raise KeyError(child)
+
+    @property
+    def effects(self):
+        """The physics this scene calls for, as a frozenset of tags.
+
+        ``gravity`` when gravity is non-zero; ``joint:<kind>`` per joint kind
+        present; ``load:{follower,world}_{force,torque}`` per load kind present.
+        """
+        tags = {f"joint:{j.kind}" for j in self.joints}
+        tags |= {ld.effect for ld in self.loads}
+        if any(g != 0.0 for g in self.gravity):
+            tags.add("gravity")
+        return frozenset(tags)
+
+    def topological_order(self):
+        """Bodies ordered parents first (the scene must be valid)."""
+        parent = {j.child: j.parent for j in self.joints}
+        order, seen = [], {WORLD}
+        pending = [b.name for b in self.bodies]
+        while pending:
+            ready = [n for n in pending if parent[n] in seen]
+            order += ready
+            seen |= set(ready)
+            pending = [n for n in pending if n not in seen]
+        return [self.body(n) for n in order]
+
+    # -------------------------------------------------------------- checks
+    def validate(self):
+        """Raise ``SceneError`` listing every problem, or return ``self``."""
+        problems = []
+        add = problems.append
+        names = [b.name for b in self.bodies]
+        if not self.bodies:
+            add("bodies: empty — add at least one Body")
+        for dup in sorted({n for n in names if names.count(n) > 1}):
+            add(f"bodies: name {dup!r} used twice — give every body a unique name")
+        if WORLD in names:
+            add(f"bodies: {WORLD!r} is reserved for the fixed world frame — rename the body")
+        if len(self.gravity) != 3 or not all(math.isfinite(g) for g in self.gravity):
+            add(f"gravity: must be 3 finite numbers (m/s^2, world frame), got {self.gravity} — "
+                "use (0, 0, 0) for none")
+        free_bodies = {j.child for j in self.joints if j.kind == "free"}
+        for b in self.bodies:
+            problems += _body_problems(b, b.name in free_bodies)
+        problems += self._joint_problems(set(names))
+        for i, ld in enumerate(self.loads):
+            problems += _load_problems(i, ld, set(names))
+        if problems:
+            raise SceneError(f"scene {self.name!r}", problems)
+        return self
+
+    def _joint_problems(self, names):
+        problems = []
+        add = problems.append
+        parents = {}
+        for i, j in enumerate(self.joints):
+            where = f"joints[{i}] ({j.kind} {j.parent!r} -> {j.child!r})"
+            if j.kind not in JOINT_KINDS:
+                add(f"{where}.kind: unknown {j.kind!r} — use one of {sorted(JOINT_KINDS)}")
+                continue
+            if j.child not in names:
+                add(f"{where}.child: no body named {j.child!r}{_did_you_mean(j.child, names)}")
+            if j.parent != WORLD and j.parent not in names:
+                add(f"{where}.parent: no body named {j.parent!r}{_did_you_mean(j.parent, names | {WORLD})}")
+            if j.parent == j.child:
+                add(f"{where}: a body cannot be its own parent")
+            if j.child in parents:
+                add(f"bodies[{j.child!r}]: has two parents ({parents[j.child]!r} and {j.parent!r}) — "
+                    "a scene is a tree: one joint per body")
+            parents.setdefault(j.child, j.parent)
+            nq, nv = JOINT_KINDS[j.kind]
+            if len(j.q0) != nq:
+                add(f"{where}.q0: {j.kind} needs {nq} numbers, got {len(j.q0)}")
+            if len(j.v0) != nv:
+                add(f"{where}.v0: {j.kind} needs {nv} numbers, got {len(j.v0)}")
+            for field_name in ("q0", "v0", "parent_point", "child_point", "parent_quat", "child_quat"):
+                if not all(math.isfinite(v) for v in getattr(j, field_name)):
+                    add(f"{where}.{field_name}: contains NaN or inf")
+            for field_name, n in (("parent_point", 3), ("child_point", 3), ("parent_quat", 4), ("child_quat", 4)):
+                if len(getattr(j, field_name)) != n:
+                    add(f"{where}.{field_name}: needs {n} numbers")
+            quats = [("parent_quat", j.parent_quat), ("child_quat", j.child_quat)]
+            if j.kind == "free" and len(j.q0) == 7:
+                quats.append(("q0[3:7] (attitude)", j.q0[3:]))
+            if j.kind == "ball" and len(j.q0) == 4:
+                quats.append(("q0 (relative attitude)", j.q0))
+            for label, q in quats:
+                if len(q) == 4 and all(math.isfinite(v) for v in q):
+                    norm = math.sqrt(sum(v * v for v in q))
+                    if abs(norm - 1.0) > QUAT_NORM_TOL:
+                        add(f"{where}.{label}: quaternion norm is {norm:.12g}, not 1 — "
+                            "normalize it (scalar first: w, x, y, z)")
+            if j.kind == "free":
+                if j.parent != WORLD:
+                    add(f"{where}.parent: a free joint connects a body to {WORLD!r}, got {j.parent!r}")
+                frames = (j.parent_point, j.child_point, j.parent_quat, j.child_quat)
+                if frames != ((0.0,) * 3, (0.0,) * 3, (1.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)):
+                    add(f"{where}: a free joint's q0 is the COM pose itself — leave the joint frames at identity")
+            if j.kind == "revolute":
+                if j.axis is None or len(j.axis) != 3:
+                    add(f"{where}.axis: a revolute joint needs a 3-vector axis (in the joint frame)")
+                elif not all(math.isfinite(v) for v in j.axis):
+                    add(f"{where}.axis: contains NaN or inf")
+                elif math.sqrt(sum(v * v for v in j.axis)) == 0.0:
+                    add(f"{where}.axis: zero length — give the rotation axis direction")
+            elif j.axis is not None:
+                add(f"{where}.axis: only revolute joints take an axis")
+        for b in sorted(names - set(parents)):
+            add(f"bodies[{b!r}]: has no joint — give it one (a free body: Joint('free', 'world', {b!r}, ...))")
+        # Cycles: follow parents up from every body; a path that never reaches the
+        # world loops (only reachable when the parent names are all known).
+        for start in sorted(parents):
+            seen, node = set(), start
+            while node in parents and node not in seen:
+                seen.add(node)
+                node = parents[node]
+            if node in seen:
+                add(f"joints: cycle through {sorted(seen)!r} — joints must form a tree rooted at {WORLD!r}")
+                break
+        return problems
+
+
+def _finite(x):
+    return all(math.isfinite(v) for v in np.ravel(x))
+
+
+def _body_problems(b, is_free):
+    where = f"bodies[{b.name!r}]"
+    problems = []
+    add = problems.append
+    if not (math.isfinite(b.mass) and b.mass > 0.0):
+        add(f"{where}.mass: must be positive and finite, got {b.mass!r} — give the mass in kg")
+    I = np.asarray(b.inertia, dtype=float)
+    if I.shape != (3, 3):
+        add(f"{where}.inertia: must be 3x3 (kg m^2 about the COM, body frame), got shape {I.shape}")
+        return problems
+    if not _finite(I):
+        add(f"{where}.inertia: contains NaN or inf")
+        return problems
+    scale = max(np.abs(I).max(), np.finfo(float).tiny)
+    if np.abs(I - I.T).max() > INERTIA_REL_TOL * scale:
+        add(f"{where}.inertia: not symmetric (max |I - I^T| = {np.abs(I - I.T).max():.3g}) — "
+            "an inertia tensor is symmetric")
+        return problems
+    moments = np.linalg.eigvalsh(I)
+    if moments[0] < 0.0 or moments[-1] <= 0.0:
+        add(f"{where}.inertia: not positive definite (principal moments {moments.tolist()}) — "
+            "principal moments must be positive")
+    elif moments[0] <= SINGULAR_INERTIA_RATIO * moments[-1]:
+        if is_free:
+            add(f"{where}.inertia: singular (principal moments {moments.tolist()}): all mass lies on "
+                "one line — the degenerate case of seed 002 — so the spin about that line is "
+                "undetermined; a free body needs three positive principal moments (give the body a "
+                "thickness)")
+        else:
+            add(f"{where}.inertia: not positive definite (principal moments {moments.tolist()}) — "
+                "give the body a finite thickness")
+    elif moments[0] + moments[1] < moments[2] * (1.0 - INERTIA_REL_TOL):
+        add(f"{where}.inertia: principal moments {moments.tolist()} violate the triangle inequality "
+            "I1 + I2 >= I3 — no mass distribution has them")
+    for k, (m, u) in enumerate(b.particles):
+        if not (math.isfinite(m) and m > 0.0) or len(u) != 3 or not _finite(u):
+            add(f"{where}.particles[{k}]: needs a positive finite mass and 3 finite coordinates")
+    return problems
+
+
+def _load_problems(i, ld, names):
+    where = f"loads[{i}] ({ld.kind} on {ld.body!r})"
+    problems = []
+    add = problems.append
+    if ld.body not in names:
+        add(f"{where}.body: no body named {ld.body!r}{_did_you_mean(ld.body, names)}")
+    if ld.kind not in LOAD_KINDS:
+        add(f"{where}.kind: unknown {ld.kind!r} — use one of {list(LOAD_KINDS)}")
+    if ld.frame not in LOAD_FRAMES:
+        add(f"{where}.frame: unknown {ld.frame!r} — use 'body' (a follower load) or 'world'")
+    for field_name in ("vector", "point"):
+        v = getattr(ld, field_name)
+        if len(v) != 3:
+            add(f"{where}.{field_name}: needs 3 numbers, got {len(v)}")
+        elif not _finite(v):
+            add(f"{where}.{field_name}: contains NaN or inf")
+    if ld.kind == "torque" and any(ld.point):
+        add(f"{where}.point: a torque has no point of application — leave point at (0, 0, 0)")
+    return problems
+
+
+def _did_you_mean(name, candidates):
+    return suggest(name, candidates)

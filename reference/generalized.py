@@ -1,0 +1,194 @@
+"""d'Alembert's principle in generalized coordinates (Kane's form) for trees of
+rigid bodies with free, revolute, ball and weld joints.
+
+Seed 003: with partial velocities ``dV_i/du_j`` (of each body's centre of mass)
+and partial angular velocities ``dw_i/du_j``, the generalized active forces
+
+    Q_j  = sum_i F_i . dV_i/du_j + T_i . dw_i/du_j
+
+and the generalized inertia forces
+
+    Q*_j = -sum_i (m_i a_i) . dV_i/du_j + (I_i alpha_i + w_i x I_i w_i) . dw_i/du_j
+
+satisfy ``Q_j + Q*_j = 0`` for every generalized speed ``u_j``. Writing
+``a_i = J_v,i u' + a_bias,i`` and ``alpha_i = J_w,i u' + alpha_bias,i`` (the
+partial velocities are the columns of the Jacobians ``J``), this is the linear
+system ``M u' = f`` with
+
+    M = sum_i m_i J_v^T J_v + J_w^T I_i J_w
+    f = sum_i J_v^T (F_i - m_i a_bias) + J_w^T (T_i - I_i alpha_bias - w_i x I_i w_i)
+
+all in world axes. Jacobians and bias accelerations come from one recursive
+pass from the root to the leaves. Joint reaction forces follow from Newton's
+law per body, from the leaves back to the root.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dalembert import spatial
+from dalembert.scene import JOINT_KINDS, WORLD
+from dalembert.trajectory import BodyStates, JointStates, Trajectory
+from reference.configuration import Block
+from reference.loads import BodyLoads
+
+__all__ = ["Kane"]
+
+
+class Kane:
+    """A ``System`` (see ``integrators``) for any valid tree scene.
+
+    The generalized coordinates and speeds are the joints' own (``JOINT_KINDS``),
+    concatenated in topological order (parents first).
+    """
+
+    def __init__(self, scene):
+        self.scene = scene
+        self.order = scene.topological_order()
+        self.joints, blocks, q0, v0 = [], [], [], []
+        iq = iv = 0
+        for body in self.order:
+            j = scene.joint(body.name)
+            nq, nv = JOINT_KINDS[j.kind]
+            jb = []
+            if j.kind == "free":
+                jb = [Block("vector", slice(iq, iq + 3), slice(iv, iv + 3)),
+                      Block("quat", slice(iq + 3, iq + 7), slice(iv + 3, iv + 6))]
+            elif j.kind == "revolute":
+                jb = [Block("vector", slice(iq, iq + 1), slice(iv, iv + 1))]
+            elif j.kind == "ball":
+                jb = [Block("quat", slice(iq, iq + 4), slice(iv, iv + 3))]
+            blocks += jb
+            self.joints.append(dict(
+                joint=j, body=body, q=slice(iq, iq + nq), v=slice(iv, iv + nv),
+                m=body.mass, I_B=body.inertia_matrix, loads=BodyLoads(scene, body),
+                R_PJ=spatial.quat_to_matrix(j.parent_quat), p_PJ=np.array(j.parent_point),
+                R_CJ=spatial.quat_to_matrix(j.child_quat), p_CJ=np.array(j.child_point),
+                axis=None if j.axis is None else np.array(j.axis) / np.linalg.norm(j.axis),
+            ))
+            q0.append(np.array(j.q0))
+            v0.append(np.array(j.v0))
+            iq, iv = iq + nq, iv + nv
+        self.blocks = tuple(blocks)
+        self.q0 = np.concatenate(q0) if q0 else np.zeros(0)
+        self.v0 = np.concatenate(v0) if v0 else np.zeros(0)
+        self.nv = iv
+
+    # ------------------------------------------------------------ kinematics
+    def kinematics(self, q, u):
+        """Pose, velocity, Jacobians and bias accelerations of every body, world axes.
+
+        Returns a dict per body name with ``R (3,3)``, ``p (3,)``, ``w (3,)``,
+        ``v (3,)``, ``Jv (3, nv)``, ``Jw (3, nv)``, ``a_bias (3,)``, ``alpha_bias (3,)``.
+        """
+        n = self.nv
+        world = dict(R=np.eye(3), p=np.zeros(3), w=np.zeros(3), v=np.zeros(3),
+                     Jv=np.zeros((3, n)), Jw=np.zeros((3, n)), a_bias=np.zeros(3), alpha_bias=np.zeros(3))
+        out = {WORLD: world}
+        for jd in self.joints:
+            j = jd["joint"]
+            P = out[j.parent]
+            qj, uj = q[jd["q"]], u[jd["v"]]
+            if j.kind == "free":
+                R = spatial.quat_to_matrix(qj[3:] / np.linalg.norm(qj[3:]))
+                Jv = np.zeros((3, n))
+                Jv[:, jd["v"].start:jd["v"].start + 3] = np.eye(3)
+                Jw = np.zeros((3, n))
+                Jw[:, jd["v"].start + 3:jd["v"].stop] = R
+                out[j.child] = dict(R=R, p=qj[:3].copy(), w=R @ uj[3:], v=uj[:3].copy(), Jv=Jv, Jw=Jw,
+                                    a_bias=np.zeros(3), alpha_bias=np.zeros(3))
+                continue
+            R_WJp = P["R"] @ jd["R_PJ"]
+            if j.kind == "revolute":
+                R_J = spatial.so3_exp(jd["axis"] * qj[0])
+            elif j.kind == "ball":
+                R_J = spatial.quat_to_matrix(qj / np.linalg.norm(qj))
+            else:
+                R_J = np.eye(3)
+            R_WJc = R_WJp @ R_J
+            R = R_WJc @ jd["R_CJ"].T
+            r_PJ = P["R"] @ jd["p_PJ"]  # parent COM -> joint point
+            r_JC = -R @ jd["p_CJ"]  # joint point -> child COM
+            Jw = P["Jw"].copy()
+            w, alpha_bias = P["w"].copy(), P["alpha_bias"].copy()
+            if j.kind == "revolute":
+                s = R_WJp @ jd["axis"]
+                Jw[:, jd["v"]] += s[:, None]
+                w_rel = s * uj[0]
+                w += w_rel
+                alpha_bias += spatial.cross(P["w"], w_rel)
+            elif j.kind == "ball":
+                Jw[:, jd["v"]] += R_WJc
+                w_rel = R_WJc @ uj
+                w += w_rel
+                alpha_bias += spatial.cross(w, w_rel)
+            Jv = P["Jv"] - spatial.skew(r_PJ) @ P["Jw"] - spatial.skew(r_JC) @ Jw
+            v = P["v"] + spatial.cross(P["w"], r_PJ) + spatial.cross(w, r_JC)
+            a_bias = (P["a_bias"] + spatial.cross(P["alpha_bias"], r_PJ) + spatial.cross(P["w"], spatial.cross(P["w"], r_PJ))
+                      + spatial.cross(alpha_bias, r_JC) + spatial.cross(w, spatial.cross(w, r_JC)))
+            out[j.child] = dict(R=R, p=P["p"] + r_PJ + r_JC, w=w, v=v, Jv=Jv, Jw=Jw,
+                                a_bias=a_bias, alpha_bias=alpha_bias)
+        return out
+
+    # -------------------------------------------------------------- dynamics
+    def _solve(self, t, q, u):
+        kin = self.kinematics(q, u)
+        M = np.zeros((self.nv, self.nv))
+        f = np.zeros(self.nv)
+        for jd in self.joints:
+            k = kin[jd["joint"].child]
+            m, R = jd["m"], k["R"]
+            I_W = R @ jd["I_B"] @ R.T
+            F, T = jd["loads"].resultant(R)
+            k["F"] = F
+            M += m * k["Jv"].T @ k["Jv"] + k["Jw"].T @ I_W @ k["Jw"]
+            f += k["Jv"].T @ (F - m * k["a_bias"])  # generalized active + inertia forces
+            f += k["Jw"].T @ (T - I_W @ k["alpha_bias"] - spatial.cross(k["w"], I_W @ k["w"]))
+        udot = np.linalg.solve(M, f) if self.nv else np.zeros(0)
+        return udot, kin
+
+    def acceleration(self, t, q, v):
+        """Generalized accelerations ``u'`` (nv,) from ``Q + Q* = 0``."""
+        return self._solve(t, q, v)[0]
+
+    def reaction_forces(self, t, q, v):
+        """Force each joint exerts ON its child (N, world axes), dict joint name -> (3,).
+
+        Newton's law per body: ``m a = F_loads + F_joint - sum_children F_child_joint``.
+        """
+        udot, kin = self._solve(t, q, v)
+        out = {}
+        for jd in reversed(self.joints):
+            name = jd["joint"].child
+            k = kin[name]
+            a = k["Jv"] @ udot + k["a_bias"]
+            children = sum((out[c["joint"].child] for c in self.joints if c["joint"].parent == name), np.zeros(3))
+            out[name] = jd["m"] * a - k["F"] + children
+        return out
+
+    # ------------------------------------------------------------ read-back
+    def trajectory(self, t, Q, V):
+        """Sampled states as a ``Trajectory`` (bodies, joints and joint reaction forces)."""
+        n = len(t)
+        bodies = {jd["joint"].child: [np.full((n, 3), np.nan), np.full((n, 4), np.nan), np.full((n, 3), np.nan),
+                                      np.full((n, 3), np.nan)] for jd in self.joints}
+        reactions = {jd["joint"].child: np.full((n, 3), np.nan) for jd in self.joints}
+        for i in range(n):
+            if not (np.all(np.isfinite(Q[i])) and np.all(np.isfinite(V[i]))):
+                continue
+            kin = self.kinematics(Q[i], V[i])
+            for name, arrs in bodies.items():
+                arrs[0][i], arrs[2][i], arrs[3][i] = kin[name]["p"], kin[name]["v"], kin[name]["w"]
+                arrs[1][i] = spatial.matrix_to_quat(kin[name]["R"])
+            for name, f in self.reaction_forces(t[i], Q[i], V[i]).items():
+                reactions[name][i] = f
+        # A free joint's attitude is the stored quaternion itself (its norm drift is data).
+        for jd in self.joints:
+            if jd["joint"].kind == "free":
+                bodies[jd["joint"].child][1] = Q[:, jd["q"]][:, 3:].copy()
+        traj_bodies = {name: BodyStates(*arrs) for name, arrs in bodies.items()}
+        joints = {jd["joint"].child: JointStates(Q[:, jd["q"]], V[:, jd["v"]]) for jd in self.joints}
+        extras = {f"reaction_force:{name}": f for name, f in reactions.items()
+                  if self.scene.joint(name).kind != "free"}
+        return Trajectory(t, traj_bodies, joints, extras)

@@ -1,0 +1,200 @@
+"""Time integrators of the reference solver, chosen by name.
+
+Contract (every integrator, like scipy's ``OdeSolver`` family):
+
+1. is registered under a lowercase, hyphenated ``name`` with ``@integrator``;
+2. says whether it is ``fixed_step`` (knob: ``dt``, which must divide every
+   sample interval) or adaptive (knobs: ``rtol``, ``atol``) and which
+   ``options`` it accepts — anything else raises before the run starts;
+3. ``run(system, times, settings)`` integrates a ``System`` from ``times[0]``
+   and returns the state exactly at every sample time: ``Q (n, nq)``,
+   ``V (n, nv)`` and a ``Stats`` (steps, right-hand-side evaluations);
+4. evaluates the right-hand side at every stage (loads included), so its
+   order of accuracy is the method's own;
+5. stops early when the state becomes non-finite and fills the remaining
+   samples with NaN (divergence is a result, not an exception).
+
+A ``System`` provides ``blocks`` (see ``configuration``), ``q0 (nq,)``,
+``v0 (nv,)`` and ``acceleration(t, q, v) -> (nv,)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from dalembert.registry import Registry
+from reference import configuration as cfg
+
+__all__ = ["INTEGRATORS", "integrator", "Stats", "check_settings", "steps_per_interval"]
+
+INTEGRATORS = Registry("integrator")
+
+# dt divides a sample interval when interval/dt is within this of an integer
+# (sample times and dt are decimals, never exact in binary).
+DIVIDES_REL_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Stats:
+    n_steps: int
+    n_rhs: int
+
+
+def integrator(name):
+    """Register an integrator class under ``name``."""
+
+    def register(cls):
+        cls.name = name
+        INTEGRATORS.register(name, cls)
+        return cls
+
+    return register
+
+
+def steps_per_interval(times, dt):
+    """Steps per sample interval, ndarray (n-1,) of int; ValueError if ``dt`` does not divide."""
+    ratio = np.diff(times) / dt
+    n = np.rint(ratio)
+    bad = np.abs(ratio - n) > DIVIDES_REL_TOL * np.maximum(ratio, 1.0)
+    if np.any(bad) or np.any(n < 1):
+        k = int(np.argmax(bad | (n < 1)))
+        raise ValueError(f"dt: {dt!r} does not divide the sample interval "
+                         f"{times[k + 1] - times[k]!r} s — choose dt = interval / integer")
+    return n.astype(int)
+
+
+def check_settings(settings, times):
+    """Raise ValueError naming the field if ``settings`` do not fit the integrator."""
+    cls = INTEGRATORS[settings.integrator]
+    problems = []
+    unknown = sorted(set(settings.options) - set(cls.options))
+    if unknown:
+        problems.append(f"options: {unknown} unknown to {cls.name!r} (accepts {sorted(cls.options) or 'none'})")
+    if cls.fixed_step:
+        if settings.dt is None:
+            problems.append(f"dt: {cls.name!r} is fixed-step — give dt (s)")
+        else:
+            try:
+                steps_per_interval(np.asarray(times), settings.dt)
+            except ValueError as e:
+                problems.append(str(e))
+        if settings.rtol is not None or settings.atol is not None:
+            problems.append(f"rtol/atol: {cls.name!r} is fixed-step — give dt, not tolerances")
+    else:
+        if settings.dt is not None:
+            problems.append(f"dt: {cls.name!r} is adaptive — give rtol/atol, not dt")
+    if problems:
+        raise ValueError("; ".join(problems))
+
+
+class _FixedStep:
+    """Shared driver: ``step`` from sample to sample in ``dt`` substeps."""
+
+    fixed_step = True
+    options = ()
+    stages = 1
+
+    def run(self, system, times, settings):
+        times = np.asarray(times, dtype=float)
+        counts = steps_per_interval(times, settings.dt)
+        Q = np.full((len(times), len(system.q0)), np.nan)
+        V = np.full((len(times), len(system.v0)), np.nan)
+        q, v = system.q0.astype(float).copy(), system.v0.astype(float).copy()
+        Q[0], V[0] = q, v
+        steps = 0
+        for k, n in enumerate(counts):
+            h = (times[k + 1] - times[k]) / n
+            for i in range(n):
+                q, v = self.step(system, times[k] + i * h, q, v, h)
+            steps += n
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                break
+            Q[k + 1], V[k + 1] = q, v
+        return Q, V, Stats(steps, steps * self.stages)
+
+
+@integrator("euler")
+class SymplecticEuler(_FixedStep):
+    """Semi-implicit (symplectic) Euler on the group: velocity first, then
+    ``q <- q exp(h v_new)``. First order."""
+
+    stages = 1
+
+    def step(self, s, t, q, v, h):
+        v = v + h * s.acceleration(t, q, v)
+        return cfg.retract(s.blocks, q, h * v), v
+
+
+@integrator("rk4")
+class ClassicalRK4(_FixedStep):
+    """Classical fourth-order Runge-Kutta on the embedded coordinates — the
+    seed's method (seed 002). Quaternion norm / orthonormality drift as O(h^4)."""
+
+    stages = 4
+
+    def step(self, s, t, q, v, h):
+        f = lambda t, q, v: (cfg.qdot(s.blocks, q, v), s.acceleration(t, q, v))  # noqa: E731
+        k1q, k1v = f(t, q, v)
+        k2q, k2v = f(t + h / 2, q + h / 2 * k1q, v + h / 2 * k1v)
+        k3q, k3v = f(t + h / 2, q + h / 2 * k2q, v + h / 2 * k2v)
+        k4q, k4v = f(t + h, q + h * k3q, v + h * k3v)
+        return (q + h / 6 * (k1q + 2 * k2q + 2 * k3q + k4q),
+                v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v))
+
+
+@integrator("rkmk4")
+class MuntheKaasRK4(_FixedStep):
+    """Runge-Kutta-Munthe-Kaas with the classical RK4 tableau (Munthe-Kaas,
+    BIT 38, 1998): stages in the tangent space at ``q``, corrected by the exact
+    ``dexp^-1`` of SO(3), configuration advanced by the exponential. Fourth
+    order, and the attitude stays on the group to roundoff."""
+
+    stages = 4
+
+    def step(self, s, t, q, v, h):
+        b = s.blocks
+
+        def f(tc, theta, vel):
+            qs = cfg.retract(b, q, theta)
+            return cfg.dexpinv(b, theta, vel), s.acceleration(tc, qs, vel)
+
+        zero = np.zeros_like(v)
+        k1q, k1v = f(t, zero, v)
+        k2q, k2v = f(t + h / 2, h / 2 * k1q, v + h / 2 * k1v)
+        k3q, k3v = f(t + h / 2, h / 2 * k2q, v + h / 2 * k2v)
+        k4q, k4v = f(t + h, h * k3q, v + h * k3v)
+        theta = h / 6 * (k1q + 2 * k2q + 2 * k3q + k4q)
+        return cfg.retract(b, q, theta), v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+
+
+@integrator("dop853")
+class DOP853:
+    """scipy's adaptive Dormand-Prince 8(5,3) on the embedded coordinates, with
+    its dense output at the sample times. The truth where no closed form exists
+    (at ``TRUTH_RTOL``/``TRUTH_ATOL``)."""
+
+    fixed_step = False
+    options = ()
+    # Defaults when the settings give no tolerance; tight enough to serve as truth
+    # (errors ~1e-12 on the canonical cases), loose enough to finish in seconds.
+    TRUTH_RTOL = 1e-12
+    TRUTH_ATOL = 1e-12
+
+    def run(self, system, times, settings):
+        nq = len(system.q0)
+        b = system.blocks
+
+        def rhs(t, y):
+            q, v = y[:nq], y[nq:]
+            return np.concatenate([cfg.qdot(b, q, v), system.acceleration(t, q, v)])
+
+        y0 = np.concatenate([system.q0, system.v0]).astype(float)
+        sol = solve_ivp(rhs, (times[0], times[-1]), y0, method="DOP853", t_eval=times,
+                        rtol=settings.rtol or self.TRUTH_RTOL, atol=settings.atol or self.TRUTH_ATOL)
+        Y = np.full((len(times), len(y0)), np.nan)
+        Y[: sol.y.shape[1]] = sol.y.T
+        n_steps = int(max(0, (sol.nfev - 1) // 12))  # DOP853: 12 evaluations per step
+        return Y[:, :nq], Y[:, nq:], Stats(n_steps, int(sol.nfev))
