@@ -159,6 +159,13 @@ class CaseFactory:
 
             raise SceneError(f"case {self.name!r}", [
                 f"parameter {k!r}: unknown{suggest(k, known)}" for k in unknown])
+        problems = []
+        for key, value in params.items():
+            default = known[key]
+            if isinstance(default, tuple) and (not isinstance(value, (tuple, list)) or len(value) != len(default)):
+                problems.append(f"parameter {key!r}: expected {len(default)} numbers like {default!r}, got {value!r}")
+        if problems:
+            raise SceneError(f"case {self.name!r}", problems)
         made = self.func(**params)
         merged = {**known, **params}
         return Case(made.name, made.scene, made.t_final, made.sample_times, made.exact, made.conserved,

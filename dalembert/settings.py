@@ -4,9 +4,23 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from types import MappingProxyType
 
 __all__ = ["Settings", "SettingsError"]
+
+
+class FrozenOptions(dict):
+    """A read-only dict (picklable, unlike ``MappingProxyType``, so settings cross process boundaries)."""
+
+    def _readonly(self, *args, **kwargs):
+        raise TypeError("Settings.options is read-only; make new Settings instead")
+
+    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = _readonly
+
+    def __reduce__(self):
+        return (FrozenOptions, (dict(self),))
+
+    def __hash__(self):
+        return hash(tuple(sorted(self.items())))
 
 
 class SettingsError(ValueError):
@@ -33,10 +47,10 @@ class Settings:
     dt: float | None = None
     rtol: float | None = None
     atol: float | None = None
-    options: MappingProxyType = field(default_factory=dict)
+    options: FrozenOptions = field(default_factory=FrozenOptions)
 
     def __post_init__(self):
-        object.__setattr__(self, "options", MappingProxyType(dict(self.options)))
+        object.__setattr__(self, "options", FrozenOptions(self.options))
         problems = []
         if not isinstance(self.integrator, str) or not self.integrator:
             problems.append("integrator: give an integrator name, e.g. 'rk4'")

@@ -86,8 +86,12 @@ def validate(case_names=None, jobs=None, progress=print):
     rows = []
     with ProcessPoolExecutor(max_workers=jobs or os.cpu_count() or 1) as pool:
         futures = [pool.submit(validate_case, *w) for w in work]
-        for k, f in enumerate(futures, 1):
-            row = f.result()
+        for k, (f, (name, _params, settings)) in enumerate(zip(futures, work), 1):
+            try:
+                row = f.result()
+            except Exception as e:  # a worker that died is a failed row, not a crashed suite
+                row = {"case": name, "settings": settings.label(), "status": "failed",
+                       "message": f"worker died: {type(e).__name__}: {e}"}
             rows.append(row)
             progress(f"[{k}/{len(work)}] {row['case']:<24} {row['settings']:<40} {row['status']}"
                      + (f"  {row.get('wall_s', float('nan')):.2f} s" if row["status"] == "ok" else

@@ -72,5 +72,5 @@ def _step(c, w, q, h):
         Q[1].append((_conv(qw, wx, n) + _conv(qy, wz, n) - _conv(qz, wy, n)) / (2 * p))
         Q[2].append((_conv(qw, wy, n) - _conv(qx, wz, n) + _conv(qz, wx, n)) / (2 * p))
         Q[3].append((_conv(qw, wz, n) + _conv(qx, wy, n) - _conv(qy, wx, n)) / (2 * p))
-    horner = lambda coef: mp.polyval(coef[::-1], h)  # noqa: E731
+    horner = lambda coef: mp.fsum(c * h**k for k, c in enumerate(coef))  # noqa: E731
     return [horner(x) for x in W], [horner(x) for x in Q]

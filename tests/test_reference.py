@@ -1,0 +1,123 @@
+"""The reference solver: orders of convergence, agreement of formulations, settings checks."""
+
+import numpy as np
+import pytest
+
+from dalembert import Settings, make_case, spatial
+from dalembert.errors import trajectory_errors
+from dalembert.invariants import orthonormality_error
+from reference import simulate
+from reference.integrators import INTEGRATORS
+from reference.newton_euler import NewtonEuler
+
+ORDER_SLACK = 0.3  # measured orders within this of the theory (asymptotic regime, 2 step sizes)
+FORMULATION_AGREEMENT = 1e-12  # rad or m over 2 s: same method, different algebra -> roundoff only
+
+FREE_CASES = ["free_top", "free_top_intermediate", "particle_box"]
+
+
+def error(case, settings, quantity):
+    traj = simulate(case.scene, case.times, settings)[0]
+    return trajectory_errors(traj, case.exact(case.times))[quantity][0]
+
+
+def order(case, integrator, quantity, dt):
+    e1 = error(case, Settings(integrator, dt=dt), quantity)
+    e2 = error(case, Settings(integrator, dt=dt / 2), quantity)
+    return np.log2(e1 / e2)
+
+
+@pytest.mark.parametrize("name", FREE_CASES)
+@pytest.mark.parametrize("integrator,expected", [("rk4", 4), ("rkmk4", 4), ("euler", 1)])
+def test_order_on_free_bodies(name, integrator, expected):
+    case = make_case(name, t_final=2.0)
+    dt = 1e-2 if expected == 4 else 2e-3
+    assert order(case, integrator, "orientation", dt) == pytest.approx(expected, abs=ORDER_SLACK)
+
+
+def test_order_on_the_rod():
+    """phi(t) is quadratic, so RK4 and RKMK4 are exact up to roundoff even at dt = 0.01;
+    symplectic Euler is first order."""
+    case = make_case("pivoted_rod")
+    for name in ("rk4", "rkmk4"):
+        assert error(case, Settings(name, dt=1e-2), "joint") < 1e-12
+    assert order(case, "euler", "joint", 1e-3) == pytest.approx(1.0, abs=ORDER_SLACK)
+
+
+@pytest.mark.parametrize("name", FREE_CASES)
+def test_newton_euler_and_kane_agree(name):
+    case = make_case(name, t_final=2.0)
+    runs = {f: simulate(case.scene, case.times, Settings("rk4", dt=1e-3, options={"formulation": f}))[0]
+            for f in ("newton-euler", "kane", "newton-euler-matrix")}
+    ne, kane, mat = (runs[k].bodies[case.scene.bodies[0].name] for k in ("newton-euler", "kane", "newton-euler-matrix"))
+    assert np.max(spatial.rotation_angle(ne.quaternion, kane.quaternion)) < FORMULATION_AGREEMENT
+    assert np.max(np.abs(ne.position - kane.position)) < FORMULATION_AGREEMENT * 1e3  # box falls ~20 m
+    assert np.max(np.abs(ne.angular_velocity - kane.angular_velocity)) < FORMULATION_AGREEMENT
+    # the seed's matrix state: same motion to the method's own error
+    assert np.max(spatial.rotation_angle(ne.quaternion, mat.quaternion)) < 1e-9
+
+
+def test_matrix_state_drifts_off_the_group_unless_integrated_on_it():
+    """Seed 002's Q' = Q Omega integrated by RK4 loses orthonormality; RKMK4
+    (exponential update) keeps it to roundoff."""
+    case = make_case("free_top_intermediate", t_final=10.0)
+    drift = {}
+    for name in ("rk4", "rkmk4"):
+        traj = simulate(case.scene, case.times, Settings(name, dt=1e-2, options={"formulation": "newton-euler-matrix"}))[0]
+        drift[name] = np.max(orthonormality_error(case.scene, traj))
+    assert drift["rkmk4"] < 1e-13
+    assert drift["rk4"] > 100 * drift["rkmk4"]
+
+
+def test_only_declared_effects_are_computed():
+    """No gravity unless the scene has it: a force-free body does not accelerate at all."""
+    top = make_case("free_top").scene
+    ne = NewtonEuler(top)
+    a = ne.acceleration(0.0, ne.q0, ne.v0)
+    assert np.array_equal(a[:3], np.zeros(3))
+    box = NewtonEuler(make_case("particle_box").scene)
+    assert np.array_equal(box.acceleration(0.0, box.q0, box.v0)[:3], [0.0, 0.0, -9.8])
+
+
+def test_divergence_is_returned_as_nan_not_raised():
+    class Blowup:
+        from reference.configuration import Block
+
+        blocks = (Block("vector", slice(0, 1), slice(0, 1)),)
+        q0, v0 = np.array([0.0]), np.array([1.0])
+
+        def acceleration(self, t, q, v):
+            with np.errstate(over="ignore", invalid="ignore"):
+                return v**3
+
+    times = np.linspace(0, 5, 51)
+    Q, V, stats = INTEGRATORS["rk4"]().run(Blowup(), times, Settings("rk4", dt=0.1))
+    finite = np.isfinite(V[:, 0])
+    assert finite[0] and not finite[-1]
+    assert np.all(finite[: np.argmin(finite)])  # finite up to the blow-up, NaN after
+
+
+@pytest.mark.parametrize("settings,field", [
+    (Settings("rk4", dt=3e-3), "dt"),
+    (Settings("rk4"), "dt"),
+    (Settings("dop853", dt=1e-3), "dt"),
+    (Settings("rk4", dt=1e-3, rtol=1e-6), "rtol"),
+    (Settings("rk4", dt=1e-3, options={"bogus": 1}), "options"),
+    (Settings("rk4", dt=1e-3, options={"formulation": "lagrange"}), "formulation"),
+])
+def test_bad_settings_fail_before_running(settings, field):
+    case = make_case("pivoted_rod")
+    with pytest.raises(ValueError, match=field):
+        simulate(case.scene, case.times, settings)
+
+
+def test_unknown_integrator_suggests():
+    case = make_case("pivoted_rod")
+    with pytest.raises(KeyError, match="did you mean 'rk4'"):
+        simulate(case.scene, case.times, Settings("rk5", dt=1e-3))
+
+
+@pytest.mark.parametrize("kw", [dict(dt=-1.0), dict(dt=float("nan")), dict(rtol=0.0), dict(atol=float("inf"))])
+def test_settings_reject_non_positive_knobs(kw):
+    with pytest.raises(ValueError, match=next(iter(kw))):
+        Settings("rk4", **kw)

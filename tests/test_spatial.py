@@ -1,0 +1,101 @@
+"""Conversions in dalembert.spatial, against definitions and each other."""
+
+import numpy as np
+import pytest
+
+from dalembert import spatial
+
+ROUNDOFF = 1e-14  # a few ulps of 1 after a handful of products
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(7)
+
+
+def random_quats(rng, n):
+    q = rng.normal(size=(n, 4))
+    return spatial.quat_normalize(q)
+
+
+def test_matrix_round_trip_every_branch(rng):
+    q = random_quats(rng, 500)
+    # include the four Shepperd branches explicitly: identity and 180-degree turns
+    q = np.vstack([q, np.eye(4)])
+    back = spatial.matrix_to_quat(spatial.quat_to_matrix(q))
+    assert np.max(spatial.rotation_angle(q, back)) < ROUNDOFF
+    R = spatial.quat_to_matrix(q)
+    assert np.max(np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3))) < ROUNDOFF
+    assert np.allclose(np.linalg.det(R), 1.0, atol=ROUNDOFF)
+
+
+def test_single_and_stacked_paths_agree(rng):
+    q1, q2 = random_quats(rng, 2)
+    w = rng.normal(size=3)
+    assert np.allclose(spatial.quat_multiply(q1, q2), spatial.quat_multiply(q1[None], q2[None])[0], atol=0, rtol=0)
+    assert np.array_equal(spatial.quat_to_matrix(q1), spatial.quat_to_matrix(q1[None])[0])
+    assert np.allclose(spatial.quat_exp(w), spatial.quat_exp(w[None])[0], atol=ROUNDOFF)
+    assert np.allclose(spatial.so3_exp(w), spatial.so3_exp(w[None])[0], atol=ROUNDOFF)
+    assert np.allclose(spatial.cross(w, q1[1:]), np.cross(w, q1[1:]), atol=ROUNDOFF)
+
+
+def test_hamilton_product_composes_rotations(rng):
+    q1, q2 = random_quats(rng, 2)
+    R12 = spatial.quat_to_matrix(q1) @ spatial.quat_to_matrix(q2)
+    assert np.allclose(spatial.quat_to_matrix(spatial.quat_multiply(q1, q2)), R12, atol=ROUNDOFF)
+
+
+def test_exp_maps_agree_and_rotate_about_the_axis(rng):
+    for theta in (rng.normal(size=3), np.array([1e-6, -2e-6, 3e-7]), np.array([0.0, 0.0, np.pi])):
+        R = spatial.so3_exp(theta)
+        assert np.allclose(spatial.quat_to_matrix(spatial.quat_exp(theta)), R, atol=ROUNDOFF)
+        assert np.allclose(R @ theta, theta, atol=ROUNDOFF)  # the axis is fixed
+    # rotation by pi/2 about z sends x to y
+    assert np.allclose(spatial.quat_rotate(spatial.quat_from_axis_angle([0, 0, 1], np.pi / 2), [1, 0, 0]),
+                       [0, 1, 0], atol=ROUNDOFF)
+
+
+def test_dexpinv_inverts_the_tangent_of_exp(rng):
+    """d/dt exp(theta(t)) = exp(theta) skew(w) with theta' = dexpinv(theta, w): check by finite differences."""
+    for theta in (rng.normal(size=3), 1e-5 * rng.normal(size=3)):
+        w = rng.normal(size=3)
+        dtheta = spatial.so3_dexpinv(theta, w)
+        h = 1e-6
+        dR = (spatial.so3_exp(theta + h * dtheta) - spatial.so3_exp(theta - h * dtheta)) / (2 * h)
+        expected = spatial.so3_exp(theta) @ spatial.skew(w)
+        assert np.allclose(dR, expected, atol=1e-8)  # central difference error ~h^2
+
+
+def test_rotation_angle_is_geodesic_and_precise_for_small_angles():
+    for angle in (1e-12, 1e-6, 0.3, 3.0):
+        q = spatial.quat_from_axis_angle([1, 2, 3], angle)
+        assert spatial.rotation_angle(spatial.IDENTITY_QUAT, q) == pytest.approx(angle, rel=1e-12)
+        assert spatial.rotation_angle(-q, q) < 1e-15  # sign-blind
+
+
+def test_body_world_round_trip(rng):
+    q = random_quats(rng, 10)
+    v = rng.normal(size=(10, 3))
+    assert np.allclose(spatial.world_to_body(q, spatial.body_to_world(q, v)), v, atol=ROUNDOFF)
+
+
+def test_quaternion_derivative_matches_body_angular_velocity(rng):
+    q = random_quats(rng, 1)[0]
+    w_B = rng.normal(size=3)
+    h = 1e-6
+    qd = spatial.quat_derivative(q, w_B)
+    dR = (spatial.quat_to_matrix(q + h * qd) - spatial.quat_to_matrix(q - h * qd)) / (2 * h)
+    assert np.allclose(dR, spatial.quat_to_matrix(q) @ spatial.skew(w_B), atol=1e-8)
+
+
+def test_euler_zxz_matches_composition():
+    phi, th, psi = 0.3, 1.1, -2.0
+    Rz = lambda a: spatial.so3_exp([0, 0, a])  # noqa: E731
+    Rx = lambda a: spatial.so3_exp([a, 0, 0])  # noqa: E731
+    assert np.allclose(spatial.matrix_from_euler_zxz(phi, th, psi), Rz(phi) @ Rx(th) @ Rz(psi), atol=ROUNDOFF)
+
+
+def test_scalar_last_round_trip(rng):
+    q = random_quats(rng, 5)
+    assert np.array_equal(spatial.xyzw_to_wxyz(spatial.wxyz_to_xyzw(q)), q)
+    assert np.array_equal(spatial.wxyz_to_xyzw(q)[:, 3], q[:, 0])
