@@ -15,9 +15,15 @@ $(STAMP): pyproject.toml
 
 setup: $(STAMP)
 
-# The main job: the validation suite, writing a report under results/.
+# The main job: the default matrix (every case, installed engine, integrator,
+# dt/tolerance sweep) into a fresh results/<time> directory, then its report.
+# `make run` exits non-zero when any run failed, diverged or timed out, after
+# writing the report anyway.
 run: $(STAMP)
-	$(BIN)/dalembert validate --out results
+	@out=results/$$(date -u +%Y%m%dT%H%M%SZ); \
+	$(BIN)/dalembert run --out $$out; status=$$?; \
+	$(BIN)/dalembert report $$out && ln -sfn $$(basename $$out) results/latest && \
+	echo "report: $$out/report.md (results/latest)"; exit $$status
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -n 2 -q

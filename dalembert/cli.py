@@ -11,9 +11,22 @@ import sys
 
 EPILOG = """examples:
   dalembert cases --verbose
+  dalembert engines
+  dalembert run --case free_top --engine reference --integrator rk4 --dt 1e-2,1e-3 --out results/top
+  dalembert run --resume results/top
+  dalembert report results/top
+  dalembert export results/top --case free_top --engine reference --integrator rk4 --dt 1e-3 --csv top.csv
   dalembert truth free_top_intermediate --param t_final=5 --csv top.csv
   dalembert validate --out results
 """
+
+
+def _floats(text):
+    """Comma-separated numbers (repeatable flags are concatenated)."""
+    try:
+        return [float(x) for x in text.split(",") if x]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
 
 
 def _parser():
@@ -32,6 +45,45 @@ def _parser():
     t.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
                    help="override a case parameter (vectors as comma-separated numbers); repeatable")
     t.add_argument("--csv", required=True, metavar="FILE", help="output file")
+
+    e = sub.add_parser("engines", help="list engines, what they support and their integrators",
+                       epilog="example:\n  dalembert engines", formatter_class=argparse.RawDescriptionHelpFormatter)
+    e.add_argument("--verbose", "-v", action="store_true", help="show integrator options")
+
+    r = sub.add_parser("run", help="run a matrix of cases x engines x integrators x dt/tolerances",
+                       epilog="examples:\n  dalembert run\n  dalembert run --tag free --engine reference --dt 1e-3\n"
+                              "  dalembert run --resume results/2026-11-22T10-00-00",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    r.add_argument("--case", action="append", help="case name (repeatable; default: all)")
+    r.add_argument("--tag", action="append", help="select cases by tag (repeatable)")
+    r.add_argument("--engine", action="append", help="engine name (repeatable; default: every installed one)")
+    r.add_argument("--integrator", action="append", help="integrator name (repeatable; default: all)")
+    r.add_argument("--dt", action="append", type=_floats, help="step sizes in s, comma-separated (default 1e-2,1e-3)")
+    r.add_argument("--rtol", action="append", type=_floats, help="tolerances for adaptive integrators (default 1e-6,1e-9)")
+    r.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="case parameter override")
+    r.add_argument("--option", action="append", default=[], metavar="KEY=VALUE", help="engine option (every run)")
+    r.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    r.add_argument("--timeout", type=float, default=None, help="per-run limit in s (default 600)")
+    r.add_argument("--scheduler", metavar="ADDRESS", help="run on a Dask cluster, e.g. tcp://host:8786")
+    r.add_argument("--out", metavar="DIR", help="results directory (default results/<timestamp>)")
+    r.add_argument("--resume", metavar="DIR", help="finish an interrupted run directory")
+
+    rp = sub.add_parser("report", help="write report.md and summary.csv for a results directory",
+                        epilog="example:\n  dalembert report results/latest",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    rp.add_argument("run_dir")
+
+    x = sub.add_parser("export", help="write one stored trajectory as CSV",
+                       epilog="example:\n  dalembert export results/latest --case free_top --engine reference "
+                              "--integrator rk4 --dt 1e-3 --csv top.csv",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    x.add_argument("run_dir")
+    x.add_argument("--case", required=True)
+    x.add_argument("--engine", required=True)
+    x.add_argument("--integrator", required=True)
+    x.add_argument("--dt", type=float)
+    x.add_argument("--rtol", type=float)
+    x.add_argument("--csv", required=True, metavar="FILE")
 
     v = sub.add_parser("validate", help="run every case with the reference solver against its closed form",
                        epilog="example:\n  dalembert validate --case pivoted_rod --out results",
@@ -109,9 +161,176 @@ def cmd_validate(args):
     return 1 if bad else 0
 
 
+def cmd_engines(args):
+    from adapters import adapter_names, get_adapter
+
+    for name in adapter_names():
+        adapter = get_adapter(name)
+        try:
+            version = adapter.version()
+        except ImportError as e:
+            version = f"not installed ({e})"
+        print(f"{name:<10} {version}")
+        print(f"    effects: {', '.join(sorted(adapter.effects))}")
+        for integ, spec in adapter.integrators.items():
+            knobs = "dt" if spec.fixed_step else "rtol, atol"
+            opts = f"; options: {', '.join(spec.options)}" if spec.options and args.verbose else ""
+            print(f"    {integ:<20} {knobs}{opts}  {spec.description if args.verbose else ''}".rstrip())
+    return 0
+
+
+def _progress_printer(stream=None):
+    import time
+
+    stream = stream or sys.stderr
+    start = time.monotonic()
+    tty = stream.isatty()
+
+    def show(done, total, bad, row):
+        elapsed = time.monotonic() - start
+        eta = elapsed / done * (total - done) if done else float("nan")
+        status = f"[{done}/{total}] failures {bad}  elapsed {elapsed:.0f} s  eta {eta:.0f} s"
+        if tty:
+            stream.write(f"\r{status}  {row['case']} {row['engine']} {row['settings']} {row['status']}\033[K")
+            if done == total:
+                stream.write("\n")
+        else:
+            stream.write(f"{status}  {row['case']} {row['engine']} {row['settings']}: {row['status']}"
+                         f"{' — ' + row['message'] if row['message'] else ''}\n")
+        stream.flush()
+
+    return show
+
+
+def cmd_run(args):
+    import shlex
+    from datetime import datetime
+
+    from dalembert.case import load_cases, parse_param
+    from dalembert.registry import UnknownNameError
+    from dalembert.run import DEFAULT_TIMEOUT_S, RunSpec, Timing, expand, run_matrix, run_matrix_dask
+    from dalembert.scene import SceneError
+    from dalembert.store import Store, harness_commit, machine_info, now
+
+    timing = Timing()
+    if args.resume:
+        store = Store(args.resume)
+        if not store.exists():
+            return _fail(f"--resume: {args.resume!r} is not a results directory (no manifest.json)")
+        manifest = store.manifest()
+        specs = [RunSpec.from_json(d) for d in manifest["specs"]]
+        timeout = manifest.get("timeout_s", DEFAULT_TIMEOUT_S)
+    else:
+        try:
+            if args.jobs is not None and args.jobs < 1:
+                raise ValueError(f"--jobs: must be at least 1, got {args.jobs}")
+            if args.timeout is not None and args.timeout <= 0:
+                raise ValueError(f"--timeout: must be positive, got {args.timeout}")
+            dts = [x for xs in args.dt or [] for x in xs]
+            rtols = [x for xs in args.rtol or [] for x in xs]
+            for flag, xs in (("--dt", dts), ("--rtol", rtols)):
+                bad = [x for x in xs if not (x > 0 and x < float("inf"))]
+                if bad:
+                    raise ValueError(f"{flag}: must be positive and finite, got {bad}")
+            params = {}
+            registry = load_cases()
+            for text in args.param:
+                key = text.split("=", 1)[0]
+                owners = [f for _, f in registry.items() if key in f.params]
+                if not owners:
+                    raise ValueError(f"--param {key!r}: no case has this parameter")
+                params.update([parse_param(owners[0], text)])
+            options = {}
+            for text in args.option:
+                if "=" not in text:
+                    raise ValueError(f"--option {text!r}: write KEY=VALUE")
+                k, v = text.split("=", 1)
+                options[k] = v
+            specs, skipped = expand(args.case, args.tag, args.engine, args.integrator, dts or None, rtols or None,
+                                    params, options)
+            out = args.out or os.path.join("results", datetime.now().strftime("%Y-%m-%dT%H-%M-%S"))
+            if os.path.exists(os.path.join(out, "manifest.json")):
+                raise ValueError(f"--out: {out!r} already holds a run — use --resume {out} or another directory")
+            try:
+                os.makedirs(out, exist_ok=True)
+            except OSError as err:
+                raise ValueError(f"--out: cannot create {out!r}: {err.strerror}") from None
+            if not os.access(out, os.W_OK):
+                raise ValueError(f"--out: cannot write to {out!r}")
+        except (UnknownNameError, ValueError, SceneError, ImportError, OSError) as e:
+            return _fail(str(e))
+        for s in skipped:
+            print(f"dalembert: skipping engine {s}", file=sys.stderr)
+        timeout = args.timeout or DEFAULT_TIMEOUT_S
+        from adapters import get_adapter
+        import dalembert
+
+        engines = sorted({s.engine for s in specs})
+        manifest = {
+            "harness_version": dalembert.__version__, "harness_commit": harness_commit(),
+            "machine": machine_info(), "engines": {e: get_adapter(e).version() for e in engines},
+            "command": shlex.join(["dalembert"] + sys.argv[1:]), "started": now(), "ended": None,
+            "timeout_s": timeout, "timing": vars(timing) if hasattr(timing, "__dict__") else {},
+            "specs": [s.to_json() for s in specs],
+        }
+        store = Store(out).create(manifest)
+    print(f"dalembert: {len(specs)} runs, {len(specs) - len(store.done_keys())} to do -> {store.path}",
+          file=sys.stderr)
+    progress = _progress_printer()
+    if args.scheduler:
+        run_matrix_dask(specs, store, args.scheduler, timeout, timing, progress)
+    else:
+        run_matrix(specs, store, args.jobs, timeout, timing, progress)
+    manifest["ended"] = now()
+    store.write_manifest(manifest)
+    rows = store.rows()
+    bad = [r for r in rows if r["status"] in ("failed", "diverged", "timeout")]
+    by_status = {}
+    for r in rows:
+        by_status[r["status"]] = by_status.get(r["status"], 0) + 1
+    print(f"dalembert: {len(rows)} runs stored in {store.path}: "
+          + ", ".join(f"{n} {s}" for s, n in sorted(by_status.items())), file=sys.stderr)
+    return 1 if bad else 0
+
+
+def cmd_report(args):
+    from dalembert.store import Store
+    from reports.summary import write_summary
+
+    store = Store(args.run_dir)
+    if not store.exists():
+        return _fail(f"{args.run_dir!r} is not a results directory (no manifest.json)")
+    md, csv_path = write_summary(store)
+    print(f"wrote {md} and {csv_path}")
+    return 0
+
+
+def cmd_export(args):
+    from dalembert.store import Store
+    from dalembert.trajectory import write_csv
+
+    store = Store(args.run_dir)
+    if not store.exists():
+        return _fail(f"{args.run_dir!r} is not a results directory (no manifest.json)")
+    rows = [r for r in store.rows() if r["case"] == args.case and r["engine"] == args.engine
+            and r["integrator"] == args.integrator
+            and (args.dt is None or r["dt"] == args.dt) and (args.rtol is None or r["rtol"] == args.rtol)]
+    if len(rows) != 1:
+        choices = sorted({f"{r['case']} {r['engine']} {r['settings']}" for r in store.rows()})
+        return _fail(f"{len(rows)} stored runs match (need exactly one; add --dt or --rtol). Stored: "
+                     + "; ".join(choices))
+    if "trajectory" not in rows[0]:
+        return _fail(f"that run has no trajectory (status {rows[0]['status']}: {rows[0]['message']})")
+    write_csv(store.trajectory(rows[0]["key"]), args.csv)
+    print(f"wrote {args.csv}")
+    return 0
+
+
 def main(argv=None):
     args = _parser().parse_args(argv)
-    return {"cases": cmd_cases, "truth": cmd_truth, "validate": cmd_validate}[args.command](args)
+    commands = {"cases": cmd_cases, "truth": cmd_truth, "validate": cmd_validate, "engines": cmd_engines,
+                "run": cmd_run, "report": cmd_report, "export": cmd_export}
+    return commands[args.command](args)
 
 
 if __name__ == "__main__":

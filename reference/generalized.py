@@ -157,7 +157,9 @@ class Kane:
 
         Newton's law per body: ``m a = F_loads + F_joint - sum_children F_child_joint``.
         """
-        udot, kin = self._solve(t, q, v)
+        return self._reactions(*self._solve(t, q, v))
+
+    def _reactions(self, udot, kin):
         out = {}
         for jd in reversed(self.joints):
             name = jd["joint"].child
@@ -177,11 +179,11 @@ class Kane:
         for i in range(n):
             if not (np.all(np.isfinite(Q[i])) and np.all(np.isfinite(V[i]))):
                 continue
-            kin = self.kinematics(Q[i], V[i])
+            udot, kin = self._solve(t[i], Q[i], V[i])  # one solve gives poses and reactions
             for name, arrs in bodies.items():
                 arrs[0][i], arrs[2][i], arrs[3][i] = kin[name]["p"], kin[name]["v"], kin[name]["w"]
                 arrs[1][i] = spatial.matrix_to_quat(kin[name]["R"])
-            for name, f in self.reaction_forces(t[i], Q[i], V[i]).items():
+            for name, f in self._reactions(udot, kin).items():
                 reactions[name][i] = f
         # A free joint's attitude is the stored quaternion itself (its norm drift is data).
         for jd in self.joints:
