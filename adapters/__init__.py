@@ -46,6 +46,7 @@ __all__ = ["Adapter", "IntegratorSpec", "Outcome", "BUILTIN", "adapter_names", "
 
 BUILTIN = {
     "reference": "adapters.reference:ReferenceAdapter",
+    "mujoco": "adapters.mujoco:MujocoAdapter",
 }
 
 

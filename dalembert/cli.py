@@ -85,6 +85,15 @@ def _parser():
     x.add_argument("--rtol", type=float)
     x.add_argument("--csv", required=True, metavar="FILE")
 
+    sm = sub.add_parser("show-model", help="print the model an engine builds for a case (e.g. MJCF)",
+                        epilog="example:\n  dalembert show-model pivoted_rod --engine mujoco",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sm.add_argument("case")
+    sm.add_argument("--engine", required=True)
+    sm.add_argument("--integrator", default=None, help="default: the engine's first")
+    sm.add_argument("--dt", type=float, default=1e-3)
+    sm.add_argument("--param", action="append", default=[], metavar="KEY=VALUE")
+
     v = sub.add_parser("validate", help="run every case with the reference solver against its closed form",
                        epilog="example:\n  dalembert validate --case pivoted_rod --out results",
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -326,10 +335,35 @@ def cmd_export(args):
     return 0
 
 
+def cmd_show_model(args):
+    from adapters import get_adapter
+    from dalembert.case import load_cases, parse_param
+    from dalembert.registry import UnknownNameError
+    from dalembert.scene import SceneError
+    from dalembert.settings import Settings
+
+    try:
+        factory = load_cases()[args.case]
+        case = factory(**dict(parse_param(factory, p) for p in args.param))
+        adapter = get_adapter(args.engine)
+        integ = args.integrator or next(iter(adapter.integrators))
+        spec = adapter.integrators.get(integ)
+        settings = Settings(integ, dt=args.dt) if spec is None or spec.fixed_step else Settings(integ, rtol=1e-8,
+                                                                                                  atol=1e-8)
+        adapter.check(case.scene, case.times, settings)
+        if not hasattr(adapter, "describe"):
+            raise ValueError(f"engine {args.engine!r} does not describe its model")
+        print(adapter.describe(case.scene, settings), end="")
+    except (UnknownNameError, ValueError, SceneError, ImportError) as e:
+        return _fail(str(e))
+    return 0
+
+
 def main(argv=None):
     args = _parser().parse_args(argv)
     commands = {"cases": cmd_cases, "truth": cmd_truth, "validate": cmd_validate, "engines": cmd_engines,
-                "run": cmd_run, "report": cmd_report, "export": cmd_export}
+                "run": cmd_run, "report": cmd_report, "export": cmd_export,
+                "show-model": cmd_show_model}
     return commands[args.command](args)
 
 

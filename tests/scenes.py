@@ -1,0 +1,59 @@
+"""Extra scenes that exercise every frame conversion of an adapter (shared by adapter tests)."""
+
+import numpy as np
+
+from dalembert import spatial
+from dalembert.case import Case, Tolerance
+from dalembert.scene import Body, Joint, Load, Scene
+
+
+def full_inertia_body(name, mass, moments, theta):
+    """A body whose frame is not principal: inertia R diag(moments) R^T."""
+    R = spatial.so3_exp(theta)
+    return Body(name, mass, R @ np.diag(moments) @ R.T)
+
+
+def chain_case(t_final=1.0):
+    """A ball-jointed body hanging from the world under gravity, a welded body
+    below it, a revolute body below that; off-centre joint frames, rotated
+    joint frames, full inertia tensors, and all four kinds of load."""
+    a = full_inertia_body("a", 2.0, (0.3, 0.4, 0.5), (0.3, -0.2, 0.5))
+    b = full_inertia_body("b", 0.5, (0.05, 0.06, 0.08), (-0.4, 0.1, 0.2))
+    c = full_inertia_body("c", 1.0, (0.1, 0.15, 0.2), (0.2, 0.7, -0.1))
+    q_ball = spatial.quat_exp([0.2, -0.1, 0.3])
+    scene = Scene(
+        "chain",
+        bodies=[a, b, c],
+        joints=[
+            Joint("ball", "world", "a", q0=q_ball, v0=[0.5, -1.0, 2.0], parent_point=[0.1, 0.0, 1.0],
+                  parent_quat=spatial.quat_exp([0.0, 0.3, 0.0]), child_point=[0.0, 0.05, 0.4],
+                  child_quat=spatial.quat_exp([0.1, 0.0, -0.2])),
+            Joint("weld", "a", "b", parent_point=[0.0, 0.0, -0.3], parent_quat=spatial.quat_exp([0.5, 0.0, 0.0]),
+                  child_point=[0.1, 0.0, 0.1]),
+            Joint("revolute", "b", "c", q0=[0.4], v0=[-3.0], axis=[0.0, 1.0, 1.0], parent_point=[0.0, 0.2, -0.1],
+                  child_point=[0.0, 0.0, 0.35], child_quat=spatial.quat_exp([0.0, 0.0, 0.4])),
+        ],
+        loads=[Load("a", "force", [0.0, 3.0, 0.0], "body", point=[0.2, 0.0, 0.0]),
+               Load("c", "force", [1.0, 0.0, 0.5], "world", point=[0.0, 0.1, 0.0]),
+               Load("b", "torque", [0.0, 0.0, 0.4], "body"),
+               Load("c", "torque", [0.2, 0.0, 0.0], "world")],
+        gravity=[0.0, 0.0, -9.81],
+    )
+    times = np.linspace(0.0, t_final, int(round(t_final / 0.01)) + 1)
+    return Case("chain", scene, t_final, times, tolerances={"orientation": Tolerance(1e-6, "test")})
+
+
+def free_body_world_loads_case(t_final=1.0):
+    """A free body with a full inertia, a world force off its COM and a world torque, under gravity."""
+    body = full_inertia_body("f", 1.5, (0.2, 0.3, 0.45), (0.1, 0.2, 0.3))
+    scene = Scene(
+        "free_world_loads",
+        bodies=[body],
+        joints=[Joint("free", "world", "f", q0=[0.1, 0.2, 0.3, *spatial.quat_exp([0.3, 0.1, -0.2])],
+                      v0=[0.5, 0.0, 1.0, 1.0, -2.0, 3.0])],
+        loads=[Load("f", "force", [0.0, 2.0, 0.0], "world", point=[0.3, 0.0, 0.1]),
+               Load("f", "torque", [0.0, 0.0, 0.5], "world")],
+        gravity=[0.0, 0.0, -9.81],
+    )
+    times = np.linspace(0.0, t_final, int(round(t_final / 0.01)) + 1)
+    return Case("free_world_loads", scene, t_final, times, tolerances={"orientation": Tolerance(1e-6, "test")})
