@@ -47,6 +47,7 @@ __all__ = ["Adapter", "IntegratorSpec", "Outcome", "BUILTIN", "adapter_names", "
 BUILTIN = {
     "reference": "adapters.reference:ReferenceAdapter",
     "mujoco": "adapters.mujoco:MujocoAdapter",
+    "pinocchio": "adapters.pinocchio:PinocchioAdapter",
 }
 
 

@@ -1,0 +1,380 @@
+"""Pinocchio adapter: the scene through Pinocchio's dynamics (ABA, RNEA), with
+the integrators owned here — so their quality is part of what is measured.
+
+Model (built programmatically, summarized by ``describe``):
+
+* A FreeFlyer for each free body, whose joint frame is the body frame at the
+  COM; a revolute (``JointModelRevoluteUnaligned``) or spherical joint whose
+  frame is the scene's child joint frame, placed in the parent's joint frame;
+  a weld adds the body to its parent's joint. Each body's inertia is
+  ``pin.Inertia(mass, lever, I_com)`` in its joint frame (Pinocchio applies the
+  parallel-axis shift), and an operational frame marks the scene body frame.
+* ``model.gravity`` is set from the scene — Pinocchio defaults to -9.81 in z,
+  so a scene without gravity gets zero explicitly.
+
+Conventions (converted only through ``dalembert.spatial``): FreeFlyer
+``q = (x, y, z, qx, qy, qz, qw)`` (scalar LAST) and ``v = (v_local, w_local)``
+(linear velocity of the joint origin in the joint frame); spherical ``q`` is
+scalar-last too. External forces enter ``aba``/``rnea`` per joint in the
+joint's LOCAL frame about its origin: a load ``f`` at point ``p`` becomes
+``(f, p x f)``; world-frame loads are rotated into the local frame at every
+evaluation from ``data.oMi`` (refreshed by ``forwardKinematics``: ``aba``
+does not update it for us).
+
+Integrators, each evaluating the loads at every stage:
+
+* ``euler``: semi-implicit (symplectic) Euler on the group;
+* ``rk4``: Runge-Kutta-Munthe-Kaas with the classical tableau, the stage
+  tangents corrected by the exact ``dexp^-1`` — Pinocchio's own
+  ``dIntegrate(q, theta, ARG1)`` is the right Jacobian of ``integrate``, so
+  ``theta' = dIntegrate^-1 v`` — and the configuration advanced by
+  ``pin.integrate``. Fourth order on the group;
+* ``rk4-naive``: RK4 on ``v`` with ``q`` advanced stagewise by
+  ``integrate(q, c h v_i)`` and no ``dexp^-1`` correction (lower order on a
+  non-commutative group: kept because the difference is a result);
+* ``rk45``, ``dop853``: scipy ``solve_ivp`` in local coordinates
+  ``q = integrate(q_k, delta)`` restarted at every sample ``q_k``: the state
+  ``(delta, v)`` has no redundant component, so error control is not fooled by
+  the quaternion's unit-norm constraint, and the quaternion never drifts.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from adapters import Adapter, IntegratorSpec, Outcome
+from dalembert import spatial
+from dalembert.scene import WORLD
+
+__all__ = ["PinocchioAdapter"]
+
+
+def _se3(R, p):
+    import pinocchio as pin
+
+    return pin.SE3(np.asarray(R, dtype=float), np.asarray(p, dtype=float))
+
+
+class PinocchioModel:
+    """A scene as a ``pin.Model`` plus the maps the adapter needs."""
+
+    def __init__(self, scene):
+        import pinocchio as pin
+
+        self.scene = scene
+        model = pin.Model()
+        model.gravity = pin.Motion(np.array(scene.gravity, dtype=float), np.zeros(3))
+        self.carrier, self.X_JB, self.joint_ids = {}, {}, {}
+        lines = []
+        for body in scene.topological_order():
+            j = scene.joint(body.name)
+            if j.parent == WORLD:
+                parent_id, X_parent = 0, _se3(np.eye(3), np.zeros(3))
+            else:
+                parent_id, X_parent = self.carrier[j.parent], self.X_JB[j.parent]
+            X_PJ = _se3(spatial.quat_to_matrix(j.parent_quat), j.parent_point)  # Jp in parent body coords
+            X_CJ = _se3(spatial.quat_to_matrix(j.child_quat), j.child_point)  # Jc in child body coords
+            if j.kind == "free":
+                jid = model.addJoint(0, pin.JointModelFreeFlyer(), _se3(np.eye(3), np.zeros(3)), body.name)
+                X_JB = _se3(np.eye(3), np.zeros(3))
+            elif j.kind in ("revolute", "ball"):
+                jm = (pin.JointModelRevoluteUnaligned(np.array(j.axis) / np.linalg.norm(j.axis))
+                      if j.kind == "revolute" else pin.JointModelSpherical())
+                jid = model.addJoint(parent_id, jm, X_parent * X_PJ, body.name)
+                X_JB = X_CJ.inverse()
+            else:  # weld: rigidly on the parent's joint
+                jid = parent_id
+                X_JB = X_parent * X_PJ * X_CJ.inverse()
+            if j.kind != "weld":
+                self.joint_ids[body.name] = jid
+            self.carrier[body.name], self.X_JB[body.name] = jid, X_JB
+            R, p = X_JB.rotation, X_JB.translation
+            model.appendBodyToJoint(jid, pin.Inertia(body.mass, p, R @ body.inertia_matrix @ R.T),
+                                    _se3(np.eye(3), np.zeros(3)))
+            model.addFrame(pin.Frame(body.name, jid, X_JB, pin.FrameType.OP_FRAME))
+            lines.append(f"{body.name}: {j.kind} -> pin joint {jid} "
+                         f"({model.joints[jid].shortname() if jid else 'universe'}), mass {body.mass:g} kg")
+        self.model = model
+        self.data = model.createData()
+        self.frame_ids = {b.name: model.getFrameId(b.name) for b in scene.bodies}
+        self.summary = "\n".join([f"pin.Model: nq = {model.nq}, nv = {model.nv}, gravity = "
+                                  f"{model.gravity.linear.tolist()}"] + lines)
+        self._prepare_loads()
+
+    # ---------------------------------------------------------------- loads
+    def _prepare_loads(self):
+        import pinocchio as pin
+
+        model = self.model
+        self.const_f = {}  # joint id -> constant local spatial force (follower loads)
+        self.world_loads = []  # (joint id, point in J, force_W or None, torque_W or None)
+        for ld in self.scene.loads:
+            jid = self.carrier[ld.body]
+            X = self.X_JB[ld.body]
+            p_J = X.rotation @ np.array(ld.point) + X.translation
+            vec = np.array(ld.vector)
+            if ld.frame == "body":
+                v_J = X.rotation @ vec
+                f = pin.Force(v_J, np.cross(p_J, v_J)) if ld.kind == "force" else pin.Force(np.zeros(3), v_J)
+                self.const_f[jid] = self.const_f.get(jid, pin.Force.Zero()) + f
+            else:
+                self.world_loads.append((jid, p_J, vec if ld.kind == "force" else None,
+                                         vec if ld.kind == "torque" else None))
+        self.has_loads = bool(self.scene.loads)
+        self.fext = pin.StdVec_Force()
+        for _ in range(model.njoints):
+            self.fext.append(pin.Force.Zero())
+        self.tau = np.zeros(model.nv)
+
+    def external_forces(self, q):
+        """Per-joint local forces for ``aba``/``rnea`` at configuration ``q``."""
+        import pinocchio as pin
+
+        if self.world_loads:
+            pin.forwardKinematics(self.model, self.data, q)
+        for i in range(self.model.njoints):
+            self.fext[i] = self.const_f.get(i, pin.Force.Zero())
+        for jid, p_J, f_W, t_W in self.world_loads:
+            R_WJ = self.data.oMi[jid].rotation
+            if f_W is not None:
+                f_J = R_WJ.T @ f_W
+                self.fext[jid] = self.fext[jid] + pin.Force(f_J, np.cross(p_J, f_J))
+            else:
+                self.fext[jid] = self.fext[jid] + pin.Force(np.zeros(3), R_WJ.T @ t_W)
+        return self.fext
+
+    def acceleration(self, q, v):
+        import pinocchio as pin
+
+        if self.has_loads:
+            return pin.aba(self.model, self.data, q, v, self.tau, self.external_forces(q))
+        return pin.aba(self.model, self.data, q, v, self.tau)
+
+    # ---------------------------------------------------------- conversions
+    def initial_state(self):
+        import pinocchio as pin
+
+        q, v = pin.neutral(self.model), np.zeros(self.model.nv)
+        for j in self.scene.joints:
+            if j.kind == "weld":
+                continue
+            jm = self.model.joints[self.joint_ids[j.child]]
+            iq, iv = jm.idx_q, jm.idx_v
+            if j.kind == "free":
+                R = spatial.quat_to_matrix(j.q0[3:])
+                q[iq:iq + 7] = np.concatenate([j.q0[:3], spatial.wxyz_to_xyzw(j.q0[3:])])
+                v[iv:iv + 6] = np.concatenate([R.T @ np.array(j.v0[:3]), j.v0[3:]])
+            elif j.kind == "ball":
+                q[iq:iq + 4] = spatial.wxyz_to_xyzw(j.q0)
+                v[iv:iv + 3] = j.v0
+            else:
+                q[iq], v[iv] = j.q0[0], j.v0[0]
+        return q, v
+
+
+class PinocchioAdapter(Adapter):
+    """Pinocchio (``pin``), integrators owned by the adapter."""
+
+    name = "pinocchio"
+    effects = frozenset({
+        "gravity", "joint:free", "joint:revolute", "joint:ball", "joint:weld",
+        "load:follower_force", "load:world_force", "load:follower_torque", "load:world_torque",
+    })
+    integrators = {
+        "euler": IntegratorSpec(True, (), "semi-implicit Euler on the group"),
+        "rk4": IntegratorSpec(True, (), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
+        "rk4-naive": IntegratorSpec(True, (), "RK4 with stagewise integrate, no dexp^-1 correction"),
+        "rk45": IntegratorSpec(False, (), "scipy RK45 in local coordinates"),
+        "dop853": IntegratorSpec(False, (), "scipy DOP853 in local coordinates"),
+    }
+
+    def version(self):
+        import pinocchio
+
+        return pinocchio.__version__
+
+    def describe(self, scene, settings):
+        return PinocchioModel(scene).summary + "\n"
+
+    def prepare(self, scene, times, settings):
+        pm = PinocchioModel(scene)
+        q0, v0 = pm.initial_state()
+        times = np.asarray(times, dtype=float)
+        steps = np.rint(np.diff(times) / settings.dt).astype(int) if settings.dt else None
+        return dict(scene=scene, pm=pm, q0=q0, v0=v0, times=times, settings=settings, steps=steps)
+
+    # ------------------------------------------------------------ stepping
+    def run(self, prepared):
+        p = prepared
+        method = p["settings"].integrator
+        start = time.perf_counter()
+        if method in ("rk45", "dop853"):
+            Q, V, n_steps, n_rhs = self._adaptive(p, method.upper())
+        else:
+            Q, V, n_steps, n_rhs = self._fixed(p, method)
+        wall = time.perf_counter() - start
+        return Outcome(self._read_back(p, Q, V), wall, n_steps, n_rhs)
+
+    def _fixed(self, p, method):
+        import pinocchio as pin
+
+        pm = p["pm"]
+        model, acc = pm.model, pm.acceleration
+        integrate = pin.integrate
+        ARG1 = pin.ArgumentPosition.ARG1
+        solve = np.linalg.solve
+
+        def J_inv(q, theta, vel):
+            return solve(pin.dIntegrate(model, q, theta, ARG1), vel)
+
+        def step(q, v, h):
+            if method == "euler":
+                v = v + h * acc(q, v)
+                return integrate(model, q, h * v), v
+            a1 = acc(q, v)
+            if method == "rk4":
+                v2 = v + 0.5 * h * a1
+                th2 = 0.5 * h * v
+                k2 = J_inv(q, th2, v2)
+                a2 = acc(integrate(model, q, th2), v2)
+                v3 = v + 0.5 * h * a2
+                th3 = 0.5 * h * k2
+                k3 = J_inv(q, th3, v3)
+                a3 = acc(integrate(model, q, th3), v3)
+                v4 = v + h * a3
+                th4 = h * k3
+                k4 = J_inv(q, th4, v4)
+                a4 = acc(integrate(model, q, th4), v4)
+                theta = h / 6.0 * (v + 2.0 * k2 + 2.0 * k3 + k4)
+            else:  # rk4-naive
+                v2 = v + 0.5 * h * a1
+                a2 = acc(integrate(model, q, 0.5 * h * v), v2)
+                v3 = v + 0.5 * h * a2
+                a3 = acc(integrate(model, q, 0.5 * h * v2), v3)
+                v4 = v + h * a3
+                a4 = acc(integrate(model, q, h * v3), v4)
+                theta = h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4)
+            return integrate(model, q, theta), v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+
+        times, steps = p["times"], p["steps"]
+        Q = np.full((len(times), model.nq), np.nan)
+        V = np.full((len(times), model.nv), np.nan)
+        q, v = p["q0"].copy(), p["v0"].copy()
+        Q[0], V[0] = q, v
+        n = 0
+        for k, nsub in enumerate(steps, 1):
+            h = (times[k] - times[k - 1]) / nsub
+            for _ in range(nsub):
+                q, v = step(q, v, h)
+            n += nsub
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                break
+            Q[k], V[k] = q, v
+        stages = 1 if method == "euler" else 4
+        return Q, V, n, n * stages
+
+    def _adaptive(self, p, method):
+        import pinocchio as pin
+        from scipy.integrate import solve_ivp
+
+        pm = p["pm"]
+        model, nv = pm.model, pm.model.nv
+        s = p["settings"]
+        ARG1 = pin.ArgumentPosition.ARG1
+        times = p["times"]
+        Q = np.full((len(times), model.nq), np.nan)
+        V = np.full((len(times), nv), np.nan)
+        q, v = p["q0"].copy(), p["v0"].copy()
+        Q[0], V[0] = q, v
+        n_steps = n_rhs = 0
+        for k in range(1, len(times)):
+            q_ref = q
+
+            def rhs(t, y):
+                delta, vel = y[:nv], y[nv:]
+                qq = pin.integrate(model, q_ref, delta)
+                ddelta = np.linalg.solve(pin.dIntegrate(model, q_ref, delta, ARG1), vel)
+                return np.concatenate([ddelta, pm.acceleration(qq, vel)])
+
+            sol = solve_ivp(rhs, (times[k - 1], times[k]), np.concatenate([np.zeros(nv), v]), method=method,
+                            rtol=s.rtol or 1e-8, atol=s.atol or 1e-8)
+            n_steps += len(sol.t) - 1
+            n_rhs += sol.nfev
+            y = sol.y[:, -1]
+            if not sol.success or not np.all(np.isfinite(y)):
+                break
+            q, v = pin.integrate(model, q_ref, y[:nv]), y[nv:]
+            Q[k], V[k] = q, v
+        return Q, V, n_steps, n_rhs
+
+    # ------------------------------------------------------------ read-back
+    def _read_back(self, p, Q, V):
+        import pinocchio as pin
+
+        from dalembert.trajectory import BodyStates, JointStates, Trajectory
+
+        pm, scene = p["pm"], p["scene"]
+        model, data = pm.model, pm.data
+        n = len(p["times"])
+        bodies = {b.name: [np.full((n, 3), np.nan), np.full((n, 4), np.nan), np.full((n, 3), np.nan),
+                           np.full((n, 3), np.nan)] for b in scene.bodies}
+        reacting = [j for j in scene.joints if j.kind in ("revolute", "ball")]
+        reactions = {j.child: np.full((n, 3), np.nan) for j in reacting}
+        for k in range(n):
+            q, v = Q[k], V[k]
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                continue
+            local = {}
+            if reacting:  # rnea with the external forces: data.f[joint] is the force through the joint
+                a = pm.acceleration(q, v)
+                if pm.has_loads:
+                    pin.rnea(model, data, q, v, a, pm.external_forces(q))
+                else:
+                    pin.rnea(model, data, q, v, a)
+                local = {j.child: data.f[pm.joint_ids[j.child]].linear.copy() for j in reacting}
+            # rnea does not refresh data.oMi: rotate with this sample's forward kinematics
+            pin.forwardKinematics(model, data, q, v)
+            pin.updateFramePlacements(model, data)
+            for child, f in local.items():
+                reactions[child][k] = data.oMi[pm.joint_ids[child]].rotation @ f
+            for name, arrs in bodies.items():
+                fid = pm.frame_ids[name]
+                X = data.oMf[fid]
+                vel = pin.getFrameVelocity(model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+                arrs[0][k], arrs[2][k], arrs[3][k] = X.translation, vel.linear, vel.angular
+                arrs[1][k] = spatial.matrix_to_quat(X.rotation)
+        joints = {}
+        for j in scene.joints:
+            if j.kind == "weld":
+                continue
+            jm = model.joints[pm.joint_ids[j.child]]
+            qj, vj = Q[:, jm.idx_q:jm.idx_q + jm.nq], V[:, jm.idx_v:jm.idx_v + jm.nv]
+            if j.kind == "free":  # the engine's own quaternion (its norm is data), scalar first
+                quat = spatial.xyzw_to_wxyz(qj[:, 3:])
+                bodies[j.child][1] = quat
+                R = spatial.quat_to_matrix(spatial.quat_normalize(np.nan_to_num(quat, nan=1.0)))
+                v_W = np.einsum("nij,nj->ni", R, vj[:, :3])
+                joints[j.child] = JointStates(np.concatenate([qj[:, :3], quat], axis=1),
+                                              np.concatenate([v_W, vj[:, 3:]], axis=1))
+            elif j.kind == "ball":
+                joints[j.child] = JointStates(spatial.xyzw_to_wxyz(qj), vj)
+            else:
+                joints[j.child] = JointStates(qj, vj)
+        traj_bodies = {name: BodyStates(*arrs) for name, arrs in bodies.items()}
+        extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
+        return Trajectory(p["times"], traj_bodies, joints, extras)
+
+    # ------------------------------------------------------------ audit
+    def audit(self, prepared, outcome):
+        pm = prepared["pm"]
+        return {
+            "gravity": tuple(float(g) for g in pm.model.gravity.linear),
+            "joints": {name: pm.model.joints[jid].shortname() for name, jid in pm.joint_ids.items()},
+            "external_forces_per_evaluation": [f"{ld.effect} on {ld.body}" for ld in prepared["scene"].loads],
+            "nq": int(pm.model.nq), "nv": int(pm.model.nv),
+            "integrator": prepared["settings"].integrator,
+            "pinocchio_version": self.version(),
+            "contacts": 0, "constraint_rows": 0,
+        }

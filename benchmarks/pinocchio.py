@@ -1,0 +1,54 @@
+"""Benchmark of the Pinocchio adapter's integrators against bare ``pin.aba`` calls.
+
+    python -m benchmarks.pinocchio
+
+Per case and fixed-step integrator at dt = 1e-3 (over 2 s): stepping time per
+simulated second, and its ratio to the cost of the ``aba`` calls the method
+needs (stages per step x steps x one bare ``pin.aba`` call with the same
+arguments, timed in a tight loop in the same process). Goal (issue 5): the
+Lie-group RK4 at most 3x four bare ``aba`` calls per step.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from adapters import get_adapter
+from dalembert import Settings
+from dalembert.case import load_cases
+
+STAGES = {"euler": 1, "rk4": 4, "rk4-naive": 4}
+
+
+def bare_aba_seconds(pm, q, v, n=20000):
+    import pinocchio as pin
+
+    fext = pm.external_forces(q) if pm.has_loads else None
+    args = (pm.model, pm.data, q, v, pm.tau) + ((fext,) if fext is not None else ())
+    pin.aba(*args)
+    t0 = time.perf_counter()
+    for _ in range(n):
+        pin.aba(*args)
+    return (time.perf_counter() - t0) / n
+
+
+def main():
+    adapter = get_adapter("pinocchio")
+    print(f"Pinocchio {adapter.version()}, dt = 1e-3, 2 s horizon")
+    print(f"{'case':<24}{'integrator':<12}{'ms/sim s':>10}{'aba us':>9}{'ratio':>8}")
+    for name, factory in load_cases().items():
+        case = factory(t_final=2.0)
+        for integ, stages in STAGES.items():
+            prepared = adapter.prepare(case.scene, case.times, Settings(integ, dt=1e-3))
+            adapter.run(prepared)
+            wall = np.median([adapter.run(prepared).wall_s for _ in range(3)])
+            aba = bare_aba_seconds(prepared["pm"], prepared["q0"], prepared["v0"])
+            n_steps = int(prepared["steps"].sum())
+            print(f"{name:<24}{integ:<12}{1e3 * wall / case.t_final:>10.2f}{1e6 * aba:>9.2f}"
+                  f"{wall / (stages * n_steps * aba):>8.2f}")
+
+
+if __name__ == "__main__":
+    main()
