@@ -48,6 +48,7 @@ BUILTIN = {
     "reference": "adapters.reference:ReferenceAdapter",
     "mujoco": "adapters.mujoco:MujocoAdapter",
     "pinocchio": "adapters.pinocchio:PinocchioAdapter",
+    "exudyn": "adapters.exudyn:ExudynAdapter",
 }
 
 
