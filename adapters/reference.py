@@ -47,6 +47,15 @@ class ReferenceAdapter(Adapter):
                 return "Newton-Euler formulations handle free bodies only (use formulation=kane)"
         return reason
 
+    def describe(self, scene, settings):
+        from reference.solver import FORMULATIONS, default_formulation
+
+        formulation = settings.options.get("formulation", default_formulation(scene))
+        system = FORMULATIONS[formulation](scene)
+        return (f"reference {formulation} ({type(system).__name__}): nq = {len(system.q0)}, nv = {len(system.v0)}; "
+                f"blocks {[b.kind for b in system.blocks]}; gravity {list(scene.gravity)}; "
+                f"loads {[ld.effect + ' on ' + ld.body for ld in scene.loads]}\n")
+
     def prepare(self, scene, times, settings):
         from reference.solver import build
 

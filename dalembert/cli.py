@@ -68,7 +68,7 @@ def _parser():
     r.add_argument("--out", metavar="DIR", help="results directory (default results/<timestamp>)")
     r.add_argument("--resume", metavar="DIR", help="finish an interrupted run directory")
 
-    rp = sub.add_parser("report", help="write report.md and summary.csv for a results directory",
+    rp = sub.add_parser("report", help="write report.html, report.md and summary.csv for a results directory",
                         epilog="example:\n  dalembert report results/latest",
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     rp.add_argument("run_dir")
@@ -84,6 +84,15 @@ def _parser():
     x.add_argument("--dt", type=float)
     x.add_argument("--rtol", type=float)
     x.add_argument("--csv", required=True, metavar="FILE")
+
+    cp = sub.add_parser("compare", help="compare two results directories; non-zero exit on a regression",
+                        epilog="example:\n  dalembert compare results/before results/after --threshold 2",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    cp.add_argument("run_a")
+    cp.add_argument("run_b")
+    cp.add_argument("--threshold", type=float, default=2.0, help="error growth factor that is a regression (default 2)")
+    cp.add_argument("--cost-threshold", type=float, default=None,
+                    help="stepping-time growth factor that is a regression (default: costs are reported only)")
 
     sm = sub.add_parser("show-model", help="print the model an engine builds for a case (e.g. MJCF)",
                         epilog="example:\n  dalembert show-model pivoted_rod --engine mujoco",
@@ -304,13 +313,13 @@ def cmd_run(args):
 
 def cmd_report(args):
     from dalembert.store import Store
-    from reports.summary import write_summary
+    from reports.render import build_report
 
     store = Store(args.run_dir)
     if not store.exists():
         return _fail(f"{args.run_dir!r} is not a results directory (no manifest.json)")
-    md, csv_path = write_summary(store)
-    print(f"wrote {md} and {csv_path}")
+    for path in build_report(store):
+        print(f"wrote {path}")
     return 0
 
 
@@ -333,6 +342,26 @@ def cmd_export(args):
     write_csv(store.trajectory(rows[0]["key"]), args.csv)
     print(f"wrote {args.csv}")
     return 0
+
+
+def cmd_compare(args):
+    from dalembert.store import Store
+    from reports.compare import compare_stores
+
+    stores = [Store(d) for d in (args.run_a, args.run_b)]
+    for d, s in zip((args.run_a, args.run_b), stores):
+        if not s.exists():
+            return _fail(f"{d!r} is not a results directory (no manifest.json)")
+    if not args.threshold > 1.0:
+        return _fail(f"--threshold: must be greater than 1, got {args.threshold}")
+    rows, regressed = compare_stores(*stores, threshold=args.threshold, cost_threshold=args.cost_threshold)
+    changed = [r for r in rows if r["change"] != "same"]
+    for r in changed:
+        setting = f"dt={r['dt']:g}" if r.get("dt") else f"rtol={r['rtol']:g}" if r.get("rtol") else ""
+        print(f"{r['case']:<24} {r['engine']:<10} {r['integrator']:<18} {setting:<12} {r['change']}")
+    print(f"{len(rows)} runs compared: {len(rows) - len(changed)} unchanged, {len(changed)} changed"
+          + (" — REGRESSION" if regressed else ""))
+    return 1 if regressed else 0
 
 
 def cmd_show_model(args):
@@ -363,7 +392,7 @@ def main(argv=None):
     args = _parser().parse_args(argv)
     commands = {"cases": cmd_cases, "truth": cmd_truth, "validate": cmd_validate, "engines": cmd_engines,
                 "run": cmd_run, "report": cmd_report, "export": cmd_export,
-                "show-model": cmd_show_model}
+                "show-model": cmd_show_model, "compare": cmd_compare}
     return commands[args.command](args)
 
 

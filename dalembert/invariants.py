@@ -31,6 +31,7 @@ __all__ = [
     "joint_residual",
     "pairwise_distance_change",
     "drift",
+    "drift_series",
     "summary",
 ]
 
@@ -206,6 +207,22 @@ CONSERVED = {
     "angular_momentum_com": "relative to max |L| (spin about the COMs)",
     "pairwise_distance": "absolute, m",
 }
+
+
+def drift_series(name, scene, traj):
+    """Change of the conserved quantity ``name`` from its initial value at each sample, shape (n,),
+    scaled as in ``CONSERVED`` (so ``max(drift_series) == drift``)."""
+    if name in ("energy", "energy_balance"):
+        x = total_energy(scene, traj) if name == "energy" else energy_balance(scene, traj)
+        ke = float(np.max(kinetic_energy(scene, traj)))
+        scale = max(abs(x[0]), ke) if name == "energy" else ke
+        return np.abs(x - x[0]) / (scale if scale > 0 else 1.0)
+    if name == "pairwise_distance":
+        return pairwise_distance_change(scene, traj)
+    x = {"linear_momentum": linear_momentum, "angular_momentum": angular_momentum,
+         "angular_momentum_com": angular_momentum_com}[name](scene, traj)
+    scale = float(np.max(np.linalg.norm(x, axis=1)))
+    return np.linalg.norm(x - x[0], axis=1) / (scale if scale > 0 else 1.0)
 
 
 def drift(name, scene, traj):

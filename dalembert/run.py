@@ -199,6 +199,7 @@ def execute(spec, timing=Timing()):
         adapter = get_adapter(spec.engine)
         row["engine_version"] = adapter.version()
         case = make_case(spec.case, **dict(spec.params))
+        row["t_final"] = case.t_final
         settings = spec.settings
         reason = adapter.unsupported(case.scene, settings)
         if reason:
@@ -211,6 +212,8 @@ def execute(spec, timing=Timing()):
         traj = first.trajectory
         row.update(n_steps=first.n_steps, n_rhs=first.n_rhs, audit=json.dumps(adapter.audit(prepared, first),
                                                                               default=str))
+        if hasattr(adapter, "describe"):
+            row["model"] = adapter.describe(case.scene, settings)
         if not traj.is_finite():
             row.update(status="diverged", message=f"non-finite state from t = {traj.first_nonfinite_time()} s",
                        t_diverged=traj.first_nonfinite_time(), wall_s_median=first.wall_s,
@@ -259,11 +262,22 @@ def _finish(store, row, npz, progress, counts):
         progress(counts["done"], counts["total"], counts["bad"], row)
 
 
+def write_truths(specs, store):
+    """Store each selected case's truth once (closed form, else the reference), for the reports."""
+    from dalembert.case import make_case
+    from reference import truth
+
+    for name, params, version in sorted({(s.case, s.params, s.case_version) for s in specs}):
+        if store.truth(name, version) is None:
+            store.write_truth(name, version, truth(make_case(name, **dict(params))))
+
+
 def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None):
     """Run ``specs`` not yet in ``store``, ``jobs`` at a time, each in a forked worker.
 
     Returns the list of keys run now.
     """
+    write_truths(specs, store)
     todo = [s for s in specs if s.key not in store.done_keys()]
     jobs = max(1, jobs or os.cpu_count() or 1)
     ctx = mp.get_context("fork")
@@ -331,6 +345,7 @@ def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=T
     from distributed import Client, as_completed
 
     client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+    write_truths(specs, store)
     todo = [s for s in specs if s.key not in store.done_keys()]
     counts = {"done": 0, "bad": 0, "total": len(todo)}
     futures = {client.submit(execute_isolated, s.to_json(), asdict(timing), timeout, pure=False): s for s in todo}

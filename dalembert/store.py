@@ -7,6 +7,7 @@ Layout of a run directory::
     rows/<key>.json        one finished run (written atomically when it ends)
     runs.parquet           all rows as a table (rebuilt from rows/ after every batch)
     trajectories/<key>.npz one trajectory per run that produced one
+    truth/<case>__<version>.npz  each case's truth at its sample times (what reports compare with)
 
 Trajectory files (``.npz``) use these array names: ``t`` (n,); per body
 ``body.<name>.position`` (n,3) COM in world, m; ``body.<name>.quaternion``
@@ -188,6 +189,19 @@ class Store:
 
     def trajectory(self, key):
         return trajectory_from_npz(os.path.join(self.traj_dir, f"{key}.npz"))
+
+    # -------------------------------------------------------------- truths
+    def truth_path(self, case, version):
+        return os.path.join(self.path, "truth", f"{case}__{version}.npz")
+
+    def write_truth(self, case, version, trajectory):
+        """Store a case's truth at its sample times (written once per case version)."""
+        os.makedirs(os.path.join(self.path, "truth"), exist_ok=True)
+        atomic_write(self.truth_path(case, version), trajectory_to_npz(trajectory))
+
+    def truth(self, case, version):
+        path = self.truth_path(case, version)
+        return trajectory_from_npz(path) if os.path.exists(path) else None
 
 
 def _json(x):

@@ -178,7 +178,7 @@ def test_export_writes_a_stored_trajectory(tmp_path, capsys):
     assert main(["run", "--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2",
                  "--param", "t_final=0.5", "--out", str(out)]) == 0
     assert main(["report", str(out)]) == 0
-    assert "## free_top" in (out / "report.md").read_text()
+    assert "## free_top" in (out / "report.md").read_text() and (out / "report.html").exists()
     assert main(["export", str(out), "--case", "free_top", "--engine", "reference", "--integrator", "rk4",
                  "--csv", str(tmp_path / "x.csv")]) == 0
     traj = read_csv(tmp_path / "x.csv")
