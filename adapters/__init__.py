@@ -41,7 +41,8 @@ from dataclasses import dataclass, field
 
 from dalembert.registry import Registry, UnknownNameError, suggest
 
-__all__ = ["Adapter", "IntegratorSpec", "Outcome", "BUILTIN", "adapter_names", "get_adapter", "register_adapter",
+__all__ = ["Adapter", "IntegratorSpec", "Outcome", "BUILTIN", "adapter_names", "adapter_path", "get_adapter",
+           "register_adapter",
            "check_adapter"]
 
 BUILTIN = {
@@ -84,7 +85,7 @@ class Adapter:
 
     def check(self, scene, times, settings):
         """Raise ValueError naming the field when ``settings`` cannot be run."""
-        from reference.integrators import steps_per_interval
+        from dalembert.settings import steps_per_interval
 
         if settings.integrator not in self.integrators:
             raise ValueError(f"integrator: {self.name} has no {settings.integrator!r}"
@@ -130,10 +131,27 @@ def _entry_points():
 
 
 def register_adapter(name, cls):
-    """Register an adapter class under ``name`` programmatically (plugins, tests)."""
+    """Register an adapter class under ``name`` programmatically (plugins, tests).
+
+    The class must be importable by module and name: worker processes that do
+    not share this process's memory (forkserver, Dask) import it from there.
+    """
     BUILTIN.pop(name, None)
     _REGISTRY.register(name, cls)
     return cls
+
+
+def adapter_path(name):
+    """``"module:Class"`` of the adapter registered as ``name`` (how another process imports it)."""
+    if name in _REGISTRY:
+        cls = _REGISTRY[name]
+        return f"{cls.__module__}:{cls.__qualname__}"
+    if name in BUILTIN:
+        return BUILTIN[name]
+    eps = _entry_points()
+    if name in eps:
+        return eps[name].value
+    raise UnknownNameError(f"unknown engine {name!r}{suggest(name, adapter_names())}")
 
 
 def adapter_names():
@@ -141,8 +159,17 @@ def adapter_names():
     return sorted(set(BUILTIN) | set(_entry_points()) | set(_REGISTRY))
 
 
-def get_adapter(name):
-    """An instance of the adapter registered as ``name`` (imported on first use)."""
+def get_adapter(name, path=None):
+    """An instance of the adapter registered as ``name`` (imported on first use).
+
+    ``path`` (``"module:Class"``) lets a worker process import an adapter that
+    was registered programmatically in its parent.
+    """
+    if name not in _REGISTRY and path and name not in BUILTIN:
+        module, cls = path.split(":")
+        obj = getattr(importlib.import_module(module), cls)
+        if name not in _REGISTRY:  # importing the module may have registered it already
+            _REGISTRY.register(name, obj)
     if name not in _REGISTRY:
         if name in BUILTIN:
             module, cls = BUILTIN[name].split(":")

@@ -52,7 +52,7 @@ import numpy as np
 
 from adapters import Adapter, IntegratorSpec, Outcome
 from dalembert import spatial
-from dalembert.scene import WORLD
+from dalembert.scene import EFFECTS, WORLD
 
 __all__ = ["MujocoAdapter", "mjcf"]
 
@@ -160,10 +160,7 @@ class MujocoAdapter(Adapter):
     """MuJoCo (``mujoco`` Python bindings). Options: ``loads`` = ``actuator`` | ``xfrc_applied``."""
 
     name = "mujoco"
-    effects = frozenset({
-        "gravity", "joint:free", "joint:revolute", "joint:ball", "joint:weld",
-        "load:follower_force", "load:world_force", "load:follower_torque", "load:world_torque",
-    })
+    effects = EFFECTS
     integrators = {
         "euler": IntegratorSpec(True, ("loads",), "semi-implicit Euler"),
         "rk4": IntegratorSpec(True, ("loads",), "classical RK4"),

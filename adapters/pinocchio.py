@@ -46,7 +46,8 @@ import numpy as np
 
 from adapters import Adapter, IntegratorSpec, Outcome
 from dalembert import spatial
-from dalembert.scene import WORLD
+from dalembert.scene import EFFECTS, WORLD
+from dalembert.settings import is_numerical_failure
 
 __all__ = ["PinocchioAdapter"]
 
@@ -178,10 +179,7 @@ class PinocchioAdapter(Adapter):
     """Pinocchio (``pin``), integrators owned by the adapter."""
 
     name = "pinocchio"
-    effects = frozenset({
-        "gravity", "joint:free", "joint:revolute", "joint:ball", "joint:weld",
-        "load:follower_force", "load:world_force", "load:follower_torque", "load:world_torque",
-    })
+    effects = EFFECTS
     integrators = {
         "euler": IntegratorSpec(True, (), "semi-implicit Euler on the group"),
         "rk4": IntegratorSpec(True, (), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
@@ -266,8 +264,14 @@ class PinocchioAdapter(Adapter):
         n = 0
         for k, nsub in enumerate(steps, 1):
             h = (times[k] - times[k - 1]) / nsub
-            for _ in range(nsub):
-                q, v = step(q, v, h)
+            try:
+                with np.errstate(over="ignore", invalid="ignore"):  # a blow-up is data, not a warning
+                    for _ in range(nsub):
+                        q, v = step(q, v, h)
+            except Exception as e:  # a blown-up state (e.g. a singular dIntegrate): NaN from here on
+                if not is_numerical_failure(e):
+                    raise
+                break
             n += nsub
             if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
                 break
@@ -298,8 +302,13 @@ class PinocchioAdapter(Adapter):
                 ddelta = np.linalg.solve(pin.dIntegrate(model, q_ref, delta, ARG1), vel)
                 return np.concatenate([ddelta, pm.acceleration(qq, vel)])
 
-            sol = solve_ivp(rhs, (times[k - 1], times[k]), np.concatenate([np.zeros(nv), v]), method=method,
-                            rtol=s.rtol or 1e-8, atol=s.atol or 1e-8)
+            try:
+                sol = solve_ivp(rhs, (times[k - 1], times[k]), np.concatenate([np.zeros(nv), v]), method=method,
+                                rtol=s.rtol or 1e-8, atol=s.atol or 1e-8)
+            except Exception as e:
+                if not is_numerical_failure(e):
+                    raise
+                break
             n_steps += len(sol.t) - 1
             n_rhs += sol.nfev
             y = sol.y[:, -1]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from adapters import Adapter, IntegratorSpec, Outcome
+from dalembert.scene import EFFECTS
 
 __all__ = ["ReferenceAdapter"]
 
@@ -18,10 +19,7 @@ class ReferenceAdapter(Adapter):
     """
 
     name = "reference"
-    effects = frozenset({
-        "gravity", "joint:free", "joint:revolute", "joint:ball", "joint:weld",
-        "load:follower_force", "load:world_force", "load:follower_torque", "load:world_torque",
-    })
+    effects = EFFECTS
     integrators = {
         "dop853": IntegratorSpec(False, ("formulation",), "scipy DOP853, adaptive 8th order"),
         "rk4": IntegratorSpec(True, ("formulation",), "classical RK4 on embedded coordinates"),

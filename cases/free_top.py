@@ -57,3 +57,89 @@ def free_top(inertia=(1.0, 2.0, 3.0), omega0=(0.1, 0.0, 5.0), t_final=20.0, samp
 def free_top_intermediate(inertia=(1.0, 2.0, 3.0), omega0=(1e-3, 5.0, 1e-3), t_final=20.0, sample_interval=0.01):
     """The same top spinning 1e-3 rad/s off the intermediate axis: unstable, it flips."""
     return _top_case("free_top_intermediate", inertia, omega0, t_final, sample_interval)
+
+
+# ---------------------------------------------------------------- hard cases
+# Stability bounds of the hard cases: a run that changes energy or |L| by more
+# than this has stopped following the motion (it is adding or removing energy),
+# whatever its phase accuracy.
+STABILITY_ENERGY = Tolerance(1e-3, "relative; 0.1% of the energy gained or lost over the horizon is no longer "
+                                   "roundoff or truncation but an integrator pumping or damping the motion")
+STABILITY_MOMENTUM = Tolerance(1e-3, "relative; as STABILITY_ENERGY, for the world angular momentum")
+HARD_ORIENTATION_TOL = Tolerance(1e-4, "rad; above the roundoff floor of every hard variant at its defaults (the "
+                                       "floor is <= 1.3e-7 rad at 500 rad/s), so a miss is the engine's, not the physics'")
+HARD_RATE_TOL = Tolerance(1e-3, "relative to the spin rate; as HARD_ORIENTATION_TOL")
+# The floor: the spread of the closed form when each component of the initial
+# angular velocity moves by FLOOR_ULPS ulps of |w0| — the physics' own
+# sensitivity to a perturbation the size of one step's roundoff. A lower bound:
+# integrators add roundoff at every step and land 30-1000x above it.
+FLOOR_ULPS = 2.0
+
+
+def top_floor(inertia, omega0, times):
+    """Orientation floor (rad) of a torque-free top over ``times`` (see FLOOR_ULPS)."""
+    from dalembert import spatial
+
+    I, w0 = np.diag(np.asarray(inertia, dtype=float)), np.asarray(omega0, dtype=float)
+    base = TorqueFreeTop(I, w0).quaternion(times)
+    h = FLOOR_ULPS * np.finfo(float).eps * np.linalg.norm(w0)
+    spread = 0.0
+    for k in range(3):
+        for s in (-1.0, 1.0):
+            w = w0.copy()
+            w[k] += s * h
+            spread = max(spread, float(np.max(spatial.rotation_angle(base, TorqueFreeTop(I, w).quaternion(times)))))
+    return {"orientation": spread}
+
+
+def _hard_top(name, inertia, omega0, t_final, sample_interval):
+    made = _top_case(name, inertia, omega0, t_final, sample_interval)
+    spin = float(np.linalg.norm(omega0))
+    rate_tol = Tolerance(HARD_RATE_TOL.value * spin, f"rad/s; {HARD_RATE_TOL.value:g} of the {spin:g} rad/s spin")
+    tolerances = dict(made.tolerances, orientation=HARD_ORIENTATION_TOL, angular_velocity=rate_tol,
+                      energy=STABILITY_ENERGY, angular_momentum=STABILITY_MOMENTUM)
+    times = made.times
+    return Case(name, made.scene, made.t_final, made.sample_times, made.exact, made.conserved, tolerances,
+                floor_fn=lambda: top_floor(inertia, omega0, times))
+
+
+@case(tags=("hard", "free", "torque-free", "intermediate-axis", "fast-spin"),
+      units=dict(UNITS, spin="rad/s", offset="rad/s"))
+def free_top_fast_spin(inertia=(1.0, 2.0, 3.0), spin=50.0, offset=1e-3, t_final=20.0, sample_interval=0.01):
+    """A fast spin ``spin`` rad/s about an axis ``offset`` rad/s off the intermediate
+    axis: frequent flips (try spin=500, t_final=200 for the hardest variant)."""
+    return _hard_top("free_top_fast_spin", inertia, (offset, spin, offset), t_final, sample_interval)
+
+
+@case(tags=("hard", "free", "torque-free", "long-horizon"), units=UNITS)
+def free_top_long_horizon(inertia=(1.0, 2.0, 3.0), omega0=(0.3, 0.2, 62.8), t_final=1000.0, sample_interval=0.1):
+    """A generic asymmetric spin over 10^4 rotation periods (~0.1 s each): energy
+    drift bounded for geometric integrators, secular for others (drift_rate)."""
+    return _hard_top("free_top_long_horizon", inertia, omega0, t_final, sample_interval)
+
+
+@case(tags=("hard", "free", "torque-free", "near-degenerate"), units=UNITS)
+def free_top_near_symmetric(inertia=(1.0, 1.0 + 1e-6, 2.0), omega0=(0.3, 0.2, 5.0), t_final=20.0,
+                            sample_interval=0.01):
+    """Two principal moments 1e-6 apart: nearly axisymmetric."""
+    return _hard_top("free_top_near_symmetric", inertia, omega0, t_final, sample_interval)
+
+
+@case(tags=("hard", "free", "torque-free", "near-degenerate"), units=UNITS)
+def free_top_slender(inertia=(1e-4, 1.0, 1.0), omega0=(5.0, 0.1, 0.2), t_final=20.0, sample_interval=0.01):
+    """A slender body (moments 1e-4, 1, 1) spinning about its long axis while tumbling."""
+    return _hard_top("free_top_slender", inertia, omega0, t_final, sample_interval)
+
+
+def separatrix_omega(inertia, spin, gap):
+    """Body angular velocity ``(x, spin, x)`` with ``2 E I2 / |L|^2 = 1 - gap`` exactly in the formulas."""
+    I1, I2, I3 = inertia
+    # M^2 - 2E I2 = gap M^2  with  w = (x, s, x):  x^2 (I3 (I3 - I2) - I1 (I2 - I1)) = gap (I2^2 s^2 + (I1^2 + I3^2) x^2)
+    a = I3 * (I3 - I2) - I1 * (I2 - I1) - gap * (I1**2 + I3**2)
+    return (float(np.sqrt(gap * I2**2 * spin**2 / a)), float(spin), float(np.sqrt(gap * I2**2 * spin**2 / a)))
+
+
+@case(tags=("hard", "free", "torque-free", "separatrix"), units=dict(UNITS, spin="rad/s", gap="1"))
+def free_top_separatrix(inertia=(1.0, 2.0, 3.0), spin=5.0, gap=1e-9, t_final=20.0, sample_interval=0.01):
+    """Energy and momentum with ``2 E I2 / |L|^2 = 1 - gap``: a hair from the separatrix."""
+    return _hard_top("free_top_separatrix", inertia, separatrix_omega(inertia, spin, gap), t_final, sample_interval)

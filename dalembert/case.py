@@ -73,6 +73,18 @@ class Case:
     tolerances: dict = field(default_factory=dict)
     tags: tuple = ()
     params: dict = field(default_factory=dict)
+    floor_fn: Callable | None = None
+
+    def floor(self):
+        """The achievable-accuracy floor, dict quantity -> value (e.g. ``orientation`` in rad), or {}.
+
+        Computed once, on first use, from ``floor_fn`` (closed forms only: cheap, engine-free).
+        """
+        if self.floor_fn is None:
+            return {}
+        if "_floor" not in self.__dict__:
+            self.__dict__["_floor"] = dict(self.floor_fn())
+        return self.__dict__["_floor"]
 
     def __post_init__(self):
         object.__setattr__(self, "t_final", float(self.t_final))
@@ -169,7 +181,7 @@ class CaseFactory:
         made = self.func(**params)
         merged = {**known, **params}
         return Case(made.name, made.scene, made.t_final, made.sample_times, made.exact, made.conserved,
-                    made.tolerances, tuple(sorted(set(made.tags) | set(self.tags))), merged)
+                    made.tolerances, tuple(sorted(set(made.tags) | set(self.tags))), merged, made.floor_fn)
 
 
 def case(tags=(), units=None):

@@ -32,6 +32,7 @@ __all__ = [
     "pairwise_distance_change",
     "drift",
     "drift_series",
+    "drift_rate",
     "summary",
 ]
 
@@ -225,6 +226,21 @@ def drift_series(name, scene, traj):
     return np.linalg.norm(x - x[0], axis=1) / (scale if scale > 0 else 1.0)
 
 
+def drift_rate(name, scene, traj):
+    """Least-squares slope (1/s) of the signed relative change of an energy-like quantity.
+
+    Secular drift (most integrators) shows as a steady slope; bounded
+    oscillation (symplectic and geometric integrators) as a slope near zero.
+    Negative: energy lost (e.g. numerical damping).
+    """
+    x = total_energy(scene, traj) if name == "energy" else energy_balance(scene, traj)
+    ke = float(np.max(kinetic_energy(scene, traj)))
+    scale = max(abs(x[0]), ke) if name == "energy" else ke
+    y = (x - x[0]) / (scale if scale > 0 else 1.0)
+    t = traj.t - traj.t[0]
+    return float(np.sum(t * y) / np.sum(t * t)) if np.sum(t * t) > 0 else 0.0
+
+
 def drift(name, scene, traj):
     """Drift of the conserved quantity ``name`` (see ``CONSERVED``) over the whole trajectory."""
     if name == "energy":
@@ -247,6 +263,9 @@ def summary(scene, traj, conserved=()):
     """Dict of invariant figures: ``drift:<name>`` per conserved quantity, plus
     ``orthonormality``, ``quaternion_norm`` and, for jointed scenes, ``joint_residual`` (maxima)."""
     out = {f"drift:{name}": drift(name, scene, traj) for name in conserved}
+    for name in conserved:
+        if name in ("energy", "energy_balance"):
+            out[f"drift_rate:{name}"] = drift_rate(name, scene, traj)
     out["orthonormality"] = float(np.max(orthonormality_error(scene, traj)))
     out["quaternion_norm"] = float(np.max(quaternion_norm_error(scene, traj)))
     if any(j.kind != "free" for j in scene.joints):

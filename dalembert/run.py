@@ -9,7 +9,9 @@ the matrix goes on. ``run_matrix_dask(...)`` does the same on a Dask cluster.
 Timing (per run): the model is built once (not timed), run once to warm up
 (not timed), then run until at least ``Timing.min_repeats`` runs and
 ``Timing.min_total_s`` seconds of stepping are reached (at most
-``Timing.max_repeats``); the median, min and max stepping wall time are stored.
+``Timing.max_repeats``, and no more once warm-up plus repeats pass
+``Timing.max_total_s``: long runs are timed once or twice); the median, min and
+max stepping wall time are stored.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import os
 import pickle
 import subprocess
 import sys
+import threading
 import time
 import traceback
 from dataclasses import asdict, dataclass, field
@@ -49,6 +52,9 @@ class Timing:
     min_repeats: int = 3  # the median of 3 is robust to one outlier
     min_total_s: float = 0.2  # short runs are repeated until timer noise is small against the total
     max_repeats: int = 30
+    # ...but once the warm-up plus timed runs exceed this, stop: a run of many
+    # seconds has negligible timer noise, and repeating it only costs time.
+    max_total_s: float = 10.0
 
 
 @dataclass(frozen=True)
@@ -64,7 +70,7 @@ class RunSpec:
     options: tuple = ()
     params: tuple = ()
     case_version: str = ""
-
+    adapter: str = ""  # "module:Class" of the engine's adapter, for workers that must import it
     @property
     def settings(self):
         return Settings(self.integrator, self.dt, self.rtol, self.atol, dict(self.options))
@@ -109,7 +115,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
     specs : list of RunSpec
     skipped : list of str — engines not installed (only when ``engines`` was not given)
     """
-    from adapters import adapter_names, get_adapter
+    from adapters import adapter_names, adapter_path, get_adapter
     from dalembert.case import load_cases
 
     registry = load_cases()
@@ -124,8 +130,8 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
 
                 raise ValueError(f"--tag: unknown tag {t!r}{suggest(t, known_tags)}")
         names += [n for n, f in registry.items() if set(tags) & set(f.tags) and n not in names]
-    if not names:
-        names = list(registry)
+    if not names:  # the default matrix: every case except the hard ones (select those with --tag hard)
+        names = [n for n, f in registry.items() if "hard" not in f.tags]
     skipped = []
     if engines:
         adapters = {e: get_adapter(e) for e in engines}
@@ -166,7 +172,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
                     variants = [dict(rtol=r, atol=r * ATOL_PER_RTOL) for r in rtols]
                 for v in variants:
                     spec = RunSpec(name, e, integ, options=options, params=frozen_params,
-                                   case_version=case.version, **v)
+                                   case_version=case.version, adapter=adapter_path(e), **v)
                     adapter.check(case.scene, case.times, spec.settings)
                     specs.append(spec)
     return specs, skipped
@@ -196,7 +202,7 @@ def execute(spec, timing=Timing()):
     row = _base_row(spec)
     started = time.perf_counter()
     try:
-        adapter = get_adapter(spec.engine)
+        adapter = get_adapter(spec.engine, spec.adapter)
         row["engine_version"] = adapter.version()
         case = make_case(spec.case, **dict(spec.params))
         row["t_final"] = case.t_final
@@ -220,7 +226,8 @@ def execute(spec, timing=Timing()):
                        wall_s_min=first.wall_s, wall_s_max=first.wall_s, repeats=1)
             return row, trajectory_to_npz(traj)
         walls, totals = [], []
-        while (len(walls) < timing.min_repeats or sum(walls) < timing.min_total_s) and len(walls) < timing.max_repeats:
+        while ((len(walls) < timing.min_repeats or sum(walls) < timing.min_total_s) and len(walls) < timing.max_repeats
+               and not (walls and first.wall_s + sum(walls) > timing.max_total_s)):
             t0 = time.perf_counter()
             out = adapter.run(prepared)
             totals.append(time.perf_counter() - t0)
@@ -233,7 +240,7 @@ def execute(spec, timing=Timing()):
         for q, (mx, final) in trajectory_errors(traj, exact).items():
             row[f"err_{q}_max"], row[f"err_{q}_final"] = mx, final
         for k, v in invariants.summary(case.scene, traj, case.conserved).items():
-            row[k.replace("drift:", "drift_")] = v
+            row[k.replace("drift_rate:", "drift_rate_").replace("drift:", "drift_")] = v
         beyond = [name for name, tol in case.tolerances.items()
                   if not row.get(f"err_{name}_max" if name in QUANTITIES else f"drift_{name}", 0.0) <= tol.value]
         row.update(status="ok", within_tolerance=not beyond, beyond_tolerance=" ".join(beyond))
@@ -246,6 +253,18 @@ def execute(spec, timing=Timing()):
 
 
 # ---------------------------------------------------------------- local pool
+def _context():
+    """``fork`` (fast: workers share the parent's imports) when this process has one
+    Python thread; else a ``forkserver``: forking a process that has other threads
+    (an in-process Dask client, a notebook's kernel threads) can copy a lock that
+    another thread holds into the child (Python's documentation warns against it)."""
+    if threading.active_count() == 1:
+        return mp.get_context("fork")
+    ctx = mp.get_context("forkserver")
+    ctx.set_forkserver_preload(["dalembert.run", "adapters"])
+    return ctx
+
+
 def _child(conn, spec, timing):
     try:
         conn.send(execute(spec, timing))
@@ -280,7 +299,7 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
     write_truths(specs, store)
     todo = [s for s in specs if s.key not in store.done_keys()]
     jobs = max(1, jobs or os.cpu_count() or 1)
-    ctx = mp.get_context("fork")
+    ctx = _context()
     counts = {"done": 0, "bad": 0, "total": len(todo)}
     running = {}  # connection -> (process, spec, start)
     queue = list(reversed(todo))

@@ -21,7 +21,7 @@ import numpy as np
 
 from dalembert.registry import suggest
 
-__all__ = ["WORLD", "JOINT_KINDS", "Body", "Joint", "Load", "Scene", "SceneError", "mass_properties"]
+__all__ = ["WORLD", "JOINT_KINDS", "EFFECTS", "Body", "Joint", "Load", "Scene", "SceneError", "mass_properties"]
 
 WORLD = "world"
 
@@ -36,6 +36,9 @@ WORLD = "world"
 JOINT_KINDS = {"free": (7, 6), "revolute": (1, 1), "ball": (4, 3), "weld": (0, 0)}
 LOAD_KINDS = ("force", "torque")
 LOAD_FRAMES = ("world", "body")
+# Every effect tag a scene can call for (``Scene.effects`` draws from these).
+EFFECTS = frozenset({"gravity"} | {f"joint:{k}" for k in JOINT_KINDS}
+                    | {f"load:{w}_{k}" for w in ("follower", "world") for k in LOAD_KINDS})
 
 # |q| may differ from 1 by this much (roundoff in user-typed decimals is ~1e-16;
 # anything larger is a real mistake, not roundoff).

@@ -5,7 +5,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-__all__ = ["Settings", "SettingsError"]
+import numpy as np
+
+__all__ = ["Settings", "SettingsError", "steps_per_interval", "is_numerical_failure"]
+
+# dt divides a sample interval when interval/dt is within this of an integer
+# (sample times and dt are decimals, never exact in binary).
+DIVIDES_REL_TOL = 1e-9
 
 
 class FrozenOptions(dict):
@@ -74,3 +80,26 @@ class Settings:
                 parts.append(f"{name}={v:g}")
         parts += [f"{k}={v}" for k, v in sorted(self.options.items())]
         return " ".join(parts)
+
+
+def steps_per_interval(times, dt):
+    """Steps per sample interval, ndarray (n-1,) of int; ValueError if ``dt`` does not divide."""
+    ratio = np.diff(times) / dt
+    n = np.rint(ratio)
+    bad = np.abs(ratio - n) > DIVIDES_REL_TOL * np.maximum(ratio, 1.0)
+    if np.any(bad) or np.any(n < 1):
+        k = int(np.argmax(bad | (n < 1)))
+        raise ValueError(f"dt: {dt!r} does not divide the sample interval "
+                         f"{times[k + 1] - times[k]!r} s — choose dt = interval / integer")
+    return n.astype(int)
+
+
+def is_numerical_failure(exc):
+    """True for the exceptions a blown-up state raises inside a stepping loop
+    (overflow, a singular matrix, ``math`` functions of inf/NaN): a divergence,
+    to be reported as NaN from that point on, not a crash."""
+    import numpy.linalg
+
+    return (isinstance(exc, (ArithmeticError, numpy.linalg.LinAlgError))
+            or (isinstance(exc, ValueError) and "math domain error" in str(exc)))
+

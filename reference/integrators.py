@@ -26,16 +26,12 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from dalembert.registry import Registry
+from dalembert.settings import is_numerical_failure, steps_per_interval
 from reference import configuration as cfg
 
 __all__ = ["INTEGRATORS", "integrator", "Stats", "check_settings", "steps_per_interval"]
 
 INTEGRATORS = Registry("integrator")
-
-# dt divides a sample interval when interval/dt is within this of an integer
-# (sample times and dt are decimals, never exact in binary).
-DIVIDES_REL_TOL = 1e-9
-
 
 @dataclass(frozen=True)
 class Stats:
@@ -52,18 +48,6 @@ def integrator(name):
         return cls
 
     return register
-
-
-def steps_per_interval(times, dt):
-    """Steps per sample interval, ndarray (n-1,) of int; ValueError if ``dt`` does not divide."""
-    ratio = np.diff(times) / dt
-    n = np.rint(ratio)
-    bad = np.abs(ratio - n) > DIVIDES_REL_TOL * np.maximum(ratio, 1.0)
-    if np.any(bad) or np.any(n < 1):
-        k = int(np.argmax(bad | (n < 1)))
-        raise ValueError(f"dt: {dt!r} does not divide the sample interval "
-                         f"{times[k + 1] - times[k]!r} s — choose dt = interval / integer")
-    return n.astype(int)
 
 
 def check_settings(settings, times):
@@ -107,8 +91,14 @@ class _FixedStep:
         steps = 0
         for k, n in enumerate(counts):
             h = (times[k + 1] - times[k]) / n
-            for i in range(n):
-                q, v = self.step(system, times[k] + i * h, q, v, h)
+            try:
+                with np.errstate(over="ignore", invalid="ignore"):  # a blow-up is data, not a warning
+                    for i in range(n):
+                        q, v = self.step(system, times[k] + i * h, q, v, h)
+            except Exception as e:  # a blown-up state: NaN from here on (contract item 5)
+                if not is_numerical_failure(e):
+                    raise
+                break
             steps += n
             if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
                 break
@@ -192,9 +182,14 @@ class DOP853:
             return np.concatenate([cfg.qdot(b, q, v), system.acceleration(t, q, v)])
 
         y0 = np.concatenate([system.q0, system.v0]).astype(float)
-        sol = solve_ivp(rhs, (times[0], times[-1]), y0, method="DOP853", t_eval=times,
-                        rtol=settings.rtol or self.TRUTH_RTOL, atol=settings.atol or self.TRUTH_ATOL)
         Y = np.full((len(times), len(y0)), np.nan)
+        try:
+            sol = solve_ivp(rhs, (times[0], times[-1]), y0, method="DOP853", t_eval=times,
+                            rtol=settings.rtol or self.TRUTH_RTOL, atol=settings.atol or self.TRUTH_ATOL)
+        except Exception as e:  # a blown-up state: NaN (contract item 5)
+            if not is_numerical_failure(e):
+                raise
+            return Y[:, :nq], Y[:, nq:], Stats(0, 0)
         Y[: sol.y.shape[1]] = sol.y.T
         n_steps = int(max(0, (sol.nfev - 1) // 12))  # DOP853: 12 evaluations per step
         return Y[:, :nq], Y[:, nq:], Stats(n_steps, int(sol.nfev))

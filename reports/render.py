@@ -100,8 +100,9 @@ def _case_section(doc, store, case_name, sub, summary_rows):
     quantity = QUANTITY_OF.get(col, "")
     if lines:
         doc.heading("What accuracy costs", 3)
+        floor = case.floor().get(quantity)
         doc.figure(figures.work_precision(lines, f"max {quantity} error ({UNIT_OF.get(quantity, '')})",
-                                          title=f"{case_name}: work-precision"),
+                                          floor=floor, title=f"{case_name}: work-precision"),
                    f"{case_name}: max {quantity} error against stepping time per simulated second", f"{case_name}-wp")
         rows = []
         for label, pts in sorted(lines.items()):

@@ -10,52 +10,40 @@ import time
 import numpy as np
 import pytest
 
-from adapters import Adapter, IntegratorSpec, Outcome, adapter_names, check_adapter, register_adapter
-from adapters.reference import ReferenceAdapter
+from adapters import adapter_names, check_adapter, register_adapter
+from broken_adapters import Broken, NoFollower
 from dalembert.run import RunSpec, Timing, execute, expand, run_matrix
 from dalembert.store import Store
 
 FAST = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
 
 
-class _Broken(ReferenceAdapter):
-    """Reference physics, but each integrator misbehaves in its own way."""
-
-    integrators = {"raises": IntegratorSpec(True), "nan": IntegratorSpec(True), "hangs": IntegratorSpec(True),
-                   "rk4": IntegratorSpec(True)}
-
-    def check(self, scene, times, settings):
-        Adapter.check(self, scene, times, settings)
-
-    def prepare(self, scene, times, settings):
-        from dalembert.settings import Settings
-
-        return super().prepare(scene, times, Settings("rk4", dt=settings.dt)), settings.integrator
-
-    def run(self, prepared):
-        inner, mode = prepared
-        if mode == "raises":
-            raise RuntimeError("engine exploded on purpose")
-        if mode == "hangs":
-            time.sleep(3600)
-        out = super().run(inner)
-        if mode == "nan":
-            b = next(iter(out.trajectory.bodies.values()))
-            b.position[len(b.position) // 2:] = np.nan
-        return out
-
-    def audit(self, prepared, outcome):
-        return super().audit(prepared[0], outcome)
-
-
 ENGINES = adapter_names()  # before the test-only adapters below are registered
-if "broken" not in adapter_names():
-    register_adapter("broken", _Broken)
+for _name, _cls in (("broken", Broken), ("no-follower", NoFollower)):
+    if _name not in adapter_names():
+        register_adapter(_name, _cls)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
 def test_every_adapter_meets_the_contract(engine):
-    assert check_adapter(engine) == []
+    from dalembert.case import load_cases
+
+    # every registered case; the hard ones on a short horizon (their full ones take minutes)
+    cases = [f(t_final=2.0) if "hard" in f.tags else f() for _, f in load_cases().items()]
+    assert check_adapter(engine, cases=cases) == []
+
+
+@pytest.mark.parametrize("engine,integrator", [("reference", "rkmk4"), ("reference", "rk4"), ("pinocchio", "rk4"),
+                                               ("pinocchio", "euler"), ("mujoco", "rk4")])
+def test_a_blow_up_is_nan_not_an_exception(engine, integrator):
+    """500 rad/s at dt = 1e-2 (5 rad per step): the state blows up; the run returns NaN from there."""
+    from adapters import get_adapter
+    from dalembert import Settings, make_case
+
+    case = make_case("free_top_fast_spin", spin=500.0, t_final=2.0)
+    adapter = get_adapter(engine)
+    out = adapter.run(adapter.prepare(case.scene, case.times, Settings(integrator, dt=1e-2)))
+    assert not out.trajectory.is_finite()
 
 
 def test_failures_are_stored_not_raised(tmp_path):
@@ -72,10 +60,6 @@ def test_failures_are_stored_not_raised(tmp_path):
 
 
 def test_unsupported_effect_is_a_stored_result():
-    class NoFollower(ReferenceAdapter):
-        effects = ReferenceAdapter.effects - {"load:follower_force"}
-
-    register_adapter("no-follower", NoFollower)
     (spec,), _ = expand(cases=["pivoted_rod"], engines=["no-follower"], integrators=["rk4"], dts=[1e-2])
     row, npz = execute(spec, FAST)
     assert row["status"] == "unsupported" and "load:follower_force" in row["message"] and npz is None

@@ -1,0 +1,44 @@
+"""Deliberately misbehaving adapters for the run-matrix tests (importable by worker processes)."""
+
+import time
+
+import numpy as np
+
+from adapters import Adapter, IntegratorSpec
+from adapters.reference import ReferenceAdapter
+
+
+class Broken(ReferenceAdapter):
+    """Reference physics, but each integrator misbehaves in its own way."""
+
+    integrators = {"raises": IntegratorSpec(True), "nan": IntegratorSpec(True), "hangs": IntegratorSpec(True),
+                   "rk4": IntegratorSpec(True)}
+
+    def check(self, scene, times, settings):
+        Adapter.check(self, scene, times, settings)
+
+    def prepare(self, scene, times, settings):
+        from dalembert.settings import Settings
+
+        return super().prepare(scene, times, Settings("rk4", dt=settings.dt)), settings.integrator
+
+    def run(self, prepared):
+        inner, mode = prepared
+        if mode == "raises":
+            raise RuntimeError("engine exploded on purpose")
+        if mode == "hangs":
+            time.sleep(3600)
+        out = super().run(inner)
+        if mode == "nan":
+            b = next(iter(out.trajectory.bodies.values()))
+            b.position[len(b.position) // 2:] = np.nan
+        return out
+
+    def audit(self, prepared, outcome):
+        return super().audit(prepared[0], outcome)
+
+
+class NoFollower(ReferenceAdapter):
+    """The reference without follower forces: scenes with them are unsupported."""
+
+    effects = ReferenceAdapter.effects - {"load:follower_force"}
