@@ -85,24 +85,15 @@ class Adapter:
 
     def check(self, scene, times, settings):
         """Raise ValueError naming the field when ``settings`` cannot be run."""
-        from dalembert.settings import steps_per_interval
+        from dalembert.settings import knob_problems
 
         if settings.integrator not in self.integrators:
             raise ValueError(f"integrator: {self.name} has no {settings.integrator!r}"
                              f"{suggest(settings.integrator, self.integrators)}")
         spec = self.integrators[settings.integrator]
-        unknown = sorted(set(settings.options) - set(spec.options))
-        if unknown:
-            raise ValueError(f"options: {unknown} unknown to {self.name} {settings.integrator!r} "
-                             f"(accepts {list(spec.options) or 'none'})")
-        if spec.fixed_step:
-            if settings.dt is None:
-                raise ValueError(f"dt: {self.name} {settings.integrator!r} is fixed-step — give dt (s)")
-            if settings.rtol is not None or settings.atol is not None:
-                raise ValueError(f"rtol: {self.name} {settings.integrator!r} is fixed-step — give dt, not tolerances")
-            steps_per_interval(times, settings.dt)
-        elif settings.dt is not None:
-            raise ValueError(f"dt: {self.name} {settings.integrator!r} is adaptive — give rtol/atol, not dt")
+        problems = knob_problems(settings, f"{self.name} {settings.integrator!r}", spec.fixed_step, spec.options, times)
+        if problems:
+            raise ValueError("; ".join(problems))
 
     def unsupported(self, scene, settings):
         """The reason this engine cannot represent ``scene``, or None."""

@@ -112,6 +112,18 @@ class Case:
         if problems:
             raise SceneError(f"case {self.name!r}", problems)
 
+    def beyond_tolerance(self, errors, drifts):
+        """Names of the tolerances a run exceeds.
+
+        ``errors``: quantity -> max error (``dalembert.errors.QUANTITIES``);
+        ``drifts``: conserved name -> drift. A bounded quantity the run did not
+        report counts as within.
+        """
+        from dalembert.errors import QUANTITIES
+
+        return [name for name, tol in self.tolerances.items()
+                if not (errors if name in QUANTITIES else drifts).get(name, 0.0) <= tol.value]
+
     @property
     def times(self):
         """Sample times as ndarray (n,), s."""

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Settings", "SettingsError", "steps_per_interval", "is_numerical_failure"]
+__all__ = ["Settings", "SettingsError", "steps_per_interval", "knob_problems", "is_numerical_failure"]
 
 # dt divides a sample interval when interval/dt is within this of an integer
 # (sample times and dt are decimals, never exact in binary).
@@ -102,4 +102,33 @@ def is_numerical_failure(exc):
 
     return (isinstance(exc, (ArithmeticError, numpy.linalg.LinAlgError))
             or (isinstance(exc, ValueError) and "math domain error" in str(exc)))
+
+
+def knob_problems(settings, who, fixed_step, options, times):
+    """What is wrong with ``settings``' knobs for one integrator, as a list of messages.
+
+    Parameters
+    ----------
+    who : str — the integrator as named in messages (e.g. ``'rk4'`` or ``mujoco 'rk4'``)
+    fixed_step : bool — fixed-step (knob ``dt``) or adaptive (knobs ``rtol``, ``atol``)
+    options : iterable of str — the option names it accepts
+    times : array_like (n,) — the sample times a fixed step must divide (s)
+    """
+    problems = []
+    unknown = sorted(set(settings.options) - set(options))
+    if unknown:
+        problems.append(f"options: {unknown} unknown to {who} (accepts {sorted(options) or 'none'})")
+    if fixed_step:
+        if settings.dt is None:
+            problems.append(f"dt: {who} is fixed-step — give dt (s)")
+        else:
+            try:
+                steps_per_interval(np.asarray(times, dtype=float), settings.dt)
+            except ValueError as e:
+                problems.append(str(e))
+        if settings.rtol is not None or settings.atol is not None:
+            problems.append(f"rtol/atol: {who} is fixed-step — give dt, not tolerances")
+    elif settings.dt is not None:
+        problems.append(f"dt: {who} is adaptive — give rtol/atol, not dt")
+    return problems
 

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from dalembert.registry import Registry
-from dalembert.settings import is_numerical_failure, steps_per_interval
+from dalembert.settings import is_numerical_failure, knob_problems, steps_per_interval
 from reference import configuration as cfg
 
 __all__ = ["INTEGRATORS", "integrator", "Stats", "check_settings", "steps_per_interval"]
@@ -53,23 +53,7 @@ def integrator(name):
 def check_settings(settings, times):
     """Raise ValueError naming the field if ``settings`` do not fit the integrator."""
     cls = INTEGRATORS[settings.integrator]
-    problems = []
-    unknown = sorted(set(settings.options) - set(cls.options))
-    if unknown:
-        problems.append(f"options: {unknown} unknown to {cls.name!r} (accepts {sorted(cls.options) or 'none'})")
-    if cls.fixed_step:
-        if settings.dt is None:
-            problems.append(f"dt: {cls.name!r} is fixed-step — give dt (s)")
-        else:
-            try:
-                steps_per_interval(np.asarray(times), settings.dt)
-            except ValueError as e:
-                problems.append(str(e))
-        if settings.rtol is not None or settings.atol is not None:
-            problems.append(f"rtol/atol: {cls.name!r} is fixed-step — give dt, not tolerances")
-    else:
-        if settings.dt is not None:
-            problems.append(f"dt: {cls.name!r} is adaptive — give rtol/atol, not dt")
+    problems = knob_problems(settings, repr(cls.name), cls.fixed_step, cls.options, times)
     if problems:
         raise ValueError("; ".join(problems))
 
