@@ -12,7 +12,8 @@ The contract — every adapter class:
    that needs another effect is not run: the harness stores it as
    ``unsupported`` with the reason — never a silent approximation;
 4. declares ``integrators``: name -> ``IntegratorSpec`` (fixed-step or
-   adaptive, and the engine options it accepts);
+   adaptive, and the engine options it accepts); ``variants(scene)`` lists the
+   option sets the default matrix runs on a scene (e.g. each formulation);
 5. ``check(scene, times, settings)`` raises ValueError naming the field for
    settings it cannot run (unknown option, dt that does not divide the sample
    interval, ...) — cheap, called before anything runs; ``unsupported(scene,
@@ -101,6 +102,10 @@ class Adapter:
         if missing:
             return f"{self.name} adapter cannot represent {', '.join(missing)}"
         return None
+
+    def variants(self, scene):
+        """Engine option sets the default matrix runs on ``scene`` (``[{}]``: the defaults only)."""
+        return [{}]
 
     def prepare(self, scene, times, settings):
         raise NotImplementedError

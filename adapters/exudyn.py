@@ -12,10 +12,22 @@ Model (``describe`` gives the summary kept for reports):
   with explicit and implicit solvers), ``ep`` (Euler parameters: an algebraic
   unit-norm constraint, so implicit solvers only), ``rxyz`` (Tait-Bryan angles,
   singular at +-90 degrees of the middle angle).
-* Revolute trees (option ``joints=minimal``, the default): one
-  ``ObjectKinematicTree`` whose links rotate about their local z; each link
-  frame is the scene's child joint frame turned so that z is the joint axis.
-  Ball joints and welds are not single-axis joints: ``unsupported``.
+* Jointed scenes two ways (option ``joints``):
+
+  - ``minimal`` (default): one ``ObjectKinematicTree`` whose links rotate about
+    their local z; each link frame is the scene's child joint frame turned so
+    that z is the joint axis. It runs with every solver. Ball joints and welds
+    are not single-axis joints: ``unsupported``. The pivot reaction is read back
+    by Newton's law on each link, ``R = m a_com - F_ext - m g + sum R_children``,
+    with ``a_com`` from the tree's acceleration sensor;
+  - ``redundant``: every body an ``ObjectRigidBody`` (the node type as above),
+    each joint an ``ObjectJointGeneric`` (revolute: the five axes other than the
+    joint axis constrained; ball: translations; weld: all six) from a marker on
+    the parent (marker 0) to one on the child, each marker frame = joint frame. An index-3 DAE: implicit solvers
+    only. The reaction is the joint's ``ForceLocal``: the force on the marker-0
+    (parent) side in the marker-0 frame, so the force ON the child in world axes is
+    ``-R_WP R_PJ ForceLocal``. Initial body states come from the
+    scene's joint coordinates by forward kinematics.
 * Loads: ``LoadForceVector``/``LoadTorqueVector`` on a rigid marker at the
   body point, ``bodyFixed=True`` for follower loads (with ``bodyFixed=False``
   the force stays world-fixed: phi(2 s) = 2.44 rad instead of 12 on the rod).
@@ -33,11 +45,14 @@ Solvers by name: ``generalized-alpha`` (options ``spectral_radius``,
 ``newton_rtol``, ``newton_atol`` — Exudyn's default Newton tolerances cap its
 accuracy), ``trapezoidal-index2``, ``explicit-euler``, ``explicit-midpoint``,
 ``rk33``, ``rk44``, ``rk67``, ``velocity-verlet`` (fixed step) and ``dopri5``,
-``ode23`` (adaptive: ``rtol``/``atol``; not yet runnable here — their steps do not
-end on the sample times, see ``unsupported``). ``DVERK6`` is listed by Exudyn
-1.13 but not implemented, so it is not offered. Redundant-coordinate joints
-(``joints=redundant``) are not implemented yet. A solver that stops before the end
-raises, and the run is stored as ``failed`` with the time reached.
+``ode23`` (adaptive: ``rtol``/``atol``). The adaptive ones are driven sample by
+sample (``MainSolverExplicit.SolveSteps`` with the end time set to the next
+sample, which Exudyn's step control lands on exactly), so their steps never
+exceed the sample interval: without dense output, sampling at fixed times caps
+the step. ``DVERK6`` is listed by Exudyn 1.13 but not implemented, so it is not
+offered. A solver that stops before the end raises, and the run is stored as
+``failed`` with the time reached. Steps are counted as Exudyn takes them (a post-
+step call per new time), so steps Exudyn shrinks on Newton failure are counted.
 """
 
 from __future__ import annotations
@@ -57,13 +72,27 @@ EXPLICIT = {"explicit-euler": "ExplicitEuler", "explicit-midpoint": "ExplicitMid
             "rk44": "RK44", "rk67": "RK67", "velocity-verlet": "VelocityVerlet", "dopri5": "DOPRI5", "ode23": "ODE23"}
 ADAPTIVE = ("dopri5", "ode23")
 NODES = {"rotvec-lg": "RotationRotationVector", "ep": "RotationEulerParameters", "rxyz": "RotationRxyz"}
-JOINTS = ("minimal",)
+JOINTS = ("minimal", "redundant")
+# ObjectJointGeneric's constrainedAxes (x, y, z translation; x, y, z rotation) in the
+# joint frame, whose z is a revolute joint's axis.
+CONSTRAINED_AXES = {"revolute": [1, 1, 1, 1, 1, 0], "ball": [1, 1, 1, 0, 0, 0], "weld": [1, 1, 1, 1, 1, 1]}
+STAGES = {"rk44": 4, "rk33": 3, "rk67": 7, "explicit-midpoint": 2, "dopri5": 7, "ode23": 4}
 OPTIONS = ("node", "joints", "spectral_radius", "newton_rtol", "newton_atol")
 # Newton tolerances used unless the options say otherwise: Exudyn's defaults
 # (1e-8 relative, 1e-10 absolute) cap generalized-alpha's accuracy (issue 6:
 # 9.4e-3 rad instead of 2.6e-6 on the intermediate-axis top at dt = 1e-4).
+# Adaptive solvers stop (the run is stored as failed, with the time reached) when a step
+# would fall below this fraction of the sample interval: such a step means the solver is
+# stuck (measured: ode23 on Tait-Bryan nodes at their singularity on the 50 rad/s fast spin
+# shrinks its steps without end); the hard cases need no step below ~1e-3 of the interval.
+MIN_STEP_FRACTION = 1e-6
 NEWTON_RTOL = 1e-12
 NEWTON_ATOL = 1e-14
+
+
+def _rigid_bodies(scene, redundant):
+    """Names of the bodies Exudyn models as ``ObjectRigidBody``: free ones, or all with redundant joints."""
+    return [b.name for b in scene.topological_order() if redundant or scene.joint(b.name).kind == "free"]
 
 
 def _axis_frame(axis):
@@ -79,7 +108,7 @@ class ExudynAdapter(Adapter):
     """Exudyn (``exudyn``), its own solvers."""
 
     name = "exudyn"
-    effects = EFFECTS - {"joint:ball", "joint:weld"}  # ObjectKinematicTree: single-axis joints only
+    effects = EFFECTS  # ball joints and welds only with joints=redundant (see ``unsupported``)
     integrators = {
         **{k: IntegratorSpec(True, OPTIONS, f"Exudyn {v}") for k, v in IMPLICIT.items()},
         **{k: IntegratorSpec(k not in ADAPTIVE, OPTIONS, f"Exudyn {v}") for k, v in EXPLICIT.items()},
@@ -116,19 +145,37 @@ class ExudynAdapter(Adapter):
         reason = super().unsupported(scene, settings)
         if reason:
             return reason
-        if settings.integrator in ADAPTIVE:
-            return ("not yet supported by this adapter: Exudyn's adaptive explicit solvers write sensors at "
-                    "their own step ends, which do not fall on the sample times, and the adapter does not yet "
-                    "stop the solver at each sample")
         node = settings.options.get("node", "rotvec-lg")
-        if node == "ep" and settings.integrator in EXPLICIT and any(j.kind == "free" for j in scene.joints):
+        redundant = settings.options.get("joints", "minimal") == "redundant"
+        explicit = settings.integrator in EXPLICIT
+        if node == "ep" and explicit and _rigid_bodies(scene, redundant):
             return ("Exudyn: explicit integrator detected node which contains algebraic variables — "
                     "Euler-parameter nodes need an implicit solver")
+        if redundant:
+            if explicit and any(j.kind != "free" for j in scene.joints):
+                return ("Exudyn: explicit integrator detected object which contains constraints that cannot be "
+                        "solved — redundant-coordinate joints (an index-3 DAE) need an implicit solver")
+            return None
+        kinds = sorted({j.kind for j in scene.joints if j.kind in ("ball", "weld")})
+        if kinds:
+            return (f"joint:{', joint:'.join(kinds)} with joints=minimal: ObjectKinematicTree has single-axis "
+                    f"joints only — use --option joints=redundant")
         free = {j.child for j in scene.joints if j.kind == "free"}
         for j in scene.joints:
             if j.kind == "revolute" and j.parent != WORLD and j.parent in free:
-                return "a revolute joint on a free body: the kinematic tree here has a fixed base"
+                return ("a revolute joint on a free body: the kinematic tree here has a fixed base — use "
+                        "--option joints=redundant")
         return None
+
+    def variants(self, scene):
+        """Default matrix: each node type where the scene has rigid-body nodes, both joint formulations
+        where it has joints."""
+        out = [{}]
+        if any(j.kind == "free" for j in scene.joints):
+            out += [{"node": n} for n in NODES if n != "rotvec-lg"]
+        if any(j.kind != "free" for j in scene.joints):
+            out.append({"joints": "redundant"})
+        return out
 
     # ------------------------------------------------------------- build
     def describe(self, scene, settings):
@@ -137,42 +184,69 @@ class ExudynAdapter(Adapter):
     def _build(self, scene, times, settings, describe_only=False):
         import exudyn as exu
         from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid,
-                                          MarkerKinematicTreeRigid, NodeGenericODE2, ObjectKinematicTree,
-                                          SensorBody, SensorKinematicTree, SensorNode)
+                                          MarkerKinematicTreeRigid, NodeGenericODE2, ObjectGround,
+                                          ObjectJointGeneric, ObjectKinematicTree, SensorBody, SensorKinematicTree,
+                                          SensorNode, SensorObject)
         from exudyn.rigidBodyUtilities import RigidBodyInertia
+
+        from reference.generalized import Kane
 
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
         g = np.array(scene.gravity, dtype=float)
         node_type = getattr(exu.NodeType, NODES[settings.options.get("node", "rotvec-lg")])
+        redundant = settings.options.get("joints", "minimal") == "redundant"
         OV = exu.OutputVariableType
-        summary, sensors, markers = [], {}, {}
-        # --- free bodies
-        for j in scene.joints:
-            if j.kind != "free":
-                continue
-            body = scene.body(j.child)
-            R0 = spatial.quat_to_matrix(j.q0[3:])
+        summary, sensors, markers, bodies = [], {}, {}, {}
+        # --- rigid bodies: free bodies, and every body with joints=redundant
+        rigid = _rigid_bodies(scene, redundant)
+        if rigid:
+            kane = Kane(scene)
+            state0 = kane.kinematics(kane.q0, kane.v0)  # world pose and velocity of every body at t = 0
+        for name in rigid:
+            body, s0 = scene.body(name), state0[name]
             kwargs = dict(inertia=RigidBodyInertia(body.mass, body.inertia_matrix, [0.0, 0.0, 0.0], True),
-                          referencePosition=list(j.q0[:3]), referenceRotationMatrix=R0,
-                          initialVelocity=list(j.v0[:3]), initialAngularVelocity=list(R0 @ np.array(j.v0[3:])),
+                          referencePosition=list(s0["p"]), referenceRotationMatrix=s0["R"],
+                          initialVelocity=list(s0["v"]), initialAngularVelocity=list(s0["w"]),
                           nodeType=node_type, returnDict=True)
             if np.any(g):
                 kwargs["gravity"] = list(g)
-            made = mbs.CreateRigidBody(**kwargs)
-            obj = made["bodyNumber"]
-            markers[body.name] = lambda p, obj=obj: mbs.AddMarker(MarkerBodyRigid(bodyNumber=obj, localPosition=list(p)))
-            sensors[body.name] = {k: mbs.AddSensor(SensorBody(bodyNumber=obj, outputVariableType=v))
-                                  for k, v in (("p", OV.Position), ("R", OV.RotationMatrix), ("v", OV.Velocity),
-                                               ("w", OV.AngularVelocity))}
-            summary.append(f"{body.name}: ObjectRigidBody on {node_type.name} node, mass {body.mass:g} kg, "
+            obj = mbs.CreateRigidBody(**kwargs)["bodyNumber"]
+            bodies[name] = obj
+            markers[name] = lambda p, obj=obj: mbs.AddMarker(MarkerBodyRigid(bodyNumber=obj, localPosition=list(p)))
+            sensors[name] = {k: mbs.AddSensor(SensorBody(bodyNumber=obj, outputVariableType=v))
+                             for k, v in (("p", OV.Position), ("R", OV.RotationMatrix), ("v", OV.Velocity),
+                                          ("w", OV.AngularVelocity))}
+            summary.append(f"{name}: ObjectRigidBody on {node_type.name} node, mass {body.mass:g} kg, "
                            f"inertia at COM (inertiaTensorAtCOM=True)")
-        # --- revolute tree(s) in one kinematic tree
-        links = [b for b in scene.topological_order() if scene.joint(b.name).kind == "revolute"]
-        tree = None
+        # --- joints=redundant: generic joints between rigid bodies (marker 0 on the parent)
+        redundant_joints = {}
+        if redundant and any(j.kind != "free" for j in scene.joints):
+            ground = mbs.AddObject(ObjectGround())
+            for j in scene.joints:
+                if j.kind == "free":
+                    continue
+                R_A = _axis_frame(j.axis) if j.kind == "revolute" else np.eye(3)
+                R0 = spatial.quat_to_matrix(j.parent_quat) @ R_A  # joint frame in the parent's frame
+                R1 = spatial.quat_to_matrix(j.child_quat) @ R_A
+                parent = ground if j.parent == WORLD else bodies[j.parent]
+                # the marker frames are the joint frames (rotationMarker0/1 are deprecated since 1.12)
+                m0 = mbs.AddMarker(MarkerBodyRigid(bodyNumber=parent,
+                                                   localHT=exu.HT(rotation=R0, translation=list(j.parent_point))))
+                m1 = mbs.AddMarker(MarkerBodyRigid(bodyNumber=bodies[j.child],
+                                                   localHT=exu.HT(rotation=R1, translation=list(j.child_point))))
+                joint = mbs.AddObject(ObjectJointGeneric(markerNumbers=[m0, m1],
+                                                         constrainedAxes=CONSTRAINED_AXES[j.kind]))
+                sensors[f"__joint:{j.child}"] = {"f": mbs.AddSensor(SensorObject(
+                    objectNumber=joint, outputVariableType=OV.ForceLocal))}
+                redundant_joints[j.child] = R0
+                summary.append(f"ObjectJointGeneric {j.parent} -> {j.child} ({j.kind}), constrainedAxes "
+                               f"{CONSTRAINED_AXES[j.kind]} (redundant coordinates)")
+        # --- joints=minimal: revolute tree(s) in one kinematic tree
+        links = [] if redundant else [b for b in scene.topological_order() if scene.joint(b.name).kind == "revolute"]
+        link_frames = {}  # body -> (p_LB, R_LB): x_L = p_LB + R_LB x_B
         if links:
             index = {b.name: i for i, b in enumerate(links)}
-            frames = {}  # body -> (p_LB, R_LB): x_L = p_LB + R_LB x_B
             Ts, offsets, coms, inertias, masses, parents, q0, v0 = [], [], [], [], [], [], [], []
             for b in links:
                 j = scene.joint(b.name)
@@ -180,12 +254,12 @@ class ExudynAdapter(Adapter):
                 R_A = _axis_frame(j.axis)
                 R_LB = R_A.T @ R_CJ.T
                 p_LB = -R_LB @ np.array(j.child_point)
-                frames[b.name] = (p_LB, R_LB)
+                link_frames[b.name] = (p_LB, R_LB)
                 R_PJ = spatial.quat_to_matrix(j.parent_quat)
                 if j.parent == WORLD:
                     p_PL, R_PL = np.zeros(3), np.eye(3)
                 else:
-                    p_PL, R_PL = frames[j.parent]
+                    p_PL, R_PL = link_frames[j.parent]
                 Ts.append(R_PL @ R_PJ @ R_A)
                 offsets.append(p_PL + R_PL @ np.array(j.parent_point))
                 coms.append(p_LB)
@@ -202,20 +276,19 @@ class ExudynAdapter(Adapter):
                 jointTransformations=exu.Matrix3DList(Ts), jointOffsets=exu.Vector3DList(offsets),
                 linkInertiasCOM=exu.Matrix3DList(inertias), linkCOMs=exu.Vector3DList(coms), linkMasses=masses,
                 baseOffset=[0.0, 0.0, 0.0], gravity=list(g)))
+            outputs = (("p", OV.Position), ("R", OV.RotationMatrix), ("v", OV.Velocity), ("w", OV.AngularVelocity),
+                       ("a", OV.Acceleration))
             for b in links:
-                i, (p_LB, R_LB) = index[b.name], frames[b.name]
+                i, (p_LB, R_LB) = index[b.name], link_frames[b.name]
                 markers[b.name] = lambda p, i=i, p_LB=p_LB, R_LB=R_LB: mbs.AddMarker(MarkerKinematicTreeRigid(
                     objectNumber=tree, linkNumber=i, localPosition=list(p_LB + R_LB @ np.array(p))))
                 sensors[b.name] = {k: mbs.AddSensor(SensorKinematicTree(
-                    objectNumber=tree, linkNumber=i, localPosition=list(p_LB), outputVariableType=v)) for k, v in (("p", OV.Position), ("R", OV.RotationMatrix),
-                                                        ("v", OV.Velocity), ("w", OV.AngularVelocity))}
+                    objectNumber=tree, linkNumber=i, localPosition=list(p_LB), outputVariableType=v))
+                    for k, v in outputs}
             sensors["__q"] = {"q": mbs.AddSensor(SensorNode(nodeNumber=node, outputVariableType=OV.Coordinates))}
             sensors["__v"] = {"v": mbs.AddSensor(SensorNode(nodeNumber=node, outputVariableType=OV.Coordinates_t))}
             summary.append(f"ObjectKinematicTree: {n} RevoluteZ link(s) {[b.name for b in links]} "
                            f"(minimal coordinates), gravity {g.tolist()}")
-            link_frames = frames
-        else:
-            link_frames = {}
         # --- loads
         for ld in scene.loads:
             R_LB = link_frames.get(ld.body, (None, np.eye(3)))[1]
@@ -230,7 +303,7 @@ class ExudynAdapter(Adapter):
             return text
         mbs.Assemble()
         return dict(SC=SC, mbs=mbs, sensors=sensors, link_frames=link_frames, links=[b.name for b in links],
-                    summary=text)
+                    redundant_joints=redundant_joints, summary=text)
 
     def prepare(self, scene, times, settings):
         return dict(scene=scene, times=np.asarray(times, dtype=float), settings=settings)
@@ -246,11 +319,14 @@ class ExudynAdapter(Adapter):
         s.timeIntegration.verboseMode = 0
         s.timeIntegration.endTime = float(times[-1])
         s.timeIntegration.startTime = float(times[0])
+        s.timeIntegration.solverType = getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[st.integrator])
         if st.integrator in ADAPTIVE:
             s.timeIntegration.automaticStepSize = True
             s.timeIntegration.relativeTolerance = float(st.rtol)
             s.timeIntegration.absoluteTolerance = float(st.atol if st.atol is not None else st.rtol)
-            s.timeIntegration.numberOfSteps = len(times) - 1  # initial step guess: the sample interval
+            s.timeIntegration.numberOfSteps = 1  # Exudyn's largest step = horizon / numberOfSteps: the samples cap it
+            s.timeIntegration.initialStepSize = float(times[1] - times[0])
+            s.timeIntegration.minimumStepSize = MIN_STEP_FRACTION * float(times[1] - times[0])
         else:
             s.timeIntegration.automaticStepSize = False
             s.timeIntegration.numberOfSteps = int(round((times[-1] - times[0]) / st.dt))
@@ -267,61 +343,78 @@ class ExudynAdapter(Adapter):
 
         p = prepared
         built = self._build(p["scene"], p["times"], p["settings"])  # a fresh system per run (Exudyn keeps state)
-        mbs = built["mbs"]
-        solver = getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[p["settings"].integrator])
+        mbs, times, integrator = built["mbs"], p["times"], p["settings"].integrator
         settings = self._settings(p)
-        samples = self._sampler(p, built)
+        min_step = settings.timeIntegration.minimumStepSize if integrator in ADAPTIVE else None
+        sampler = _Sampler(mbs, built["sensors"], times, p["settings"].dt, min_step)
         console = exu.config.printToConsole
         exu.config.printToConsole = False  # silent unless the user asks (Exudyn prints solver banners)
+        error = None
         try:
             start = time.perf_counter()
             try:
-                ok = mbs.SolveDynamic(settings, solverType=solver)
-                error = None
+                if integrator in ADAPTIVE:
+                    it = self._solve_per_sample(mbs, settings, sampler, times)
+                else:
+                    solver = getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[integrator])
+                    mbs.SolveDynamic(settings, solverType=solver)
             except Exception as e:  # Exudyn raises on solver failure
-                ok, error = False, e
+                error = e
             wall = time.perf_counter() - start
         finally:
             exu.config.printToConsole = console
-        it = mbs.sys["dynamicSolver"].it if "dynamicSolver" in mbs.sys else None
-        reached = float(it.currentTime) if it is not None else float("nan")
-        if not ok or error is not None or reached < p["times"][-1] * (1 - 1e-12):
-            raise RuntimeError(f"Exudyn solver stopped at t = {reached:g} s of {p['times'][-1]:g} s"
+        if integrator not in ADAPTIVE:
+            it = mbs.sys["dynamicSolver"].it if "dynamicSolver" in mbs.sys else None
+        reached = sampler.last_time
+        if error is not None or reached < times[-1] * (1 - 1e-12) or sampler.next != len(times):
+            missing = "" if sampler.next == len(times) else f" ({len(times) - sampler.next} sample(s) not reached)"
+            if sampler.stalled is not None:
+                missing += f": the adaptive step fell to its minimum {min_step:g} s (stuck)"
+            raise RuntimeError(f"Exudyn solver stopped at t = {reached:g} s of {times[-1]:g} s{missing}"
                                + (f": {error}" if error else ""))
-        if samples["next"] != len(p["times"]):
-            raise RuntimeError(f"Exudyn: {len(p['times']) - samples['next']} sample(s) not reached "
-                               f"(first at t = {p['times'][samples['next']]!r} s)")
-        traj = self._read_back(p, built, samples["values"])
-        n_steps = int(it.currentStepIndex) - 1 if it is not None else 0
-        stages = {"rk44": 4, "rk33": 3, "rk67": 7, "explicit-midpoint": 2}.get(p["settings"].integrator, 1)
-        info = {"newton_steps": int(it.newtonStepsCount) if it is not None else 0,
-                "rejected_steps": int(it.rejectedAutomaticStepSizeSteps) if it is not None else 0,
-                "summary": built["summary"]}
-        return Outcome(traj, wall, n_steps, n_steps * stages, info)
+        if built["links"] and integrator in EXPLICIT:
+            self._initial_accelerations(p, sampler.values)
+        traj = self._read_back(p, built, sampler.values)
+        rejected = int(it.rejectedAutomaticStepSizeSteps) if it is not None else 0
+        info = {"newton_steps": int(it.newtonStepsCount) if it is not None else 0, "rejected_steps": rejected,
+                "summary": built["summary"],
+                "constraints": sum(sum(CONSTRAINED_AXES[p["scene"].joint(c).kind]) for c in built["redundant_joints"])}
+        n_rhs = (sampler.steps + rejected) * STAGES.get(integrator, 1)
+        return Outcome(traj, wall, sampler.steps, n_rhs, info)
 
     @staticmethod
-    def _sampler(p, built):
-        """Install a post-step user function that reads every sensor at each sample time."""
-        mbs, times = built["mbs"], p["times"]
-        n = len(times)
-        # A step "is" sample k when its time is within half a step of t_k (fixed step: exactly one step is).
-        half = 0.5 * (p["settings"].dt or (times[1] - times[0]))
-        flat = [(body, key, sid) for body, group in built["sensors"].items() for key, sid in group.items()]
-        values = {(body, key): [None] * n for body, key, _ in flat}
-        state = {"next": 1, "values": values}
-        for body, key, sid in flat:  # sample 0: the assembled initial state
-            values[(body, key)][0] = np.array(mbs.GetSensorValues(sid), dtype=float)
+    def _solve_per_sample(mbs, settings, sampler, times):
+        """Adaptive explicit solvers: one ``SolveSteps`` per sample interval, ending on the sample."""
+        import exudyn as exu
 
-        def post_step(mbs_, t):
-            k = state["next"]
-            if k < n and abs(t - times[k]) <= half:
-                for body, key, sid in flat:
-                    values[(body, key)][k] = np.array(mbs_.GetSensorValues(sid), dtype=float)
-                state["next"] = k + 1
-            return True
+        solver = exu.MainSolverExplicit()
+        solver.InitializeSolver(mbs, settings)
+        try:
+            for k in range(1, len(times)):
+                solver.it.endTime = float(times[k])
+                solver.SolveSteps(mbs, settings)
+                if solver.it.currentTime < times[k] - 1e-9 * (times[k] - times[k - 1]):
+                    break  # the solver gave up (step size below its minimum): the run is incomplete
+                sampler.read(k)
+        finally:
+            solver.FinalizeSolver(mbs, settings)
+        return solver.it
 
-        mbs.SetPostStepUserFunction(post_step)
-        return state
+    def _initial_accelerations(self, p, values):
+        """Exudyn's explicit solvers compute accelerations only at step ends, so the sample-0
+        accelerations (for the tree's reactions) come from one explicit Euler step of 1e-30 s on a fresh
+        system, which leaves every coordinate unchanged in double precision."""
+        import exudyn as exu
+
+        built = self._build(p["scene"], p["times"], p["settings"])
+        s = exu.SimulationSettings()
+        s.solution.file.write = False
+        s.timeIntegration.verboseMode = 0
+        s.timeIntegration.endTime = 1e-30
+        s.timeIntegration.numberOfSteps = 1
+        built["mbs"].SolveDynamic(s, solverType=exu.DynamicSolverType.ExplicitEuler)
+        for name in built["links"]:
+            values[(name, "a")][0] = np.array(built["mbs"].GetSensorValues(built["sensors"][name]["a"]), dtype=float)
 
     def _read_back(self, p, built, values):
         from dalembert.trajectory import BodyStates, JointStates, Trajectory
@@ -333,22 +426,41 @@ class ExudynAdapter(Adapter):
             return np.array([np.ravel(v)[:width] if v is not None else np.full(width, np.nan)
                              for v in values[(body, key)]], dtype=float)
 
-        bodies = {}
+        bodies, R_WB = {}, {}
         for b in scene.bodies:
             R_WL = series(b.name, "R", 9).reshape(n, 3, 3)  # row-major in sensor output
             R_LB = built["link_frames"].get(b.name, (None, np.eye(3)))[1]
-            R_WB = R_WL @ R_LB
-            finite = np.all(np.isfinite(R_WB), axis=(1, 2))
+            R_WB[b.name] = R_WL @ R_LB
+            finite = np.all(np.isfinite(R_WB[b.name]), axis=(1, 2))
             quat = np.full((n, 4), np.nan)
-            quat[finite] = spatial.matrix_to_quat(R_WB[finite])
+            quat[finite] = spatial.matrix_to_quat(R_WB[b.name][finite])
             bodies[b.name] = BodyStates(series(b.name, "p", 3), quat, series(b.name, "v", 3),
-                                        series(b.name, "w", 3), rotation=R_WB)
-        joints = {}
-        if built["links"]:
+                                        series(b.name, "w", 3), rotation=R_WB[b.name])
+        joints, reactions = {}, {}
+        if built["links"]:  # minimal coordinates: the tree's own; reactions by Newton's law per link
             q, v = series("__q", "q", len(built["links"])), series("__v", "v", len(built["links"]))
             for i, name in enumerate(built["links"]):
                 joints[name] = JointStates(q[:, i:i + 1], v[:, i:i + 1])
-        return Trajectory(times, bodies, joints)
+            for name in reversed(built["links"]):  # children first
+                body = scene.body(name)
+                f = body.mass * (series(name, "a", 3) - np.asarray(scene.gravity))
+                for ld in scene.loads:
+                    if ld.body == name and ld.kind == "force":
+                        f -= R_WB[name] @ np.array(ld.vector) if ld.frame == "body" else np.array(ld.vector)
+                for child in built["links"]:
+                    if scene.joint(child).parent == name:
+                        f += reactions[child]
+                reactions[name] = f
+        for child, R0 in built["redundant_joints"].items():  # redundant coordinates: from the bodies
+            j = scene.joint(child)
+            R_WP = np.eye(3) if j.parent == WORLD else R_WB[j.parent]
+            w_P = np.zeros((n, 3)) if j.parent == WORLD else bodies[j.parent].angular_velocity
+            joints[child] = spatial.joint_coordinates(j, R_WP, R_WB[child], w_P, bodies[child].angular_velocity)
+            f_local = series(f"__joint:{child}", "f", 3)
+            reactions[child] = -np.einsum("...ij,...j->...i", R_WP @ R0, f_local)  # ON the child, world axes
+        joints = {k: v if isinstance(v, JointStates) else JointStates(*v) for k, v in joints.items()}
+        extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
+        return Trajectory(times, bodies, joints, extras)
 
     # ------------------------------------------------------------- audit
     def audit(self, prepared, outcome):
@@ -358,9 +470,50 @@ class ExudynAdapter(Adapter):
             "gravity_loads": "mass-proportional (CreateRigidBody / KinematicTree)" if any(scene.gravity) else "none",
             "node": st.options.get("node", "rotvec-lg"), "joints": st.options.get("joints", "minimal"),
             "solver": {**IMPLICIT, **EXPLICIT}[st.integrator],
-            "constraints": 0, "contacts": 0,
+            "constraints": outcome.info.get("constraints", 0), "contacts": 0,
             "model": outcome.info.get("summary", ""),
             "newton_steps": outcome.info.get("newton_steps", 0),
             "rejected_steps": outcome.info.get("rejected_steps", 0),
             "exudyn_version": self.version(),
         }
+
+
+class _Sampler:
+    """Reads every sensor at the sample times and counts the steps Exudyn takes.
+
+    Installed as the post-step user function: fixed-step solvers are sampled at
+    the step that lands on each sample time (a step that divides the interval;
+    "lands" = within half a step, as Exudyn accumulates its time); adaptive runs
+    call ``read`` after each ``SolveSteps``, and are stopped (returning False) at a
+    step of ``min_step``, where Exudyn would otherwise go on forever. Sample 0 is
+    the initial state.
+    """
+
+    def __init__(self, mbs, sensors, times, dt, min_step=None):
+        self.mbs, self.times, self.min_step, self.stalled = mbs, times, min_step, None
+        self.flat = [(body, key, sid) for body, group in sensors.items() for key, sid in group.items()]
+        self.values = {(body, key): [None] * len(times) for body, key, _ in self.flat}
+        self.half = 0.5 * dt if dt else None
+        self.steps, self.last_time, self.next = 0, float(times[0]), 1
+        self.read(0)
+        mbs.SetPostStepUserFunction(self._post_step)
+
+    def read(self, k):
+        for body, key, sid in self.flat:
+            self.values[(body, key)][k] = np.array(self.mbs.GetSensorValues(sid), dtype=float)
+        self.next = k + 1
+
+    def _post_step(self, mbs, t):
+        if self.steps == 0 and t == self.times[0]:  # once before the first step, with accelerations and
+            self.read(0)  # constraint forces of the initial state computed (not yet at assembly)
+            return True
+        if t > self.last_time:  # Exudyn also calls this once per solve without stepping
+            if self.min_step is not None and t - self.last_time <= self.min_step * (1.0 + 1e-9):
+                self.stalled = t  # Exudyn would go on at its minimum step without end: stop here
+                return False
+            self.steps += 1
+            self.last_time = t
+            k = self.next
+            if self.half is not None and k < len(self.times) and abs(t - self.times[k]) <= self.half:
+                self.read(k)
+        return True

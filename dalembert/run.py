@@ -108,7 +108,8 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
     integrators : integrator names (default: every integrator of each engine)
     dts, rtols : step sizes (s) for fixed-step and tolerances for adaptive integrators
     params : dict of case parameter overrides (applied to every selected case that has them)
-    options : dict of engine options (applied to every run)
+    options : dict of engine options (applied to every run; default: each
+        engine's ``variants`` for each case)
 
     Returns
     -------
@@ -155,7 +156,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
     dts = tuple(dts or DEFAULT_DTS)
     rtols = tuple(rtols or DEFAULT_RTOLS)
     params = dict(params or {})
-    options = tuple(sorted((options or {}).items()))
+    user_options = tuple(sorted((options or {}).items()))
     specs = []
     for name in names:
         factory = registry[name]
@@ -170,11 +171,15 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
                     variants = [dict(dt=dt) for dt in dts]
                 else:
                     variants = [dict(rtol=r, atol=r * ATOL_PER_RTOL) for r in rtols]
-                for v in variants:
-                    spec = RunSpec(name, e, integ, options=options, params=frozen_params,
-                                   case_version=case.version, adapter=adapter_path(e), **v)
-                    adapter.check(case.scene, case.times, spec.settings)
-                    specs.append(spec)
+                # given options apply to every run; else each engine's own variants for this scene
+                option_sets = [user_options] if options else [tuple(sorted(o.items()))
+                                                              for o in adapter.variants(case.scene)]
+                for opts in option_sets:
+                    for v in variants:
+                        spec = RunSpec(name, e, integ, options=opts, params=frozen_params,
+                                       case_version=case.version, adapter=adapter_path(e), **v)
+                        adapter.check(case.scene, case.times, spec.settings)
+                        specs.append(spec)
     return specs, skipped
 
 

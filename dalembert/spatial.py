@@ -40,6 +40,7 @@ __all__ = [
     "body_to_world",
     "wxyz_to_xyzw",
     "xyzw_to_wxyz",
+    "joint_coordinates",
 ]
 
 IDENTITY_QUAT = (1.0, 0.0, 0.0, 0.0)
@@ -338,3 +339,43 @@ def xyzw_to_wxyz(q):
     """Scalar-last (Pinocchio's storage) to scalar-first, shape (..., 4)."""
     q = np.asarray(q, dtype=float)
     return np.concatenate([q[..., 3:], q[..., :3]], axis=-1)
+
+
+def joint_coordinates(joint, R_WP, R_WC, w_WP_W, w_WC_W):
+    """A joint's coordinates (``Joint`` conventions) from its parent's and child's motion.
+
+    For engines that simulate bodies in redundant coordinates. A revolute angle
+    is unwrapped and shifted by whole turns to start at ``joint.q0``.
+
+    Parameters
+    ----------
+    joint : dalembert.scene.Joint — revolute, ball or weld
+    R_WP, R_WC : array_like (n, 3, 3) or (3, 3) — parent and child body rotations
+        ``R_WB`` (world: the identity)
+    w_WP_W, w_WC_W : array_like (n, 3) — their angular velocities, world axes, rad/s
+
+    Returns
+    -------
+    q : ndarray (n, nq) — angle (rad), scalar-first quaternion ``q_JpJc``, or (n, 0)
+    v : ndarray (n, nv) — rate about the axis (rad/s), ``w_JpJc`` in the child
+        joint frame (rad/s), or (n, 0)
+    """
+    w_rel = np.asarray(w_WC_W, dtype=float) - np.asarray(w_WP_W, dtype=float)
+    n = len(w_rel)
+    if joint.kind == "weld":
+        return np.zeros((n, 0)), np.zeros((n, 0))
+    R_WJp = np.asarray(R_WP, dtype=float) @ quat_to_matrix(joint.parent_quat)
+    R_WJc = np.asarray(R_WC, dtype=float) @ quat_to_matrix(joint.child_quat)
+    R_J = np.broadcast_to(np.swapaxes(R_WJp, -1, -2) @ R_WJc, (n, 3, 3))
+    if joint.kind == "ball":
+        return matrix_to_quat(R_J), np.einsum("nji,nj->ni", np.broadcast_to(R_WJc, (n, 3, 3)), w_rel)
+    if joint.kind != "revolute":
+        raise ValueError(f"joint.kind: no joint coordinates for {joint.kind!r} here")
+    a = np.asarray(joint.axis, dtype=float) / np.linalg.norm(joint.axis)
+    # R_J = exp(angle skew(a)): R - R^T = 2 sin(angle) skew(a), trace = 1 + 2 cos(angle)
+    vee = np.stack([R_J[:, 2, 1] - R_J[:, 1, 2], R_J[:, 0, 2] - R_J[:, 2, 0], R_J[:, 1, 0] - R_J[:, 0, 1]], -1)
+    angle = np.unwrap(np.arctan2(0.5 * vee @ a, 0.5 * (np.trace(R_J, axis1=1, axis2=2) - 1.0)))
+    if n and np.isfinite(angle[0]):
+        angle += 2.0 * np.pi * np.round((joint.q0[0] - angle[0]) / (2.0 * np.pi))
+    rate = np.einsum("ni,ni->n", np.broadcast_to(R_WJp @ a, (n, 3)), w_rel)
+    return angle[:, None], rate[:, None]

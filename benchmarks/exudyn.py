@@ -1,0 +1,87 @@
+"""Benchmark of the Exudyn adapter: stepping cost per solver and the adapter's overhead.
+
+    python -m benchmarks.exudyn
+
+Per case and solver (fixed-step ones at dt = 1e-3, adaptive ones at rtol = atol =
+1e-8; default node and joints), in the same process, each the median of 3 runs
+after a warm-up:
+
+* ``solve``: Exudyn's stepping time per simulated second as the adapter measures
+  it (``Outcome.wall_s``: ``SolveDynamic`` with the post-step sampler, or the
+  per-sample ``SolveSteps`` loop of the adaptive solvers);
+* ``bare``: ``SolveDynamic`` on the same system built the same way, with no
+  user function (Exudyn's own sensor schedule at the sample interval, which the
+  adapter avoids because it drifts after ~3e4 steps);
+* ``overhead``: everything in ``adapter.run`` but the bare solve (building the
+  system, the per-step Python callback, read-back), as a fraction of the whole
+  ``adapter.run``. Goal (issue 6): <= 20% for runs over 50 ms.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from adapters import get_adapter
+from adapters.exudyn import ADAPTIVE
+from dalembert import Settings
+from dalembert.case import load_cases
+
+REPEATS = 3
+LONG_RUN_S = 0.05  # the goal applies to runs longer than this (issue 6)
+GOAL = 0.20
+
+
+def bare_solve(adapter, prepared):
+    """Seconds of ``SolveDynamic`` alone on a system built as the adapter builds it."""
+    import exudyn as exu
+
+    built = adapter._build(prepared["scene"], prepared["times"], prepared["settings"])
+    settings = adapter._settings(prepared)
+    settings.solution.sensors.writePeriod = float(prepared["times"][1] - prepared["times"][0])
+    console, exu.config.printToConsole = exu.config.printToConsole, False
+    try:
+        t0 = time.perf_counter()
+        built["mbs"].SolveDynamic(settings, solverType=settings.timeIntegration.solverType)
+        return time.perf_counter() - t0
+    finally:
+        exu.config.printToConsole = console
+
+
+def main():
+    adapter = get_adapter("exudyn")
+    print(f"Exudyn {adapter.version()}; stepping time per simulated second (ms); overhead = share of "
+          f"adapter.run that is not Exudyn solving")
+    print(f"{'case':<24}{'solver':<20}{'solve':>9}{'bare':>9}{'run':>9}{'overhead':>10}")
+    shares = []
+    for name, factory in load_cases().items():
+        case = factory()
+        if "hard" in factory.tags:
+            continue
+        for integ in adapter.integrators:
+            s = Settings(integ, rtol=1e-8, atol=1e-8) if integ in ADAPTIVE else Settings(integ, dt=1e-3)
+            if adapter.unsupported(case.scene, s):
+                continue
+            prepared = adapter.prepare(case.scene, case.times, s)
+            adapter.run(prepared)
+            runs, solves = [], []
+            for _ in range(REPEATS):
+                t0 = time.perf_counter()
+                out = adapter.run(prepared)
+                runs.append(time.perf_counter() - t0)
+                solves.append(out.wall_s)
+            bare = np.median([bare_solve(adapter, prepared) for _ in range(REPEATS)])
+            run = np.median(runs)
+            share = (run - bare) / run
+            if run > LONG_RUN_S:
+                shares.append(share)
+            per_s = 1e3 / case.t_final
+            print(f"{name:<24}{integ:<20}{np.median(solves) * per_s:>9.2f}{bare * per_s:>9.2f}{run * per_s:>9.2f}"
+                  f"{100 * share:>9.1f}%")
+    print(f"overhead for runs > {1e3 * LONG_RUN_S:.0f} ms: median {100 * np.median(shares):.1f}%, "
+          f"max {100 * np.max(shares):.1f}% (goal <= {100 * GOAL:.0f}%)")
+
+
+if __name__ == "__main__":
+    main()
