@@ -153,6 +153,40 @@ class PinocchioModel:
             return pin.aba(self.model, self.data, q, v, self.tau, self.external_forces(q))
         return pin.aba(self.model, self.data, q, v, self.tau)
 
+    def acceleration_function(self):
+        """``acc(q, v)`` with the fewest Python calls: the external forces are built once
+        when they do not depend on the configuration (no world-frame loads)."""
+        import pinocchio as pin
+
+        aba, model, data, tau = pin.aba, self.model, self.data, self.tau
+        if not self.has_loads:
+            return lambda q, v: aba(model, data, q, v, tau)
+        if not self.world_loads:
+            fext = self.external_forces(None)  # follower loads only: constant in the joint frames
+            return lambda q, v: aba(model, data, q, v, tau, fext)
+        return self.acceleration
+
+    def dexpinv_function(self):
+        """``dexpinv(q, theta, vel)``: the tangent ``theta'`` of ``q (+) theta`` moving with
+        velocity ``vel`` — ``dIntegrate(q, theta, ARG1)^-1 vel`` — or None where it is ``vel``.
+
+        Only revolute joints: the configuration space is a vector space (None). One
+        FreeFlyer: ``Jlog6(exp6(theta)) vel``, the closed-form inverse of the right
+        Jacobian (agrees with the solve to ~1e-14 relative; 3x cheaper). Otherwise
+        the nv x nv solve with ``dIntegrate``.
+        """
+        import pinocchio as pin
+
+        model = self.model
+        names = [model.joints[i].shortname() for i in range(1, model.njoints)]
+        if all(n.startswith("JointModelR") for n in names):  # RevoluteUnaligned / RX / RY / RZ
+            return None
+        if names == ["JointModelFreeFlyer"]:
+            Jlog6, exp6 = pin.Jlog6, pin.exp6
+            return lambda q, theta, vel: Jlog6(exp6(theta)) @ vel
+        dIntegrate, ARG1, solve = pin.dIntegrate, pin.ArgumentPosition.ARG1, np.linalg.solve
+        return lambda q, theta, vel: solve(dIntegrate(model, q, theta, ARG1), vel)
+
     # ---------------------------------------------------------- conversions
     def initial_state(self):
         import pinocchio as pin
@@ -219,42 +253,48 @@ class PinocchioAdapter(Adapter):
         import pinocchio as pin
 
         pm = p["pm"]
-        model, acc = pm.model, pm.acceleration
+        model, acc = pm.model, pm.acceleration_function()
         integrate = pin.integrate
-        ARG1 = pin.ArgumentPosition.ARG1
-        solve = np.linalg.solve
+        dexpinv = pm.dexpinv_function()
+        J_inv = dexpinv if dexpinv is not None else (lambda q, theta, vel: vel)
 
-        def J_inv(q, theta, vel):
-            return solve(pin.dIntegrate(model, q, theta, ARG1), vel)
+        def euler(q, v, h):
+            v = v + h * acc(q, v)
+            return integrate(model, q, h * v), v
 
-        def step(q, v, h):
-            if method == "euler":
-                v = v + h * acc(q, v)
-                return integrate(model, q, h * v), v
+        def rk4(q, v, h):  # Munthe-Kaas: stage tangents k_i, all from q
+            hh = 0.5 * h
             a1 = acc(q, v)
-            if method == "rk4":
-                v2 = v + 0.5 * h * a1
-                th2 = 0.5 * h * v
-                k2 = J_inv(q, th2, v2)
-                a2 = acc(integrate(model, q, th2), v2)
-                v3 = v + 0.5 * h * a2
-                th3 = 0.5 * h * k2
-                k3 = J_inv(q, th3, v3)
-                a3 = acc(integrate(model, q, th3), v3)
-                v4 = v + h * a3
-                th4 = h * k3
-                k4 = J_inv(q, th4, v4)
-                a4 = acc(integrate(model, q, th4), v4)
-                theta = h / 6.0 * (v + 2.0 * k2 + 2.0 * k3 + k4)
-            else:  # rk4-naive
-                v2 = v + 0.5 * h * a1
-                a2 = acc(integrate(model, q, 0.5 * h * v), v2)
-                v3 = v + 0.5 * h * a2
-                a3 = acc(integrate(model, q, 0.5 * h * v2), v3)
-                v4 = v + h * a3
-                a4 = acc(integrate(model, q, h * v3), v4)
-                theta = h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4)
-            return integrate(model, q, theta), v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+            v2 = v + hh * a1
+            th2 = hh * v
+            k2 = J_inv(q, th2, v2)
+            a2 = acc(integrate(model, q, th2), v2)
+            v3 = v + hh * a2
+            th3 = hh * k2
+            k3 = J_inv(q, th3, v3)
+            a3 = acc(integrate(model, q, th3), v3)
+            v4 = v + h * a3
+            th4 = h * k3
+            k4 = J_inv(q, th4, v4)
+            a4 = acc(integrate(model, q, th4), v4)
+            h6 = h / 6.0
+            return (integrate(model, q, h6 * (v + 2.0 * (k2 + k3) + k4)),
+                    v + h6 * (a1 + 2.0 * (a2 + a3) + a4))
+
+        def rk4_naive(q, v, h):  # stagewise integrate, no dexp^-1
+            hh = 0.5 * h
+            a1 = acc(q, v)
+            v2 = v + hh * a1
+            a2 = acc(integrate(model, q, hh * v), v2)
+            v3 = v + hh * a2
+            a3 = acc(integrate(model, q, hh * v2), v3)
+            v4 = v + h * a3
+            a4 = acc(integrate(model, q, h * v3), v4)
+            h6 = h / 6.0
+            return (integrate(model, q, h6 * (v + 2.0 * (v2 + v3) + v4)),
+                    v + h6 * (a1 + 2.0 * (a2 + a3) + a4))
+
+        step = {"euler": euler, "rk4": rk4, "rk4-naive": rk4_naive}[method]
 
         times, steps = p["times"], p["steps"]
         Q = np.full((len(times), model.nq), np.nan)
