@@ -103,12 +103,19 @@ def linear_momentum(scene, traj):
 
 
 def angular_momentum_com(scene, traj):
-    """Spin angular momentum ``sum R I R^T w`` about each body's COM (kg m^2/s), world, shape (n, 3)."""
-    total = np.zeros((len(traj.t), 3))
+    """Angular momentum about the system's centre of mass (kg m^2/s), world, shape (n, 3):
+    ``sum m (x - x_c) x (v - v_c) + R I R^T w``. Conserved under uniform gravity; for one body,
+    its spin ``R I R^T w``."""
+    masses = np.array([b.mass for b in scene.bodies])
+    x = np.stack([traj.bodies[b.name].position for b in scene.bodies])  # (bodies, n, 3)
+    v = np.stack([traj.bodies[b.name].velocity for b in scene.bodies])
+    x_c = np.einsum("b,bni->ni", masses, x) / masses.sum()
+    v_c = np.einsum("b,bni->ni", masses, v) / masses.sum()
+    total = np.einsum("b,bni->ni", masses, np.cross(x - x_c, v - v_c)) if len(masses) > 1 else np.zeros_like(x_c)
     for body in scene.bodies:
         R = _R(traj, body.name)
         I_W = R @ body.inertia_matrix @ np.swapaxes(R, 1, 2)
-        total += np.einsum("nij,nj->ni", I_W, traj.bodies[body.name].angular_velocity)
+        total = total + np.einsum("nij,nj->ni", I_W, traj.bodies[body.name].angular_velocity)
     return total
 
 
@@ -171,22 +178,26 @@ def joint_residual(scene, traj):
 
 
 def pairwise_distance_change(scene, traj):
-    """Largest change of any distance between two particles of one body (m), shape (n,).
+    """Largest change of any distance between two particles of the scene (m), shape (n,).
 
-    Uses each body's attitude as stored (a drifting quaternion norm or matrix
-    stretches the body); zero for scenes without particles.
+    Particles of one body and of different bodies alike (a body of one particle
+    at its COM is a particle held to others by joints). Uses each body's
+    attitude as stored (a drifting quaternion norm or matrix stretches the
+    body); zero for scenes with fewer than two particles.
     """
-    err = np.zeros(len(traj.t))
+    points = []  # (n, 3) world positions of every particle
     for body in scene.bodies:
-        if len(body.particles) < 2:
+        if not body.particles:
             continue
         u = np.array([p for _, p in body.particles])
         R = traj.bodies[body.name].rotation_matrix
-        x = traj.bodies[body.name].position[:, None, :] + np.einsum("nij,kj->nki", R, u)
-        i, k = np.array(list(itertools.combinations(range(len(u)), 2))).T
-        d = np.linalg.norm(x[:, i] - x[:, k], axis=2)
-        err = np.maximum(err, np.abs(d - np.linalg.norm(u[i] - u[k], axis=1)).max(axis=1))
-    return err
+        points.append(traj.bodies[body.name].position[:, None, :] + np.einsum("nij,kj->nki", R, u))
+    if sum(p.shape[1] for p in points) < 2:
+        return np.zeros(len(traj.t))
+    x = np.concatenate(points, axis=1)
+    i, k = np.array(list(itertools.combinations(range(x.shape[1]), 2))).T
+    d = np.linalg.norm(x[:, i] - x[:, k], axis=2)
+    return np.abs(d - d[:1]).max(axis=1)
 
 
 def _rel_drift_scalar(x, scale):

@@ -17,12 +17,29 @@ HARD = [n for n, f in load_cases().items() if "hard" in f.tags]
 # The built-in engines (other tests register deliberately broken ones in this process).
 ENGINES = ["reference", "mujoco", "pinocchio", "exudyn"]
 # Horizons for the tests (the full ones are for `dalembert run --tag hard`).
-SHORT = {"free_top_long_horizon": dict(t_final=5.0), "pivoted_rod_violent": {}}
+SHORT = {"free_top_long_horizon": dict(t_final=5.0), "pivoted_rod_violent": {},
+         "particle_box_welded": dict(t_final=0.5)}  # 27 bodies: the reference's Kane loop is slow
 
 
 def test_the_hard_cases_are_registered():
     assert set(HARD) >= {"free_top_fast_spin", "free_top_long_horizon", "free_top_near_symmetric",
-                         "free_top_slender", "free_top_separatrix", "pivoted_rod_violent"}
+                         "free_top_slender", "free_top_separatrix", "pivoted_rod_violent", "particle_box_welded"}
+
+
+def test_welds_hold_in_exudyn_redundant_coordinates():
+    """The 27 welded particles as rigid bodies + 26 generic joints: the box stays rigid and
+    follows the rigid-body closed form (second order)."""
+    from adapters import get_adapter
+    from dalembert import invariants
+
+    case = make_case("particle_box_welded", t_final=0.5)
+    exudyn = get_adapter("exudyn")
+    s = Settings("generalized-alpha", dt=1e-3, options={"joints": "redundant"})
+    traj = exudyn.run(exudyn.prepare(case.scene, case.times, s)).trajectory
+    errors = trajectory_errors(traj, case.exact(case.times))
+    assert errors["orientation"][0] < case.tolerances["orientation"].value
+    assert errors["position"][0] < case.tolerances["position"].value
+    assert invariants.drift("pairwise_distance", case.scene, traj) < case.tolerances["pairwise_distance"].value
 
 
 def test_separatrix_closed_form_is_still_exact():
