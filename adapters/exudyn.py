@@ -189,8 +189,6 @@ class ExudynAdapter(Adapter):
                                           SensorNode, SensorObject)
         from exudyn.rigidBodyUtilities import RigidBodyInertia
 
-        from reference.generalized import Kane
-
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
         g = np.array(scene.gravity, dtype=float)
@@ -200,9 +198,7 @@ class ExudynAdapter(Adapter):
         summary, sensors, markers, bodies = [], {}, {}, {}
         # --- rigid bodies: free bodies, and every body with joints=redundant
         rigid = _rigid_bodies(scene, redundant)
-        if rigid:
-            kane = Kane(scene)
-            state0 = kane.kinematics(kane.q0, kane.v0)  # world pose and velocity of every body at t = 0
+        state0 = spatial.initial_body_states(scene) if rigid else {}  # world states at t = 0
         for name in rigid:
             body, s0 = scene.body(name), state0[name]
             kwargs = dict(inertia=RigidBodyInertia(body.mass, body.inertia_matrix, [0.0, 0.0, 0.0], True),

@@ -41,6 +41,7 @@ __all__ = [
     "wxyz_to_xyzw",
     "xyzw_to_wxyz",
     "joint_coordinates",
+    "initial_body_states",
 ]
 
 IDENTITY_QUAT = (1.0, 0.0, 0.0, 0.0)
@@ -379,3 +380,43 @@ def joint_coordinates(joint, R_WP, R_WC, w_WP_W, w_WC_W):
         angle += 2.0 * np.pi * np.round((joint.q0[0] - angle[0]) / (2.0 * np.pi))
     rate = np.einsum("ni,ni->n", np.broadcast_to(R_WJp @ a, (n, 3)), w_rel)
     return angle[:, None], rate[:, None]
+
+
+def initial_body_states(scene):
+    """World pose and velocity of every body at the joints' ``q0``, ``v0`` (forward kinematics).
+
+    For engines that take body states rather than joint coordinates (redundant
+    coordinates). Joint conventions as in ``dalembert.scene.JOINT_KINDS``.
+
+    Returns
+    -------
+    dict body name -> dict with ``R`` (3, 3) ``R_WB``, ``p`` (3,) COM position (m),
+    ``v`` (3,) COM velocity (m/s), ``w`` (3,) angular velocity ``w_WB_W`` (rad/s)
+    """
+    zero = np.zeros(3)
+    out = {"world": dict(R=np.eye(3), p=zero, v=zero, w=zero)}
+    for body in scene.topological_order():
+        j = scene.joint(body.name)
+        q0, v0 = np.asarray(j.q0, dtype=float), np.asarray(j.v0, dtype=float)
+        if j.kind == "free":
+            R = quat_to_matrix(q0[3:] / np.linalg.norm(q0[3:]))
+            out[body.name] = dict(R=R, p=q0[:3].copy(), v=v0[:3].copy(), w=R @ v0[3:])
+            continue
+        P = out[j.parent]
+        R_WJp = P["R"] @ quat_to_matrix(j.parent_quat)
+        if j.kind == "revolute":
+            a = np.asarray(j.axis, dtype=float) / np.linalg.norm(j.axis)
+            R_J, w_rel = so3_exp(a * q0[0]), R_WJp @ a * v0[0]
+        elif j.kind == "ball":
+            R_J = quat_to_matrix(q0 / np.linalg.norm(q0))
+            w_rel = R_WJp @ R_J @ v0  # v0 in the child joint frame
+        else:  # weld
+            R_J, w_rel = np.eye(3), zero
+        R = R_WJp @ R_J @ quat_to_matrix(j.child_quat).T
+        r_PJ = P["R"] @ np.asarray(j.parent_point, dtype=float)  # parent COM -> joint point
+        r_JC = -R @ np.asarray(j.child_point, dtype=float)  # joint point -> child COM
+        w = P["w"] + w_rel
+        out[body.name] = dict(R=R, p=P["p"] + r_PJ + r_JC, w=w,
+                              v=P["v"] + cross(P["w"], r_PJ) + cross(w, r_JC))
+    del out["world"]
+    return out

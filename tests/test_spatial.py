@@ -99,3 +99,16 @@ def test_scalar_last_round_trip(rng):
     q = random_quats(rng, 5)
     assert np.array_equal(spatial.xyzw_to_wxyz(spatial.wxyz_to_xyzw(q)), q)
     assert np.array_equal(spatial.wxyz_to_xyzw(q)[:, 3], q[:, 0])
+
+
+def test_initial_body_states_match_kanes_kinematics():
+    """Forward kinematics for redundant-coordinate engines against the reference's Kane kinematics."""
+    from reference.generalized import Kane
+    from scenes import chain_case
+
+    scene = chain_case().scene
+    kane = Kane(scene)
+    expected = kane.kinematics(kane.q0, kane.v0)
+    for name, got in spatial.initial_body_states(scene).items():
+        for key in ("R", "p", "v", "w"):
+            np.testing.assert_allclose(got[key], expected[name][key], rtol=0, atol=1e-14, err_msg=f"{name} {key}")
