@@ -185,19 +185,25 @@ def pairwise_distance_change(scene, traj):
     attitude as stored (a drifting quaternion norm or matrix stretches the
     body); zero for scenes with fewer than two particles.
     """
-    points = []  # (n, 3) world positions of every particle
-    for body in scene.bodies:
+    points, owner, local = [], [], []  # world positions (n, k, 3); each particle's body and body-frame point
+    for b, body in enumerate(scene.bodies):
         if not body.particles:
             continue
         u = np.array([p for _, p in body.particles])
         R = traj.bodies[body.name].rotation_matrix
         points.append(traj.bodies[body.name].position[:, None, :] + np.einsum("nij,kj->nki", R, u))
-    if sum(p.shape[1] for p in points) < 2:
+        owner += [b] * len(u)
+        local.append(u)
+    if len(owner) < 2:
         return np.zeros(len(traj.t))
-    x = np.concatenate(points, axis=1)
-    i, k = np.array(list(itertools.combinations(range(x.shape[1]), 2))).T
+    x, owner, local = np.concatenate(points, axis=1), np.array(owner), np.concatenate(local)
+    i, k = np.array(list(itertools.combinations(range(len(owner)), 2))).T
     d = np.linalg.norm(x[:, i] - x[:, k], axis=2)
-    return np.abs(d - d[:1]).max(axis=1)
+    # nominal distances: within a body, from its definition (so a stretched attitude shows from t = 0);
+    # across bodies (held by joints), as at the first sample
+    same = owner[i] == owner[k]
+    nominal = np.where(same, np.linalg.norm(local[i] - local[k], axis=1), d[0])
+    return np.abs(d - nominal).max(axis=1)
 
 
 def _rel_drift_scalar(x, scale):
