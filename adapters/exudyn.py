@@ -86,6 +86,12 @@ OPTIONS = ("node", "joints", "spectral_radius", "newton_rtol", "newton_atol")
 # stuck (measured: ode23 on Tait-Bryan nodes at their singularity on the 50 rad/s fast spin
 # shrinks its steps without end); the hard cases need no step below ~1e-3 of the interval.
 MIN_STEP_FRACTION = 1e-6
+# Adaptive solvers also stop after this many rejected attempts in a row at one time: Exudyn
+# retries a rejected step without end once it sits at its minimum step (measured: ode23 at
+# rtol 1e-9 on Tait-Bryan nodes at their singularity, t = 0.314 s on the intermediate-axis
+# top, 1.2e7 attempts in a minute); a controller that shrinks the step on each rejection
+# reaches any step it could accept in far fewer.
+MAX_REJECTIONS_IN_A_ROW = 100
 NEWTON_RTOL = 1e-12
 NEWTON_ATOL = 1e-14
 
@@ -365,8 +371,8 @@ class ExudynAdapter(Adapter):
         # complete = every sample read (Exudyn's accumulated time may end a few ulps short of the horizon)
         if error is not None or sampler.next != len(times):
             missing = "" if sampler.next == len(times) else f" ({len(times) - sampler.next} sample(s) not reached)"
-            if sampler.stalled is not None:
-                missing += f": the adaptive step fell to its minimum {min_step:g} s (stuck)"
+            if sampler.stalled is not None:  # our stop, not Exudyn's: its message would only echo ours
+                missing, error = f"{missing}: stuck, {sampler.stalled}", None
             raise RuntimeError(f"Exudyn solver stopped at t = {reached:g} s of {times[-1]:g} s{missing}"
                                + (f": {error}" if error else ""))
         if built["links"] and integrator in EXPLICIT:
@@ -475,6 +481,10 @@ class ExudynAdapter(Adapter):
         }
 
 
+class _Stuck(RuntimeError):
+    """An adaptive run that retries one step without end."""
+
+
 class _Sampler:
     """Reads every sensor at the sample times and counts the steps Exudyn takes.
 
@@ -482,8 +492,9 @@ class _Sampler:
     the step that lands on each sample time (a step that divides the interval;
     "lands" = within half a step, as Exudyn accumulates its time); adaptive runs
     call ``read`` after each ``SolveSteps``, and are stopped (returning False) at a
-    step of ``min_step``, where Exudyn would otherwise go on forever. Sample 0 is
-    the initial state.
+    step of ``min_step``, or (raising from the pre-step function) after
+    ``MAX_REJECTIONS_IN_A_ROW`` rejected attempts at one time: where Exudyn would
+    otherwise go on forever. Sample 0 is the initial state.
     """
 
     def __init__(self, mbs, sensors, times, dt, min_step=None):
@@ -492,13 +503,26 @@ class _Sampler:
         self.values = {(body, key): [None] * len(times) for body, key, _ in self.flat}
         self.half = 0.5 * dt if dt else None
         self.steps, self.last_time, self.next = 0, float(times[0]), 1
+        self.attempt_time, self.attempts = None, 0
         self.read(0)
         mbs.SetPostStepUserFunction(self._post_step)
+        if min_step is not None:
+            mbs.SetPreStepUserFunction(self._pre_step)
 
     def read(self, k):
         for body, key, sid in self.flat:
             self.values[(body, key)][k] = np.array(self.mbs.GetSensorValues(sid), dtype=float)
         self.next = k + 1
+
+    def _pre_step(self, mbs, t):
+        # Called before every attempt, rejected ones included; returning False does not stop
+        # Exudyn, raising does (the solve ends with the error, the samples read so far kept).
+        self.attempts = self.attempts + 1 if t == self.attempt_time else 1
+        self.attempt_time = t
+        if self.attempts > MAX_REJECTIONS_IN_A_ROW:
+            self.stalled = f"{MAX_REJECTIONS_IN_A_ROW} rejected attempts in a row at t = {t:g} s"
+            raise _Stuck(self.stalled)
+        return True
 
     def _post_step(self, mbs, t):
         if self.steps == 0 and t == self.times[0]:  # once before the first step, with accelerations and
@@ -506,7 +530,8 @@ class _Sampler:
             return True
         if t > self.last_time:  # Exudyn also calls this once per solve without stepping
             if self.min_step is not None and t - self.last_time <= self.min_step * (1.0 + 1e-9):
-                self.stalled = t  # Exudyn would go on at its minimum step without end: stop here
+                # Exudyn would go on at its minimum step without end: stop here
+                self.stalled = f"the adaptive step fell to its minimum {self.min_step:g} s"
                 return False
             self.steps += 1
             self.last_time = t

@@ -143,6 +143,15 @@ def test_tait_bryan_singularity_shows_as_a_non_finite_run():
     assert not out.trajectory.is_finite()
 
 
+def test_an_adaptive_solver_stuck_at_the_singularity_stops_with_the_time_reached():
+    """ode23 on Rxyz nodes retries one step without end at the singularity (t = 0.314 s): the
+    adapter stops it, and the run fails with the time reached instead of hanging the suite."""
+    case = make_case("free_top_intermediate", t_final=1.0)
+    prepared = ADAPTER.prepare(case.scene, case.times, Settings("ode23", rtol=1e-9, options={"node": "rxyz"}))
+    with pytest.raises(RuntimeError, match=r"stopped at t = 0\.31.*stuck"):
+        ADAPTER.run(prepared)
+
+
 def test_no_files_written(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     for name in ("pivoted_rod", "particle_box"):
