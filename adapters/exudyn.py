@@ -92,6 +92,16 @@ MIN_STEP_FRACTION = 1e-6
 # top, 1.2e7 attempts in a minute); a controller that shrinks the step on each rejection
 # reaches any step it could accept in far fewer.
 MAX_REJECTIONS_IN_A_ROW = 100
+# Fixed-step runs are sampled by Exudyn's sensor schedule, shortened so that it leads the
+# sample times by this many steps at the horizon: enough to stay ahead of the ulps its
+# accumulated time loses (measured: 2e-8 s behind after 1e6 steps of 1e-3 s, i.e. 2e-5
+# steps), and short of half a step, so each write is still the step nearest its sample.
+SCHEDULE_LEAD = 0.25
+# A fixed-step sample is read at the step that lands on its time to within this fraction of a
+# step (Exudyn's accumulated time is off by 2e-5 steps after 1e6 steps). Exudyn shrinks
+# implicit steps when Newton fails, and its grid is then lost: a sample no step lands on ends
+# the run (no dense output to interpolate; reading the nearest step would shift the sample).
+ON_TIME = 1e-3
 NEWTON_RTOL = 1e-12
 NEWTON_ATOL = 1e-14
 
@@ -344,53 +354,115 @@ class ExudynAdapter(Adapter):
         import exudyn as exu
 
         p = prepared
+        times, integrator = p["times"], p["settings"].integrator
+        console = exu.config.printToConsole
+        exu.config.printToConsole = False  # silent unless the user asks (Exudyn prints solver banners)
+        try:
+            solved = None if integrator in ADAPTIVE else self._solve_stored(p)
+            if solved is None or solved["late"] is not None:
+                late = solved and solved["late"]
+                solved = self._solve_sampled(p)
+                solved["sampling"] = "post-step user function" + (f" ({late})" if late else "")
+        finally:
+            exu.config.printToConsole = console
+        built, it, error = solved["built"], solved["it"], solved["error"]
+        # complete = every sample read (Exudyn's accumulated time may end a few ulps short of the horizon)
+        if error is not None or solved["read"] != len(times):
+            missing = "" if solved["read"] == len(times) else f" ({len(times) - solved['read']} sample(s) not reached)"
+            if solved.get("stalled") is not None:  # our stop, not Exudyn's: its message would only echo ours
+                missing, error = f"{missing}: {solved['stalled']}", None
+            raise RuntimeError(f"Exudyn solver stopped at t = {solved['reached']:g} s of {times[-1]:g} s{missing}"
+                               + (f": {error}" if error else ""))
+        if built["links"] and integrator in EXPLICIT:
+            self._initial_accelerations(p, solved["values"])
+        traj = self._read_back(p, built, solved["values"])
+        rejected = int(it.rejectedAutomaticStepSizeSteps) if it is not None else 0
+        info = {"newton_steps": int(it.newtonStepsCount) if it is not None else 0, "rejected_steps": rejected,
+                "summary": built["summary"], "sampling": solved["sampling"],
+                "constraints": sum(sum(CONSTRAINED_AXES[p["scene"].joint(c).kind]) for c in built["redundant_joints"])}
+        n_rhs = (solved["steps"] + rejected) * STAGES.get(integrator, 1)
+        return Outcome(traj, solved["wall"], solved["steps"], n_rhs, info)
+
+    def _solve_stored(self, p):
+        """Fixed-step solvers, sampled by Exudyn itself: sensors stored in memory (C++ side, no
+        Python per step) on Exudyn's write schedule, set a little short of the sample interval.
+
+        Exudyn writes when its accumulated time passes its accumulated schedule; both lose ulps
+        over many steps (measured: every sample one step late after 3e5 steps of 1e-3 s at the
+        exact interval), so the schedule is shortened to lead the samples by ``SCHEDULE_LEAD``
+        steps at the horizon — still the step nearest each sample. The time column is checked
+        against the sample times; ``late`` names the first miss (the caller then samples itself).
+        """
+        import exudyn as exu
+
         built = self._build(p["scene"], p["times"], p["settings"])  # a fresh system per run (Exudyn keeps state)
+        mbs, times, dt = built["mbs"], p["times"], p["settings"].dt
+        flat = [(body, key, sid) for body, group in built["sensors"].items() for key, sid in group.items()]
+        for _, _, sid in flat:
+            mbs.SetSensorParameter(sid, "storeInternal", True)
+        settings = self._settings(p)
+        interval, horizon = float(times[1] - times[0]), float(times[-1] - times[0])
+        settings.solution.sensors.writePeriod = interval * (1.0 - SCHEDULE_LEAD * dt / horizon)
+        error = None
+        start = time.perf_counter()
+        try:
+            mbs.SolveDynamic(settings, solverType=getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[
+                p["settings"].integrator]))
+        except Exception as e:  # Exudyn raises on solver failure; what it stored so far is kept
+            error = e
+        wall = time.perf_counter() - start
+        it = mbs.sys["dynamicSolver"].it if "dynamicSolver" in mbs.sys else None
+        stored = {}
+        for body, key, sid in flat:
+            data = np.asarray(mbs.GetSensorStoredData(sid), dtype=float)
+            stored[(body, key)] = data if data.ndim == 2 else np.empty((0, 1))
+        # every sensor is written at the same steps: one time column speaks for all; a row at each
+        # sample time, extra rows (written between samples, or at the horizon again) ignored
+        t = next(iter(stored.values()))[:, 0]
+        rows = np.minimum(np.searchsorted(t, times - ON_TIME * dt), max(len(t) - 1, 0))
+        on_time = np.abs(t[rows] - times) <= ON_TIME * dt if len(t) else np.zeros(len(times), bool)
+        read = len(times) if on_time.all() else int(np.argmin(on_time))
+        late = None
+        if read < len(times) and error is None:
+            late = (f"Exudyn's sensor schedule wrote no row at sample {read} (t = {times[read]:.12g} s), the "
+                    f"nearest at {t[rows[read]]:.12g} s" if len(t) else "Exudyn's sensor schedule wrote no rows")
+        elif read < len(times) and error is not None and len(t) and t[-1] > times[read]:
+            late = f"Exudyn's sensor schedule wrote no row at sample {read} before the solver stopped"
+        return dict(built=built, values={k: v[rows[:read], 1:] for k, v in stored.items()}, read=read,
+                    steps=_steps(it),
+                    reached=float(it.currentTime) if it is not None else float(times[read - 1]),
+                    it=it, error=error, wall=wall, late=late, sampling="Exudyn's stored sensors")
+
+    def _solve_sampled(self, p):
+        """Sampled from Python: the post-step user function reads the sensors at the steps that land
+        on the samples (fixed-step solvers), or one ``SolveSteps`` per sample interval (adaptive ones)."""
+        import exudyn as exu
+
+        built = self._build(p["scene"], p["times"], p["settings"])
         mbs, times, integrator = built["mbs"], p["times"], p["settings"].integrator
         settings = self._settings(p)
         min_step = settings.timeIntegration.minimumStepSize if integrator in ADAPTIVE else None
         sampler = _Sampler(mbs, built["sensors"], times, p["settings"].dt, min_step)
-        console = exu.config.printToConsole
-        exu.config.printToConsole = False  # silent unless the user asks (Exudyn prints solver banners)
+        solver = exu.MainSolverExplicit() if integrator in ADAPTIVE else None
         error = None
+        start = time.perf_counter()
         try:
-            start = time.perf_counter()
-            try:
-                if integrator in ADAPTIVE:
-                    it = self._solve_per_sample(mbs, settings, sampler, times)
-                else:
-                    solver = getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[integrator])
-                    mbs.SolveDynamic(settings, solverType=solver)
-            except Exception as e:  # Exudyn raises on solver failure
-                error = e
-            wall = time.perf_counter() - start
-        finally:
-            exu.config.printToConsole = console
-        if integrator not in ADAPTIVE:
-            it = mbs.sys["dynamicSolver"].it if "dynamicSolver" in mbs.sys else None
-        reached = sampler.last_time
-        # complete = every sample read (Exudyn's accumulated time may end a few ulps short of the horizon)
-        if error is not None or sampler.next != len(times):
-            missing = "" if sampler.next == len(times) else f" ({len(times) - sampler.next} sample(s) not reached)"
-            if sampler.stalled is not None:  # our stop, not Exudyn's: its message would only echo ours
-                missing, error = f"{missing}: stuck, {sampler.stalled}", None
-            raise RuntimeError(f"Exudyn solver stopped at t = {reached:g} s of {times[-1]:g} s{missing}"
-                               + (f": {error}" if error else ""))
-        if built["links"] and integrator in EXPLICIT:
-            self._initial_accelerations(p, sampler.values)
-        traj = self._read_back(p, built, sampler.values)
-        rejected = int(it.rejectedAutomaticStepSizeSteps) if it is not None else 0
-        info = {"newton_steps": int(it.newtonStepsCount) if it is not None else 0, "rejected_steps": rejected,
-                "summary": built["summary"],
-                "constraints": sum(sum(CONSTRAINED_AXES[p["scene"].joint(c).kind]) for c in built["redundant_joints"])}
-        n_rhs = (sampler.steps + rejected) * STAGES.get(integrator, 1)
-        return Outcome(traj, wall, sampler.steps, n_rhs, info)
+            if solver is not None:
+                self._solve_per_sample(solver, mbs, settings, sampler, times)
+            else:
+                mbs.SolveDynamic(settings, solverType=getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[
+                    integrator]))
+        except Exception as e:  # Exudyn raises on solver failure
+            error = e
+        wall = time.perf_counter() - start
+        it = solver.it if solver is not None else mbs.sys["dynamicSolver"].it if "dynamicSolver" in mbs.sys else None
+        return dict(built=built, values=sampler.values, read=sampler.next, steps=_steps(it),
+                    reached=float(it.currentTime) if solver is not None else sampler.last_time, it=it, error=error, wall=wall, late=None, stalled=sampler.stalled,
+                    sampling="post-step user function")
 
     @staticmethod
-    def _solve_per_sample(mbs, settings, sampler, times):
+    def _solve_per_sample(solver, mbs, settings, sampler, times):
         """Adaptive explicit solvers: one ``SolveSteps`` per sample interval, ending on the sample."""
-        import exudyn as exu
-
-        solver = exu.MainSolverExplicit()
         solver.InitializeSolver(mbs, settings)
         try:
             for k in range(1, len(times)):
@@ -401,7 +473,6 @@ class ExudynAdapter(Adapter):
                 sampler.read(k)
         finally:
             solver.FinalizeSolver(mbs, settings)
-        return solver.it
 
     def _initial_accelerations(self, p, values):
         """Exudyn's explicit solvers compute accelerations only at step ends, so the sample-0
@@ -481,32 +552,42 @@ class ExudynAdapter(Adapter):
         }
 
 
+def _steps(it):
+    """Accepted steps of a solve: Exudyn counts one discontinuous iteration per step where nothing
+    switches (no scene here has contacts or switches); ``currentStepIndex`` restarts with each
+    ``SolveSteps``. A last step of a few ulps, taken when the accumulated time ends short of the
+    horizon, counts."""
+    return int(it.discontinuousIterationsCount) if it is not None else 0
+
+
 class _Stuck(RuntimeError):
     """An adaptive run that retries one step without end."""
 
 
 class _Sampler:
-    """Reads every sensor at the sample times and counts the steps Exudyn takes.
+    """Reads every sensor at the sample times from Python.
 
-    Installed as the post-step user function: fixed-step solvers are sampled at
-    the step that lands on each sample time (a step that divides the interval;
-    "lands" = within half a step, as Exudyn accumulates its time); adaptive runs
-    call ``read`` after each ``SolveSteps``, and are stopped (returning False) at a
-    step of ``min_step``, or (raising from the pre-step function) after
-    ``MAX_REJECTIONS_IN_A_ROW`` rejected attempts at one time: where Exudyn would
-    otherwise go on forever. Sample 0 is the initial state.
+    Fixed-step solvers (``min_step`` None): installed as the post-step user
+    function, it reads at the step that lands on each sample time (within
+    ``ON_TIME`` of a step, as Exudyn accumulates its time; a sample passed without
+    landing stops the run). Adaptive ones: ``read`` is called after each
+    ``SolveSteps``, and the pre-step user function (called before every attempt,
+    rejected ones included, with the attempt's end time) stops the run, by
+    raising, where Exudyn would go on forever: at a step of ``min_step``, or after
+    ``MAX_REJECTIONS_IN_A_ROW`` attempts at one time. Sample 0 is the initial
+    state.
     """
 
     def __init__(self, mbs, sensors, times, dt, min_step=None):
         self.mbs, self.times, self.min_step, self.stalled = mbs, times, min_step, None
         self.flat = [(body, key, sid) for body, group in sensors.items() for key, sid in group.items()]
         self.values = {(body, key): [None] * len(times) for body, key, _ in self.flat}
-        self.half = 0.5 * dt if dt else None
-        self.steps, self.last_time, self.next = 0, float(times[0]), 1
-        self.attempt_time, self.attempts = None, 0
+        self.tol = ON_TIME * dt if dt else None
+        self.last_time, self.next, self.attempts = float(times[0]), 1, 0
         self.read(0)
-        mbs.SetPostStepUserFunction(self._post_step)
-        if min_step is not None:
+        if min_step is None:
+            mbs.SetPostStepUserFunction(self._post_step)
+        else:
             mbs.SetPreStepUserFunction(self._pre_step)
 
     def read(self, k):
@@ -515,27 +596,33 @@ class _Sampler:
         self.next = k + 1
 
     def _pre_step(self, mbs, t):
-        # Called before every attempt, rejected ones included; returning False does not stop
-        # Exudyn, raising does (the solve ends with the error, the samples read so far kept).
-        self.attempts = self.attempts + 1 if t == self.attempt_time else 1
-        self.attempt_time = t
-        if self.attempts > MAX_REJECTIONS_IN_A_ROW:
-            self.stalled = f"{MAX_REJECTIONS_IN_A_ROW} rejected attempts in a row at t = {t:g} s"
+        # t is the attempt's END time: the same t again is a retry of the same step (rejected at the
+        # minimum step); a t just past the last one is a step of the minimum after an accepted one.
+        # Returning False does not stop Exudyn here, raising does (the samples read so far are kept).
+        if t == self.last_time:
+            self.attempts += 1
+            if self.attempts > MAX_REJECTIONS_IN_A_ROW:
+                self.stalled = f"stuck: {MAX_REJECTIONS_IN_A_ROW} rejected attempts in a row at t = {t:g} s"
+                raise _Stuck(self.stalled)
+            return True
+        if 0.0 < t - self.last_time <= self.min_step * (1.0 + 1e-9):
+            self.stalled = f"stuck: the adaptive step fell to its minimum {self.min_step:g} s"
             raise _Stuck(self.stalled)
+        self.last_time, self.attempts = t, 1
         return True
 
     def _post_step(self, mbs, t):
-        if self.steps == 0 and t == self.times[0]:  # once before the first step, with accelerations and
-            self.read(0)  # constraint forces of the initial state computed (not yet at assembly)
+        if t == self.times[0]:  # once before the first step, with accelerations and constraint
+            self.read(0)  # forces of the initial state computed (not yet at assembly)
             return True
         if t > self.last_time:  # Exudyn also calls this once per solve without stepping
-            if self.min_step is not None and t - self.last_time <= self.min_step * (1.0 + 1e-9):
-                # Exudyn would go on at its minimum step without end: stop here
-                self.stalled = f"the adaptive step fell to its minimum {self.min_step:g} s"
-                return False
-            self.steps += 1
             self.last_time = t
             k = self.next
-            if self.half is not None and k < len(self.times) and abs(t - self.times[k]) <= self.half:
-                self.read(k)
+            if k < len(self.times):
+                if abs(t - self.times[k]) <= self.tol:
+                    self.read(k)
+                elif t > self.times[k]:
+                    self.stalled = (f"no step landed on sample {k} at t = {self.times[k]:g} s (Exudyn shrank its "
+                                    f"steps after a Newton failure, so its grid is lost; the step went to t = {t:.9g} s)")
+                    return False
         return True

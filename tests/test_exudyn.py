@@ -143,6 +143,27 @@ def test_tait_bryan_singularity_shows_as_a_non_finite_run():
     assert not out.trajectory.is_finite()
 
 
+def test_stored_sampling_lands_on_every_sample_and_falls_back_when_late(monkeypatch):
+    """3e5 steps of 1e-3 s: Exudyn's own sensor schedule at exactly the sample interval writes
+    every sample after t = 296.6 s one step late (its accumulated time falls behind); the adapter's
+    shortened schedule lands on all of them, and with the shortening removed it notices and samples
+    from Python instead. Both read the same steps, so the samples are identical."""
+    import adapters.exudyn as module
+
+    case = make_case("free_top", t_final=300.0, sample_interval=0.1)
+    prepared = ADAPTER.prepare(case.scene, case.times, Settings("rk44", dt=1e-3))
+    stored = ADAPTER.run(prepared)
+    assert stored.info["sampling"] == "Exudyn's stored sensors"
+    monkeypatch.setattr(module, "SCHEDULE_LEAD", 0.0)
+    fallback = ADAPTER.run(prepared)
+    assert "wrote no row at sample 29" in fallback.info["sampling"]
+    # 3e5 steps, and one of a few ulps where the accumulated time ends short of the horizon
+    assert stored.n_steps == fallback.n_steps == 300_001
+    a, b = stored.trajectory.bodies["top"], fallback.trajectory.bodies["top"]
+    np.testing.assert_array_equal(a.rotation, b.rotation)
+    np.testing.assert_array_equal(a.angular_velocity, b.angular_velocity)
+
+
 def test_an_adaptive_solver_stuck_at_the_singularity_stops_with_the_time_reached():
     """ode23 on Rxyz nodes retries one step without end at the singularity (t = 0.314 s): the
     adapter stops it, and the run fails with the time reached instead of hanging the suite."""

@@ -154,6 +154,18 @@ def test_bad_command_lines_fail_fast_and_write_nothing(args, words, tmp_path, ca
     assert not os.path.exists(tmp_path / "results")
 
 
+def test_a_diverged_run_is_a_finding_unless_strict(tmp_path):
+    """Tait-Bryan nodes pass their singularity in the first intermediate-axis flip (t = 0.35 s)."""
+    pytest.importorskip("exudyn")
+    from dalembert.cli import main
+
+    args = ["run", "--case", "free_top_intermediate", "--engine", "exudyn", "--integrator", "rk44",
+            "--option", "node=rxyz", "--dt", "1e-2", "--param", "t_final=1", "--jobs", "1"]
+    assert main([*args, "--out", str(tmp_path / "a")]) == 0
+    assert main([*args, "--out", str(tmp_path / "b"), "--strict"]) == 1
+    assert [r["status"] for r in Store(tmp_path / "a").rows()] == ["diverged"]
+
+
 def test_export_writes_a_stored_trajectory(tmp_path, capsys):
     from dalembert.cli import main
     from dalembert.trajectory import read_csv
