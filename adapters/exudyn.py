@@ -358,18 +358,16 @@ class ExudynAdapter(Adapter):
         console = exu.config.printToConsole
         exu.config.printToConsole = False  # silent unless the user asks (Exudyn prints solver banners)
         try:
-            solved = None if integrator in ADAPTIVE else self._solve_stored(p)
-            if solved is None or solved["late"] is not None:
-                late = solved and solved["late"]
-                solved = self._solve_sampled(p)
-                solved["sampling"] = "post-step user function" + (f" ({late})" if late else "")
+            solved = self._solve(p, stored=True)
+            if solved["late"] is not None:  # Exudyn's own sampling missed a sample: sample from Python
+                solved = dict(self._solve(p, stored=False), sampling=f"from Python ({solved['late']})")
         finally:
             exu.config.printToConsole = console
-        built, it, error = solved["built"], solved["it"], solved["error"]
+        built, it, error, read = solved["built"], solved["it"], solved["error"], solved["read"]
         # complete = every sample read (Exudyn's accumulated time may end a few ulps short of the horizon)
-        if error is not None or solved["read"] != len(times):
-            missing = "" if solved["read"] == len(times) else f" ({len(times) - solved['read']} sample(s) not reached)"
-            if solved.get("stalled") is not None:  # our stop, not Exudyn's: its message would only echo ours
+        if error is not None or read != len(times):
+            missing = "" if read == len(times) else f" ({len(times) - read} sample(s) not reached)"
+            if solved["stalled"] is not None:  # our stop, not Exudyn's: its message would only echo ours
                 missing, error = f"{missing}: {solved['stalled']}", None
             raise RuntimeError(f"Exudyn solver stopped at t = {solved['reached']:g} s of {times[-1]:g} s{missing}"
                                + (f": {error}" if error else ""))
@@ -383,94 +381,91 @@ class ExudynAdapter(Adapter):
         n_rhs = (solved["steps"] + rejected) * STAGES.get(integrator, 1)
         return Outcome(traj, solved["wall"], solved["steps"], n_rhs, info)
 
-    def _solve_stored(self, p):
-        """Fixed-step solvers, sampled by Exudyn itself: sensors stored in memory (C++ side, no
-        Python per step) on Exudyn's write schedule, set a little short of the sample interval.
+    def _solve(self, p, stored):
+        """One solve on a fresh system (Exudyn keeps state), sampled by Exudyn or from Python.
 
-        Exudyn writes when its accumulated time passes its accumulated schedule; both lose ulps
-        over many steps (measured: every sample one step late after 3e5 steps of 1e-3 s at the
-        exact interval), so the schedule is shortened to lead the samples by ``SCHEDULE_LEAD``
-        steps at the horizon — still the step nearest each sample. The time column is checked
-        against the sample times; ``late`` names the first miss (the caller then samples itself).
+        ``stored``: Exudyn keeps the sensors in memory, with no Python per step or sample.
+        Fixed-step solvers write on Exudyn's schedule, which fires when its accumulated time
+        passes its accumulated schedule; both lose ulps over many steps (measured: every sample
+        one step late after 3e5 steps of 1e-3 s at the exact interval), so the schedule is
+        shortened to lead the samples by ``SCHEDULE_LEAD`` steps at the horizon, still the step
+        nearest each sample. Adaptive solvers run one ``SolveSteps`` per sample interval, each
+        ending on its sample, where Exudyn writes the sensors (the schedule is set beyond the
+        horizon, so it writes nowhere else). The time column is then checked against the
+        samples, and ``late`` names the first miss. Otherwise ``_Sampler`` reads from Python.
         """
         import exudyn as exu
 
-        built = self._build(p["scene"], p["times"], p["settings"])  # a fresh system per run (Exudyn keeps state)
-        mbs, times, dt = built["mbs"], p["times"], p["settings"].dt
-        flat = [(body, key, sid) for body, group in built["sensors"].items() for key, sid in group.items()]
-        for _, _, sid in flat:
-            mbs.SetSensorParameter(sid, "storeInternal", True)
+        built = self._build(p["scene"], p["times"], p["settings"])
+        mbs, times, st = built["mbs"], p["times"], p["settings"]
+        adaptive = st.integrator in ADAPTIVE
         settings = self._settings(p)
         interval, horizon = float(times[1] - times[0]), float(times[-1] - times[0])
-        settings.solution.sensors.writePeriod = interval * (1.0 - SCHEDULE_LEAD * dt / horizon)
+        min_step = settings.timeIntegration.minimumStepSize if adaptive else None
+        tol = ON_TIME * (min_step if adaptive else st.dt)  # a sample is on time within this, s
+        flat = [(body, key, sid) for body, group in built["sensors"].items() for key, sid in group.items()]
+        sampler = None
+        if stored:
+            for _, _, sid in flat:
+                mbs.SetSensorParameter(sid, "storeInternal", True)
+            settings.solution.sensors.writePeriod = (
+                2.0 * horizon if adaptive else interval * (1.0 - SCHEDULE_LEAD * st.dt / horizon))
+        else:
+            sampler = _Sampler(mbs, flat, times, None if adaptive else tol)
+        guard = _Guard(mbs, min_step) if adaptive else None
+        solver = exu.MainSolverExplicit() if adaptive else None
         error = None
         start = time.perf_counter()
         try:
-            mbs.SolveDynamic(settings, solverType=getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[
-                p["settings"].integrator]))
-        except Exception as e:  # Exudyn raises on solver failure; what it stored so far is kept
+            if adaptive:
+                self._solve_per_sample(solver, mbs, settings, times, tol, sampler)
+            else:
+                mbs.SolveDynamic(settings, solverType=settings.timeIntegration.solverType)
+        except Exception as e:  # Exudyn raises on solver failure; what was sampled so far is kept
             error = e
         wall = time.perf_counter() - start
-        it = mbs.sys["dynamicSolver"].it if "dynamicSolver" in mbs.sys else None
+        it = solver.it if adaptive else mbs.sys["dynamicSolver"].it if "dynamicSolver" in mbs.sys else None
+        late = None
+        if stored:
+            values, read, late = self._stored_samples(mbs, flat, times, tol, error)
+        else:
+            values, read = sampler.values, sampler.next
+        stalled = guard.stalled if guard else sampler.stalled if sampler else None
+        return dict(built=built, values=values, read=read, late=late, it=it, error=error, wall=wall,
+                    steps=_steps(it), stalled=stalled, sampling="Exudyn's stored sensors",
+                    reached=float(it.currentTime) if it is not None else float(times[max(read, 1) - 1]))
+
+    @staticmethod
+    def _stored_samples(mbs, flat, times, tol, error):
+        """The stored rows at the sample times: (values, samples read, first miss or None)."""
         stored = {}
         for body, key, sid in flat:
             data = np.asarray(mbs.GetSensorStoredData(sid), dtype=float)
             stored[(body, key)] = data if data.ndim == 2 else np.empty((0, 1))
-        # every sensor is written at the same steps: one time column speaks for all; a row at each
-        # sample time, extra rows (written between samples, or at the horizon again) ignored
+        # every sensor is written at the same steps: one time column speaks for all; extra rows
+        # (written between samples, or at the horizon again) are ignored
         t = next(iter(stored.values()))[:, 0]
-        rows = np.minimum(np.searchsorted(t, times - ON_TIME * dt), max(len(t) - 1, 0))
-        on_time = np.abs(t[rows] - times) <= ON_TIME * dt if len(t) else np.zeros(len(times), bool)
+        rows = np.minimum(np.searchsorted(t, times - tol), max(len(t) - 1, 0))
+        on_time = np.abs(t[rows] - times) <= tol if len(t) else np.zeros(len(times), bool)
         read = len(times) if on_time.all() else int(np.argmin(on_time))
         late = None
-        if read < len(times) and error is None:
-            late = (f"Exudyn's sensor schedule wrote no row at sample {read} (t = {times[read]:.12g} s), the "
-                    f"nearest at {t[rows[read]]:.12g} s" if len(t) else "Exudyn's sensor schedule wrote no rows")
-        elif read < len(times) and error is not None and len(t) and t[-1] > times[read]:
-            late = f"Exudyn's sensor schedule wrote no row at sample {read} before the solver stopped"
-        return dict(built=built, values={k: v[rows[:read], 1:] for k, v in stored.items()}, read=read,
-                    steps=_steps(it),
-                    reached=float(it.currentTime) if it is not None else float(times[read - 1]),
-                    it=it, error=error, wall=wall, late=late, sampling="Exudyn's stored sensors")
-
-    def _solve_sampled(self, p):
-        """Sampled from Python: the post-step user function reads the sensors at the steps that land
-        on the samples (fixed-step solvers), or one ``SolveSteps`` per sample interval (adaptive ones)."""
-        import exudyn as exu
-
-        built = self._build(p["scene"], p["times"], p["settings"])
-        mbs, times, integrator = built["mbs"], p["times"], p["settings"].integrator
-        settings = self._settings(p)
-        min_step = settings.timeIntegration.minimumStepSize if integrator in ADAPTIVE else None
-        sampler = _Sampler(mbs, built["sensors"], times, p["settings"].dt, min_step)
-        solver = exu.MainSolverExplicit() if integrator in ADAPTIVE else None
-        error = None
-        start = time.perf_counter()
-        try:
-            if solver is not None:
-                self._solve_per_sample(solver, mbs, settings, sampler, times)
-            else:
-                mbs.SolveDynamic(settings, solverType=getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[
-                    integrator]))
-        except Exception as e:  # Exudyn raises on solver failure
-            error = e
-        wall = time.perf_counter() - start
-        it = solver.it if solver is not None else mbs.sys["dynamicSolver"].it if "dynamicSolver" in mbs.sys else None
-        return dict(built=built, values=sampler.values, read=sampler.next, steps=_steps(it),
-                    reached=float(it.currentTime) if solver is not None else sampler.last_time, it=it, error=error, wall=wall, late=None, stalled=sampler.stalled,
-                    sampling="post-step user function")
+        if read < len(times) and (error is None or (len(t) and t[-1] > times[read])):
+            late = (f"Exudyn's stored sensors have no row at sample {read} (t = {times[read]:.12g} s), the "
+                    f"nearest at {t[rows[read]]:.12g} s" if len(t) else "Exudyn stored no sensor rows")
+        return {k: v[rows[:read], 1:] for k, v in stored.items()}, read, late
 
     @staticmethod
-    def _solve_per_sample(solver, mbs, settings, sampler, times):
+    def _solve_per_sample(solver, mbs, settings, times, tol, sampler=None):
         """Adaptive explicit solvers: one ``SolveSteps`` per sample interval, ending on the sample."""
         solver.InitializeSolver(mbs, settings)
         try:
             for k in range(1, len(times)):
                 solver.it.endTime = float(times[k])
                 solver.SolveSteps(mbs, settings)
-                if solver.it.currentTime < times[k] - 1e-9 * (times[k] - times[k - 1]):
+                if solver.it.currentTime < times[k] - tol:
                     break  # the solver gave up (step size below its minimum): the run is incomplete
-                sampler.read(k)
+                if sampler is not None:
+                    sampler.read(k)
         finally:
             solver.FinalizeSolver(mbs, settings)
 
@@ -496,9 +491,9 @@ class ExudynAdapter(Adapter):
         scene, times = p["scene"], p["times"]
         n = len(times)
 
-        def series(body, key, width):
-            return np.array([np.ravel(v)[:width] if v is not None else np.full(width, np.nan)
-                             for v in values[(body, key)]], dtype=float)
+        def series(body, key, width):  # (n, width): stored rows, or the samples read from Python
+            v = values[(body, key)]
+            return (v if isinstance(v, np.ndarray) else np.vstack(v))[:, :width]
 
         bodies, R_WB = {}, {}
         for b in scene.bodies:
@@ -564,52 +559,55 @@ class _Stuck(RuntimeError):
     """An adaptive run that retries one step without end."""
 
 
-class _Sampler:
-    """Reads every sensor at the sample times from Python.
+class _Guard:
+    """Stops an adaptive solve where Exudyn would go on forever: at a step of ``min_step``, or
+    after ``MAX_REJECTIONS_IN_A_ROW`` attempts at one time.
 
-    Fixed-step solvers (``min_step`` None): installed as the post-step user
-    function, it reads at the step that lands on each sample time (within
-    ``ON_TIME`` of a step, as Exudyn accumulates its time; a sample passed without
-    landing stops the run). Adaptive ones: ``read`` is called after each
-    ``SolveSteps``, and the pre-step user function (called before every attempt,
-    rejected ones included, with the attempt's end time) stops the run, by
-    raising, where Exudyn would go on forever: at a step of ``min_step``, or after
-    ``MAX_REJECTIONS_IN_A_ROW`` attempts at one time. Sample 0 is the initial
-    state.
+    Installed as the pre-step user function, which Exudyn calls before every attempt, rejected
+    ones included, with the attempt's END time: the same time again is a retry of the same step
+    (rejected at the minimum step); a time just past the last one is a step of the minimum.
+    Returning False does not stop Exudyn there, raising does (what was sampled so far is kept).
     """
 
-    def __init__(self, mbs, sensors, times, dt, min_step=None):
-        self.mbs, self.times, self.min_step, self.stalled = mbs, times, min_step, None
-        self.flat = [(body, key, sid) for body, group in sensors.items() for key, sid in group.items()]
-        self.values = {(body, key): [None] * len(times) for body, key, _ in self.flat}
-        self.tol = ON_TIME * dt if dt else None
-        self.last_time, self.next, self.attempts = float(times[0]), 1, 0
-        self.read(0)
-        if min_step is None:
-            mbs.SetPostStepUserFunction(self._post_step)
-        else:
-            mbs.SetPreStepUserFunction(self._pre_step)
-
-    def read(self, k):
-        for body, key, sid in self.flat:
-            self.values[(body, key)][k] = np.array(self.mbs.GetSensorValues(sid), dtype=float)
-        self.next = k + 1
+    def __init__(self, mbs, min_step):
+        self.min_step, self.stalled, self.last_time, self.attempts = min_step, None, None, 0
+        mbs.SetPreStepUserFunction(self._pre_step)
 
     def _pre_step(self, mbs, t):
-        # t is the attempt's END time: the same t again is a retry of the same step (rejected at the
-        # minimum step); a t just past the last one is a step of the minimum after an accepted one.
-        # Returning False does not stop Exudyn here, raising does (the samples read so far are kept).
         if t == self.last_time:
             self.attempts += 1
             if self.attempts > MAX_REJECTIONS_IN_A_ROW:
                 self.stalled = f"stuck: {MAX_REJECTIONS_IN_A_ROW} rejected attempts in a row at t = {t:g} s"
                 raise _Stuck(self.stalled)
             return True
-        if 0.0 < t - self.last_time <= self.min_step * (1.0 + 1e-9):
+        if self.last_time is not None and 0.0 < t - self.last_time <= self.min_step * (1.0 + 1e-9):
             self.stalled = f"stuck: the adaptive step fell to its minimum {self.min_step:g} s"
             raise _Stuck(self.stalled)
         self.last_time, self.attempts = t, 1
         return True
+
+
+class _Sampler:
+    """Reads every sensor at the sample times from Python (when Exudyn's stored sensors miss one).
+
+    With ``tol`` (fixed-step solvers) it is the post-step user function and reads at the step
+    that lands on each sample time to within ``tol`` s; a sample passed without landing stops
+    the run. Without (adaptive solvers), ``read`` is called after each ``SolveSteps``. Sample 0
+    is the initial state.
+    """
+
+    def __init__(self, mbs, flat, times, tol=None):
+        self.mbs, self.flat, self.times, self.tol, self.stalled = mbs, flat, times, tol, None
+        self.values = {(body, key): [None] * len(times) for body, key, _ in flat}
+        self.last_time, self.next = float(times[0]), 1
+        self.read(0)
+        if tol is not None:
+            mbs.SetPostStepUserFunction(self._post_step)
+
+    def read(self, k):
+        for body, key, sid in self.flat:
+            self.values[(body, key)][k] = np.array(self.mbs.GetSensorValues(sid), dtype=float)
+        self.next = k + 1
 
     def _post_step(self, mbs, t):
         if t == self.times[0]:  # once before the first step, with accelerations and constraint
