@@ -37,7 +37,7 @@ def work_precision(lines, ylabel, floor=None, title=""):
         for ci, ei, name in zip(c, e, names):
             ax.annotate(name, (ci, ei), fontsize=6, color=h.get_color(), xytext=(3, 3), textcoords="offset points")
     if floor:
-        ax.axhline(floor, color="k", ls=":", lw=1, label="roundoff floor (lower bound)")
+        ax.axhline(floor, color="k", ls=":", lw=1, label="roundoff floor (double RK4 at dt = 1e-3 vs extended precision)")
     ax.set_xlabel("stepping wall time per simulated second (s/s)")
     ax.set_ylabel(ylabel)
     ax.set_title(title)
