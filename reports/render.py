@@ -86,6 +86,40 @@ def _plain(c):
     return re.sub(r"<(?!/?b>)[^>]+>", "", str(c))
 
 
+def _grid_labels(r):
+    """(row, column) of a run in the per-case grids: engine + integrator (+ options), dt or tol."""
+    rl = f"{r['engine']} {r['integrator']}" + ("" if r.get("options") in ("{}", None) else f" {r['options']}")
+    cl = f"dt={r['dt']:g}" if isinstance(r.get("dt"), float) and not math.isnan(r["dt"]) else f"tol={r['rtol']:g}"
+    return rl, cl
+
+
+def _drift_rates(doc, sub):
+    """Energy drift per simulated second, engine + integrator x step: a steady slope is secular
+    drift (most integrators), a slope near zero bounded oscillation (symplectic, geometric ones)."""
+    cols = [c for c in ("drift_rate_energy", "drift_rate_energy_balance") if c in sub and sub[c].notna().any()]
+    if not cols:
+        return
+    col = cols[0]
+    ok = sub[(sub["status"] == "ok") & sub[col].notna()]
+    if ok.empty:
+        return
+    rates, row_labels, col_labels = {}, set(), set()
+    for _, r in ok.iterrows():
+        rl, cl = _grid_labels(r)
+        rates[(rl, cl)] = r[col]
+        row_labels.add(rl)
+        col_labels.add(cl)
+    col_labels = sorted(col_labels, key=lambda c: (c.startswith("tol"), -float(c.split("=")[1])))
+    what = "energy" if col == "drift_rate_energy" else "energy balance (E - work of the loads)"
+    doc.heading("Energy drift rate", 3)
+    doc.para(html.escape(f"Least-squares slope of the relative change of the {what}, per simulated second "
+                         f"(negative: lost). Bounded oscillation shows as a slope near zero, secular drift as a "
+                         f"steady one; successful runs only."))
+    doc.table(["engine + integrator"] + col_labels,
+              [[html.escape(rl)] + [_num(rates.get((rl, c)), "{:+.2e} /s") if (rl, c) in rates else "—"
+                                    for c in col_labels] for rl in sorted(row_labels)])
+
+
 def _case_section(doc, store, case_name, sub, summary_rows):
     version = sub["case_version"].iloc[0]
     case = make_case(case_name, **_params(sub["params"].iloc[0]))
@@ -113,8 +147,7 @@ def _case_section(doc, store, case_name, sub, summary_rows):
     # --- stability grid
     cells, row_labels, col_labels, reasons = {}, [], [], []
     for _, r in sub.iterrows():
-        rl = f"{r['engine']} {r['integrator']}" + ("" if r.get("options") in ("{}", None) else f" {r['options']}")
-        cl = f"dt={r['dt']:g}" if isinstance(r.get("dt"), float) and not math.isnan(r["dt"]) else f"tol={r['rtol']:g}"
+        rl, cl = _grid_labels(r)
         v, why = verdict(r.to_dict(), case.tolerances)
         cells[(rl, cl)] = v
         row_labels.append(rl)
@@ -128,6 +161,7 @@ def _case_section(doc, store, case_name, sub, summary_rows):
     if reasons:
         doc.details(f"why {len(reasons)} run(s) are not stable",
                     "\n".join(f"{r[0]} {r[1]}: {r[2]} — {html.unescape(r[3])}" for r in reasons))
+    _drift_rates(doc, sub)
     # --- every run
     doc.heading("Every run", 3)
     errs = [c for c in ("err_position_max", "err_orientation_max", "err_velocity_max", "err_angular_velocity_max",

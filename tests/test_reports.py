@@ -47,6 +47,21 @@ def test_report_files_and_values_equal_the_store(store):
     assert figures and all(os.path.exists(os.path.join(store.path, f)) for f in figures)
 
 
+def test_energy_drift_rates_are_shown_as_stored(store):
+    """The drift-rate table: every successful run's stored slope, signed, per engine + integrator
+    and step (explicit Euler's secular drift and RK4's near-zero one side by side)."""
+    md = open(os.path.join(store.path, "report.md")).read()
+    section = md.split("## free_top")[1].split("### Energy drift rate")[1].split("###")[0]
+    rows = store.table()
+    top = rows[(rows.case == "free_top") & (rows.status == "ok")]
+    assert len(top) == 4
+    for _, r in top.iterrows():
+        line = next(x for x in section.splitlines() if x.startswith(f"| {r.engine} {r.integrator} |"))
+        assert f"{r.drift_rate_energy:+.2e} /s" in line
+    euler, rk4 = (top[top.integrator == k].drift_rate_energy.abs().max() for k in ("euler", "rk4"))
+    assert euler > 1e3 * rk4
+
+
 def test_report_is_self_contained(store):
     page = open(os.path.join(store.path, "report.html")).read()
     # no resource is fetched from anywhere: every src/href is local (anchors) or inline
