@@ -32,6 +32,11 @@ Integrators, each evaluating the loads at every stage:
 * ``rk4-naive``: RK4 on ``v`` with ``q`` advanced stagewise by
   ``integrate(q, c h v_i)`` and no ``dexp^-1`` correction (lower order on a
   non-commutative group: kept because the difference is a result);
+The fixed-step loops run compiled (``pinocchio_stepper.cpp`` through
+``pinocchio_native``: the same integrators and loads against the installed
+Pinocchio, no Python call per step), or in Python with ``--option loop=python``
+and wherever the compiled loop cannot be built (the audit says which ran).
+
 * ``rk45``, ``dop853``: scipy ``solve_ivp`` in local coordinates
   ``q = integrate(q_k, delta)`` restarted at every sample ``q_k``: the state
   ``(delta, v)`` has no redundant component, so error control is not fooled by
@@ -50,6 +55,10 @@ from dalembert.scene import EFFECTS, WORLD
 from dalembert.settings import is_numerical_failure
 
 __all__ = ["PinocchioAdapter"]
+
+# Fixed-step loops: compiled (adapters/pinocchio_stepper.cpp, the default) or the Python one
+# (the same integrators, kept as the readable specification and the fallback).
+LOOPS = ("native", "python")
 
 
 def _se3(R, p):
@@ -166,6 +175,14 @@ class PinocchioModel:
             return lambda q, v: aba(model, data, q, v, tau, fext)
         return self.acceleration
 
+    def dexpinv_kind(self):
+        """0: the configuration space is a vector space (only revolute joints); 1: one FreeFlyer
+        (closed-form ``Jlog6``); 2: the ``dIntegrate`` solve (see ``dexpinv_function``)."""
+        names = [self.model.joints[i].shortname() for i in range(1, self.model.njoints)]
+        if all(n.startswith("JointModelR") for n in names):  # RevoluteUnaligned / RX / RY / RZ
+            return 0
+        return 1 if names == ["JointModelFreeFlyer"] else 2
+
     def dexpinv_function(self):
         """``dexpinv(q, theta, vel)``: the tangent ``theta'`` of ``q (+) theta`` moving with
         velocity ``vel`` — ``dIntegrate(q, theta, ARG1)^-1 vel`` — or None where it is ``vel``.
@@ -179,16 +196,15 @@ class PinocchioModel:
         """
         import pinocchio as pin
 
-        model = self.model
-        names = [model.joints[i].shortname() for i in range(1, model.njoints)]
-        if all(n.startswith("JointModelR") for n in names):  # RevoluteUnaligned / RX / RY / RZ
+        model, kind = self.model, self.dexpinv_kind()
+        if kind == 0:
             return None
         dIntegrate, ARG1, solve = pin.dIntegrate, pin.ArgumentPosition.ARG1, np.linalg.solve
 
         def by_solve(q, theta, vel):
             return solve(dIntegrate(model, q, theta, ARG1), vel)
 
-        if names == ["JointModelFreeFlyer"]:
+        if kind == 1:
             Jlog6, exp6, pi2 = pin.Jlog6, pin.exp6, np.pi**2
             w = slice(3, 6)
             return lambda q, theta, vel: (Jlog6(exp6(theta)) @ vel if theta[w] @ theta[w] < pi2
@@ -223,9 +239,9 @@ class PinocchioAdapter(Adapter):
     name = "pinocchio"
     effects = EFFECTS
     integrators = {
-        "euler": IntegratorSpec(True, (), "semi-implicit Euler on the group"),
-        "rk4": IntegratorSpec(True, (), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
-        "rk4-naive": IntegratorSpec(True, (), "RK4 with stagewise integrate, no dexp^-1 correction"),
+        "euler": IntegratorSpec(True, ("loop",), "semi-implicit Euler on the group"),
+        "rk4": IntegratorSpec(True, ("loop",), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
+        "rk4-naive": IntegratorSpec(True, ("loop",), "RK4 with stagewise integrate, no dexp^-1 correction"),
         "rk45": IntegratorSpec(False, (), "scipy RK45 in local coordinates"),
         "dop853": IntegratorSpec(False, (), "scipy DOP853 in local coordinates"),
     }
@@ -234,6 +250,12 @@ class PinocchioAdapter(Adapter):
         import pinocchio
 
         return pinocchio.__version__
+
+    def check(self, scene, times, settings):
+        super().check(scene, times, settings)
+        loop = settings.options.get("loop", "native")
+        if loop not in LOOPS:
+            raise ValueError(f"options.loop: unknown {loop!r} — use one of {list(LOOPS)}")
 
     def describe(self, scene, settings):
         return PinocchioModel(scene).summary + "\n"
@@ -249,13 +271,32 @@ class PinocchioAdapter(Adapter):
     def run(self, prepared):
         p = prepared
         method = p["settings"].integrator
+        info = {}
         start = time.perf_counter()
         if method in ("rk45", "dop853"):
             Q, V, n_steps, n_rhs = self._adaptive(p, method.upper())
+            info["loop"] = "Python around scipy solve_ivp"
         else:
-            Q, V, n_steps, n_rhs = self._fixed(p, method)
+            Q, V, n_steps, n_rhs, info["loop"] = self._fixed_loop(p, method)
         wall = time.perf_counter() - start
-        return Outcome(self._read_back(p, Q, V), wall, n_steps, n_rhs)
+        return Outcome(self._read_back(p, Q, V), wall, n_steps, n_rhs, info)
+
+    def _fixed_loop(self, p, method):
+        """The compiled loop (``pinocchio_native``) unless ``options.loop`` is ``python`` or it
+        cannot be built; the fifth item says which ran, and why not the compiled one."""
+        from adapters import pinocchio_native
+
+        if p["settings"].options.get("loop", "native") == "python":
+            return (*self._fixed(p, method), "Python (options.loop = python)")
+        pm = p["pm"]
+        try:
+            Q, V, n, error = pinocchio_native.run_fixed(pm, method, pm.dexpinv_kind(), p["q0"], p["v0"], p["times"],
+                                                        p["steps"])
+        except RuntimeError as e:  # not built here: the Python loop, saying why
+            return (*self._fixed(p, method), f"Python (the compiled loop is unavailable: {e})")
+        stages = 1 if method == "euler" else 4
+        loop = "C++ (adapters/pinocchio_stepper.cpp)" + (f"; stopped: {error}" if error else "")
+        return Q, V, n, n * stages, loop
 
     def _fixed(self, p, method):
         import pinocchio as pin
@@ -432,6 +473,7 @@ class PinocchioAdapter(Adapter):
             "external_forces_per_evaluation": [f"{ld.effect} on {ld.body}" for ld in prepared["scene"].loads],
             "nq": int(pm.model.nq), "nv": int(pm.model.nv),
             "integrator": prepared["settings"].integrator,
+            "loop": outcome.info.get("loop", ""),
             "pinocchio_version": self.version(),
             "contacts": 0, "constraint_rows": 0,
         }

@@ -2,11 +2,12 @@
 
     python -m benchmarks.pinocchio
 
-Per case and fixed-step integrator at dt = 1e-3 (over 2 s): stepping time per
-simulated second, and its ratio to the cost of the ``aba`` calls the method
-needs (stages per step x steps x one bare ``pin.aba`` call with the same
-arguments, timed in a tight loop in the same process). Goal (issue 5): the
-Lie-group RK4 at most 3x four bare ``aba`` calls per step.
+Per case and fixed-step integrator at dt = 1e-3 (over 2 s), for the compiled
+loop (the default) and the Python one (``--option loop=python``): stepping time
+per simulated second, and its ratio to the cost of the ``aba`` calls the method
+needs (stages per step x steps x one bare ``pin.aba`` call from Python with the
+same arguments, timed in a tight loop in the same process). Best of 3. Goal
+(issue 5): the Lie-group RK4 at most 3x four bare ``aba`` calls per step.
 """
 
 from __future__ import annotations
@@ -37,18 +38,22 @@ def bare_aba_seconds(pm, q, v, n=20000):
 def main():
     adapter = get_adapter("pinocchio")
     print(f"Pinocchio {adapter.version()}, dt = 1e-3, 2 s horizon")
-    print(f"{'case':<24}{'integrator':<12}{'ms/sim s':>10}{'aba us':>9}{'ratio':>8}")
+    print(f"{'case':<24}{'integrator':<12}{'ms/sim s':>10}{'python':>9}{'aba us':>9}{'ratio':>8}{'python':>8}")
     rk4_ratios = []
     for name, factory in load_cases().items():
         case = factory(t_final=2.0)
         for integ, stages in STAGES.items():
-            prepared = adapter.prepare(case.scene, case.times, Settings(integ, dt=1e-3))
-            adapter.run(prepared)
-            wall = np.median([adapter.run(prepared).wall_s for _ in range(3)])
+            walls = {}
+            for loop in ("native", "python"):
+                prepared = adapter.prepare(case.scene, case.times, Settings(integ, dt=1e-3, options={"loop": loop}))
+                adapter.run(prepared)
+                walls[loop] = min(adapter.run(prepared).wall_s for _ in range(3))
+            wall = walls["native"]
             aba = bare_aba_seconds(prepared["pm"], prepared["q0"], prepared["v0"])
             n_steps = int(prepared["steps"].sum())
-            print(f"{name:<24}{integ:<12}{1e3 * wall / case.t_final:>10.2f}{1e6 * aba:>9.2f}"
-                  f"{wall / (stages * n_steps * aba):>8.2f}")
+            print(f"{name:<24}{integ:<12}{1e3 * wall / case.t_final:>10.2f}{1e3 * walls['python'] / case.t_final:>9.2f}"
+                  f"{1e6 * aba:>9.2f}{wall / (stages * n_steps * aba):>8.2f}"
+                  f"{walls['python'] / (stages * n_steps * aba):>8.2f}")
             if integ == "rk4":
                 rk4_ratios.append(wall / (stages * n_steps * aba))
     print(f"rk4 (Lie group) per step / four bare aba calls: median {np.median(rk4_ratios):.2f}, "

@@ -97,6 +97,32 @@ def test_every_joint_kind_frame_and_load_against_the_reference(make):
         assert mx < CROSS_CHECK_TOL, q
 
 
+# The compiled and the Python loops do the same arithmetic in a different order here and there
+# (Eigen's and numpy's sums): they agree to roundoff, relative to the state's size (measured:
+# <= 4e-15 relative on the particle box over 20 s, 1e-15 rad on the top).
+LOOPS_AGREE_REL = 1e-12
+
+
+@pytest.mark.parametrize("integrator", ["euler", "rk4", "rk4-naive"])
+@pytest.mark.parametrize("make", [chain_case, free_body_world_loads_case,
+                                  lambda: make_case("pivoted_rod"), lambda: make_case("particle_box", t_final=2.0)])
+def test_the_compiled_loop_is_the_python_loop(make, integrator):
+    """Every joint kind, follower and world loads, each dexp^-1 (identity, Jlog6, dIntegrate solve)."""
+    case = make()
+    runs = {}
+    for loop in ("native", "python"):
+        out = ADAPTER.run(ADAPTER.prepare(case.scene, case.times, Settings(integrator, dt=1e-3, options={"loop": loop})))
+        runs[loop] = out
+    assert runs["native"].info["loop"].startswith("C++"), runs["native"].info["loop"]
+    assert runs["native"].n_steps == runs["python"].n_steps
+    for name, b in runs["native"].trajectory.bodies.items():
+        c = runs["python"].trajectory.bodies[name]
+        for field in ("position", "quaternion", "velocity", "angular_velocity"):
+            x, y = getattr(b, field), getattr(c, field)
+            scale = max(1.0, float(np.max(np.abs(y))))
+            assert np.max(np.abs(x - y)) <= LOOPS_AGREE_REL * scale, (name, field)
+
+
 def test_audit_reports_the_model():
     case = make_case("pivoted_rod")
     prepared = ADAPTER.prepare(case.scene, case.times, Settings("rk4", dt=1e-2))

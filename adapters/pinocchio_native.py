@@ -1,0 +1,148 @@
+"""The Pinocchio adapter's fixed-step loop, compiled: ``pinocchio_stepper.cpp``.
+
+A Python loop around Pinocchio's C++ calls costs 6-9x the calls themselves
+(``python -m benchmarks.pinocchio``), so the work-precision diagrams would
+measure Python, not Pinocchio. The same integrators and loads in C++ against the
+installed Pinocchio (headers and library from the ``pin`` wheel, Eigen from
+``cmeel-eigen``) give the same numbers (tests/test_pinocchio.py) without a
+Python call per step.
+
+Built on first use (``make`` builds it at setup: ``python -m adapters.pinocchio_native``)
+with the system's C++ compiler into a cache keyed by the source, the compiler
+flags and the Pinocchio version; where it cannot be built the adapter falls back
+to its Python loop and says why in the run's audit.
+
+    python -m adapters.pinocchio_native     # build (or find) the library; print where, or why not
+"""
+
+from __future__ import annotations
+
+import ctypes
+import fcntl
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+
+__all__ = ["library", "run_fixed", "METHODS"]
+
+SOURCE = os.path.join(os.path.dirname(__file__), "pinocchio_stepper.cpp")
+METHODS = {"euler": 0, "rk4": 1, "rk4-naive": 2}
+# Pinocchio's own compile definitions for its users (lib/cmake/pinocchio/pinocchioTargets.cmake,
+# targets pinocchio_headers and pinocchio_default): Boost.MPL sizes its joint variant needs, and
+# the explicit template instantiations the library ships (much shorter builds).
+DEFINES = ["BOOST_MPL_LIMIT_LIST_SIZE=30", "BOOST_MPL_LIMIT_VECTOR_SIZE=30", "BOOST_MPL_CFG_NO_PREPROCESSED_HEADERS",
+           "BOOST_FUSION_INVOKE_MAX_ARITY=12", "PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION", "NDEBUG"]
+# -O2 and no -march: the same IEEE arithmetic as numpy's (no fused multiply-add), so the
+# compiled and the Python loops agree to roundoff.
+FLAGS = ["-O2", "-std=c++17", "-shared", "-fPIC"]
+_ERR_LEN = 512
+_cached = {}
+
+
+def _paths():
+    import pinocchio
+
+    # the pin wheel: cmeel.prefix/lib/python3.x/site-packages/pinocchio, headers in cmeel.prefix/include
+    prefix = os.path.abspath(os.path.join(os.path.dirname(pinocchio.__file__), *[".."] * 4))
+    if not os.path.isdir(os.path.join(prefix, "include", "pinocchio")):
+        raise RuntimeError(f"no Pinocchio headers under {prefix}/include (not the pin wheel's layout)")
+    return prefix, pinocchio.__version__
+
+
+def _cache_dir():
+    root = os.environ.get("DALEMBERT_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "dalembert")
+    os.makedirs(root, exist_ok=True)
+    return root
+
+
+def _command(prefix, out):
+    cxx = os.environ.get("CXX") or shutil.which("c++") or shutil.which("g++") or shutil.which("clang++")
+    if cxx is None:
+        raise RuntimeError("no C++ compiler (c++, g++ or clang++) on PATH")
+    inc = os.path.join(prefix, "include")
+    return [cxx, *FLAGS, *(f"-D{d}" for d in DEFINES), SOURCE, f"-I{inc}", f"-I{os.path.join(inc, 'eigen3')}",
+            f"-L{os.path.join(prefix, 'lib')}", "-lpinocchio_default", "-lboost_serialization",
+            f"-Wl,-rpath,{os.path.join(prefix, 'lib')}", "-o", out]
+
+
+def library():
+    """The compiled stepper (a ``ctypes.CDLL``), building it if needed; raises RuntimeError with
+    the reason where it cannot be built."""
+    if "lib" in _cached:
+        return _cached["lib"]
+    if "error" in _cached:
+        raise RuntimeError(_cached["error"])
+    try:
+        prefix, version = _paths()
+        if not os.path.exists(os.path.join(prefix, "include", "eigen3", "Eigen", "Core")):
+            raise RuntimeError(f"no Eigen headers under {prefix}/include/eigen3 — pip install cmeel-eigen")
+        with open(SOURCE, "rb") as f:
+            key = hashlib.sha256(f.read() + repr((FLAGS, DEFINES, version, prefix)).encode()).hexdigest()[:16]
+        cache = _cache_dir()
+        path = os.path.join(cache, f"pinocchio_stepper-{key}.so")
+        with open(os.path.join(cache, "pinocchio_stepper.lock"), "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # worker processes wait for one build instead of racing
+            if not os.path.exists(path):
+                tmp = f"{path}.{os.getpid()}.tmp"
+                proc = subprocess.run(_command(prefix, tmp), capture_output=True, text=True)
+                if proc.returncode != 0:
+                    raise RuntimeError(f"building {os.path.basename(SOURCE)} failed: {proc.stderr.strip()[-1500:]}")
+                os.replace(tmp, path)
+        lib = ctypes.CDLL(path)
+    except Exception as e:  # noqa: BLE001 - every reason is reported, and the Python loop runs instead
+        _cached["error"] = f"{type(e).__name__}: {e}" if not isinstance(e, RuntimeError) else str(e)
+        raise RuntimeError(_cached["error"]) from None
+    D, Li, In = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long), ctypes.POINTER(ctypes.c_int)
+    lib.dalembert_pin_fixed.restype = ctypes.c_int
+    lib.dalembert_pin_fixed.argtypes = [ctypes.c_char_p, ctypes.c_int, ctypes.c_int, D, D, ctypes.c_int, D, Li,
+                                        ctypes.c_int, D, ctypes.c_int, In, D, D, In, D, D, Li, ctypes.c_char_p,
+                                        ctypes.c_int]
+    _cached["lib"] = lib
+    return lib
+
+
+def run_fixed(pm, method, dexpinv_kind, q0, v0, times, steps):
+    """Step ``pm`` (a ``PinocchioModel``) through ``times`` with ``steps[k]`` substeps per interval.
+
+    Returns ``(Q (n, nq), V (n, nv), steps taken, error message or None)``; rows after a
+    non-finite state stay NaN, as in the Python loop.
+    """
+    lib = library()
+    model = pm.model
+    D, Li, In = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long), ctypes.POINTER(ctypes.c_int)
+
+    def arr(x, dtype=float):
+        return np.ascontiguousarray(x, dtype=dtype)
+
+    const = np.zeros((model.njoints, 6))
+    for jid, force in pm.const_f.items():
+        const[jid] = force.vector
+    world = pm.world_loads
+    w_joint = arr([w[0] for w in world] or [0], np.int32)
+    w_point = arr([w[1] for w in world] or [np.zeros(3)])
+    w_vec = arr([w[2] if w[2] is not None else w[3] for w in world] or [np.zeros(3)])
+    w_torque = arr([w[2] is None for w in world] or [0], np.int32)
+    times, steps, q0, v0 = arr(times), arr(steps, np.int64), arr(q0), arr(v0)
+    Q = np.full((len(times), model.nq), np.nan)
+    V = np.full((len(times), model.nv), np.nan)
+    taken, err = ctypes.c_long(0), ctypes.create_string_buffer(_ERR_LEN)
+    rc = lib.dalembert_pin_fixed(
+        model.saveToString().encode(), METHODS[method], dexpinv_kind, q0.ctypes.data_as(D), v0.ctypes.data_as(D),
+        len(times), times.ctypes.data_as(D), steps.ctypes.data_as(Li), int(pm.has_loads), const.ctypes.data_as(D),
+        len(world), w_joint.ctypes.data_as(In), w_point.ctypes.data_as(D), w_vec.ctypes.data_as(D),
+        w_torque.ctypes.data_as(In), Q.ctypes.data_as(D), V.ctypes.data_as(D), ctypes.byref(taken), err, _ERR_LEN)
+    return Q, V, int(taken.value), (err.value.decode() if rc else None)
+
+
+if __name__ == "__main__":
+    try:
+        lib = library()
+    except RuntimeError as e:
+        print(f"pinocchio stepper: not built ({e}); the Pinocchio adapter will use its Python loop", file=sys.stderr)
+        sys.exit(0)
+    print(f"pinocchio stepper: {lib._name}")
