@@ -124,6 +124,9 @@ def _case_section(doc, store, case_name, sub, summary_rows):
     version = sub["case_version"].iloc[0]
     case = make_case(case_name, **_params(sub["params"].iloc[0]))
     truth = store.truth(case_name, version)
+    # each run's verdict and its reason, once (the grid, the run table and the summary use them)
+    judged = [verdict(r, case.tolerances) for r in sub.to_dict("records")]
+    sub = sub.assign(verdict=[v for v, _ in judged], verdict_why=[why for _, why in judged])
     doc.heading(f"{case_name}", 2, anchor=f"case-{case_name}")
     doc.para(html.escape(f"version {version}; parameters {json.loads(sub['params'].iloc[0]) or 'defaults'}; "
                          f"horizon {case.t_final:g} s; effects {', '.join(sorted(case.scene.effects))}."))
@@ -148,7 +151,7 @@ def _case_section(doc, store, case_name, sub, summary_rows):
     cells, row_labels, col_labels, reasons = {}, [], [], []
     for _, r in sub.iterrows():
         rl, cl = _grid_labels(r)
-        v, why = verdict(r.to_dict(), case.tolerances)
+        v, why = r["verdict"], r["verdict_why"]
         cells[(rl, cl)] = v
         row_labels.append(rl)
         col_labels.append(cl)
@@ -169,7 +172,7 @@ def _case_section(doc, store, case_name, sub, summary_rows):
     drifts = sorted(c for c in sub.columns if c.startswith("drift_") and sub[c].notna().any())
     table_rows, classes = [], []
     for _, r in sub.sort_values(["engine", "integrator", "dt", "rtol"], na_position="last").iterrows():
-        v, _ = verdict(r.to_dict(), case.tolerances)
+        v = r["verdict"]
         status = r["status"] if r["status"] == "ok" else f"{r['status']}: {html.escape(str(r['message']))}"
         ok = r.get("within_tolerance")
         okcell = "—" if r["status"] != "ok" else ("yes" if ok is True else f"<b>no</b>: {r.get('beyond_tolerance')}")
@@ -229,10 +232,7 @@ def _case_section(doc, store, case_name, sub, summary_rows):
         best_set = ok.loc[ok[col].idxmin(), "settings"] if col and len(ok) and ok[col].notna().any() else ""
         costs = [cost_to_reach(pts, SUMMARY_TARGET) for label, pts in lines.items() if label.startswith(engine + " ")]
         costs = [c for c in costs if c is not None]
-        counts = {}
-        for _, r in es.iterrows():
-            v, _ = verdict(r.to_dict(), case.tolerances)
-            counts[v] = counts.get(v, 0) + 1
+        counts = es["verdict"].value_counts().to_dict()
         summary_rows.append(dict(case=case_name, engine=engine, agrees=passing, best_error=best_err,
                                  best_settings=best_set, quantity=quantity,
                                  cost_of_1e_6=min(costs) if costs else float("nan"),
