@@ -60,6 +60,18 @@ __all__ = ["MujocoAdapter", "mjcf"]
 INTEGRATORS = {"euler": "Euler", "rk4": "RK4", "implicit": "implicit", "implicitfast": "implicitfast",
                "discrete": "discrete"}
 LOAD_PATHS = ("actuator", "xfrc_applied")
+# Welds: nested bodies (``tree``, exact: no constraint) or free bodies held by equality
+# constraints (``equality``: MuJoCo's constraint solver, whose constraints are soft).
+WELDS = ("tree", "equality")
+OPTIONS = ("loads", "welds")
+# Weld constraints as stiff as MuJoCo allows, since the scene's welds are rigid: the time
+# constant at 2 timesteps (MuJoCo clamps anything shorter, refsafe) with critical damping,
+# and the impedance at 0.9999 (MuJoCo's largest). What softness remains is MuJoCo's, and the
+# pairwise-distance invariant shows it: the stretch falls as dt^2, but the impedance leaves
+# the constraint forces ~1e-4 relative short at any step (measured: 3.9e-4 N on the chain's
+# joint reactions at dt = 1e-3 and 1e-4).
+WELD_SOLREF_STEPS = 2.0
+WELD_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 DISABLED = ("contact", "constraint", "equality", "limit", "frictionloss", "spring", "damper", "clampctrl",
             "autoreset")
 # Longest rollout call: its state output (steps x nstate doubles) stays ~10 MB
@@ -74,12 +86,17 @@ def _f(x):
     return " ".join(repr(float(v)) for v in np.ravel(x))
 
 
-def _frames(scene):
+def _floating(j, welds):
+    """Whether MuJoCo gets this body as a free body: a free joint, or a weld with ``welds=equality``."""
+    return j.kind == "free" or (j.kind == "weld" and welds == "equality")
+
+
+def _frames(scene, welds="tree"):
     """Per body: the scene body frame B in the MuJoCo body frame M, as ``(p_MB, R_MB)``
     with ``x_M = p_MB + R_MB x_B``."""
     out = {}
     for j in scene.joints:
-        if j.kind == "free":
+        if _floating(j, welds):
             out[j.child] = (np.zeros(3), np.eye(3))
         else:  # M = the child joint frame Jc
             R_CJ = spatial.quat_to_matrix(j.child_quat)
@@ -89,13 +106,17 @@ def _frames(scene):
 
 def mjcf(scene, settings):
     """MJCF text of ``scene`` for ``settings`` (dt, integrator, options)."""
-    frames = _frames(scene)
+    welds = settings.options.get("welds", "tree")
+    frames = _frames(scene, welds)
     load_path = settings.options.get("loads", "actuator")
+    state0 = spatial.initial_body_states(scene)
+    weld_constraints = [j for j in scene.joints if j.kind == "weld" and welds == "equality"]
     children = {}
-    for j in scene.joints:
-        children.setdefault(j.parent, []).append(j)
+    for j in scene.joints:  # a welded body held by a constraint hangs from the world, free
+        children.setdefault(WORLD if j in weld_constraints else j.parent, []).append(j)
     gravity = np.array(scene.gravity)
-    flags = " ".join(f'{f}="disable"' for f in DISABLED)
+    disabled = [f for f in DISABLED if not (weld_constraints and f in ("constraint", "equality"))]
+    flags = " ".join(f'{f}="disable"' for f in disabled)
     if not np.any(gravity):
         flags += ' gravity="disable"'
     lines = ['<mujoco model="%s">' % scene.name,
@@ -111,6 +132,8 @@ def mjcf(scene, settings):
         body = scene.body(j.child)
         if j.kind == "free":
             pos, quat = np.array(j.q0[:3]), np.array(j.q0[3:])  # placed by qpos anyway
+        elif j.kind == "weld" and welds == "equality":  # at its initial pose: the weld's reference
+            pos, quat = state0[j.child]["p"], spatial.matrix_to_quat(state0[j.child]["R"])
         else:
             # M (= Jc) coincides with the parent joint frame Jp at q = 0.
             # (p, R) of the parent's scene frame in the parent's MuJoCo frame: x_M = p + R x_B.
@@ -122,7 +145,7 @@ def mjcf(scene, settings):
         fi = [I_M[0, 0], I_M[1, 1], I_M[2, 2], I_M[0, 1], I_M[0, 2], I_M[1, 2]]
         out = [f'{indent}<body name="{body.name}" pos="{_f(pos)}" quat="{_f(quat)}">',
                f'{indent}  <inertial pos="{_f(p_MB)}" mass="{body.mass!r}" fullinertia="{_f(fi)}"/>']
-        if j.kind == "free":
+        if _floating(j, welds):
             out.append(f'{indent}  <freejoint name="{body.name}"/>')
         elif j.kind == "revolute":
             out.append(f'{indent}  <joint name="{body.name}" type="hinge" pos="0 0 0" axis="{_f(j.axis)}" '
@@ -144,6 +167,22 @@ def mjcf(scene, settings):
     for j in children.get(WORLD, []):
         lines += body_xml(j, "    ")
     lines.append("  </worldbody>")
+    if weld_constraints:
+        solref = f"{WELD_SOLREF_STEPS * settings.dt!r} 1"
+        lines.append("  <equality>")
+        for j in weld_constraints:
+            # relpose: the child's MuJoCo frame in the parent's, as the scene's weld holds them
+            X = {}
+            for name in (j.parent, j.child):
+                s0, (p_MB, R_MB) = state0[name], frames.get(name, (np.zeros(3), np.eye(3)))
+                R_WM = s0["R"] @ R_MB.T
+                X[name] = (s0["p"] - R_WM @ p_MB, R_WM)
+            (p1, R1), (p2, R2) = X[j.parent], X[j.child]
+            relpose = np.concatenate([R1.T @ (p2 - p1), spatial.matrix_to_quat(R1.T @ R2)])
+            body1 = "" if j.parent == WORLD else f' body1="{j.parent}"'
+            lines.append(f'    <weld name="{j.child}"{body1} body2="{j.child}" relpose="{_f(relpose)}" '
+                         f'solref="{solref}" solimp="{_f(WELD_SOLIMP)}"/>')
+        lines.append("  </equality>")
     if load_path == "actuator" and scene.loads:
         lines.append("  <actuator>")
         for k, ld in enumerate(scene.loads):
@@ -157,16 +196,17 @@ def mjcf(scene, settings):
 
 
 class MujocoAdapter(Adapter):
-    """MuJoCo (``mujoco`` Python bindings). Options: ``loads`` = ``actuator`` | ``xfrc_applied``."""
+    """MuJoCo (``mujoco`` Python bindings). Options: ``loads`` = ``actuator`` | ``xfrc_applied``;
+    ``welds`` = ``tree`` | ``equality``."""
 
     name = "mujoco"
     effects = EFFECTS
     integrators = {
-        "euler": IntegratorSpec(True, ("loads",), "semi-implicit Euler"),
-        "rk4": IntegratorSpec(True, ("loads",), "classical RK4"),
-        "implicit": IntegratorSpec(True, ("loads",), "implicit in velocity (Coriolis and damping)"),
-        "implicitfast": IntegratorSpec(True, ("loads",), "implicit in velocity, no Coriolis derivatives"),
-        "discrete": IntegratorSpec(True, ("loads",), "MuJoCo 4's discrete integrator"),
+        "euler": IntegratorSpec(True, OPTIONS, "semi-implicit Euler"),
+        "rk4": IntegratorSpec(True, OPTIONS, "classical RK4"),
+        "implicit": IntegratorSpec(True, OPTIONS, "implicit in velocity (Coriolis and damping)"),
+        "implicitfast": IntegratorSpec(True, OPTIONS, "implicit in velocity, no Coriolis derivatives"),
+        "discrete": IntegratorSpec(True, OPTIONS, "MuJoCo 4's discrete integrator"),
     }
 
     def version(self):
@@ -179,6 +219,13 @@ class MujocoAdapter(Adapter):
         path = settings.options.get("loads", "actuator")
         if path not in LOAD_PATHS:
             raise ValueError(f"options.loads: unknown {path!r} — use one of {list(LOAD_PATHS)}")
+        welds = settings.options.get("welds", "tree")
+        if welds not in WELDS:
+            raise ValueError(f"options.welds: unknown {welds!r} — use one of {list(WELDS)}")
+
+    def variants(self, scene):
+        """Default matrix: where the scene has welds, also as equality constraints."""
+        return [{}, {"welds": "equality"}] if any(j.kind == "weld" for j in scene.joints) else [{}]
 
     def describe(self, scene, settings):
         """The generated model, for reports and ``dalembert show-model``."""
@@ -190,22 +237,29 @@ class MujocoAdapter(Adapter):
 
         text = mjcf(scene, settings)
         model = mujoco.MjModel.from_xml_string(text)
-        frames = _frames(scene)
+        welds = settings.options.get("welds", "tree")
+        frames = _frames(scene, welds)
         ids = {b.name: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b.name) for b in scene.bodies}
         self._check_mass_properties(model, scene, frames, ids)
         data = mujoco.MjData(model)
         qpos0, qvel0 = np.zeros(model.nq), np.zeros(model.nv)
+        state0 = spatial.initial_body_states(scene)
         for j in scene.joints:
-            if j.kind == "weld":
+            if j.kind == "weld" and welds == "tree":
                 continue
             jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j.child)
             a, v = model.jnt_qposadr[jid], model.jnt_dofadr[jid]
+            if j.kind == "weld":  # a free body at its initial state: qvel = (v world, w body)
+                s0 = state0[j.child]
+                qpos0[a:a + 7] = np.concatenate([s0["p"], spatial.matrix_to_quat(s0["R"])])
+                qvel0[v:v + 6] = np.concatenate([s0["v"], s0["R"].T @ s0["w"]])
+                continue
             qpos0[a:a + len(j.q0)] = j.q0
             qvel0[v:v + len(j.v0)] = j.v0
         steps = np.rint(np.diff(times) / settings.dt).astype(int)
         return dict(scene=scene, times=np.asarray(times, float), settings=settings, model=model, data=data,
                     scratch=mujoco.MjData(model), qpos0=qpos0, qvel0=qvel0, steps=steps, frames=frames, ids=ids,
-                    mjcf=text, load_path=settings.options.get("loads", "actuator"))
+                    mjcf=text, load_path=settings.options.get("loads", "actuator"), welds=welds)
 
     @staticmethod
     def _check_mass_properties(model, scene, frames, ids):
@@ -345,13 +399,14 @@ class MujocoAdapter(Adapter):
         n, nb = len(p["times"]), len(scene.bodies)
         pos, quat = np.full((nb, n, 3), np.nan), np.full((nb, n, 4), np.nan)
         vel, omega = np.full((nb, n, 3), np.nan), np.full((nb, n, 3), np.nan)
-        reactions = {j.child: np.full((n, 3), np.nan) for j in scene.joints if j.kind != "free"}
+        # a weld held by an equality constraint has no joint force to read (cfrc_int is zero)
+        reactions = {j.child: np.full((n, 3), np.nan) for j in scene.joints if not _floating(j, p["welds"])}
         max_ncon = max_nefc = 0
         max_passive = 0.0
         res = np.zeros(6)
         if p["load_path"] == "actuator":
             d.ctrl[:] = 1.0
-        subtree = {b.name: self._subtree(scene, b.name) for b in scene.bodies}
+        subtree = {b.name: self._subtree(scene, b.name, p["welds"]) for b in scene.bodies}
         for k in range(n):
             if not np.all(np.isfinite(Q[k])):
                 continue
@@ -386,7 +441,7 @@ class MujocoAdapter(Adapter):
         # Free bodies: the attitude is MuJoCo's own quaternion as integrated (its norm is data).
         for bi, b in enumerate(scene.bodies):
             j = scene.joint(b.name)
-            if j.kind == "free":
+            if _floating(j, p["welds"]):
                 jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, b.name)
                 a = model.jnt_qposadr[jid]
                 quat[bi] = Q[:, a + 3:a + 7]
@@ -404,12 +459,13 @@ class MujocoAdapter(Adapter):
         return Trajectory(p["times"], bodies, joints, extras), audit
 
     @staticmethod
-    def _subtree(scene, name):
+    def _subtree(scene, name, welds="tree"):
+        """``name`` and the bodies below it in MuJoCo's tree (a weld held by a constraint is not)."""
         out, frontier = {name}, [name]
         while frontier:
             parent = frontier.pop()
             for j in scene.joints:
-                if j.parent == parent and j.child not in out:
+                if j.parent == parent and j.child not in out and not _floating(j, welds):
                     out.add(j.child)
                     frontier.append(j.child)
         return out

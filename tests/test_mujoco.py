@@ -87,6 +87,45 @@ def test_every_joint_kind_frame_and_load_against_the_reference(make):
             assert np.max(np.abs(mj.joints[name].q - j.q)) < CROSS_CHECK_TOL
 
 
+# welds=equality, rk4 at dt = 1e-3 over 0.5 s on the welded particle box (measured: COM
+# 2.7e-8 m, attitude 1.2e-8 rad, welds stretched 3.6e-8 m — MuJoCo's soft constraints at the
+# stiffest it allows); 3x the measurements.
+WELD_EQUALITY_TOL = 1e-7
+# The chain's weld as a constraint, rk4 at dt = 1e-3 against Kane (measured 3.7e-8 m and 1.8e-7
+# rad, both falling as dt^2: the weld's softness; a wrong relative pose would be ~0.1): 5x.
+CHAIN_WELD_TOL = 1e-6
+
+
+def test_welds_as_equality_constraints_hold_the_box_and_soften_with_the_step():
+    """27 free bodies held by 26 weld constraints through MuJoCo's constraint solver: it follows the
+    rigid body's closed form, and the welds' stretch (the constraints' softness, time constant
+    2 dt) falls as dt^2."""
+    from dalembert import invariants
+
+    case = make_case("particle_box_welded", t_final=0.5)
+    stretch = {}
+    for dt in (1e-3, 1e-4):
+        prepared, outcome = run(case, Settings("rk4", dt=dt, options={"welds": "equality"}))
+        stretch[dt] = invariants.drift("pairwise_distance", case.scene, outcome.trajectory)
+        if dt == 1e-3:
+            e = trajectory_errors(outcome.trajectory, case.exact(case.times))
+            assert e["position"][0] < WELD_EQUALITY_TOL and e["orientation"][0] < WELD_EQUALITY_TOL
+            audit = ADAPTER.audit(prepared, outcome)
+            assert audit["max_constraint_rows"] == 6 * 26 and "equality" not in audit["disabled"]
+    assert stretch[1e-3] < WELD_EQUALITY_TOL and stretch[1e-3] / stretch[1e-4] > 50
+
+
+def test_a_weld_constraint_on_a_turned_revolute_link_against_the_reference():
+    """The weld's relative pose is the scene's, not MuJoCo's reference configuration (which has the
+    revolute joints at zero)."""
+    case = chain_case()
+    ref = simulate(case.scene, case.times, Settings("dop853", rtol=1e-12, atol=1e-12,
+                                                    options={"formulation": "kane"}))[0]
+    mj = run(case, Settings("rk4", dt=1e-3, options={"welds": "equality"}))[1].trajectory
+    e = trajectory_errors(mj, ref)
+    assert e["position"][0] < CHAIN_WELD_TOL and e["orientation"][0] < CHAIN_WELD_TOL, e
+
+
 def test_mass_properties_round_trip_full_inertia_and_com_offset():
     case = chain_case()
     prepared = ADAPTER.prepare(case.scene, case.times, Settings("rk4", dt=1e-3))
