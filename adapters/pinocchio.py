@@ -59,6 +59,9 @@ __all__ = ["PinocchioAdapter"]
 # Fixed-step loops: compiled (adapters/pinocchio_stepper.cpp, the default) or the Python one
 # (the same integrators, kept as the readable specification and the fallback).
 LOOPS = ("native", "python")
+# Welds: merged into the parent's joint (``tree``, exact), or 6D constraints between free
+# flyers solved by ``pin.constraintDynamics`` (``constraint``).
+WELDS = ("tree", "constraint")
 
 
 def _se3(R, p):
@@ -68,12 +71,19 @@ def _se3(R, p):
 
 
 class PinocchioModel:
-    """A scene as a ``pin.Model`` plus the maps the adapter needs."""
+    """A scene as a ``pin.Model`` plus the maps the adapter needs.
 
-    def __init__(self, scene):
+    ``welds="constraint"``: a welded body gets its own FreeFlyer, held to its parent by a 6D
+    ``RigidConstraintModel``, and the dynamics is ``pin.constraintDynamics`` (no Baumgarte
+    correction: the constraints are met at the acceleration level, so what drift the
+    integrator leaves shows in the pairwise distances).
+    """
+
+    def __init__(self, scene, welds="tree"):
         import pinocchio as pin
 
-        self.scene = scene
+        self.scene, self.welds = scene, welds
+        self.constraints = []  # (parent joint, placement in it, child joint, placement in it)
         model = pin.Model()
         model.gravity = pin.Motion(np.array(scene.gravity, dtype=float), np.zeros(3))
         self.carrier, self.X_JB, self.joint_ids = {}, {}, {}
@@ -86,9 +96,11 @@ class PinocchioModel:
                 parent_id, X_parent = self.carrier[j.parent], self.X_JB[j.parent]
             X_PJ = _se3(spatial.quat_to_matrix(j.parent_quat), j.parent_point)  # Jp in parent body coords
             X_CJ = _se3(spatial.quat_to_matrix(j.child_quat), j.child_point)  # Jc in child body coords
-            if j.kind == "free":
+            if j.kind == "free" or (j.kind == "weld" and welds == "constraint"):
                 jid = model.addJoint(0, pin.JointModelFreeFlyer(), _se3(np.eye(3), np.zeros(3)), body.name)
                 X_JB = _se3(np.eye(3), np.zeros(3))
+                if j.kind == "weld":  # the weld frame, in the parent's joint frame and in the child's (= body)
+                    self.constraints.append((parent_id, X_parent * X_PJ, jid, X_CJ))
             elif j.kind in ("revolute", "ball"):
                 jm = (pin.JointModelRevoluteUnaligned(np.array(j.axis) / np.linalg.norm(j.axis))
                       if j.kind == "revolute" else pin.JointModelSpherical())
@@ -97,7 +109,7 @@ class PinocchioModel:
             else:  # weld: rigidly on the parent's joint
                 jid = parent_id
                 X_JB = X_parent * X_PJ * X_CJ.inverse()
-            if j.kind != "weld":
+            if j.kind != "weld" or welds == "constraint":
                 self.joint_ids[body.name] = jid
             self.carrier[body.name], self.X_JB[body.name] = jid, X_JB
             R, p = X_JB.rotation, X_JB.translation
@@ -108,6 +120,16 @@ class PinocchioModel:
                          f"({model.joints[jid].shortname() if jid else 'universe'}), mass {body.mass:g} kg")
         self.model = model
         self.data = model.createData()
+        if self.constraints:
+            self.cmodels = pin.StdVec_RigidConstraintModel()
+            for j1, X1, j2, X2 in self.constraints:
+                self.cmodels.append(pin.RigidConstraintModel(pin.ContactType.CONTACT_6D, model, j1, X1, j2, X2,
+                                                             pin.ReferenceFrame.LOCAL))
+            self.cdatas = pin.StdVec_RigidConstraintData()
+            for cm in self.cmodels:
+                self.cdatas.append(cm.createData())
+            pin.initConstraintDynamics(model, self.data, self.cmodels, self.cdatas)
+            lines.append(f"{len(self.constraints)} weld(s) as 6D RigidConstraintModels (pin.constraintDynamics)")
         self.frame_ids = {b.name: model.getFrameId(b.name) for b in scene.bodies}
         self.summary = "\n".join([f"pin.Model: nq = {model.nq}, nv = {model.nv}, gravity = "
                                   f"{model.gravity.linear.tolist()}"] + lines)
@@ -158,6 +180,8 @@ class PinocchioModel:
     def acceleration(self, q, v):
         import pinocchio as pin
 
+        if self.constraints:  # no external forces here: such scenes are unsupported (see the adapter)
+            return pin.constraintDynamics(self.model, self.data, q, v, self.tau, self.cmodels, self.cdatas)
         if self.has_loads:
             return pin.aba(self.model, self.data, q, v, self.tau, self.external_forces(q))
         return pin.aba(self.model, self.data, q, v, self.tau)
@@ -168,6 +192,8 @@ class PinocchioModel:
         import pinocchio as pin
 
         aba, model, data, tau = pin.aba, self.model, self.data, self.tau
+        if self.constraints:
+            return self.acceleration
         if not self.has_loads:
             return lambda q, v: aba(model, data, q, v, tau)
         if not self.world_loads:
@@ -176,23 +202,23 @@ class PinocchioModel:
         return self.acceleration
 
     def dexpinv_kind(self):
-        """0: the configuration space is a vector space (only revolute joints); 1: one FreeFlyer
-        (closed-form ``Jlog6``); 2: the ``dIntegrate`` solve (see ``dexpinv_function``)."""
+        """0: the configuration space is a vector space (only revolute joints); 2: the
+        ``dIntegrate`` solve; 3: several FreeFlyers and nothing else (the same solve, block by
+        block) — see ``dexpinv_function``. The compiled loop takes 0 and 2."""
         names = [self.model.joints[i].shortname() for i in range(1, self.model.njoints)]
         if all(n.startswith("JointModelR") for n in names):  # RevoluteUnaligned / RX / RY / RZ
             return 0
-        return 1 if names == ["JointModelFreeFlyer"] else 2
+        return 3 if len(names) > 1 and all(n == "JointModelFreeFlyer" for n in names) else 2
 
     def dexpinv_function(self):
         """``dexpinv(q, theta, vel)``: the tangent ``theta'`` of ``q (+) theta`` moving with
-        velocity ``vel`` — ``dIntegrate(q, theta, ARG1)^-1 vel`` — or None where it is ``vel``.
+        velocity ``vel`` — ``dIntegrate(q, theta, ARG1)^-1 vel`` — or None where it is ``vel``
+        (only revolute joints: the configuration space is a vector space).
 
-        Only revolute joints: the configuration space is a vector space (None). One
-        FreeFlyer: ``Jlog6(exp6(theta)) vel``, the closed-form inverse of the right
-        Jacobian (agrees with the solve to ~1e-14 relative; 3x cheaper) while the
-        rotation part of ``theta`` is below pi — beyond, log no longer inverts exp
-        (e.g. 500 rad/s at dt = 1e-2) and the solve is used. Otherwise the nv x nv
-        solve with ``dIntegrate``.
+        Always the solve: Pinocchio's closed-form inverse, ``Jlog6(exp6(theta))``, is off by up
+        to 5e-9 for rotations of 1e-4 to 1e-3 rad (measured against the solve, which agrees with
+        the series of dexp^-1 ~15x better there) — a step's stage rotations on slow bodies. With
+        FreeFlyers only, ``dIntegrate`` is block diagonal: 6 x 6 solves in one batched call.
         """
         import pinocchio as pin
 
@@ -200,28 +226,32 @@ class PinocchioModel:
         if kind == 0:
             return None
         dIntegrate, ARG1, solve = pin.dIntegrate, pin.ArgumentPosition.ARG1, np.linalg.solve
+        if kind == 3:
+            n = model.nv // 6
+            diag = np.arange(n)
 
-        def by_solve(q, theta, vel):
-            return solve(dIntegrate(model, q, theta, ARG1), vel)
-
-        if kind == 1:
-            Jlog6, exp6, pi2 = pin.Jlog6, pin.exp6, np.pi**2
-            w = slice(3, 6)
-            return lambda q, theta, vel: (Jlog6(exp6(theta)) @ vel if theta[w] @ theta[w] < pi2
-                                          else by_solve(q, theta, vel))
-        return by_solve
+            def per_block(q, theta, vel):
+                J = dIntegrate(model, q, theta, ARG1).reshape(n, 6, n, 6)[diag, :, diag, :]  # (n, 6, 6)
+                return solve(J, vel.reshape(n, 6, 1)).ravel()
+            return per_block
+        return lambda q, theta, vel: solve(dIntegrate(model, q, theta, ARG1), vel)
 
     # ---------------------------------------------------------- conversions
     def initial_state(self):
         import pinocchio as pin
 
         q, v = pin.neutral(self.model), np.zeros(self.model.nv)
+        state0 = spatial.initial_body_states(self.scene) if self.constraints else {}
         for j in self.scene.joints:
-            if j.kind == "weld":
+            if j.kind == "weld" and not self.constraints:
                 continue
             jm = self.model.joints[self.joint_ids[j.child]]
             iq, iv = jm.idx_q, jm.idx_v
-            if j.kind == "free":
+            if j.kind == "weld":  # a FreeFlyer at the body's initial state, velocities local
+                s0 = state0[j.child]
+                q[iq:iq + 7] = np.concatenate([s0["p"], spatial.wxyz_to_xyzw(spatial.matrix_to_quat(s0["R"]))])
+                v[iv:iv + 6] = np.concatenate([s0["R"].T @ s0["v"], s0["R"].T @ s0["w"]])
+            elif j.kind == "free":
                 R = spatial.quat_to_matrix(j.q0[3:])
                 q[iq:iq + 7] = np.concatenate([j.q0[:3], spatial.wxyz_to_xyzw(j.q0[3:])])
                 v[iv:iv + 6] = np.concatenate([R.T @ np.array(j.v0[:3]), j.v0[3:]])
@@ -239,11 +269,11 @@ class PinocchioAdapter(Adapter):
     name = "pinocchio"
     effects = EFFECTS
     integrators = {
-        "euler": IntegratorSpec(True, ("loop",), "semi-implicit Euler on the group"),
-        "rk4": IntegratorSpec(True, ("loop",), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
-        "rk4-naive": IntegratorSpec(True, ("loop",), "RK4 with stagewise integrate, no dexp^-1 correction"),
-        "rk45": IntegratorSpec(False, (), "scipy RK45 in local coordinates"),
-        "dop853": IntegratorSpec(False, (), "scipy DOP853 in local coordinates"),
+        "euler": IntegratorSpec(True, ("loop", "welds"), "semi-implicit Euler on the group"),
+        "rk4": IntegratorSpec(True, ("loop", "welds"), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
+        "rk4-naive": IntegratorSpec(True, ("loop", "welds"), "RK4 with stagewise integrate, no dexp^-1 correction"),
+        "rk45": IntegratorSpec(False, ("welds",), "scipy RK45 in local coordinates"),
+        "dop853": IntegratorSpec(False, ("welds",), "scipy DOP853 in local coordinates"),
     }
 
     def version(self):
@@ -256,12 +286,34 @@ class PinocchioAdapter(Adapter):
         loop = settings.options.get("loop", "native")
         if loop not in LOOPS:
             raise ValueError(f"options.loop: unknown {loop!r} — use one of {list(LOOPS)}")
+        welds = settings.options.get("welds", "tree")
+        if welds not in WELDS:
+            raise ValueError(f"options.welds: unknown {welds!r} — use one of {list(WELDS)}")
+
+    def unsupported(self, scene, settings):
+        reason = super().unsupported(scene, settings)
+        if reason or settings.options.get("welds", "tree") != "constraint":
+            return reason
+        if scene.loads:
+            return ("welds=constraint with loads: pin.constraintDynamics takes no external forces — "
+                    "use welds=tree")
+        if any(j.kind in ("revolute", "ball") for j in scene.joints):
+            return ("welds=constraint with revolute or ball joints: their reactions would miss the "
+                    "constraint forces — use welds=tree")
+        return None
+
+    def variants(self, scene):
+        """Default matrix: where the scene has welds, also as constraints (where supported)."""
+        out = [{}]
+        if any(j.kind == "weld" for j in scene.joints):
+            out.append({"welds": "constraint"})
+        return out
 
     def describe(self, scene, settings):
-        return PinocchioModel(scene).summary + "\n"
+        return PinocchioModel(scene, settings.options.get("welds", "tree")).summary + "\n"
 
     def prepare(self, scene, times, settings):
-        pm = PinocchioModel(scene)
+        pm = PinocchioModel(scene, settings.options.get("welds", "tree"))
         q0, v0 = pm.initial_state()
         times = np.asarray(times, dtype=float)
         steps = np.rint(np.diff(times) / settings.dt).astype(int) if settings.dt else None
@@ -289,8 +341,10 @@ class PinocchioAdapter(Adapter):
         if p["settings"].options.get("loop", "native") == "python":
             return (*self._fixed(p, method), "Python (options.loop = python)")
         pm = p["pm"]
+        if pm.constraints:
+            return (*self._fixed(p, method), "Python (constraint dynamics: the compiled loop has aba only)")
         try:
-            Q, V, n, error = pinocchio_native.run_fixed(pm, method, pm.dexpinv_kind(), p["q0"], p["v0"], p["times"],
+            Q, V, n, error = pinocchio_native.run_fixed(pm, method, min(pm.dexpinv_kind(), 2), p["q0"], p["v0"], p["times"],
                                                         p["steps"])
         except RuntimeError as e:  # not built here: the Python loop, saying why
             return (*self._fixed(p, method), f"Python (the compiled loop is unavailable: {e})")

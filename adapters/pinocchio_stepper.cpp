@@ -23,9 +23,9 @@ using Mat = Eigen::MatrixXd;
 namespace {
 
 enum Method { EULER = 0, RK4 = 1, RK4_NAIVE = 2 };
-// dexp^-1 of the configuration space: identity (only revolute joints), Jlog6 (one free
-// flyer, while the step's rotation is below pi), or the dIntegrate solve (otherwise).
-enum Dexpinv { IDENTITY = 0, FREEFLYER = 1, SOLVE = 2 };
+// dexp^-1 of the configuration space: identity (only revolute joints) or the dIntegrate
+// solve (see PinocchioModel.dexpinv_function for why not Jlog6).
+enum Dexpinv { IDENTITY = 0, SOLVE = 2 };
 
 struct WorldLoad {
   int joint;
@@ -70,11 +70,6 @@ struct Stepper {
 
   Vec dexpinv(const Vec& q, const Vec& theta, const Vec& vel) {
     if (dexpinv_kind == IDENTITY) return vel;
-    if (dexpinv_kind == FREEFLYER && theta.segment<3>(3).squaredNorm() < M_PI * M_PI) {
-      Eigen::Matrix<double, 6, 6> Jl;
-      pin::Jlog6(pin::exp6(pin::Motion(theta.head<6>())), Jl);
-      return Jl * vel;
-    }
     pin::dIntegrate(model, q, theta, J, pin::ARG1);
     return J.partialPivLu().solve(vel);
   }
