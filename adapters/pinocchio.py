@@ -53,6 +53,7 @@ from adapters import Adapter, IntegratorSpec, Outcome
 from dalembert import spatial
 from dalembert.scene import EFFECTS, WORLD
 from dalembert.settings import is_numerical_failure
+from dalembert.stepping import march
 
 __all__ = ["PinocchioAdapter"]
 
@@ -399,26 +400,7 @@ class PinocchioAdapter(Adapter):
 
         step = {"euler": euler, "rk4": rk4, "rk4-naive": rk4_naive}[method]
 
-        times, steps = p["times"], p["steps"]
-        Q = np.full((len(times), model.nq), np.nan)
-        V = np.full((len(times), model.nv), np.nan)
-        q, v = p["q0"].copy(), p["v0"].copy()
-        Q[0], V[0] = q, v
-        n = 0
-        for k, nsub in enumerate(steps, 1):
-            h = (times[k] - times[k - 1]) / nsub
-            try:
-                with np.errstate(over="ignore", invalid="ignore"):  # a blow-up is data, not a warning
-                    for _ in range(nsub):
-                        q, v = step(q, v, h)
-            except Exception as e:  # a blown-up state (e.g. a singular dIntegrate): NaN from here on
-                if not is_numerical_failure(e):
-                    raise
-                break
-            n += nsub
-            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-                break
-            Q[k], V[k] = q, v
+        Q, V, n = march(lambda t, q, v, h: step(q, v, h), p["q0"], p["v0"], p["times"], p["steps"])
         stages = 1 if method == "euler" else 4
         return Q, V, n, n * stages
 

@@ -27,6 +27,7 @@ from scipy.integrate import solve_ivp
 
 from dalembert.registry import Registry
 from dalembert.settings import is_numerical_failure, knob_problems, steps_per_interval
+from dalembert.stepping import march
 from reference import configuration as cfg
 
 __all__ = ["INTEGRATORS", "integrator", "Stats", "check_settings", "steps_per_interval"]
@@ -66,27 +67,8 @@ class _FixedStep:
     stages = 1
 
     def run(self, system, times, settings):
-        times = np.asarray(times, dtype=float)
-        counts = steps_per_interval(times, settings.dt)
-        Q = np.full((len(times), len(system.q0)), np.nan)
-        V = np.full((len(times), len(system.v0)), np.nan)
-        q, v = system.q0.astype(float).copy(), system.v0.astype(float).copy()
-        Q[0], V[0] = q, v
-        steps = 0
-        for k, n in enumerate(counts):
-            h = (times[k + 1] - times[k]) / n
-            try:
-                with np.errstate(over="ignore", invalid="ignore"):  # a blow-up is data, not a warning
-                    for i in range(n):
-                        q, v = self.step(system, times[k] + i * h, q, v, h)
-            except Exception as e:  # a blown-up state: NaN from here on (contract item 5)
-                if not is_numerical_failure(e):
-                    raise
-                break
-            steps += n
-            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-                break
-            Q[k + 1], V[k + 1] = q, v
+        counts = steps_per_interval(np.asarray(times, dtype=float), settings.dt)
+        Q, V, steps = march(lambda t, q, v, h: self.step(system, t, q, v, h), system.q0, system.v0, times, counts)
         return Q, V, Stats(steps, steps * self.stages)
 
 
