@@ -70,6 +70,7 @@ struct Stepper {
 
   Vec dexpinv(const Vec& q, const Vec& theta, const Vec& vel) {
     if (dexpinv_kind == IDENTITY) return vel;
+    J.setZero();  // dIntegrate writes each joint's diagonal block only (Python's comes zeroed)
     pin::dIntegrate(model, q, theta, J, pin::ARG1);
     return J.partialPivLu().solve(vel);
   }
