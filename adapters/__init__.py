@@ -43,8 +43,7 @@ from dataclasses import dataclass, field
 from dalembert.registry import Registry, UnknownNameError, suggest
 
 __all__ = ["Adapter", "IntegratorSpec", "Outcome", "BUILTIN", "adapter_names", "adapter_path", "get_adapter",
-           "register_adapter",
-           "check_adapter"]
+           "register_adapter", "check_adapter", "option_choice"]
 
 BUILTIN = {
     "reference": "adapters.reference:ReferenceAdapter",
@@ -118,6 +117,15 @@ class Adapter:
 
 
 _REGISTRY = Registry("engine")
+
+
+def option_choice(settings, key, choices):
+    """The value of engine option ``key`` (``choices[0]`` when absent); a ValueError naming the
+    option and its choices when it is not one of them."""
+    value = settings.options.get(key, choices[0])
+    if value not in choices:
+        raise ValueError(f"options.{key}: unknown {value!r} — use one of {list(choices)}")
+    return value
 
 
 def _entry_points():

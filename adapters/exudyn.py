@@ -61,7 +61,7 @@ import time
 
 import numpy as np
 
-from adapters import Adapter, IntegratorSpec, Outcome
+from adapters import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert import spatial
 from dalembert.scene import EFFECTS, WORLD
 
@@ -138,10 +138,8 @@ class ExudynAdapter(Adapter):
     def check(self, scene, times, settings):
         super().check(scene, times, settings)
         o = settings.options
-        if o.get("node", "rotvec-lg") not in NODES:
-            raise ValueError(f"options.node: unknown {o['node']!r} — use one of {list(NODES)}")
-        if o.get("joints", "minimal") not in JOINTS:
-            raise ValueError(f"options.joints: unknown {o['joints']!r} — use one of {list(JOINTS)}")
+        option_choice(settings, "node", tuple(NODES))
+        option_choice(settings, "joints", JOINTS)
         for key in ("spectral_radius", "newton_rtol", "newton_atol"):
             if key in o:
                 try:

@@ -50,7 +50,7 @@ import time
 
 import numpy as np
 
-from adapters import Adapter, IntegratorSpec, Outcome
+from adapters import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert import spatial
 from dalembert.scene import EFFECTS, WORLD
 
@@ -216,12 +216,8 @@ class MujocoAdapter(Adapter):
 
     def check(self, scene, times, settings):
         super().check(scene, times, settings)
-        path = settings.options.get("loads", "actuator")
-        if path not in LOAD_PATHS:
-            raise ValueError(f"options.loads: unknown {path!r} — use one of {list(LOAD_PATHS)}")
-        welds = settings.options.get("welds", "tree")
-        if welds not in WELDS:
-            raise ValueError(f"options.welds: unknown {welds!r} — use one of {list(WELDS)}")
+        option_choice(settings, "loads", LOAD_PATHS)
+        option_choice(settings, "welds", WELDS)
 
     def variants(self, scene):
         """Default matrix: where the scene has welds, also as equality constraints."""

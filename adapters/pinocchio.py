@@ -49,7 +49,7 @@ import time
 
 import numpy as np
 
-from adapters import Adapter, IntegratorSpec, Outcome
+from adapters import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert import spatial
 from dalembert.scene import EFFECTS, WORLD
 from dalembert.settings import is_numerical_failure
@@ -284,12 +284,8 @@ class PinocchioAdapter(Adapter):
 
     def check(self, scene, times, settings):
         super().check(scene, times, settings)
-        loop = settings.options.get("loop", "native")
-        if loop not in LOOPS:
-            raise ValueError(f"options.loop: unknown {loop!r} — use one of {list(LOOPS)}")
-        welds = settings.options.get("welds", "tree")
-        if welds not in WELDS:
-            raise ValueError(f"options.welds: unknown {welds!r} — use one of {list(WELDS)}")
+        option_choice(settings, "loop", LOOPS)
+        option_choice(settings, "welds", WELDS)
 
     def unsupported(self, scene, settings):
         reason = super().unsupported(scene, settings)
