@@ -53,6 +53,7 @@ import numpy as np
 from adapters import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert import spatial
 from dalembert.scene import EFFECTS, WORLD
+from dalembert.settings import steps_per_interval
 
 __all__ = ["MujocoAdapter", "mjcf"]
 
@@ -109,8 +110,8 @@ def mjcf(scene, settings):
     welds = settings.options.get("welds", "tree")
     frames = _frames(scene, welds)
     load_path = settings.options.get("loads", "actuator")
-    state0 = spatial.initial_body_states(scene)
     weld_constraints = [j for j in scene.joints if j.kind == "weld" and welds == "equality"]
+    state0 = spatial.initial_body_states(scene) if weld_constraints else {}  # the welded bodies' poses
     children = {}
     for j in scene.joints:  # a welded body held by a constraint hangs from the world, free
         children.setdefault(WORLD if j in weld_constraints else j.parent, []).append(j)
@@ -132,7 +133,7 @@ def mjcf(scene, settings):
         body = scene.body(j.child)
         if j.kind == "free":
             pos, quat = np.array(j.q0[:3]), np.array(j.q0[3:])  # placed by qpos anyway
-        elif j.kind == "weld" and welds == "equality":  # at its initial pose: the weld's reference
+        elif _floating(j, welds):  # a weld held by a constraint, at its initial pose: the weld's reference
             pos, quat = state0[j.child]["p"], spatial.matrix_to_quat(state0[j.child]["R"])
         else:
             # M (= Jc) coincides with the parent joint frame Jp at q = 0.
@@ -239,7 +240,7 @@ class MujocoAdapter(Adapter):
         self._check_mass_properties(model, scene, frames, ids)
         data = mujoco.MjData(model)
         qpos0, qvel0 = np.zeros(model.nq), np.zeros(model.nv)
-        state0 = spatial.initial_body_states(scene)
+        state0 = spatial.initial_body_states(scene) if welds == "equality" else {}
         for j in scene.joints:
             if j.kind == "weld" and welds == "tree":
                 continue
@@ -252,7 +253,7 @@ class MujocoAdapter(Adapter):
                 continue
             qpos0[a:a + len(j.q0)] = j.q0
             qvel0[v:v + len(j.v0)] = j.v0
-        steps = np.rint(np.diff(times) / settings.dt).astype(int)
+        steps = steps_per_interval(np.asarray(times, float), settings.dt)
         return dict(scene=scene, times=np.asarray(times, float), settings=settings, model=model, data=data,
                     scratch=mujoco.MjData(model), qpos0=qpos0, qvel0=qvel0, steps=steps, frames=frames, ids=ids,
                     mjcf=text, load_path=settings.options.get("loads", "actuator"), welds=welds)

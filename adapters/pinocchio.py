@@ -32,15 +32,15 @@ Integrators, each evaluating the loads at every stage:
 * ``rk4-naive``: RK4 on ``v`` with ``q`` advanced stagewise by
   ``integrate(q, c h v_i)`` and no ``dexp^-1`` correction (lower order on a
   non-commutative group: kept because the difference is a result);
-The fixed-step loops run compiled (``pinocchio_stepper.cpp`` through
-``pinocchio_native``: the same integrators and loads against the installed
-Pinocchio, no Python call per step), or in Python with ``--option loop=python``
-and wherever the compiled loop cannot be built (the audit says which ran).
-
 * ``rk45``, ``dop853``: scipy ``solve_ivp`` in local coordinates
   ``q = integrate(q_k, delta)`` restarted at every sample ``q_k``: the state
   ``(delta, v)`` has no redundant component, so error control is not fooled by
   the quaternion's unit-norm constraint, and the quaternion never drifts.
+
+The fixed-step loops run compiled (``pinocchio_stepper.cpp`` through
+``pinocchio_native``: the same integrators and loads against the installed
+Pinocchio, no Python call per step), or in Python with ``--option loop=python``
+and wherever the compiled loop cannot be built (the audit says which ran).
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ import numpy as np
 from adapters import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert import spatial
 from dalembert.scene import EFFECTS, WORLD
-from dalembert.settings import is_numerical_failure
+from dalembert.settings import is_numerical_failure, steps_per_interval
 from dalembert.stepping import march
 
 __all__ = ["PinocchioAdapter"]
@@ -60,6 +60,7 @@ __all__ = ["PinocchioAdapter"]
 # Fixed-step loops: compiled (adapters/pinocchio_stepper.cpp, the default) or the Python one
 # (the same integrators, kept as the readable specification and the fallback).
 LOOPS = ("native", "python")
+STAGES = {"euler": 1, "rk4": 4, "rk4-naive": 4}  # right-hand-side evaluations per fixed step
 # Welds: merged into the parent's joint (``tree``, exact), or 6D constraints between free
 # flyers solved by ``pin.constraintDynamics`` (``constraint``).
 WELDS = ("tree", "constraint")
@@ -83,7 +84,7 @@ class PinocchioModel:
     def __init__(self, scene, welds="tree"):
         import pinocchio as pin
 
-        self.scene, self.welds = scene, welds
+        self.scene = scene
         self.constraints = []  # (parent joint, placement in it, child joint, placement in it)
         model = pin.Model()
         model.gravity = pin.Motion(np.array(scene.gravity, dtype=float), np.zeros(3))
@@ -313,7 +314,7 @@ class PinocchioAdapter(Adapter):
         pm = PinocchioModel(scene, settings.options.get("welds", "tree"))
         q0, v0 = pm.initial_state()
         times = np.asarray(times, dtype=float)
-        steps = np.rint(np.diff(times) / settings.dt).astype(int) if settings.dt else None
+        steps = steps_per_interval(times, settings.dt) if settings.dt else None
         return dict(scene=scene, pm=pm, q0=q0, v0=v0, times=times, settings=settings, steps=steps)
 
     # ------------------------------------------------------------ stepping
@@ -345,9 +346,8 @@ class PinocchioAdapter(Adapter):
                                                         p["steps"])
         except RuntimeError as e:  # not built here: the Python loop, saying why
             return (*self._fixed(p, method), f"Python (the compiled loop is unavailable: {e})")
-        stages = 1 if method == "euler" else 4
         loop = "C++ (adapters/pinocchio_stepper.cpp)" + (f"; stopped: {error}" if error else "")
-        return Q, V, n, n * stages, loop
+        return Q, V, n, n * STAGES[method], loop
 
     def _fixed(self, p, method):
         import pinocchio as pin
@@ -397,8 +397,7 @@ class PinocchioAdapter(Adapter):
         step = {"euler": euler, "rk4": rk4, "rk4-naive": rk4_naive}[method]
 
         Q, V, n = march(lambda t, q, v, h: step(q, v, h), p["q0"], p["v0"], p["times"], p["steps"])
-        stages = 1 if method == "euler" else 4
-        return Q, V, n, n * stages
+        return Q, V, n, n * STAGES[method]
 
     def _adaptive(self, p, method):
         import pinocchio as pin

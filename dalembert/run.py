@@ -71,6 +71,7 @@ class RunSpec:
     params: tuple = ()
     case_version: str = ""
     adapter: str = ""  # "module:Class" of the engine's adapter, for workers that must import it
+
     @property
     def settings(self):
         return Settings(self.integrator, self.dt, self.rtol, self.atol, dict(self.options))
