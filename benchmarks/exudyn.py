@@ -26,7 +26,7 @@ import time
 import numpy as np
 
 from adapters import get_adapter
-from adapters.exudyn import ADAPTIVE
+from adapters.exudyn import ADAPTIVE, ON_TIME
 from dalembert import Settings
 from dalembert.case import load_cases
 
@@ -36,7 +36,8 @@ GOAL = 0.20
 
 
 def bare_solve(adapter, prepared):
-    """Seconds of ``SolveDynamic`` alone on a system built as the adapter builds it."""
+    """Seconds of Exudyn's solve alone on a system built as the adapter builds it (no sensors
+    stored, no user function): ``SolveDynamic``, or the adapter's per-sample loop."""
     import exudyn as exu
 
     built = adapter._build(prepared["scene"], prepared["times"], prepared["settings"])
@@ -46,12 +47,8 @@ def bare_solve(adapter, prepared):
     try:
         t0 = time.perf_counter()
         if prepared["settings"].integrator in ADAPTIVE:
-            solver = exu.MainSolverExplicit()
-            solver.InitializeSolver(mbs, settings)
-            for t in times[1:]:
-                solver.it.endTime = float(t)
-                solver.SolveSteps(mbs, settings)
-            solver.FinalizeSolver(mbs, settings)
+            tol = ON_TIME * settings.timeIntegration.minimumStepSize
+            adapter._solve_per_sample(exu.MainSolverExplicit(), mbs, settings, times, tol)
         else:
             mbs.SolveDynamic(settings, solverType=settings.timeIntegration.solverType)
         return time.perf_counter() - t0

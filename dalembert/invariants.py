@@ -206,10 +206,6 @@ def pairwise_distance_change(scene, traj):
     return np.abs(d - nominal).max(axis=1)
 
 
-def _rel_drift_scalar(x, scale):
-    return float(np.max(np.abs(x - x[0])) / scale) if scale > 0 else float(np.max(np.abs(x - x[0])))
-
-
 def _rel_drift_vector(x):
     scale = float(np.max(np.linalg.norm(x, axis=1)))
     d = float(np.max(np.linalg.norm(x - x[0], axis=1)))
@@ -227,14 +223,20 @@ CONSERVED = {
 }
 
 
+def _energy_change(name, scene, traj):
+    """Signed change of ``energy`` or ``energy_balance`` from its initial value, scaled as in
+    ``CONSERVED``, shape (n,)."""
+    x = total_energy(scene, traj) if name == "energy" else energy_balance(scene, traj)
+    ke = float(np.max(kinetic_energy(scene, traj)))
+    scale = max(abs(x[0]), ke) if name == "energy" else ke
+    return (x - x[0]) / (scale if scale > 0 else 1.0)
+
+
 def drift_series(name, scene, traj):
     """Change of the conserved quantity ``name`` from its initial value at each sample, shape (n,),
     scaled as in ``CONSERVED`` (so ``max(drift_series) == drift``)."""
     if name in ("energy", "energy_balance"):
-        x = total_energy(scene, traj) if name == "energy" else energy_balance(scene, traj)
-        ke = float(np.max(kinetic_energy(scene, traj)))
-        scale = max(abs(x[0]), ke) if name == "energy" else ke
-        return np.abs(x - x[0]) / (scale if scale > 0 else 1.0)
+        return np.abs(_energy_change(name, scene, traj))
     if name == "pairwise_distance":
         return pairwise_distance_change(scene, traj)
     x = {"linear_momentum": linear_momentum, "angular_momentum": angular_momentum,
@@ -250,21 +252,15 @@ def drift_rate(name, scene, traj):
     oscillation (symplectic and geometric integrators) as a slope near zero.
     Negative: energy lost (e.g. numerical damping).
     """
-    x = total_energy(scene, traj) if name == "energy" else energy_balance(scene, traj)
-    ke = float(np.max(kinetic_energy(scene, traj)))
-    scale = max(abs(x[0]), ke) if name == "energy" else ke
-    y = (x - x[0]) / (scale if scale > 0 else 1.0)
+    y = _energy_change(name, scene, traj)
     t = traj.t - traj.t[0]
     return float(np.sum(t * y) / np.sum(t * t)) if np.sum(t * t) > 0 else 0.0
 
 
 def drift(name, scene, traj):
     """Drift of the conserved quantity ``name`` (see ``CONSERVED``) over the whole trajectory."""
-    if name == "energy":
-        E = total_energy(scene, traj)
-        return _rel_drift_scalar(E, max(abs(E[0]), float(np.max(kinetic_energy(scene, traj)))))
-    if name == "energy_balance":
-        return _rel_drift_scalar(energy_balance(scene, traj), float(np.max(kinetic_energy(scene, traj))))
+    if name in ("energy", "energy_balance"):
+        return float(np.max(np.abs(_energy_change(name, scene, traj))))
     if name == "linear_momentum":
         return _rel_drift_vector(linear_momentum(scene, traj))
     if name == "angular_momentum":
