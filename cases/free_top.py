@@ -68,12 +68,12 @@ STABILITY_ENERGY = Tolerance(1e-3, "relative; 0.1% of the energy gained or lost 
 STABILITY_MOMENTUM = Tolerance(1e-3, "relative; as STABILITY_ENERGY, for the world angular momentum")
 HARD_ORIENTATION_TOL = Tolerance(1e-3, "rad; above the roundoff floor of every hard variant at its defaults for up "
                                        "to 2e5 steps (largest: the 50 rad/s fast spin, 7.7e-5 rad at dt = 1e-3, "
-                                       "3.8e-4 at 1e-4), so a miss is the engine's, not the physics'")
+                                       "3.5e-4 at 1e-4), so a miss is the engine's, not the physics'")
 HARD_RATE_TOL = Tolerance(1e-3, "relative to the spin rate; as HARD_ORIENTATION_TOL")
 # The floor: what double precision alone costs an integrator on this motion — the same
 # RK4 run in double and in extended precision (reference/roundoff.py), at FLOOR_DT (the
 # default matrix's finer step; finer steps accumulate more roundoff: 7.7e-5 rad at 1e-3,
-# 3.8e-4 rad at 1e-4 on the 50 rad/s fast spin). Never below the physics' own sensitivity:
+# 3.5e-4 rad at 1e-4 on the 50 rad/s fast spin). Never below the physics' own sensitivity:
 # the spread of the closed form when each component of the initial angular velocity moves
 # by FLOOR_ULPS ulps of |w0| (a lower bound: 1.6e-9 rad on that spin).
 FLOOR_DT = 1e-3
