@@ -11,7 +11,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e ".[test]"
-	$(BIN)/python -m adapters.pinocchio_native  # compile the Pinocchio stepper once (~2 min)
+	$(BIN)/python -m dalembert.adapters.pinocchio_native  # compile the Pinocchio stepper once (~2 min)
 	touch $(STAMP)
 
 setup: $(STAMP)
@@ -27,7 +27,7 @@ run: $(STAMP)
 	echo "report: $$out/report.md (results/latest)"; exit $$status
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -n 2 -q
+	$(BIN)/python -P -m pytest -n 2 -q  # -P: the checkout is not on sys.path, only the installed package
 
 clean:
 	rm -rf $(VENV) results

@@ -46,10 +46,10 @@ __all__ = ["Adapter", "IntegratorSpec", "Outcome", "BUILTIN", "adapter_names", "
            "register_adapter", "check_adapter", "option_choice"]
 
 BUILTIN = {
-    "reference": "adapters.reference:ReferenceAdapter",
-    "mujoco": "adapters.mujoco:MujocoAdapter",
-    "pinocchio": "adapters.pinocchio:PinocchioAdapter",
-    "exudyn": "adapters.exudyn:ExudynAdapter",
+    "reference": "dalembert.adapters.reference:ReferenceAdapter",
+    "mujoco": "dalembert.adapters.mujoco:MujocoAdapter",
+    "pinocchio": "dalembert.adapters.pinocchio:PinocchioAdapter",
+    "exudyn": "dalembert.adapters.exudyn:ExudynAdapter",
 }
 
 

@@ -49,7 +49,7 @@ import time
 
 import numpy as np
 
-from adapters import Adapter, IntegratorSpec, Outcome, option_choice
+from dalembert.adapters import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert import spatial
 from dalembert.scene import EFFECTS, WORLD
 from dalembert.settings import is_numerical_failure, steps_per_interval
@@ -334,7 +334,7 @@ class PinocchioAdapter(Adapter):
     def _fixed_loop(self, p, method):
         """The compiled loop (``pinocchio_native``) unless ``options.loop`` is ``python`` or it
         cannot be built; the fifth item says which ran, and why not the compiled one."""
-        from adapters import pinocchio_native
+        from dalembert.adapters import pinocchio_native
 
         if p["settings"].options.get("loop", "native") == "python":
             return (*self._fixed(p, method), "Python (options.loop = python)")

@@ -7,12 +7,12 @@ installed Pinocchio (headers and library from the ``pin`` wheel, Eigen from
 ``cmeel-eigen``) give the same numbers (tests/test_pinocchio.py) without a
 Python call per step.
 
-Built on first use (``make`` builds it at setup: ``python -m adapters.pinocchio_native``)
+Built on first use (``make`` builds it at setup: ``python -m dalembert.adapters.pinocchio_native``)
 with the system's C++ compiler into a cache keyed by the source, the compiler
 flags and the Pinocchio version; where it cannot be built the adapter falls back
 to its Python loop and says why in the run's audit.
 
-    python -m adapters.pinocchio_native     # build (or find) the library; print where, or why not
+    python -m dalembert.adapters.pinocchio_native     # build (or find) the library; print where, or why not
 """
 
 from __future__ import annotations

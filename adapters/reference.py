@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from adapters import Adapter, IntegratorSpec, Outcome
+from dalembert.adapters import Adapter, IntegratorSpec, Outcome
 from dalembert.scene import EFFECTS
 
 __all__ = ["ReferenceAdapter"]
@@ -34,7 +34,7 @@ class ReferenceAdapter(Adapter):
 
     def check(self, scene, times, settings):
         super().check(scene, times, settings)
-        from reference.solver import build
+        from dalembert.reference.solver import build
 
         build(scene, settings, np.asarray(times))  # formulation and integrator checks
 
@@ -46,7 +46,7 @@ class ReferenceAdapter(Adapter):
         return reason
 
     def describe(self, scene, settings):
-        from reference.solver import FORMULATIONS, default_formulation
+        from dalembert.reference.solver import FORMULATIONS, default_formulation
 
         formulation = settings.options.get("formulation", default_formulation(scene))
         system = FORMULATIONS[formulation](scene)
@@ -55,7 +55,7 @@ class ReferenceAdapter(Adapter):
                 f"loads {[ld.effect + ' on ' + ld.body for ld in scene.loads]}\n")
 
     def prepare(self, scene, times, settings):
-        from reference.solver import build
+        from dalembert.reference.solver import build
 
         times = np.asarray(times, dtype=float)
         system, inner = build(scene, settings, times)
@@ -64,7 +64,7 @@ class ReferenceAdapter(Adapter):
     def run(self, prepared):
         import time
 
-        from reference.integrators import INTEGRATORS
+        from dalembert.reference.integrators import INTEGRATORS
 
         p = prepared
         start = time.perf_counter()

@@ -25,8 +25,8 @@ import time
 
 import numpy as np
 
-from adapters import get_adapter
-from adapters.exudyn import ADAPTIVE, ON_TIME
+from dalembert.adapters import get_adapter
+from dalembert.adapters.exudyn import ADAPTIVE, ON_TIME
 from dalembert import Settings
 from dalembert.case import load_cases
 

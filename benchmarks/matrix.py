@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from dalembert.run import expand, run_matrix
+from dalembert.harness.run import expand, run_matrix
 from dalembert.store import Store
 
 LONG_RUN_S = 0.05  # the overhead goal applies to runs whose stepping takes longer than this

@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from adapters import get_adapter
+from dalembert.adapters import get_adapter
 from dalembert import Settings
 from dalembert.case import load_cases
 

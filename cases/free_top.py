@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from cases._sampling import sample_times
+from dalembert.cases._sampling import sample_times
 from dalembert.case import Case, Tolerance, case
 from dalembert.scene import Body, Joint, Scene
 from dalembert.trajectory import BodyStates, Trajectory
-from reference.closed_form import TorqueFreeTop
+from dalembert.reference.closed_form import TorqueFreeTop
 
 # Agreement with the closed form over the horizon.
 ORIENTATION_TOL = Tolerance(1e-7, "rad over 20 s; 5x the roundoff floor of a double-precision integrator on the "
@@ -86,7 +86,7 @@ FLOOR_MAX_STEPS = 2e5
 def top_floor(inertia, omega0, times):
     """Orientation floor (rad) of a torque-free top over ``times`` (see FLOOR_DT, FLOOR_ULPS)."""
     from dalembert import spatial
-    from reference.roundoff import top_roundoff
+    from dalembert.reference.roundoff import top_roundoff
 
     I, w0 = np.diag(np.asarray(inertia, dtype=float)), np.asarray(omega0, dtype=float)
     base = TorqueFreeTop(I, w0).quaternion(times)

@@ -6,12 +6,12 @@ import itertools
 
 import numpy as np
 
-from cases._sampling import sample_times
+from dalembert.cases._sampling import sample_times
 from dalembert import spatial
 from dalembert.case import Case, Tolerance, case
 from dalembert.scene import Body, Joint, Scene
 from dalembert.trajectory import BodyStates, Trajectory
-from reference.closed_form import Ballistic, TorqueFreeTop
+from dalembert.reference.closed_form import Ballistic, TorqueFreeTop
 
 POSITION_TOL = Tolerance(1e-8, "m after a 1960 m fall; the parabola is quadratic in t, so RK methods of order >= 2 "
                                "are exact up to roundoff (~1e-13 relative)")

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from cases._sampling import sample_times
+from dalembert.cases._sampling import sample_times
 from dalembert import spatial
 from dalembert.case import Case, Tolerance, case
 from dalembert.scene import Body, Joint, Load, Scene
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
-from reference.closed_form import FollowerForceRod
+from dalembert.reference.closed_form import FollowerForceRod
 
 # Agreement with the closed form. phi(t) is quadratic in t, so any Runge-Kutta
 # method of order >= 2 is exact up to roundoff (~1e-14 rad over 12 rad); these

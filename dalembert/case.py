@@ -8,19 +8,16 @@ its keyword parameters (all with defaults) give variants for free::
 
     make_case("pivoted_rod", length=2.0)
 
-Every module in the ``cases`` package is imported by ``load_cases()`` (no
-import list to maintain), and third-party packages can add cases through the
-entry-point group ``dalembert.cases``.
+``load_cases()`` loads every package registered in the entry-point group
+``dalembert.cases``: the built-in ``dalembert.cases`` and any third party's.
 """
 
 from __future__ import annotations
 
 import hashlib
-import importlib
 import inspect
 import json
 import math
-import pkgutil
 from dataclasses import asdict, dataclass, field, is_dataclass
 from typing import Callable
 
@@ -217,18 +214,19 @@ _LOADED = False
 
 
 def load_cases():
-    """Import every module of the ``cases`` package and entry point ``dalembert.cases``."""
+    """Load every case package registered in the entry-point group ``dalembert.cases``
+    (the built-in ``dalembert.cases`` is one of them) and return the registry."""
     global _LOADED
     if _LOADED:
         return CASES
-    import cases as package
-
-    for info in pkgutil.iter_modules(package.__path__):
-        importlib.import_module(f"{package.__name__}.{info.name}")
     from importlib.metadata import entry_points
 
     for ep in entry_points(group="dalembert.cases"):
-        ep.load()
+        try:
+            ep.load()
+        except Exception as e:
+            raise ImportError(f"cases entry point {ep.name!r} ({ep.value}) failed to load: "
+                              f"{type(e).__name__}: {e} — fix or uninstall the package that declares it") from e
     _LOADED = True
     return CASES
 

@@ -1,7 +1,7 @@
 """The engine-free reference solver: Newton-Euler, Kane (d'Alembert), integrators
 and closed forms. Imports no engine."""
 
-from reference.solver import FORMULATIONS, simulate, truth_settings
+from dalembert.reference.solver import FORMULATIONS, simulate, truth_settings
 
 __all__ = ["FORMULATIONS", "simulate", "truth", "truth_settings"]
 

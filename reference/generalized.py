@@ -30,8 +30,8 @@ import numpy as np
 from dalembert import spatial
 from dalembert.scene import JOINT_KINDS, WORLD
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
-from reference.configuration import Block
-from reference.loads import BodyLoads
+from dalembert.reference.configuration import Block
+from dalembert.reference.loads import BodyLoads
 
 __all__ = ["Kane"]
 

@@ -28,7 +28,7 @@ from scipy.integrate import solve_ivp
 from dalembert.registry import Registry
 from dalembert.settings import is_numerical_failure, knob_problems, steps_per_interval
 from dalembert.stepping import march
-from reference import configuration as cfg
+from dalembert.reference import configuration as cfg
 
 __all__ = ["INTEGRATORS", "integrator", "Stats", "check_settings", "steps_per_interval"]
 

@@ -18,8 +18,8 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
-from reference.configuration import Block
-from reference.loads import BodyLoads
+from dalembert.reference.configuration import Block
+from dalembert.reference.loads import BodyLoads
 
 __all__ = ["NewtonEuler"]
 

@@ -7,9 +7,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from reference.generalized import Kane
-from reference.integrators import INTEGRATORS, DOP853, check_settings
-from reference.newton_euler import NewtonEuler
+from dalembert.reference.generalized import Kane
+from dalembert.reference.integrators import INTEGRATORS, DOP853, check_settings
+from dalembert.reference.newton_euler import NewtonEuler
 
 __all__ = ["FORMULATIONS", "simulate", "build", "truth_settings"]
 

@@ -19,8 +19,8 @@ from dalembert.case import make_case
 from dalembert.errors import error_series
 from dalembert.stability import verdict
 from dalembert.store import atomic_write
-from reports import figures
-from reports.work_precision import TARGETS, cost_to_reach, headline_error, series
+from dalembert.reports import figures
+from dalembert.reports.work_precision import TARGETS, cost_to_reach, headline_error, series
 
 __all__ = ["build_report"]
 

@@ -4,8 +4,8 @@ import time
 
 import numpy as np
 
-from adapters import Adapter, IntegratorSpec
-from adapters.reference import ReferenceAdapter
+from dalembert.adapters import Adapter, IntegratorSpec
+from dalembert.adapters.reference import ReferenceAdapter
 
 
 class Broken(ReferenceAdapter):

@@ -7,7 +7,7 @@ from dalembert import Settings, invariants, spatial
 from dalembert.case import CASES, load_cases
 from dalembert.errors import QUANTITIES, trajectory_errors
 from dalembert.trajectory import read_csv, write_csv
-from reference import simulate, truth
+from dalembert.reference import simulate, truth
 
 load_cases()
 NAMES = list(CASES)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dalembert import make_case
-from dalembert.cli import main
+from dalembert.harness.cli import main
 from dalembert.trajectory import CSV_COLUMNS, read_csv
 
 

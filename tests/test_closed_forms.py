@@ -11,8 +11,8 @@ import pytest
 
 from dalembert import Settings, invariants, spatial
 from dalembert.scene import Body, mass_properties
-from reference import simulate
-from reference.closed_form import Ballistic, FollowerForceRod, TorqueFreeTop
+from dalembert.reference import simulate
+from dalembert.reference.closed_form import Ballistic, FollowerForceRod, TorqueFreeTop
 from taylor import integrate_top
 
 # Required by the foundation issue: attitude within 1e-11 rad of an independent

@@ -4,7 +4,7 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from reference.closed_form.elliptic import ellipj, ellipk, inverse_amplitude
+from dalembert.reference.closed_form.elliptic import ellipj, ellipk, inverse_amplitude
 
 # Absolute error bound of sn, cn, dn for m1 >= 1e-9 (measured <= 1e-15 for |u| <= 2K;
 # worst near u = K/2 where asin is ill-conditioned) ...

@@ -5,10 +5,10 @@ import os
 import numpy as np
 import pytest
 
-from adapters import get_adapter
+from dalembert.adapters import get_adapter
 from dalembert import Settings, make_case
 from dalembert.errors import trajectory_errors
-from reference import simulate
+from dalembert.reference import simulate
 from scenes import free_body_world_loads_case
 
 exudyn = pytest.importorskip("exudyn")  # CI installs it: this never skips there

@@ -6,11 +6,11 @@ import pytest
 from dalembert import Settings, make_case, spatial
 from dalembert.case import load_cases
 from dalembert.errors import QUANTITIES, trajectory_errors
-from dalembert.run import expand
+from dalembert.harness.run import expand
 from dalembert.stability import VERDICTS, verdict
 from dalembert.store import Store
-from reference import simulate
-from reference.closed_form import TorqueFreeTop
+from dalembert.reference import simulate
+from dalembert.reference.closed_form import TorqueFreeTop
 from taylor import integrate_top
 
 HARD = [n for n, f in load_cases().items() if "hard" in f.tags]
@@ -29,7 +29,7 @@ def test_the_hard_cases_are_registered():
 def test_welds_hold_in_exudyn_redundant_coordinates():
     """The 27 welded particles as rigid bodies + 26 generic joints: the box stays rigid and
     follows the rigid-body closed form (second order)."""
-    from adapters import get_adapter
+    from dalembert.adapters import get_adapter
     from dalembert import invariants
 
     case = make_case("particle_box_welded", t_final=0.5)
@@ -77,7 +77,7 @@ def test_every_engine_gets_a_verdict_on_every_hard_case(tmp_path):
 
     out = tmp_path / "hard"
     engines = [arg for e in ENGINES for arg in ("--engine", e)]
-    proc = subprocess.run([sys.executable, "-m", "dalembert.cli", "run", "--tag", "hard", *engines, "--dt", "1e-2,1e-3",
+    proc = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--tag", "hard", *engines, "--dt", "1e-2,1e-3",
                            "--rtol", "1e-6", "--param", "t_final=1", "--timeout", "120", "--out", str(out)],
                           capture_output=True, text=True, timeout=900)
     assert "runs stored" in proc.stderr, proc.stderr[-2000:]

@@ -5,10 +5,10 @@ import os
 import numpy as np
 import pytest
 
-from adapters import get_adapter
+from dalembert.adapters import get_adapter
 from dalembert import Settings, make_case, spatial
 from dalembert.errors import trajectory_errors
-from reference import simulate
+from dalembert.reference import simulate
 from scenes import chain_case, free_body_world_loads_case
 
 mujoco = pytest.importorskip("mujoco")  # CI installs it: this never skips there

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from adapters import get_adapter
+from dalembert.adapters import get_adapter
 from dalembert import Settings, make_case, spatial
 from dalembert.errors import trajectory_errors
 from dalembert.scene import Body, Joint, Scene
-from reference import simulate
+from dalembert.reference import simulate
 from scenes import chain_case, free_body_world_loads_case
 
 pin = pytest.importorskip("pinocchio")  # CI installs it: this never skips there

@@ -6,9 +6,9 @@ import pytest
 from dalembert import Settings, make_case, spatial
 from dalembert.errors import trajectory_errors
 from dalembert.invariants import orthonormality_error
-from reference import simulate
-from reference.integrators import INTEGRATORS
-from reference.newton_euler import NewtonEuler
+from dalembert.reference import simulate
+from dalembert.reference.integrators import INTEGRATORS
+from dalembert.reference.newton_euler import NewtonEuler
 
 ORDER_SLACK = 0.3  # measured orders within this of the theory (asymptotic regime, 2 step sizes)
 FORMULATION_AGREEMENT = 1e-12  # rad or m over 2 s: same method, different algebra -> roundoff only
@@ -81,7 +81,7 @@ def test_only_declared_effects_are_computed():
 
 def test_divergence_is_returned_as_nan_not_raised():
     class Blowup:
-        from reference.configuration import Block
+        from dalembert.reference.configuration import Block
 
         blocks = (Block("vector", slice(0, 1), slice(0, 1)),)
         q0, v0 = np.array([0.0]), np.array([1.0])

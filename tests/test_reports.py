@@ -10,10 +10,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from dalembert.run import Timing, expand, run_matrix
+from dalembert.harness.run import Timing, expand, run_matrix
 from dalembert.store import Store
-from reports.compare import compare_stores
-from reports.render import build_report
+from dalembert.reports.compare import compare_stores
+from dalembert.reports.render import build_report
 
 FAST = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
 ARTIFACTS = os.path.join(os.path.dirname(__file__), "..", "test-artifacts")
@@ -112,7 +112,7 @@ def test_compare_detects_a_tenfold_error_regression(store, tmp_path):
     rows, regressed = compare_stores(store, worse)
     assert regressed
     assert [r for r in rows if r["change"].startswith("REGRESSION")][0]["error_ratio"] == pytest.approx(10.0)
-    from dalembert.cli import main
+    from dalembert.harness.cli import main
 
     assert main(["compare", store.path, worse.path]) == 1
     assert main(["compare", store.path, store.path]) == 0

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dalembert import make_case, spatial
-from reference.roundoff import EXTENDED, rk4_top, top_roundoff
+from dalembert.reference.roundoff import EXTENDED, rk4_top, top_roundoff
 
 pytestmark = pytest.mark.skipif(EXTENDED is None, reason="this platform's longdouble is plain double")
 

@@ -10,9 +10,9 @@ import time
 import numpy as np
 import pytest
 
-from adapters import adapter_names, check_adapter, register_adapter
+from dalembert.adapters import adapter_names, check_adapter, register_adapter
 from broken_adapters import Broken, NoFollower
-from dalembert.run import RunSpec, Timing, execute, expand, run_matrix
+from dalembert.harness.run import RunSpec, Timing, execute, expand, run_matrix
 from dalembert.store import Store
 
 FAST = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
@@ -37,7 +37,7 @@ def test_every_adapter_meets_the_contract(engine):
                                                ("pinocchio", "euler"), ("mujoco", "rk4")])
 def test_a_blow_up_is_nan_not_an_exception(engine, integrator):
     """500 rad/s at dt = 1e-2 (5 rad per step): the state blows up; the run returns NaN from there."""
-    from adapters import get_adapter
+    from dalembert.adapters import get_adapter
     from dalembert import Settings, make_case
 
     case = make_case("free_top_fast_spin", spin=500.0, t_final=2.0)
@@ -83,7 +83,7 @@ def test_stored_row_and_trajectory_round_trip(tmp_path):
 
 
 def _cli(*args, **kw):
-    return subprocess.Popen([sys.executable, "-m", "dalembert.cli", *args], stdout=subprocess.PIPE,
+    return subprocess.Popen([sys.executable, "-m", "dalembert.harness.cli", *args], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, **kw)
 
 
@@ -116,7 +116,7 @@ def test_interrupted_run_resumes_to_the_same_store(tmp_path):
 
 def test_dask_cluster_gives_the_same_rows(tmp_path):
     distributed = pytest.importorskip("distributed")
-    from dalembert.run import run_matrix_dask
+    from dalembert.harness.run import run_matrix_dask
 
     specs, _ = expand(cases=["pivoted_rod"], engines=["reference"], integrators=["rk4", "dop853"], dts=[1e-2],
                       rtols=[1e-6], params={"t_final": 1.0})
@@ -146,7 +146,7 @@ def test_dask_cluster_gives_the_same_rows(tmp_path):
     (["--out", "/proc/forbidden"], "--out"),
 ])
 def test_bad_command_lines_fail_fast_and_write_nothing(args, words, tmp_path, capsys, monkeypatch):
-    from dalembert.cli import main
+    from dalembert.harness.cli import main
 
     monkeypatch.chdir(tmp_path)
     assert main(["run", *args]) == 2
@@ -157,7 +157,7 @@ def test_bad_command_lines_fail_fast_and_write_nothing(args, words, tmp_path, ca
 def test_a_diverged_run_is_a_finding_unless_strict(tmp_path):
     """Tait-Bryan nodes pass their singularity in the first intermediate-axis flip (t = 0.35 s)."""
     pytest.importorskip("exudyn")
-    from dalembert.cli import main
+    from dalembert.harness.cli import main
 
     args = ["run", "--case", "free_top_intermediate", "--engine", "exudyn", "--integrator", "rk44",
             "--option", "node=rxyz", "--dt", "1e-2", "--param", "t_final=1", "--jobs", "1"]
@@ -167,7 +167,7 @@ def test_a_diverged_run_is_a_finding_unless_strict(tmp_path):
 
 
 def test_export_writes_a_stored_trajectory(tmp_path, capsys):
-    from dalembert.cli import main
+    from dalembert.harness.cli import main
     from dalembert.trajectory import read_csv
 
     out = tmp_path / "r"

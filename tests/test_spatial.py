@@ -103,7 +103,7 @@ def test_scalar_last_round_trip(rng):
 
 def test_initial_body_states_match_kanes_kinematics():
     """Forward kinematics for redundant-coordinate engines against the reference's Kane kinematics."""
-    from reference.generalized import Kane
+    from dalembert.reference.generalized import Kane
     from scenes import chain_case
 
     scene = chain_case().scene

@@ -47,7 +47,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dalembert import spatial
-from reference.closed_form.elliptic import ellipj, ellipk, inverse_amplitude
+from dalembert.reference.closed_form.elliptic import ellipj, ellipk, inverse_amplitude
 
 __all__ = ["TorqueFreeTop"]
 

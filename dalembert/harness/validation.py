@@ -45,7 +45,7 @@ def settings_for(case):
 def validate_case(name, params, settings):
     """One row: the reference on case ``name`` with ``settings``, against its truth."""
     from dalembert.case import make_case
-    from reference import simulate, truth
+    from dalembert.reference import simulate, truth
 
     case = make_case(name, **params)
     row = {"case": name, "version": case.version, "settings": settings.label(), "status": "ok", "message": ""}

@@ -147,7 +147,7 @@ def cmd_truth(args):
     out_dir = os.path.dirname(os.path.abspath(args.csv))
     if not os.access(out_dir, os.W_OK):
         return _fail(f"--csv: cannot write to {out_dir!r}")
-    from reference import truth
+    from dalembert.reference import truth
 
     write_csv(truth(case), args.csv)
     print(f"wrote {args.csv}: {case.name} (version {case.version}), {len(case.sample_times)} samples")
@@ -157,7 +157,7 @@ def cmd_truth(args):
 def cmd_validate(args):
     from dalembert.case import load_cases
     from dalembert.registry import UnknownNameError
-    from dalembert.validation import to_markdown, validate, write_csv
+    from dalembert.harness.validation import to_markdown, validate, write_csv
 
     try:
         for n in args.case or []:
@@ -183,7 +183,7 @@ def cmd_validate(args):
 
 
 def cmd_engines(args):
-    from adapters import adapter_names, get_adapter
+    from dalembert.adapters import adapter_names, get_adapter
 
     for name in adapter_names():
         adapter = get_adapter(name)
@@ -229,7 +229,7 @@ def cmd_run(args):
 
     from dalembert.case import load_cases, parse_param
     from dalembert.registry import UnknownNameError
-    from dalembert.run import DEFAULT_TIMEOUT_S, RunSpec, Timing, expand, run_matrix, run_matrix_dask
+    from dalembert.harness.run import DEFAULT_TIMEOUT_S, RunSpec, Timing, expand, run_matrix, run_matrix_dask
     from dalembert.scene import SceneError
     from dalembert.store import Store, harness_commit, machine_info, now
 
@@ -283,7 +283,7 @@ def cmd_run(args):
         for s in skipped:
             print(f"dalembert: skipping engine {s}", file=sys.stderr)
         timeout = args.timeout or DEFAULT_TIMEOUT_S
-        from adapters import get_adapter
+        from dalembert.adapters import get_adapter
         import dalembert
 
         engines = sorted({s.engine for s in specs})
@@ -316,7 +316,7 @@ def cmd_run(args):
 
 def cmd_report(args):
     from dalembert.store import Store
-    from reports.render import build_report
+    from dalembert.reports.render import build_report
 
     store = Store(args.run_dir)
     if not store.exists():
@@ -349,7 +349,7 @@ def cmd_export(args):
 
 def cmd_compare(args):
     from dalembert.store import Store
-    from reports.compare import compare_stores
+    from dalembert.reports.compare import compare_stores
 
     stores = [Store(d) for d in (args.run_a, args.run_b)]
     for d, s in zip((args.run_a, args.run_b), stores):
@@ -368,7 +368,7 @@ def cmd_compare(args):
 
 
 def cmd_show_model(args):
-    from adapters import get_adapter
+    from dalembert.adapters import get_adapter
     from dalembert.case import load_cases, parse_param
     from dalembert.registry import UnknownNameError
     from dalembert.scene import SceneError

@@ -117,7 +117,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
     specs : list of RunSpec
     skipped : list of str — engines not installed (only when ``engines`` was not given)
     """
-    from adapters import adapter_names, adapter_path, get_adapter
+    from dalembert.adapters import adapter_names, adapter_path, get_adapter
     from dalembert.case import load_cases
 
     registry = load_cases()
@@ -198,12 +198,12 @@ def _base_row(spec):
 
 def execute(spec, timing=Timing()):
     """Run one spec in this process: ``(row, trajectory_npz or None)``. Never raises."""
-    from adapters import get_adapter
+    from dalembert.adapters import get_adapter
     from dalembert import invariants
     from dalembert.case import make_case
     from dalembert.errors import trajectory_errors
     from dalembert.store import trajectory_to_npz
-    from reference import truth
+    from dalembert.reference import truth
 
     row = _base_row(spec)
     started = time.perf_counter()
@@ -268,7 +268,7 @@ def _context():
     if threading.active_count() == 1:
         return mp.get_context("fork")
     ctx = mp.get_context("forkserver")
-    ctx.set_forkserver_preload(["dalembert.run", "adapters"])
+    ctx.set_forkserver_preload(["dalembert.harness.run", "dalembert.adapters"])
     return ctx
 
 
@@ -291,7 +291,7 @@ def _finish(store, row, npz, progress, counts):
 def write_truths(specs, store):
     """Store each selected case's truth once (closed form, else the reference), for the reports."""
     from dalembert.case import make_case
-    from reference import truth
+    from dalembert.reference import truth
 
     for name, params, version in sorted({(s.case, s.params, s.case_version) for s in specs}):
         if store.truth(name, version) is None:
@@ -353,7 +353,7 @@ def execute_isolated(spec_json, timing_json, timeout):
     spec = RunSpec.from_json(spec_json)
     payload = json.dumps({"spec": spec_json, "timing": timing_json}).encode()
     try:
-        proc = subprocess.run([sys.executable, "-m", "dalembert.worker"], input=payload, capture_output=True,
+        proc = subprocess.run([sys.executable, "-m", "dalembert.harness.worker"], input=payload, capture_output=True,
                               timeout=timeout)
     except subprocess.TimeoutExpired:
         row = _base_row(spec)

@@ -1,11 +1,11 @@
-"""``python -m dalembert.worker``: run one spec read as JSON on stdin, write the
+"""``python -m dalembert.harness.worker``: run one spec read as JSON on stdin, write the
 pickled ``(row, trajectory_npz)`` to stdout. Used to isolate runs on Dask workers."""
 
 import json
 import pickle
 import sys
 
-from dalembert.run import RunSpec, Timing, execute
+from dalembert.harness.run import RunSpec, Timing, execute
 
 
 def main():
