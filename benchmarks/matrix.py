@@ -19,7 +19,8 @@ import time
 
 import numpy as np
 
-from dalembert.harness.run import expand, run_matrix
+from dalembert.harness.matrix import expand
+from dalembert.harness.pool import run_matrix
 from dalembert.store import Store
 
 LONG_RUN_S = 0.05  # the overhead goal applies to runs whose stepping takes longer than this
@@ -39,10 +40,10 @@ def main(argv=None):
             t0 = time.perf_counter()
             run_matrix(specs, store, jobs=jobs)
             walls[jobs] = time.perf_counter() - t0
-            rows = store.rows()
-            print(f"--jobs {jobs}: {walls[jobs]:.1f} s wall, {sum(r['status'] == 'ok' for r in rows)} ok")
-        long_rows = [r for r in rows if r["status"] == "ok" and r["wall_s_median"] > LONG_RUN_S]
-        frac = np.array([1.0 - r["stepping_total_s"] / r["worker_s"] for r in long_rows])
+            records = store.records()
+            print(f"--jobs {jobs}: {walls[jobs]:.1f} s wall, {sum(r.ok for r in records)} ok")
+        long_runs = [r for r in records if r.ok and r.cost.wall_s_median > LONG_RUN_S]
+        frac = np.array([1.0 - r.cost.stepping_total_s / r.cost.worker_s for r in long_runs])
     speedup = walls[1] / walls[2]
     print(f"speed-up with 2 jobs: {speedup:.2f} (goal >= 1.7)")
     print(f"harness overhead, runs > {LONG_RUN_S * 1e3:.0f} ms ({len(frac)} runs): median {np.median(frac):.1%}, "

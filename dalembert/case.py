@@ -24,9 +24,9 @@ from typing import Callable
 import numpy as np
 
 from dalembert.registry import Registry
-from dalembert.scene import SceneError
+from dalembert.scene import Scene, SceneError
 
-__all__ = ["Tolerance", "Case", "CaseFactory", "case", "make_case", "load_cases", "CASES", "parse_param"]
+__all__ = ["Tolerance", "Case", "CaseRecord", "CaseFactory", "case", "make_case", "load_cases", "CASES", "parse_param"]
 
 CASES = Registry("case")
 
@@ -109,18 +109,6 @@ class Case:
         if problems:
             raise SceneError(f"case {self.name!r}", problems)
 
-    def beyond_tolerance(self, errors, drifts):
-        """Names of the tolerances a run exceeds.
-
-        ``errors``: quantity -> max error (``dalembert.errors.QUANTITIES``);
-        ``drifts``: conserved name -> drift. A bounded quantity the run did not
-        report counts as within.
-        """
-        from dalembert.errors import QUANTITIES
-
-        return [name for name, tol in self.tolerances.items()
-                if not (errors if name in QUANTITIES else drifts).get(name, 0.0) <= tol.value]
-
     @property
     def times(self):
         """Sample times as ndarray (n,), s."""
@@ -128,16 +116,83 @@ class Case:
 
     @property
     def version(self):
-        """Content hash (12 hex digits) of everything that defines the problem."""
+        """Content hash (12 hex digits) of everything that defines the problem and judges a run:
+        scene, horizon, sample times, parameters, tolerance values, conserved quantities."""
         payload = {
             "name": self.name,
             "scene": _canonical(self.scene),
             "t_final": self.t_final,
             "sample_times": self.sample_times,
             "params": _canonical(self.params),
+            # what judges a run is part of the problem: change a bound, and runs stored
+            # under the old one are of another version (the reasons are prose, not covered)
+            "tolerances": {k: repr(t.value) for k, t in sorted(self.tolerances.items())},
+            "conserved": list(self.conserved),
         }
         text = json.dumps(payload, sort_keys=True, default=repr)
         return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
+@dataclass(frozen=True, eq=False)
+class CaseRecord:
+    """A case as it was run, as a results store keeps it: everything a report or a
+    comparison needs, and no code (no closed form, no factory).
+
+    Attributes
+    ----------
+    name, version : str — the case and its content hash (``Case.version``)
+    params : dict — every parameter of the factory, defaults included
+    scene : Scene
+    t_final : float — horizon, s
+    sample_times : tuple of float — s
+    tolerances : dict name -> Tolerance — with their reasons
+    conserved : tuple of str
+    tags : tuple of str
+    floor : dict quantity -> float — the achievable-accuracy floor (``Case.floor``), unit of the quantity
+    truth : str — where the truth came from ("closed form", or the reference solver's settings)
+    """
+
+    name: str
+    version: str
+    params: dict
+    scene: Scene
+    t_final: float
+    sample_times: tuple
+    tolerances: dict
+    conserved: tuple
+    tags: tuple
+    floor: dict
+    truth: str
+
+    @property
+    def times(self):
+        """Sample times as ndarray (n,), s."""
+        return np.array(self.sample_times)
+
+    @classmethod
+    def from_case(cls, case, truth):
+        """Record ``case`` (computing its floor) whose truth came from ``truth``."""
+        return cls(case.name, case.version, dict(case.params), case.scene, case.t_final, case.sample_times,
+                   dict(case.tolerances), tuple(case.conserved), tuple(case.tags), dict(case.floor()), truth)
+
+    def to_json(self):
+        return {"name": self.name, "version": self.version, "params": _canonical_json(self.params),
+                "scene": self.scene.to_json(), "t_final": self.t_final, "sample_times": list(self.sample_times),
+                "tolerances": {k: {"value": t.value, "reason": t.reason} for k, t in self.tolerances.items()},
+                "conserved": list(self.conserved), "tags": list(self.tags), "floor": dict(self.floor),
+                "truth": self.truth}
+
+    @classmethod
+    def from_json(cls, data):
+        return cls(data["name"], data["version"],
+                   {k: tuple(v) if isinstance(v, list) else v for k, v in data["params"].items()},
+                   Scene.from_json(data["scene"]), float(data["t_final"]), tuple(data["sample_times"]),
+                   {k: Tolerance(t["value"], t["reason"]) for k, t in data["tolerances"].items()},
+                   tuple(data["conserved"]), tuple(data["tags"]), dict(data["floor"]), data["truth"])
+
+
+def _canonical_json(params):
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}
 
 
 def _canonical(obj):

@@ -8,6 +8,7 @@ relative to a scale stated per quantity (``CONSERVED``).
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.integrate import cumulative_simpson
@@ -33,6 +34,7 @@ __all__ = [
     "drift",
     "drift_series",
     "drift_rate",
+    "Summary",
     "summary",
 ]
 
@@ -272,15 +274,29 @@ def drift(name, scene, traj):
     raise KeyError(f"unknown conserved quantity {name!r} — known: {sorted(CONSERVED)}")
 
 
+@dataclass(frozen=True)
+class Summary:
+    """The invariant figures of one trajectory.
+
+    Attributes
+    ----------
+    drifts : dict name -> float — ``drift`` of each conserved quantity
+    drift_rates : dict name -> float — ``drift_rate`` (1/s) of the energy-like ones
+    checks : dict name -> float — maxima of ``orthonormality``, ``quaternion_norm`` and, for
+        jointed scenes, ``joint_residual`` (``dalembert.record.CHECKS``)
+    """
+
+    drifts: dict
+    drift_rates: dict
+    checks: dict
+
+
 def summary(scene, traj, conserved=()):
-    """Dict of invariant figures: ``drift:<name>`` per conserved quantity, plus
-    ``orthonormality``, ``quaternion_norm`` and, for jointed scenes, ``joint_residual`` (maxima)."""
-    out = {f"drift:{name}": drift(name, scene, traj) for name in conserved}
-    for name in conserved:
-        if name in ("energy", "energy_balance"):
-            out[f"drift_rate:{name}"] = drift_rate(name, scene, traj)
-    out["orthonormality"] = float(np.max(orthonormality_error(scene, traj)))
-    out["quaternion_norm"] = float(np.max(quaternion_norm_error(scene, traj)))
+    """The ``Summary`` of ``traj``: drifts of the ``conserved`` quantities and the checks."""
+    drifts = {name: drift(name, scene, traj) for name in conserved}
+    rates = {name: drift_rate(name, scene, traj) for name in conserved if name in ("energy", "energy_balance")}
+    checks = {"orthonormality": float(np.max(orthonormality_error(scene, traj))),
+              "quaternion_norm": float(np.max(quaternion_norm_error(scene, traj)))}
     if any(j.kind != "free" for j in scene.joints):
-        out["joint_residual"] = float(np.max(joint_residual(scene, traj)))
-    return out
+        checks["joint_residual"] = float(np.max(joint_residual(scene, traj)))
+    return Summary(drifts, rates, checks)

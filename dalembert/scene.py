@@ -15,7 +15,7 @@ fixed in the child (``child_point``, ``child_quat``, in child body coordinates).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -236,6 +236,17 @@ class Scene:
         object.__setattr__(self, "loads", tuple(self.loads))
         object.__setattr__(self, "gravity", _vec(self.gravity))
         self.validate()
+
+    # -------------------------------------------------------------- data
+    def to_json(self):
+        """The scene as plain JSON data; ``from_json`` rebuilds it exactly (floats round-trip)."""
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, data):
+        """Inverse of ``to_json`` (validated like any scene)."""
+        return cls(data["name"], [Body(**b) for b in data["bodies"]], [Joint(**j) for j in data["joints"]],
+                   data["gravity"], [Load(**ld) for ld in data["loads"]])
 
     # -------------------------------------------------------------- queries
     def body(self, name):

@@ -2,12 +2,17 @@
 
 Layout of a run directory::
 
-    manifest.json          harness version/commit, machine, OS, Python, engine versions,
-                           command line, start/end time, and the full list of run specs
-    rows/<key>.json        one finished run (written atomically when it ends)
+    manifest.json          schema version, harness version/commit, machine, OS, Python, engine
+                           versions, command line, start/end time, and the full list of run specs
+    rows/<key>.json        one finished run: ``RunRecord.to_row()`` (written atomically when it ends)
     runs.parquet           all rows as a table (rebuilt from rows/ after every batch)
     trajectories/<key>.npz one trajectory per run that produced one
-    truth/<case>__<version>.npz  each case's truth at its sample times (what reports compare with)
+    cases/<case>__<version>.json  each case as it was run (``CaseRecord``: scene, parameters,
+                           tolerances with reasons, conserved quantities, floor)
+    truth/<case>__<version>.npz   each case's truth at its sample times
+
+A report or a comparison needs nothing but these files: no case is rebuilt from
+code and no integrator runs to read a store.
 
 Trajectory files (``.npz``) use these array names: ``t`` (n,); per body
 ``body.<name>.position`` (n,3) COM in world, m; ``body.<name>.quaternion``
@@ -19,7 +24,9 @@ per joint ``joint.<name>.q`` (n,nq) and ``joint.<name>.v`` (n,nv); extras as
 
 Every write goes to a temporary file in the same directory, then ``os.replace``:
 a reader or an interrupted run never sees half a file. ``resume`` runs only the
-specs without a row file.
+specs without a row file. The schema version (``dalembert.record.SCHEMA_VERSION``)
+is in the manifest and in every row; a store of another schema is refused with
+a message that says so.
 """
 
 from __future__ import annotations
@@ -36,9 +43,11 @@ from datetime import datetime, timezone
 
 import numpy as np
 
+from dalembert.case import CaseRecord
+from dalembert.record import SCHEMA_VERSION, RunRecord, SchemaError
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
-__all__ = ["Store", "atomic_write", "trajectory_to_npz", "trajectory_from_npz", "machine_info", "harness_commit"]
+__all__ = ["Store", "StoreError", "atomic_write", "trajectory_to_npz", "trajectory_from_npz", "machine_info", "harness_commit"]
 
 
 def atomic_write(path, data):
@@ -100,7 +109,8 @@ def harness_commit():
     try:
         commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True,
                                 timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here,
+        # --no-optional-locks: reading must not take .git/index.lock in the user's checkout
+        dirty = subprocess.run(["git", "--no-optional-locks", "status", "--porcelain", "--untracked-files=no"], cwd=here,
                                capture_output=True, text=True, timeout=10).stdout.strip()
         return (commit + ("-dirty" if dirty else "")) or "unknown"
     except (OSError, subprocess.SubprocessError):
@@ -126,6 +136,10 @@ def now():
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
 
+class StoreError(ValueError):
+    """A results directory that cannot be read as asked; the message names the file and the fix."""
+
+
 class Store:
     """A results directory (see the module docstring)."""
 
@@ -133,13 +147,31 @@ class Store:
         self.path = os.path.abspath(path)
         self.rows_dir = os.path.join(self.path, "rows")
         self.traj_dir = os.path.join(self.path, "trajectories")
+        self.cases_dir = os.path.join(self.path, "cases")
+        self.truth_dir = os.path.join(self.path, "truth")
 
-    # -------------------------------------------------------------- create
+    # -------------------------------------------------------------- create, open
     def create(self, manifest):
-        os.makedirs(self.rows_dir, exist_ok=True)
-        os.makedirs(self.traj_dir, exist_ok=True)
-        self.write_manifest(manifest)
+        """Make the directories and write ``manifest`` (with the schema version)."""
+        for d in (self.rows_dir, self.traj_dir, self.cases_dir, self.truth_dir):
+            os.makedirs(d, exist_ok=True)
+        self.write_manifest({**manifest, "schema_version": SCHEMA_VERSION})
         return self
+
+    @classmethod
+    def open(cls, path, schemas=(SCHEMA_VERSION,)):
+        """An existing store whose schema is one of ``schemas``; ``StoreError`` naming the
+        directory otherwise (not a store, or written by another schema)."""
+        store = cls(path)
+        if not store.exists():
+            raise StoreError(f"{path!r} is not a results directory (no manifest.json) — give the directory "
+                             "`dalembert run --out` wrote")
+        schema = store.schema_version()
+        if schema not in schemas:
+            raise SchemaError(f"{path!r}: written with store schema {schema}, and this needs schema "
+                              f"{' or '.join(map(str, schemas))} — rerun the matrix with this dalembert, or read "
+                              "the store with the version that wrote it")
+        return store
 
     def write_manifest(self, manifest):
         atomic_write(os.path.join(self.path, "manifest.json"), json.dumps(manifest, indent=2, sort_keys=True))
@@ -148,17 +180,21 @@ class Store:
         with open(os.path.join(self.path, "manifest.json")) as fh:
             return json.load(fh)
 
+    def schema_version(self):
+        """The store's schema (1 for stores written before the schema was recorded)."""
+        return self.manifest().get("schema_version", 1)
+
     def exists(self):
         return os.path.exists(os.path.join(self.path, "manifest.json"))
 
-    # -------------------------------------------------------------- rows
-    def write_result(self, row, trajectory_npz=None):
+    # -------------------------------------------------------------- runs
+    def write_record(self, record, trajectory_npz=None):
         """Store one finished run: its trajectory (if any), then its row (the commit point)."""
-        key = row["key"]
         if trajectory_npz is not None:
-            atomic_write(os.path.join(self.traj_dir, f"{key}.npz"), trajectory_npz)
-            row = {**row, "trajectory": f"trajectories/{key}.npz"}
-        atomic_write(os.path.join(self.rows_dir, f"{key}.json"), json.dumps(row, sort_keys=True, default=_json))
+            atomic_write(os.path.join(self.traj_dir, f"{record.key}.npz"), trajectory_npz)
+            record = record.with_trajectory(f"trajectories/{record.key}.npz")
+        atomic_write(os.path.join(self.rows_dir, f"{record.key}.json"),
+                     json.dumps(record.to_row(), sort_keys=True, allow_nan=False))
 
     def done_keys(self):
         if not os.path.isdir(self.rows_dir):
@@ -166,15 +202,19 @@ class Store:
         return {f[:-5] for f in os.listdir(self.rows_dir) if f.endswith(".json") and not f.startswith(".tmp-")}
 
     def rows(self):
-        """Every stored row, sorted by key."""
+        """Every stored row as written (a dict of columns), sorted by key."""
         out = []
         for key in sorted(self.done_keys()):
             with open(os.path.join(self.rows_dir, f"{key}.json")) as fh:
                 out.append(json.load(fh))
         return out
 
+    def records(self):
+        """Every stored run as a ``RunRecord``, sorted by key."""
+        return [RunRecord.from_row(r) for r in self.rows()]
+
     def table(self):
-        """All rows as a pandas DataFrame."""
+        """All rows as a pandas DataFrame (one column per row field; ``RunRecord`` names them)."""
         import pandas as pd
 
         return pd.DataFrame(self.rows())
@@ -190,23 +230,31 @@ class Store:
     def trajectory(self, key):
         return trajectory_from_npz(os.path.join(self.traj_dir, f"{key}.npz"))
 
-    # -------------------------------------------------------------- truths
-    def truth_path(self, case, version):
-        return os.path.join(self.path, "truth", f"{case}__{version}.npz")
+    # -------------------------------------------------------------- cases and truths
+    def _case_file(self, directory, name, version, ext):
+        return os.path.join(directory, f"{name}__{version}.{ext}")
 
-    def write_truth(self, case, version, trajectory):
-        """Store a case's truth at its sample times (written once per case version)."""
-        os.makedirs(os.path.join(self.path, "truth"), exist_ok=True)
-        atomic_write(self.truth_path(case, version), trajectory_to_npz(trajectory))
+    def write_case(self, record, truth):
+        """Store a case as run (``CaseRecord``) and its truth at its sample times, once per version."""
+        os.makedirs(self.cases_dir, exist_ok=True)
+        os.makedirs(self.truth_dir, exist_ok=True)
+        atomic_write(self._case_file(self.truth_dir, record.name, record.version, "npz"), trajectory_to_npz(truth))
+        atomic_write(self._case_file(self.cases_dir, record.name, record.version, "json"),
+                     json.dumps(record.to_json(), indent=1, sort_keys=True, allow_nan=False))
 
-    def truth(self, case, version):
-        path = self.truth_path(case, version)
+    def has_case(self, name, version):
+        return os.path.exists(self._case_file(self.cases_dir, name, version, "json"))
+
+    def case(self, name, version):
+        """The ``CaseRecord`` of case ``name`` at ``version``; ``StoreError`` when the store has none."""
+        path = self._case_file(self.cases_dir, name, version, "json")
+        if not os.path.exists(path):
+            raise StoreError(f"{self.path}: no record of case {name!r} version {version} (cases/) — "
+                             "the store is incomplete; rerun the matrix")
+        with open(path) as fh:
+            return CaseRecord.from_json(json.load(fh))
+
+    def truth(self, name, version):
+        """The case's stored truth trajectory, or None."""
+        path = self._case_file(self.truth_dir, name, version, "npz")
         return trajectory_from_npz(path) if os.path.exists(path) else None
-
-
-def _json(x):
-    if isinstance(x, (np.floating, np.integer)):
-        return x.item()
-    if isinstance(x, np.bool_):
-        return bool(x)
-    raise TypeError(f"not JSON serializable: {type(x).__name__}")

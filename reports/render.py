@@ -1,7 +1,8 @@
 """The report: a self-contained ``report.html``, ``report.md`` with its figures
-beside it, and ``summary.csv`` — built from a results store only (it never runs
-an engine: truths and trajectories are read from the store; cases are rebuilt
-from their names and parameters only to know masses and tolerances).
+beside it, and ``summary.csv`` — built from a results store only: runs as
+stored records (their verdicts judged when they ran), each case as its stored
+record (scene, tolerances, floor), truths and trajectories from the store. It
+never rebuilds a case from code and never runs an engine or an integrator.
 """
 
 from __future__ import annotations
@@ -11,21 +12,16 @@ import json
 import math
 import os
 
-import numpy as np
 import pandas as pd
 
 from dalembert import invariants
-from dalembert.case import make_case
-from dalembert.errors import error_series
-from dalembert.stability import verdict
+from dalembert.errors import QUANTITIES, error_series
 from dalembert.store import atomic_write
 from dalembert.reports import figures
-from dalembert.reports.work_precision import TARGETS, cost_to_reach, headline_error, series
+from dalembert.reports.work_precision import TARGETS, cost_to_reach, line_label, series
 
 __all__ = ["build_report"]
 
-QUANTITY_OF = {"err_joint_max": "joint", "err_orientation_max": "orientation", "err_position_max": "position"}
-UNIT_OF = {"joint": "rad", "orientation": "rad", "position": "m"}
 SUMMARY_TARGET = 1e-6  # the accuracy whose cost the summary quotes
 
 
@@ -33,10 +29,6 @@ def _num(x, fmt="{:.2e}"):
     if x is None or (isinstance(x, float) and math.isnan(x)):
         return "—"
     return fmt.format(x)
-
-
-def _params(text):
-    return {k: tuple(v) if isinstance(v, list) else v for k, v in json.loads(text or "{}").items()}
 
 
 class _Doc:
@@ -88,59 +80,56 @@ def _plain(c):
 
 def _grid_labels(r):
     """(row, column) of a run in the per-case grids: engine + integrator (+ options), dt or tol."""
-    rl = f"{r['engine']} {r['integrator']}" + ("" if r.get("options") in ("{}", None) else f" {r['options']}")
-    cl = f"dt={r['dt']:g}" if isinstance(r.get("dt"), float) and not math.isnan(r["dt"]) else f"tol={r['rtol']:g}"
-    return rl, cl
+    return line_label(r), r.sweep_label
 
 
-def _drift_rates(doc, sub):
+def _sweep_order(label):
+    """Grid columns: fixed steps first, then tolerances, each from coarse to fine."""
+    return label.startswith("tol"), -float(label.split("=")[1])
+
+
+def _drift_rates(doc, runs):
     """Energy drift per simulated second, engine + integrator x step: a steady slope is secular
     drift (most integrators), a slope near zero bounded oscillation (symplectic, geometric ones)."""
-    cols = [c for c in ("drift_rate_energy", "drift_rate_energy_balance") if c in sub and sub[c].notna().any()]
-    if not cols:
+    names = [n for n in ("energy", "energy_balance") if any(n in r.drift_rates for r in runs)]
+    if not names:
         return
-    col = cols[0]
-    ok = sub[(sub["status"] == "ok") & sub[col].notna()]
-    if ok.empty:
+    name = names[0]
+    ok = [r for r in runs if r.ok and not math.isnan(r.drift_rates.get(name, math.nan))]
+    if not ok:
         return
-    rates, row_labels, col_labels = {}, set(), set()
-    for _, r in ok.iterrows():
-        rl, cl = _grid_labels(r)
-        rates[(rl, cl)] = r[col]
-        row_labels.add(rl)
-        col_labels.add(cl)
-    col_labels = sorted(col_labels, key=lambda c: (c.startswith("tol"), -float(c.split("=")[1])))
-    what = "energy" if col == "drift_rate_energy" else "energy balance (E - work of the loads)"
+    rates = {_grid_labels(r): r.drift_rates[name] for r in ok}
+    row_labels = sorted({rl for rl, _ in rates})
+    col_labels = sorted({cl for _, cl in rates}, key=_sweep_order)
+    what = "energy" if name == "energy" else "energy balance (E - work of the loads)"
     doc.heading("Energy drift rate", 3)
     doc.para(html.escape(f"Least-squares slope of the relative change of the {what}, per simulated second "
                          f"(negative: lost). Bounded oscillation shows as a slope near zero, secular drift as a "
                          f"steady one; successful runs only."))
     doc.table(["engine + integrator"] + col_labels,
-              [[html.escape(rl)] + [_num(rates.get((rl, c)), "{:+.2e} /s") if (rl, c) in rates else "—"
-                                    for c in col_labels] for rl in sorted(row_labels)])
+              [[html.escape(rl)] + [_num(rates[(rl, c)], "{:+.2e} /s") if (rl, c) in rates else "—"
+                                    for c in col_labels] for rl in row_labels])
 
 
-def _case_section(doc, store, case_name, sub, summary_rows):
-    version = sub["case_version"].iloc[0]
-    case = make_case(case_name, **_params(sub["params"].iloc[0]))
-    truth = store.truth(case_name, version)
-    # each run's verdict and its reason, once (the grid, the run table and the summary use them)
-    judged = [verdict(r, case.tolerances) for r in sub.to_dict("records")]
-    sub = sub.assign(verdict=[v for v, _ in judged], verdict_why=[why for _, why in judged])
-    doc.heading(f"{case_name}", 2, anchor=f"case-{case_name}")
-    doc.para(html.escape(f"version {version}; parameters {json.loads(sub['params'].iloc[0]) or 'defaults'}; "
-                         f"horizon {case.t_final:g} s; effects {', '.join(sorted(case.scene.effects))}."))
+def _case_section(doc, store, runs, summary_rows):
+    """The section of one case: ``runs`` are its records (one case version)."""
+    case = store.case(runs[0].case, runs[0].case_version)
+    name = case.name
+    truth = store.truth(name, case.version)
+    doc.heading(f"{name}", 2, anchor=f"case-{name}")
+    doc.para(html.escape(f"version {case.version}; parameters {runs[0].params or 'defaults'}; "
+                         f"horizon {case.t_final:g} s; effects {', '.join(sorted(case.scene.effects))}; "
+                         f"truth: {case.truth}."))
     doc.table(["tolerance", "value", "reason"], [[k, f"{t.value:g}", html.escape(t.reason)]
                                                   for k, t in case.tolerances.items()])
     # --- work-precision
-    lines, col = series(sub)
-    quantity = QUANTITY_OF.get(col, "")
+    lines, quantity = series(runs)
     if lines:
         doc.heading("What accuracy costs", 3)
-        floor = case.floor().get(quantity)
-        doc.figure(figures.work_precision(lines, f"max {quantity} error ({UNIT_OF.get(quantity, '')})",
-                                          floor=floor, title=f"{case_name}: work-precision"),
-                   f"{case_name}: max {quantity} error against stepping time per simulated second", f"{case_name}-wp")
+        unit = QUANTITIES[quantity]
+        doc.figure(figures.work_precision(lines, f"max {quantity} error ({unit})", floor=case.floor.get(quantity),
+                                          title=f"{name}: work-precision"),
+                   f"{name}: max {quantity} error against stepping time per simulated second", f"{name}-wp")
         rows = []
         for label, pts in sorted(lines.items()):
             costs = [cost_to_reach(pts, t) for t in TARGETS]
@@ -148,96 +137,94 @@ def _case_section(doc, store, case_name, sub, summary_rows):
                         + [_num(c, "{:.3g} s/s") if c is not None else "not reached" for c in costs])
         doc.table(["engine + integrator", "best error"] + [f"cost to reach {t:g}" for t in TARGETS], rows)
     # --- stability grid
-    cells, row_labels, col_labels, reasons = {}, [], [], []
-    for _, r in sub.iterrows():
+    cells, reasons = {}, []
+    for r in runs:
         rl, cl = _grid_labels(r)
-        v, why = r["verdict"], r["verdict_why"]
-        cells[(rl, cl)] = v
-        row_labels.append(rl)
-        col_labels.append(cl)
-        if why and v != "stable":
-            reasons.append([html.escape(rl), cl, v, html.escape(why)])
-    row_labels, col_labels = sorted(set(row_labels)), sorted(set(col_labels), key=lambda c: -float(c.split("=")[1]))
+        cells[(rl, cl)] = r.verdict
+        if r.verdict_reason and r.verdict != "stable":
+            reasons.append(f"{rl} {cl}: {r.verdict} — {r.verdict_reason}")
+    row_labels = sorted({rl for rl, _ in cells})
+    col_labels = sorted({cl for _, cl in cells}, key=_sweep_order)
     doc.heading("Stability", 3)
-    doc.figure(figures.stability_grid(row_labels, col_labels, cells, title=f"{case_name}: verdicts"),
-               f"{case_name}: stability verdict per engine, integrator and step", f"{case_name}-stability")
+    doc.figure(figures.stability_grid(row_labels, col_labels, cells, title=f"{name}: verdicts"),
+               f"{name}: stability verdict per engine, integrator and step", f"{name}-stability")
     if reasons:
-        doc.details(f"why {len(reasons)} run(s) are not stable",
-                    "\n".join(f"{r[0]} {r[1]}: {r[2]} — {html.unescape(r[3])}" for r in reasons))
-    _drift_rates(doc, sub)
+        doc.details(f"why {len(reasons)} run(s) are not stable", "\n".join(reasons))
+    _drift_rates(doc, runs)
     # --- every run
     doc.heading("Every run", 3)
-    errs = [c for c in ("err_position_max", "err_orientation_max", "err_velocity_max", "err_angular_velocity_max",
-                        "err_joint_max", "err_reaction_force_max") if c in sub and sub[c].notna().any()]
-    drifts = sorted(c for c in sub.columns if c.startswith("drift_") and sub[c].notna().any())
+    errs = [q for q in ("position", "orientation", "velocity", "angular_velocity", "joint", "reaction_force")
+            if any(not math.isnan(r.max_error(q)) for r in runs)]
+    drifts = sorted({n for r in runs for n, v in r.drifts.items() if not math.isnan(v)})
     table_rows, classes = [], []
-    for _, r in sub.sort_values(["engine", "integrator", "dt", "rtol"], na_position="last").iterrows():
-        v = r["verdict"]
-        status = r["status"] if r["status"] == "ok" else f"{r['status']}: {html.escape(str(r['message']))}"
-        ok = r.get("within_tolerance")
-        okcell = "—" if r["status"] != "ok" else ("yes" if ok is True else f"<b>no</b>: {r.get('beyond_tolerance')}")
-        table_rows.append([r["engine"], html.escape(r["settings"]), status, _num(r.get("wall_s_median"))]
-                          + [_num(r.get(c)) for c in errs + drifts] + [okcell, v])
-        classes.append(v)
-    doc.table(["engine", "settings", "status", "wall s"] + [c[4:-4] for c in errs] + [c[6:] + " drift" for c in drifts]
+    for r in sorted(runs, key=lambda r: (r.engine, r.integrator, r.dt or math.inf, r.rtol or math.inf)):
+        status = r.status if r.ok else f"{r.status}: {html.escape(r.message)}"
+        okcell = "—" if not r.ok else ("yes" if r.within_tolerance else f"<b>no</b>: {' '.join(r.beyond)}")
+        table_rows.append([r.engine, html.escape(r.settings_label), status, _num(r.cost.wall_s_median)]
+                          + [_num(r.max_error(q)) for q in errs] + [_num(r.drifts.get(n)) for n in drifts]
+                          + [okcell, r.verdict])
+        classes.append(r.verdict)
+    doc.table(["engine", "settings", "status", "wall s"] + errs + [f"{n} drift" for n in drifts]
               + ["within tol", "verdict"], table_rows, classes)
     # --- trajectories of each engine's most accurate run
     best = {}
-    if col:
-        for _, r in sub[sub["status"] == "ok"].iterrows():
-            if r.get("trajectory") and (r["engine"] not in best or r[col] < best[r["engine"]][col]):
-                best[r["engine"]] = r
+    if quantity:
+        for r in runs:
+            if r.ok and r.trajectory and (r.engine not in best
+                                          or r.max_error(quantity) < best[r.engine].max_error(quantity)):
+                best[r.engine] = r
     if truth is not None and best:
         doc.heading("Trajectories (each engine's most accurate run)", 3)
         t = truth.t
-        trajs = {e: store.trajectory(r["key"]) for e, r in best.items()}
-        label = {e: f"{e} {r['settings']}" for e, r in best.items()}
+        trajs = {e: store.trajectory(r.key) for e, r in best.items()}
+        label = {e: f"{e} {r.settings_label}" for e, r in best.items()}
         if quantity == "joint":
             jname = next(iter(truth.joints))
             doc.figure(figures.time_series(t, {label[e]: tr.joints[jname].q[:, 0] for e, tr in trajs.items()},
                                            "joint angle (rad)", truth=truth.joints[jname].q[:, 0],
-                                           title=f"{case_name}: joint angle"),
-                       f"{case_name}: joint angle against the truth", f"{case_name}-angle")
+                                           title=f"{name}: joint angle"),
+                       f"{name}: joint angle against the truth", f"{name}-angle")
         else:
             bname = next(iter(truth.bodies))
             doc.figure(figures.time_series(t, {label[e]: tr.bodies[bname].angular_velocity_body
                                                for e, tr in trajs.items()}, "w_B components (rad/s)",
                                            truth=truth.bodies[bname].angular_velocity_body,
-                                           title=f"{case_name}: body angular velocity"),
-                       f"{case_name}: body-frame angular velocity against the truth", f"{case_name}-omega")
+                                           title=f"{name}: body angular velocity"),
+                       f"{name}: body-frame angular velocity against the truth", f"{name}-omega")
         doc.figure(figures.time_series(t, {label[e]: error_series(tr, truth)[quantity] for e, tr in trajs.items()},
-                                       f"{quantity} error ({UNIT_OF[quantity]})", log=True,
-                                       title=f"{case_name}: error against time"),
-                   f"{case_name}: {quantity} error against time", f"{case_name}-error")
+                                       f"{quantity} error ({QUANTITIES[quantity]})", log=True,
+                                       title=f"{name}: error against time"),
+                   f"{name}: {quantity} error against time", f"{name}-error")
         if case.conserved:
-            name = case.conserved[0]
-            doc.figure(figures.time_series(t, {label[e]: invariants.drift_series(name, case.scene, tr)
-                                               for e, tr in trajs.items()}, f"{name} drift", log=True,
-                                           title=f"{case_name}: {name} drift ({invariants.CONSERVED[name]})"),
-                       f"{case_name}: {name} drift against time", f"{case_name}-drift")
+            cname = case.conserved[0]
+            doc.figure(figures.time_series(t, {label[e]: invariants.drift_series(cname, case.scene, tr)
+                                               for e, tr in trajs.items()}, f"{cname} drift", log=True,
+                                           title=f"{name}: {cname} drift ({invariants.CONSERVED[cname]})"),
+                       f"{name}: {cname} drift against time", f"{name}-drift")
     # --- what each engine computed
     doc.heading("What each engine simulated", 3)
-    for engine, r in sorted(best.items()) or [(e, sub[sub.engine == e].iloc[0]) for e in sorted(sub.engine.unique())]:
-        audit = r.get("audit")
-        if isinstance(audit, str):
-            doc.details(f"{engine}: effects audit ({r['settings']})", json.dumps(json.loads(audit), indent=2))
-        if isinstance(r.get("model"), str):
-            doc.details(f"{engine}: generated model", r["model"])
+    shown = best or {e: next(r for r in runs if r.engine == e) for e in sorted({r.engine for r in runs})}
+    for engine, r in sorted(shown.items()):
+        if r.audit:
+            doc.details(f"{engine}: effects audit ({r.settings_label})", json.dumps(r.audit, indent=2))
+        if r.model:
+            doc.details(f"{engine}: generated model", r.model)
     # --- summary rows
-    for engine in sorted(sub["engine"].unique()):
-        es = sub[sub["engine"] == engine]
-        ok = es[es["status"] == "ok"]
-        passing = bool(ok["within_tolerance"].fillna(False).astype(bool).any()) if "within_tolerance" in ok else False
-        best_err = float(ok[col].min()) if col and len(ok) else float("nan")
-        best_set = ok.loc[ok[col].idxmin(), "settings"] if col and len(ok) and ok[col].notna().any() else ""
-        costs = [cost_to_reach(pts, SUMMARY_TARGET) for label, pts in lines.items() if label.startswith(engine + " ")]
-        costs = [c for c in costs if c is not None]
-        counts = es["verdict"].value_counts().to_dict()
-        summary_rows.append(dict(case=case_name, engine=engine, agrees=passing, best_error=best_err,
-                                 best_settings=best_set, quantity=quantity,
-                                 cost_of_1e_6=min(costs) if costs else float("nan"),
+    for engine in sorted({r.engine for r in runs}):
+        mine = [r for r in runs if r.engine == engine]
+        ok = [r for r in mine if r.ok and not math.isnan(r.max_error(quantity or ""))]
+        top = min(ok, key=lambda r: r.max_error(quantity)) if ok else None
+        costs = [c for c in (cost_to_reach(pts, SUMMARY_TARGET) for label, pts in lines.items()
+                             if label.startswith(engine + " ")) if c is not None]
+        counts = {}
+        for r in mine:
+            counts[r.verdict] = counts.get(r.verdict, 0) + 1
+        summary_rows.append(dict(case=name, engine=engine, agrees=any(r.ok and r.within_tolerance for r in mine),
+                                 best_error=top.max_error(quantity) if top else math.nan,
+                                 best_settings=top.settings_label if top else "", quantity=quantity or "",
+                                 cost_of_1e_6=min(costs) if costs else math.nan,
                                  verdicts=", ".join(f"{n} {v}" for v, n in sorted(counts.items())),
-                                 runs=len(es)))
+                                 runs=len(mine)))
 
 
 CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1200px;color:#222}
@@ -263,14 +250,14 @@ def build_report(store, out_dir=None):
     out_dir = out_dir or store.path
     files_dir = os.path.join(out_dir, "report_files")
     os.makedirs(files_dir, exist_ok=True)
-    df = store.table()
+    records = store.records()
     manifest = store.manifest()
     doc = _Doc(files_dir, "report_files")
     summary_rows = []
-    cases = sorted(df["case"].unique()) if not df.empty else []
+    cases = sorted({r.case for r in records})
     body = _Doc(files_dir, "report_files")
     for case_name in cases:
-        _case_section(body, store, case_name, df[df["case"] == case_name], summary_rows)
+        _case_section(body, store, [r for r in records if r.case == case_name], summary_rows)
     machine = manifest.get("machine", {})
     doc.heading("dalembert report", 1)
     doc.para(html.escape(f"harness {manifest.get('harness_version')} at commit {manifest.get('harness_commit')}; "
@@ -286,7 +273,7 @@ def build_report(store, out_dir=None):
              "stability verdicts of all its runs.")
     sm = pd.DataFrame(summary_rows)
     rows = [[f'<a href="#case-{r.case}">{r.case}</a>', r.engine, "yes" if r.agrees else "<b>no</b>",
-             f"{_num(r.best_error)} {UNIT_OF.get(r.quantity, '')}", html.escape(r.best_settings),
+             f"{_num(r.best_error)} {QUANTITIES.get(r.quantity, '')}", html.escape(r.best_settings),
              _num(r.cost_of_1e_6, "{:.3g} s/s") if not math.isnan(r.cost_of_1e_6) else "not reached",
              r.verdicts] for r in sm.itertuples()] if len(sm) else []
     doc.table(["case", "engine", "agrees", "best accuracy", "at", f"cost of {SUMMARY_TARGET:g}", "verdicts"], rows)

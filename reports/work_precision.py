@@ -10,43 +10,43 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
-__all__ = ["TARGETS", "headline_error", "series", "cost_to_reach"]
+__all__ = ["TARGETS", "ERROR_DISPLAY_FLOOR", "headline_quantity", "line_label", "series", "cost_to_reach"]
 
 # Error levels of the "cost to reach" table (in the unit of the headline error).
 TARGETS = (1e-2, 1e-4, 1e-6, 1e-8)
+# Errors of exactly 0 are drawn at this level on log axes (below any double-precision roundoff).
+ERROR_DISPLAY_FLOOR = 1e-17
 
 
-def headline_error(df):
-    """The error column that sums up a case: joint angle for jointed cases, else orientation."""
-    for col in ("err_joint_max", "err_orientation_max", "err_position_max"):
-        if col in df and df[col].notna().any():
-            return col
+def headline_quantity(records):
+    """The error quantity that sums up a case: joint angle for jointed cases, else orientation
+    (else position); None when no run measured any."""
+    for q in ("joint", "orientation", "position"):
+        if any(not math.isnan(r.max_error(q)) for r in records):
+            return q
     return None
 
 
-def _line_label(row):
-    opts = row.get("options") or "{}"
-    return f"{row['engine']} {row['integrator']}" + ("" if opts in ("{}", "") else f" {opts}")
+def line_label(r):
+    """A work-precision line: ``engine integrator`` and its options."""
+    return " ".join(x for x in (r.engine, r.integrator, r.options_label) if x)
 
 
-def series(df):
-    """``{label: [(cost_per_sim_s, error, point_label), ...]}`` sorted by cost, ok runs only."""
-    col = headline_error(df)
+def series(records):
+    """``({label: [(cost_per_sim_s, error, point_label), ...]}, quantity)`` sorted by cost, ok runs only."""
+    quantity = headline_quantity(records)
     out = {}
-    if col is None:
+    if quantity is None:
         return out, None
-    for _, r in df[df["status"] == "ok"].iterrows():
-        err, wall = r.get(col), r.get("wall_s_median")
-        if err is None or wall is None or not (np.isfinite(err) and np.isfinite(wall)):
+    for r in records:
+        err, wall = r.max_error(quantity), r.cost.wall_s_median
+        if not r.ok or not (math.isfinite(err) and math.isfinite(wall)):
             continue
-        horizon = r.get("t_final") or 1.0
-        point = f"dt={r['dt']:g}" if r.get("dt") == r.get("dt") and r.get("dt") is not None else f"tol={r['rtol']:g}"
-        out.setdefault(_line_label(r), []).append((wall / horizon, max(float(err), 1e-17), point))
+        horizon = r.t_final if math.isfinite(r.t_final) and r.t_final > 0 else 1.0
+        out.setdefault(line_label(r), []).append((wall / horizon, max(err, ERROR_DISPLAY_FLOOR), r.sweep_label))
     for pts in out.values():
         pts.sort()
-    return out, col
+    return out, quantity
 
 
 def cost_to_reach(points, target):

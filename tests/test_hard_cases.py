@@ -6,8 +6,8 @@ import pytest
 from dalembert import Settings, make_case, spatial
 from dalembert.case import load_cases
 from dalembert.errors import QUANTITIES, trajectory_errors
-from dalembert.harness.run import expand
-from dalembert.stability import VERDICTS, verdict
+from dalembert.harness.matrix import expand
+from dalembert.judge import VERDICTS, judge
 from dalembert.store import Store
 from dalembert.reference import simulate
 from dalembert.reference.closed_form import TorqueFreeTop
@@ -59,11 +59,11 @@ def test_reference_is_stable_and_matches_the_closed_form(name):
     traj = simulate(case.scene, case.times, Settings("rkmk4", dt=1e-3))[0]
     from dalembert import invariants
 
-    row = {"status": "ok"}
-    row.update({k.replace("drift:", "drift_"): v for k, v in invariants.summary(case.scene, traj, case.conserved).items()})
-    v, why = verdict(row, case.tolerances)
-    assert v == "stable", why
     errors = trajectory_errors(traj, case.exact(case.times))
+    drifts = invariants.summary(case.scene, traj, case.conserved).drifts
+    judged = judge("ok", "", {q: mx for q, (mx, _) in errors.items()}, drifts, case.tolerances)
+    assert judged.verdict == "stable", judged.reason
+    assert judged.within_tolerance, judged.beyond
     for q, tol in case.tolerances.items():
         if q in QUANTITIES and q in errors:
             assert errors[q][0] <= tol.value, (q, errors[q][0])
@@ -77,17 +77,16 @@ def test_every_engine_gets_a_verdict_on_every_hard_case(tmp_path):
 
     out = tmp_path / "hard"
     engines = [arg for e in ENGINES for arg in ("--engine", e)]
-    proc = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--tag", "hard", *engines, "--dt", "1e-2,1e-3",
-                           "--rtol", "1e-6", "--param", "t_final=1", "--timeout", "120", "--out", str(out)],
-                          capture_output=True, text=True, timeout=900)
+    # no deadline of its own: a busy CI machine makes this slow, not wrong
+    proc = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--tag", "hard", *engines, "--dt",
+                           "1e-2,1e-3", "--rtol", "1e-6", "--param", "t_final=1", "--timeout", "120", "--out", str(out)],
+                          capture_output=True, text=True)
     assert "runs stored" in proc.stderr, proc.stderr[-2000:]
-    rows = Store(out).rows()
+    records = Store(out).records()
     specs, _ = expand(tags=["hard"], engines=ENGINES, dts=[1e-2, 1e-3], rtols=[1e-6], params={"t_final": 1.0})
-    assert len(rows) == len(specs) and len({r["engine"] for r in rows}) >= 4
-    cases = {n: make_case(n, t_final=1.0) for n in HARD}
+    assert len(records) == len(specs) and len({r.engine for r in records}) >= 4
     verdicts = {}
-    for r in rows:
-        v, _ = verdict(r, cases[r["case"]].tolerances)
-        assert v in VERDICTS and v != "timeout", (r["case"], r["engine"], r["settings"], v)
-        verdicts[v] = verdicts.get(v, 0) + 1
+    for r in records:
+        assert r.verdict in VERDICTS and r.verdict != "timeout", (r.case, r.engine, r.settings_label, r.verdict)
+        verdicts[r.verdict] = verdicts.get(r.verdict, 0) + 1
     assert verdicts.get("stable", 0) > 0

@@ -5,18 +5,24 @@ import os
 import re
 import shutil
 import subprocess
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from dalembert.harness.run import Timing, expand, run_matrix
+from dalembert.harness.execute import Timing
+from dalembert.harness.matrix import expand
+from dalembert.harness.pool import run_matrix
+from dalembert.record import RunRecord
 from dalembert.store import Store
 from dalembert.reports.compare import compare_stores
 from dalembert.reports.render import build_report
 
 FAST = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
-ARTIFACTS = os.path.join(os.path.dirname(__file__), "..", "test-artifacts")
+# Screenshots go where DALEMBERT_ARTIFACTS says (CI may keep them), else into the test's own
+# temporary directory: a test writes nothing into the checkout.
+ARTIFACTS = os.environ.get("DALEMBERT_ARTIFACTS")
 
 
 @pytest.fixture(scope="module")
@@ -30,19 +36,21 @@ def store(tmp_path_factory):
     return s
 
 
+def _headline(case):
+    return "joint" if case == "pivoted_rod" else "orientation"
+
+
 def test_report_files_and_values_equal_the_store(store):
     for name in ("report.html", "report.md", "summary.csv"):
         assert os.path.getsize(os.path.join(store.path, name)) > 0
-    rows = store.table()
+    records = store.records()
     summary = pd.read_csv(os.path.join(store.path, "summary.csv"))
     for _, s in summary.iterrows():
-        sub = rows[(rows.case == s.case) & (rows.engine == s.engine)]
-        col = "err_joint_max" if s.case == "pivoted_rod" else "err_orientation_max"
-        assert s.best_error == sub[col].min()  # full precision in the CSV
+        mine = [r.max_error(_headline(s.case)) for r in records if r.case == s.case and r.engine == s.engine]
+        assert s.best_error == min(mine)  # full precision in the CSV
     md = open(os.path.join(store.path, "report.md")).read()
-    for _, r in rows.iterrows():  # every stored headline error appears as shown (3 significant digits)
-        col = "err_joint_max" if r.case == "pivoted_rod" else "err_orientation_max"
-        assert f"{r[col]:.2e}" in md
+    for r in records:  # every stored headline error appears as shown (3 significant digits)
+        assert f"{r.max_error(_headline(r.case)):.2e}" in md
     figures = re.findall(r"!\[[^\]]*\]\((report_files/[^)]+)\)", md)
     assert figures and all(os.path.exists(os.path.join(store.path, f)) for f in figures)
 
@@ -52,14 +60,20 @@ def test_energy_drift_rates_are_shown_as_stored(store):
     and step (explicit Euler's secular drift and RK4's near-zero one side by side)."""
     md = open(os.path.join(store.path, "report.md")).read()
     section = md.split("## free_top")[1].split("### Energy drift rate")[1].split("###")[0]
-    rows = store.table()
-    top = rows[(rows.case == "free_top") & (rows.status == "ok")]
+    top = [r for r in store.records() if r.case == "free_top" and r.ok]
     assert len(top) == 4
-    for _, r in top.iterrows():
+    for r in top:
         line = next(x for x in section.splitlines() if x.startswith(f"| {r.engine} {r.integrator} |"))
-        assert f"{r.drift_rate_energy:+.2e} /s" in line
-    euler, rk4 = (top[top.integrator == k].drift_rate_energy.abs().max() for k in ("euler", "rk4"))
+        assert f"{r.drift_rates['energy']:+.2e} /s" in line
+    euler, rk4 = (max(abs(r.drift_rates["energy"]) for r in top if r.integrator == k) for k in ("euler", "rk4"))
     assert euler > 1e3 * rk4
+
+
+def _tamper(store, change):
+    """Rewrite the first stored run of ``store`` as ``change(record)`` returns it."""
+    key = sorted(store.done_keys())[0]
+    path = os.path.join(store.rows_dir, f"{key}.json")
+    json.dump(change(RunRecord.from_row(json.load(open(path)))).to_row(), open(path, "w"))
 
 
 def test_report_is_self_contained(store):
@@ -92,8 +106,9 @@ def test_report_renders_in_a_real_browser(store, tmp_path):
     console = [line for line in dom.stderr.splitlines() if "CONSOLE" in line]
     assert console == [], console
     assert not re.search(r"net::ERR_|Failed to load resource", dom.stderr)
-    os.makedirs(ARTIFACTS, exist_ok=True)
-    shot = os.path.join(ARTIFACTS, "report-summary.png")
+    artifacts = ARTIFACTS or str(tmp_path)
+    os.makedirs(artifacts, exist_ok=True)
+    shot = os.path.join(artifacts, "report-summary.png")
     subprocess.run(flags + [f"--screenshot={shot}", url], capture_output=True, timeout=120)
     assert os.path.getsize(shot) > 10_000
 
@@ -103,12 +118,8 @@ def test_compare_detects_a_tenfold_error_regression(store, tmp_path):
     assert not regressed and all(r["change"] == "same" for r in same)
     worse = Store(tmp_path / "worse")
     shutil.copytree(store.path, worse.path)
-    key = sorted(worse.done_keys())[0]
-    path = os.path.join(worse.rows_dir, f"{key}.json")
-    row = json.load(open(path))
-    col = next(c for c in sorted(row) if c.startswith("err_") and c.endswith("_max") and row[c] > 1e-10)
-    row[col] *= 10.0
-    json.dump(row, open(path, "w"))
+    _tamper(worse, lambda r: replace(r, errors={q: (mx * 10.0 if mx > 1e-10 else mx, final)
+                                                for q, (mx, final) in r.errors.items()}))
     rows, regressed = compare_stores(store, worse)
     assert regressed
     assert [r for r in rows if r["change"].startswith("REGRESSION")][0]["error_ratio"] == pytest.approx(10.0)
@@ -121,12 +132,49 @@ def test_compare_detects_a_tenfold_error_regression(store, tmp_path):
 def test_compare_flags_a_changed_case_instead_of_comparing(store, tmp_path):
     other = Store(tmp_path / "other")
     shutil.copytree(store.path, other.path)
-    key = sorted(other.done_keys())[0]
-    path = os.path.join(other.rows_dir, f"{key}.json")
-    row = json.load(open(path))
-    row["case_version"] = "different"
-    row["err_orientation_max"] = 1.0
-    json.dump(row, open(path, "w"))
+    _tamper(other, lambda r: replace(r, case_version="different", errors={q: (1.0, 1.0) for q in r.errors}))
     rows, regressed = compare_stores(store, other)
     assert not regressed
     assert any("case version differs" in r["change"] for r in rows)
+    rows, regressed = compare_stores(store, other, across_versions=True)  # asked to compare anyway
+    assert regressed
+
+
+def test_report_reads_only_the_store(store, tmp_path):
+    """With the cases, the reference solver and the engines unimportable, the report still
+    builds from the store alone — through the command line, as a user runs it — and shows the
+    verdicts as stored (a tolerance changed in code later cannot re-judge them)."""
+    import sys
+
+    out = tmp_path / "copy"
+    shutil.copytree(store.path, out)
+    script = ("import sys\n"
+              "for name in ('dalembert.cases', 'dalembert.reference', 'dalembert.adapters', 'mujoco', 'pinocchio', "
+              "'exudyn'):\n    sys.modules[name] = None\n"
+              "from dalembert.harness.cli import main\n"
+              f"raise SystemExit(main(['report', {str(out)!r}]))\n")
+    ran = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert ran.returncode == 0, ran.stderr[-2000:]
+    md = (out / "report.md").read_text()
+    for r in store.records():
+        assert r.verdict in md
+    # the stored verdict is what the report shows, even where the tolerances would now judge otherwise
+    key = next(r.key for r in store.records() if r.verdict == "stable")
+    row = json.load(open(out / "rows" / f"{key}.json"))
+    row["verdict"], row["verdict_reason"] = "drifts", "as judged when it ran"
+    json.dump(row, open(out / "rows" / f"{key}.json", "w"))
+    assert subprocess.run([sys.executable, "-c", script], capture_output=True).returncode == 0
+    assert "as judged when it ran" in (out / "report.md").read_text()
+
+
+def test_a_store_of_another_schema_is_refused_clearly(store, tmp_path, capsys):
+    from dalembert.harness.cli import main
+
+    other = tmp_path / "other"
+    shutil.copytree(store.path, other)
+    manifest = json.load(open(other / "manifest.json"))
+    manifest["schema_version"] = 99
+    json.dump(manifest, open(other / "manifest.json", "w"))
+    assert main(["report", str(other)]) == 2
+    err = capsys.readouterr().err
+    assert "schema 99" in err and str(other) in err

@@ -12,7 +12,10 @@ import pytest
 
 from dalembert.adapters import adapter_names, check_adapter, register_adapter
 from broken_adapters import Broken, NoFollower
-from dalembert.harness.run import RunSpec, Timing, execute, expand, run_matrix
+from dalembert.harness.execute import Timing, execute
+from dalembert.harness.matrix import RunSpec, expand
+from dalembert.harness.pool import run_matrix
+from dalembert.record import RunRecord
 from dalembert.store import Store
 
 FAST = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
@@ -50,19 +53,23 @@ def test_failures_are_stored_not_raised(tmp_path):
     specs, _ = expand(cases=["pivoted_rod"], engines=["broken"], dts=[1e-2])
     store = Store(tmp_path).create({"specs": [s.to_json() for s in specs]})
     run_matrix(specs, store, jobs=2, timeout=5.0, timing=FAST)
-    rows = {r["integrator"]: r for r in store.rows()}
-    assert rows["raises"]["status"] == "failed" and "exploded on purpose" in rows["raises"]["message"]
-    assert rows["nan"]["status"] == "diverged" and "t = 1.0" in rows["nan"]["message"]
-    assert rows["hangs"]["status"] == "timeout" and "5 s" in rows["hangs"]["message"]
-    assert rows["rk4"]["status"] == "ok" and rows["rk4"]["within_tolerance"]
+    runs = {r.integrator: r for r in store.records()}
+    assert runs["raises"].status == "failed" and "exploded on purpose" in runs["raises"].message
+    assert runs["nan"].status == "diverged" and "t = 1.0" in runs["nan"].message
+    assert runs["hangs"].status == "timeout" and "5 s" in runs["hangs"].message
+    assert runs["rk4"].status == "ok" and runs["rk4"].within_tolerance
+    # the verdict is judged when the run ends and stored with it
+    assert [runs[k].verdict for k in ("raises", "nan", "hangs", "rk4")] == ["failed", "diverged", "timeout", "stable"]
     table = store.write_table()
     assert len(table) == 4 and (tmp_path / "runs.parquet").exists()
+    assert {"schema_version", "verdict", "verdict_reason"} <= set(table.columns)
 
 
 def test_unsupported_effect_is_a_stored_result():
     (spec,), _ = expand(cases=["pivoted_rod"], engines=["no-follower"], integrators=["rk4"], dts=[1e-2])
-    row, npz = execute(spec, FAST)
-    assert row["status"] == "unsupported" and "load:follower_force" in row["message"] and npz is None
+    record, npz = execute(spec, FAST)
+    assert record.status == "unsupported" and "load:follower_force" in record.message and npz is None
+    assert record.verdict == "unsupported" and record.verdict_reason == record.message
 
 
 def test_stored_row_and_trajectory_round_trip(tmp_path):
@@ -71,14 +78,16 @@ def test_stored_row_and_trajectory_round_trip(tmp_path):
     store = Store(tmp_path).create({})
     run_matrix([spec], store, jobs=1, timing=FAST)
     (row,) = store.rows()
-    assert row["key"] == spec.key and row["status"] == "ok" and row["repeats"] == 1
+    record = RunRecord.from_row(row)
+    assert record.key == spec.key and record.status == "ok" and record.cost.repeats == 1
+    assert RunRecord.from_row(json.loads(json.dumps(record.to_row()))).to_row() == row  # the row round-trips
     traj = store.trajectory(spec.key)
     assert traj.t[-1] == 1.0 and "top" in traj.bodies
     from dalembert.case import make_case
     from dalembert.errors import trajectory_errors
 
     case = make_case("free_top", t_final=1.0)
-    assert trajectory_errors(traj, case.exact(case.times))["orientation"][0] == row["err_orientation_max"]
+    assert trajectory_errors(traj, case.exact(case.times))["orientation"][0] == record.max_error("orientation")
     assert RunSpec.from_json(json.loads(json.dumps(spec.to_json()))) == spec
 
 
@@ -102,21 +111,21 @@ def test_interrupted_run_resumes_to_the_same_store(tmp_path):
     proc.wait()
     n_before = len(store.done_keys())
     assert 2 <= n_before < len(Store(full).done_keys())
-    before = {r["key"]: r for r in store.rows()}
+    before = {r.key: r for r in store.records()}
     assert _cli("run", "--resume", str(cut)).wait() == 0
-    after = {r["key"]: r for r in store.rows()}
-    reference = {r["key"]: r for r in Store(full).rows()}
+    after = {r.key: r for r in store.records()}
+    reference = {r.key: r for r in Store(full).records()}
     assert set(after) == set(reference)  # same rows, none missing, no duplicates
     for key, row in before.items():  # nothing finished was redone
-        assert after[key]["wall_s_median"] == row["wall_s_median"]
+        assert after[key].cost == row.cost
     for key, row in reference.items():  # deterministic numbers
-        assert after[key]["status"] == row["status"]
-        assert after[key].get("err_orientation_max") == row.get("err_orientation_max")
+        assert after[key].status == row.status
+        assert after[key].errors == row.errors
 
 
 def test_dask_cluster_gives_the_same_rows(tmp_path):
     distributed = pytest.importorskip("distributed")
-    from dalembert.harness.run import run_matrix_dask
+    from dalembert.harness.dask import run_matrix_dask
 
     specs, _ = expand(cases=["pivoted_rod"], engines=["reference"], integrators=["rk4", "dop853"], dts=[1e-2],
                       rtols=[1e-6], params={"t_final": 1.0})
@@ -126,7 +135,9 @@ def test_dask_cluster_gives_the_same_rows(tmp_path):
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
                                   processes=True) as cluster, distributed.Client(cluster) as client:
         run_matrix_dask(specs, remote, client, timing=FAST)
-    drop = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "build_s", "worker_s", "stepping_total_s"}
+    # everything but where and how long it ran
+    drop = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "build_s", "worker_s", "stepping_total_s",
+            "provenance"}
     strip = lambda rows: [{k: v for k, v in r.items() if k not in drop} for r in rows]  # noqa: E731
     assert strip(local.rows()) == strip(remote.rows())
     for key in local.done_keys():
@@ -163,7 +174,7 @@ def test_a_diverged_run_is_a_finding_unless_strict(tmp_path):
             "--option", "node=rxyz", "--dt", "1e-2", "--param", "t_final=1", "--jobs", "1"]
     assert main([*args, "--out", str(tmp_path / "a")]) == 0
     assert main([*args, "--out", str(tmp_path / "b"), "--strict"]) == 1
-    assert [r["status"] for r in Store(tmp_path / "a").rows()] == ["diverged"]
+    assert [r.status for r in Store(tmp_path / "a").records()] == ["diverged"]
 
 
 def test_export_writes_a_stored_trajectory(tmp_path, capsys):
@@ -179,3 +190,44 @@ def test_export_writes_a_stored_trajectory(tmp_path, capsys):
                  "--csv", str(tmp_path / "x.csv")]) == 0
     traj = read_csv(tmp_path / "x.csv")
     assert np.array_equal(traj.t, np.linspace(0, 0.5, 51))
+
+
+def test_resume_refuses_a_case_that_changed(tmp_path, capsys):
+    """Finishing a store after a case's code changed would mix two versions of the case: refused,
+    naming the case; a store written with another schema is refused too."""
+    from dalembert.harness.cli import main
+
+    out = tmp_path / "r"
+    assert main(["run", "--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2",
+                 "--param", "t_final=0.5", "--out", str(out)]) == 0
+    store = Store(out)
+    assert {"schema_version", "verdict", "verdict_reason"} <= set(store.table().columns)
+    assert store.schema_version() == store.rows()[0]["schema_version"] == 2
+    manifest = store.manifest()
+    manifest["specs"][0]["case_version"] = "0123456789ab"  # as if the case's code had changed since
+    store.write_manifest(manifest)
+    assert main(["run", "--resume", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "case 'free_top'" in err and "0123456789ab" in err
+    manifest["schema_version"] = 1
+    store.write_manifest(manifest)
+    assert main(["run", "--resume", str(out)]) == 2
+    assert "schema 1" in capsys.readouterr().err
+
+
+def test_the_store_carries_the_case_as_run(tmp_path):
+    """Scene, parameters, tolerances with reasons, conserved quantities and the truth, read back
+    equal to the case the code makes."""
+    from dalembert.case import make_case
+
+    (spec,), _ = expand(cases=["pivoted_rod"], engines=["reference"], integrators=["rk4"], dts=[1e-2],
+                        params={"t_final": 1.0})
+    store = Store(tmp_path).create({})
+    run_matrix([spec], store, jobs=1, timing=FAST)
+    case = make_case("pivoted_rod", t_final=1.0)
+    stored = store.case("pivoted_rod", case.version)
+    assert stored.scene == case.scene and stored.params == case.params
+    assert stored.tolerances == case.tolerances and stored.conserved == case.conserved
+    assert stored.sample_times == case.sample_times and stored.truth == "closed form"
+    truth = store.truth("pivoted_rod", case.version)
+    assert np.array_equal(truth.joints["rod"].q, case.exact(case.times).joints["rod"].q)

@@ -9,6 +9,11 @@ import argparse
 import os
 import sys
 
+from dalembert.record import BAD_STATUSES
+from dalembert.registry import UnknownNameError
+from dalembert.scene import SceneError
+from dalembert.store import atomic_write
+
 EPILOG = """examples:
   dalembert cases --verbose
   dalembert engines
@@ -17,7 +22,7 @@ EPILOG = """examples:
   dalembert report results/top
   dalembert export results/top --case free_top --engine reference --integrator rk4 --dt 1e-3 --csv top.csv
   dalembert truth free_top_intermediate --param t_final=5 --csv top.csv
-  dalembert validate --out results
+  dalembert validate --case pivoted_rod
 """
 
 
@@ -96,6 +101,9 @@ def _parser():
     cp.add_argument("--threshold", type=float, default=2.0, help="error growth factor that is a regression (default 2)")
     cp.add_argument("--cost-threshold", type=float, default=None,
                     help="stepping-time growth factor that is a regression (default: costs are reported only)")
+    cp.add_argument("--across-versions", action="store_true",
+                    help="compare runs whose case version differs (e.g. after a change that only reworded a "
+                         "case or re-hashed it); by default they are flagged, not compared")
 
     sm = sub.add_parser("show-model", help="print the model an engine builds for a case (e.g. MJCF)",
                         epilog="example:\n  dalembert show-model pivoted_rod --engine mujoco",
@@ -106,12 +114,13 @@ def _parser():
     sm.add_argument("--dt", type=float, default=1e-3)
     sm.add_argument("--param", action="append", default=[], metavar="KEY=VALUE")
 
-    v = sub.add_parser("validate", help="run every case with the reference solver against its closed form",
-                       epilog="example:\n  dalembert validate --case pivoted_rod --out results",
+    v = sub.add_parser("validate", help="run every case (not tagged hard) with the reference solver against its truth",
+                       epilog="example:\n  dalembert validate --case pivoted_rod",
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    v.add_argument("--case", action="append", help="case name (repeatable; default: all)")
+    v.add_argument("--case", action="append", help="case name (repeatable; default: every case not tagged hard)")
     v.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
-    v.add_argument("--out", default="results", metavar="DIR", help="where the report goes (default: results)")
+    v.add_argument("--out", metavar="DIR",
+                   help="results directory for the validation runs and tables (default results/validation-<timestamp>)")
     return p
 
 
@@ -134,8 +143,6 @@ def cmd_cases(args):
 
 def cmd_truth(args):
     from dalembert.case import load_cases, parse_param
-    from dalembert.registry import UnknownNameError
-    from dalembert.scene import SceneError
     from dalembert.trajectory import write_csv
 
     try:
@@ -155,31 +162,25 @@ def cmd_truth(args):
 
 
 def cmd_validate(args):
-    from dalembert.case import load_cases
-    from dalembert.registry import UnknownNameError
-    from dalembert.harness.validation import to_markdown, validate, write_csv
+    from dalembert.harness.validation import to_markdown, validate, validation_specs, write_csv
 
     try:
-        for n in args.case or []:
-            load_cases()[n]
         if args.jobs is not None and args.jobs < 1:
             raise ValueError(f"--jobs: must be at least 1, got {args.jobs}")
-        os.makedirs(args.out, exist_ok=True)
-        if not os.access(args.out, os.W_OK):
-            raise ValueError(f"--out: cannot write to {args.out!r}")
-    except (UnknownNameError, ValueError, OSError) as e:
+        validation_specs(args.case)  # unknown names and bad settings fail here, before anything runs
+        store = _new_store(args.out or _timestamped("validation"), {"command": _command_line(), "specs": []})
+    except (UnknownNameError, ValueError, SceneError, OSError) as e:
         return _fail(str(e))
-    rows = validate(args.case, args.jobs)
-    md = to_markdown(rows)
-    md_path, csv_path = os.path.join(args.out, "reference-validation.md"), os.path.join(args.out, "reference-validation.csv")
-    with open(md_path, "w") as fh:
-        fh.write(md)
-    write_csv(rows, csv_path)
+    records = validate(store, args.case, args.jobs, _progress_printer())
+    md = to_markdown(store)
+    md_path = os.path.join(store.path, "reference-validation.md")
+    csv_path = os.path.join(store.path, "reference-validation.csv")
+    atomic_write(md_path, md)
+    write_csv(store, csv_path)
     print()
     print(md)
     print(f"wrote {md_path} and {csv_path}")
-    bad = [r for r in rows if r["status"] not in ("ok", "unsupported")]
-    return 1 if bad else 0
+    return 1 if any(r.status not in ("ok", "unsupported") for r in records) else 0
 
 
 def cmd_engines(args):
@@ -207,39 +208,88 @@ def _progress_printer(stream=None):
     start = time.monotonic()
     tty = stream.isatty()
 
-    def show(done, total, bad, row):
+    def show(done, total, bad, record):
         elapsed = time.monotonic() - start
         eta = elapsed / done * (total - done) if done else float("nan")
         status = f"[{done}/{total}] failures {bad}  elapsed {elapsed:.0f} s  eta {eta:.0f} s"
         if tty:
-            stream.write(f"\r{status}  {row['case']} {row['engine']} {row['settings']} {row['status']}\033[K")
+            stream.write(f"\r{status}  {record.case} {record.engine} {record.settings_label} {record.status}\033[K")
             if done == total:
                 stream.write("\n")
         else:
-            stream.write(f"{status}  {row['case']} {row['engine']} {row['settings']}: {row['status']}"
-                         f"{' — ' + row['message'] if row['message'] else ''}\n")
+            stream.write(f"{status}  {record.case} {record.engine} {record.settings_label}: {record.status}"
+                         f"{' — ' + record.message if record.message else ''}\n")
         stream.flush()
 
     return show
 
 
-def cmd_run(args):
+def _command_line():
     import shlex
+
+    return shlex.join(["dalembert"] + sys.argv[1:])
+
+
+def _timestamped(prefix=""):
     from datetime import datetime
 
+    return os.path.join("results", prefix + ("-" if prefix else "") + datetime.now().strftime("%Y-%m-%dT%H-%M-%S"))
+
+
+def _new_store(out, manifest):
+    """A new store at ``out`` (created); ValueError naming ``--out`` when it cannot be."""
+    from dalembert.store import Store
+
+    if os.path.exists(os.path.join(out, "manifest.json")):
+        raise ValueError(f"--out: {out!r} already holds a run — use --resume {out} or another directory")
+    try:
+        os.makedirs(out, exist_ok=True)
+    except OSError as err:
+        raise ValueError(f"--out: cannot create {out!r}: {err.strerror}") from None
+    if not os.access(out, os.W_OK):
+        raise ValueError(f"--out: cannot write to {out!r}")
+    return Store(out).create(manifest)
+
+
+def _resumable(path):
+    """The store at ``path`` and its specs, if this dalembert may finish it: same schema, and
+    every case still at the version the matrix was made for. ValueError naming what differs."""
+    from dalembert.case import load_cases
+    from dalembert.harness.matrix import RunSpec
+    from dalembert.store import Store
+
+    store = Store.open(path)
+    specs = [RunSpec.from_json(d) for d in store.manifest()["specs"]]
+    registry = load_cases()
+    changed = []
+    for name, params, version in sorted({(s.case, s.params, s.case_version) for s in specs}):
+        if name not in registry:
+            changed.append(f"case {name!r} is no longer registered")
+            continue
+        now = registry[name](**dict(params)).version
+        if now != version:
+            changed.append(f"case {name!r} is version {now} now, the store holds runs of version {version}")
+    if changed:
+        raise ValueError(f"--resume {path}: " + "; ".join(changed) + " — finishing it would mix two versions of a "
+                         "case; start a new matrix with --out")
+    return store, specs
+
+
+def cmd_run(args):
     from dalembert.case import load_cases, parse_param
-    from dalembert.registry import UnknownNameError
-    from dalembert.harness.run import DEFAULT_TIMEOUT_S, RunSpec, Timing, expand, run_matrix, run_matrix_dask
-    from dalembert.scene import SceneError
-    from dalembert.store import Store, harness_commit, machine_info, now
+    from dalembert.harness.dask import run_matrix_dask
+    from dalembert.harness.execute import Timing
+    from dalembert.harness.matrix import expand
+    from dalembert.harness.pool import DEFAULT_TIMEOUT_S, run_matrix
+    from dalembert.store import harness_commit, machine_info, now
 
     timing = Timing()
     if args.resume:
-        store = Store(args.resume)
-        if not store.exists():
-            return _fail(f"--resume: {args.resume!r} is not a results directory (no manifest.json)")
+        try:
+            store, specs = _resumable(args.resume)
+        except (ValueError, UnknownNameError, SceneError, ImportError) as e:
+            return _fail(str(e))
         manifest = store.manifest()
-        specs = [RunSpec.from_json(d) for d in manifest["specs"]]
         timeout = manifest.get("timeout_s", DEFAULT_TIMEOUT_S)
     else:
         try:
@@ -269,32 +319,22 @@ def cmd_run(args):
                 options[k] = v
             specs, skipped = expand(args.case, args.tag, args.engine, args.integrator, dts or None, rtols or None,
                                     params, options)
-            out = args.out or os.path.join("results", datetime.now().strftime("%Y-%m-%dT%H-%M-%S"))
-            if os.path.exists(os.path.join(out, "manifest.json")):
-                raise ValueError(f"--out: {out!r} already holds a run — use --resume {out} or another directory")
-            try:
-                os.makedirs(out, exist_ok=True)
-            except OSError as err:
-                raise ValueError(f"--out: cannot create {out!r}: {err.strerror}") from None
-            if not os.access(out, os.W_OK):
-                raise ValueError(f"--out: cannot write to {out!r}")
+            from dalembert.adapters import get_adapter
+            import dalembert
+
+            timeout = args.timeout or DEFAULT_TIMEOUT_S
+            manifest = {
+                "harness_version": dalembert.__version__, "harness_commit": harness_commit(),
+                "machine": machine_info(),
+                "engines": {e: get_adapter(e).version() for e in sorted({s.engine for s in specs})},
+                "command": _command_line(), "started": now(), "ended": None, "timeout_s": timeout,
+                "timing": vars(timing), "specs": [s.to_json() for s in specs],
+            }
+            store = _new_store(args.out or _timestamped(), manifest)
         except (UnknownNameError, ValueError, SceneError, ImportError, OSError) as e:
             return _fail(str(e))
         for s in skipped:
             print(f"dalembert: skipping engine {s}", file=sys.stderr)
-        timeout = args.timeout or DEFAULT_TIMEOUT_S
-        from dalembert.adapters import get_adapter
-        import dalembert
-
-        engines = sorted({s.engine for s in specs})
-        manifest = {
-            "harness_version": dalembert.__version__, "harness_commit": harness_commit(),
-            "machine": machine_info(), "engines": {e: get_adapter(e).version() for e in engines},
-            "command": shlex.join(["dalembert"] + sys.argv[1:]), "started": now(), "ended": None,
-            "timeout_s": timeout, "timing": vars(timing) if hasattr(timing, "__dict__") else {},
-            "specs": [s.to_json() for s in specs],
-        }
-        store = Store(out).create(manifest)
     print(f"dalembert: {len(specs)} runs, {len(specs) - len(store.done_keys())} to do -> {store.path}",
           file=sys.stderr)
     progress = _progress_printer()
@@ -302,62 +342,74 @@ def cmd_run(args):
         run_matrix_dask(specs, store, args.scheduler, timeout, timing, progress)
     else:
         run_matrix(specs, store, args.jobs, timeout, timing, progress)
+    manifest = store.manifest()
     manifest["ended"] = now()
     store.write_manifest(manifest)
-    rows = store.rows()
-    bad = [r for r in rows if r["status"] in ("failed", "diverged", "timeout")]
+    records = store.records()
     by_status = {}
-    for r in rows:
-        by_status[r["status"]] = by_status.get(r["status"], 0) + 1
-    print(f"dalembert: {len(rows)} runs stored in {store.path}: "
+    for r in records:
+        by_status[r.status] = by_status.get(r.status, 0) + 1
+    print(f"dalembert: {len(records)} runs stored in {store.path}: "
           + ", ".join(f"{n} {s}" for s, n in sorted(by_status.items())), file=sys.stderr)
-    return 1 if bad and args.strict else 0
+    return 1 if args.strict and any(r.status in BAD_STATUSES for r in records) else 0
+
+
+def _open(path, schemas=None):
+    from dalembert.record import SCHEMA_VERSION
+    from dalembert.store import Store
+
+    return Store.open(path, schemas or (SCHEMA_VERSION,))
 
 
 def cmd_report(args):
-    from dalembert.store import Store
     from dalembert.reports.render import build_report
 
-    store = Store(args.run_dir)
-    if not store.exists():
-        return _fail(f"{args.run_dir!r} is not a results directory (no manifest.json)")
+    try:
+        store = _open(args.run_dir)
+    except ValueError as e:
+        return _fail(str(e))
     for path in build_report(store):
         print(f"wrote {path}")
     return 0
 
 
 def cmd_export(args):
-    from dalembert.store import Store
     from dalembert.trajectory import write_csv
 
-    store = Store(args.run_dir)
-    if not store.exists():
-        return _fail(f"{args.run_dir!r} is not a results directory (no manifest.json)")
-    rows = [r for r in store.rows() if r["case"] == args.case and r["engine"] == args.engine
-            and r["integrator"] == args.integrator
-            and (args.dt is None or r["dt"] == args.dt) and (args.rtol is None or r["rtol"] == args.rtol)]
-    if len(rows) != 1:
-        choices = sorted({f"{r['case']} {r['engine']} {r['settings']}" for r in store.rows()})
-        return _fail(f"{len(rows)} stored runs match (need exactly one; add --dt or --rtol). Stored: "
+    try:
+        store = _open(args.run_dir)
+    except ValueError as e:
+        return _fail(str(e))
+    records = store.records()
+    chosen = [r for r in records if r.case == args.case and r.engine == args.engine and r.integrator == args.integrator
+              and (args.dt is None or r.dt == args.dt) and (args.rtol is None or r.rtol == args.rtol)]
+    if len(chosen) != 1:
+        choices = sorted({f"{r.case} {r.engine} {r.settings_label}" for r in records})
+        return _fail(f"{len(chosen)} stored runs match (need exactly one; add --dt or --rtol). Stored: "
                      + "; ".join(choices))
-    if "trajectory" not in rows[0]:
-        return _fail(f"that run has no trajectory (status {rows[0]['status']}: {rows[0]['message']})")
-    write_csv(store.trajectory(rows[0]["key"]), args.csv)
+    if not chosen[0].trajectory:
+        return _fail(f"that run has no trajectory (status {chosen[0].status}: {chosen[0].message})")
+    write_csv(store.trajectory(chosen[0].key), args.csv)
     print(f"wrote {args.csv}")
     return 0
 
 
 def cmd_compare(args):
-    from dalembert.store import Store
+    from dalembert.record import READABLE_SCHEMAS
     from dalembert.reports.compare import compare_stores
 
-    stores = [Store(d) for d in (args.run_a, args.run_b)]
-    for d, s in zip((args.run_a, args.run_b), stores):
-        if not s.exists():
-            return _fail(f"{d!r} is not a results directory (no manifest.json)")
+    try:
+        stores = [_open(d, READABLE_SCHEMAS) for d in (args.run_a, args.run_b)]
+    except ValueError as e:
+        return _fail(str(e))
     if not args.threshold > 1.0:
         return _fail(f"--threshold: must be greater than 1, got {args.threshold}")
-    rows, regressed = compare_stores(*stores, threshold=args.threshold, cost_threshold=args.cost_threshold)
+    schemas = [s.schema_version() for s in stores]
+    if schemas[0] != schemas[1]:
+        print(f"dalembert: note: the stores have schemas {schemas[0]} and {schemas[1]}; runs are matched by case, "
+              "engine and settings", file=sys.stderr)
+    rows, regressed = compare_stores(*stores, threshold=args.threshold, cost_threshold=args.cost_threshold,
+                                     across_versions=args.across_versions)
     changed = [r for r in rows if r["change"] != "same"]
     for r in changed:
         setting = f"dt={r['dt']:g}" if r.get("dt") else f"rtol={r['rtol']:g}" if r.get("rtol") else ""
@@ -370,8 +422,6 @@ def cmd_compare(args):
 def cmd_show_model(args):
     from dalembert.adapters import get_adapter
     from dalembert.case import load_cases, parse_param
-    from dalembert.registry import UnknownNameError
-    from dalembert.scene import SceneError
     from dalembert.settings import Settings
 
     try:

@@ -1,16 +1,19 @@
-"""``python -m dalembert.harness.worker``: run one spec read as JSON on stdin, write the
-pickled ``(row, trajectory_npz)`` to stdout. Used to isolate runs on Dask workers."""
+"""``python -m dalembert.harness.worker``: run one spec read (pickled: spec, timing, truth
+npz) from stdin, write the pickled ``(RunRecord, trajectory npz)`` to stdout. Used to
+isolate runs on Dask workers."""
 
-import json
 import pickle
 import sys
 
-from dalembert.harness.run import RunSpec, Timing, execute
+from dalembert.harness.execute import Timing, execute
+from dalembert.harness.matrix import RunSpec
+from dalembert.store import trajectory_from_npz
 
 
 def main():
-    request = json.loads(sys.stdin.buffer.read())
-    result = execute(RunSpec.from_json(request["spec"]), Timing(**request["timing"]))
+    request = pickle.loads(sys.stdin.buffer.read())
+    truth = trajectory_from_npz(request["truth"]) if request["truth"] is not None else None
+    result = execute(RunSpec.from_json(request["spec"]), Timing(**request["timing"]), truth)
     sys.stdout.buffer.write(pickle.dumps(result))
 
 

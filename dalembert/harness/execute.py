@@ -1,0 +1,121 @@
+"""One run, in this process: build, warm up, time, read back, measure, judge.
+
+Timing (per run): the model is built once (not timed), run once to warm up
+(not timed), then run until at least ``Timing.min_repeats`` runs and
+``Timing.min_total_s`` seconds of stepping are reached (at most
+``Timing.max_repeats``, and no more once warm-up plus repeats pass
+``Timing.max_total_s``: long runs are timed once or twice); the median, min and
+max stepping wall time are stored.
+
+The run is judged here, once (``dalembert.judge``), and its verdict is part of
+its record.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import time
+import traceback
+from dataclasses import dataclass
+
+import numpy as np
+
+from dalembert.judge import judge
+from dalembert.record import Cost, RunRecord
+
+__all__ = ["Timing", "execute", "unfinished"]
+
+
+@dataclass(frozen=True)
+class Timing:
+    """Repeat policy for timing one run (see the module docstring)."""
+
+    min_repeats: int = 3  # the median of 3 is robust to one outlier
+    min_total_s: float = 0.2  # short runs are repeated until timer noise is small against the total
+    max_repeats: int = 30
+    # ...but once the warm-up plus timed runs exceed this, stop: a run of many
+    # seconds has negligible timer noise, and repeating it only costs time.
+    max_total_s: float = 10.0
+
+
+def _record(spec, status, message="", errors=None, drifts=None, tolerances=None, **fields):
+    """The record of ``spec`` ending in ``status``, judged."""
+    errors, drifts = errors or {}, drifts or {}
+    verdict = judge(status, message, {q: mx for q, (mx, _) in errors.items()}, drifts, tolerances or {})
+    return RunRecord(key=spec.key, case=spec.case, case_version=spec.case_version, engine=spec.engine,
+                     integrator=spec.integrator, dt=spec.dt, rtol=spec.rtol, atol=spec.atol,
+                     options=dict(spec.options), params=dict(spec.params), status=status, message=message,
+                     errors=errors, drifts=drifts, beyond=verdict.beyond, verdict=verdict.verdict,
+                     verdict_reason=verdict.reason, within_tolerance=verdict.within_tolerance,
+                     provenance={"host": socket.gethostname(), "pid": os.getpid()}, **fields)
+
+
+def unfinished(spec, status, message):
+    """The record of a run that ended outside its worker's control (timeout, a dead worker)."""
+    return _record(spec, status, message)
+
+
+def execute(spec, timing=Timing(), truth=None):
+    """Run ``spec`` in this process: ``(RunRecord, trajectory npz or None)``. Never raises.
+
+    ``truth``: the case's truth trajectory at its sample times (computed here when None).
+    """
+    from dalembert import invariants
+    from dalembert.adapters import get_adapter
+    from dalembert.case import make_case
+    from dalembert.errors import trajectory_errors
+    from dalembert.store import trajectory_to_npz
+
+    started = time.perf_counter()
+    found = {}  # what is known so far, for the record of a run that fails part-way
+    try:
+        adapter = get_adapter(spec.engine, spec.adapter)
+        found["engine_version"] = adapter.version()
+        case = make_case(spec.case, **dict(spec.params))
+        found["t_final"] = case.t_final
+        if case.version != spec.case_version:
+            return _record(spec, "failed", f"case {spec.case!r} is now version {case.version}, the matrix was made "
+                                           f"for {spec.case_version}: its code changed — start a new matrix", **found), None
+        settings = spec.settings
+        reason = adapter.unsupported(case.scene, settings)
+        if reason:
+            return _record(spec, "unsupported", reason, **found), None
+        t0 = time.perf_counter()
+        prepared = adapter.prepare(case.scene, case.times, settings)
+        build_s = time.perf_counter() - t0
+        first = adapter.run(prepared)  # warm-up, not timed
+        traj = first.trajectory
+        found["audit"] = adapter.audit(prepared, first)
+        if hasattr(adapter, "describe"):
+            found["model"] = adapter.describe(case.scene, settings)
+        if not traj.is_finite():
+            t_bad = traj.first_nonfinite_time()
+            cost = Cost(build_s=build_s, wall_s_median=first.wall_s, wall_s_min=first.wall_s,
+                        wall_s_max=first.wall_s, repeats=1, n_steps=first.n_steps, n_rhs=first.n_rhs)
+            return _record(spec, "diverged", f"non-finite state from t = {t_bad} s", t_diverged=t_bad, cost=cost,
+                           **found), trajectory_to_npz(traj)
+        walls, totals = [], []
+        while ((len(walls) < timing.min_repeats or sum(walls) < timing.min_total_s) and len(walls) < timing.max_repeats
+               and not (walls and first.wall_s + sum(walls) > timing.max_total_s)):
+            t0 = time.perf_counter()
+            out = adapter.run(prepared)
+            totals.append(time.perf_counter() - t0)
+            walls.append(out.wall_s)
+        errors = trajectory_errors(traj, truth if truth is not None else _truth(case))
+        summary = invariants.summary(case.scene, traj, case.conserved)
+        npz = trajectory_to_npz(traj)
+        cost = Cost(build_s=build_s, wall_s_median=float(np.median(walls)), wall_s_min=float(np.min(walls)),
+                    wall_s_max=float(np.max(walls)), repeats=len(walls), n_steps=first.n_steps, n_rhs=first.n_rhs,
+                    overhead_s=float(np.median(np.array(totals) - np.array(walls))),
+                    stepping_total_s=float(first.wall_s + sum(walls)), worker_s=time.perf_counter() - started)
+        return _record(spec, "ok", "", errors, summary.drifts, case.tolerances, drift_rates=summary.drift_rates,
+                       checks=summary.checks, cost=cost, **found), npz
+    except Exception as e:  # a failure is data
+        return _record(spec, "failed", f"{type(e).__name__}: {e}", traceback=traceback.format_exc(), **found), None
+
+
+def _truth(case):
+    from dalembert.reference import truth
+
+    return truth(case)

@@ -1,0 +1,152 @@
+"""The run matrix: cases x engines x integrators x step sizes (or tolerances), as ``RunSpec``s.
+
+``expand(...)`` turns a selection into specs, checking every name and setting
+before anything runs; ``spec(...)`` makes one spec from explicit settings.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict, dataclass
+
+from dalembert.registry import suggest
+from dalembert.settings import Settings
+
+__all__ = ["RunSpec", "expand", "spec", "DEFAULT_DTS", "DEFAULT_RTOLS", "ATOL_PER_RTOL"]
+
+# Default sweeps: two decades of step size and of tolerance, enough for a
+# work-precision slope, affordable for the pure-Python reference on 2 cores.
+DEFAULT_DTS = (1e-2, 1e-3)
+DEFAULT_RTOLS = (1e-6, 1e-9)
+# atol = rtol * ATOL_PER_RTOL: the states are O(1) in SI units for the cases here.
+ATOL_PER_RTOL = 1.0
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One (case, engine, settings) run. ``params``, ``options``: sorted (key, value) pairs."""
+
+    case: str
+    engine: str
+    integrator: str
+    dt: float | None = None
+    rtol: float | None = None
+    atol: float | None = None
+    options: tuple = ()
+    params: tuple = ()
+    case_version: str = ""
+    adapter: str = ""  # "module:Class" of the engine's adapter, for workers that must import it
+
+    @property
+    def settings(self):
+        return Settings(self.integrator, self.dt, self.rtol, self.atol, dict(self.options))
+
+    @property
+    def key(self):
+        """Deterministic, readable file key: case, engine, integrator and a content hash."""
+        payload = json.dumps([self.case, self.case_version, self.engine, self.integrator, self.dt, self.rtol,
+                              self.atol, list(self.options)], default=repr)
+        digest = hashlib.sha256(payload.encode()).hexdigest()[:12]
+        return f"{self.case}__{self.engine}__{self.integrator}__{digest}"
+
+    def to_json(self):
+        d = asdict(self)
+        d["options"] = [list(x) for x in self.options]
+        d["params"] = [[k, list(v) if isinstance(v, tuple) else v] for k, v in self.params]
+        return d
+
+    @classmethod
+    def from_json(cls, d):
+        d = dict(d)
+        d["options"] = tuple(tuple(x) for x in d["options"])
+        d["params"] = tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in d["params"])
+        return cls(**d)
+
+
+def spec(case, engine, settings, params=()):
+    """The spec of running ``case`` (a Case made with ``params``) on ``engine`` with ``settings``;
+    ValueError naming the field when the engine cannot take the settings."""
+    from dalembert.adapters import adapter_path, get_adapter
+
+    adapter = get_adapter(engine)
+    made = RunSpec(case.name, engine, settings.integrator, settings.dt, settings.rtol, settings.atol,
+                   tuple(sorted(settings.options.items())), tuple(sorted(dict(params).items())), case.version,
+                   adapter_path(engine))
+    adapter.check(case.scene, case.times, made.settings)
+    return made
+
+
+def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=None, params=None,
+           options=None):
+    """Turn a selection into run specs. Raises ValueError/KeyError before anything runs.
+
+    Parameters
+    ----------
+    cases, tags : names / tags of cases (default: every case not tagged ``hard``)
+    engines : engine names (default: every registered engine whose engine imports)
+    integrators : integrator names (default: every integrator of each engine)
+    dts, rtols : step sizes (s) for fixed-step and tolerances for adaptive integrators
+    params : dict of case parameter overrides (applied to every selected case that has them)
+    options : dict of engine options (applied to every run; default: each
+        engine's ``variants`` for each case)
+
+    Returns
+    -------
+    specs : list of RunSpec
+    skipped : list of str — engines not installed (only when ``engines`` was not given)
+    """
+    from dalembert.adapters import adapter_names, get_adapter
+    from dalembert.case import load_cases
+
+    registry = load_cases()
+    names = list(cases or [])
+    for n in names:
+        registry[n]  # "did you mean" for unknown names
+    if tags:
+        known_tags = {t for _, f in registry.items() for t in f.tags}
+        for t in tags:
+            if t not in known_tags:
+                raise ValueError(f"--tag: unknown tag {t!r}{suggest(t, known_tags)}")
+        names += [n for n, f in registry.items() if set(tags) & set(f.tags) and n not in names]
+    if not names:  # the default matrix: every case except the hard ones (select those with --tag hard)
+        names = [n for n, f in registry.items() if "hard" not in f.tags]
+    skipped = []
+    if engines:
+        adapters = {e: get_adapter(e) for e in engines}
+        for e, a in adapters.items():
+            a.version()  # ImportError: the engine is not installed
+    else:
+        adapters = {}
+        for e in adapter_names():
+            a = get_adapter(e)
+            try:
+                a.version()
+                adapters[e] = a
+            except ImportError as err:
+                skipped.append(f"{e} ({err})")
+    for i in integrators or []:
+        if not any(i in a.integrators for a in adapters.values()):
+            offered = {n for a in adapters.values() for n in a.integrators}
+            raise ValueError(f"--integrator: no selected engine offers {i!r}{suggest(i, offered)}")
+    dts = tuple(dts or DEFAULT_DTS)
+    rtols = tuple(rtols or DEFAULT_RTOLS)
+    params = dict(params or {})
+    specs = []
+    for name in names:
+        factory = registry[name]
+        case_params = {k: v for k, v in params.items() if k in factory.params}
+        case = factory(**case_params)
+        for e, adapter in adapters.items():
+            for integ, ispec in adapter.integrators.items():
+                if integrators and integ not in integrators:
+                    continue
+                if ispec.fixed_step:
+                    knobs = [dict(dt=dt) for dt in dts]
+                else:
+                    knobs = [dict(rtol=r, atol=r * ATOL_PER_RTOL) for r in rtols]
+                # given options apply to every run; else each engine's own variants for this scene
+                option_sets = [dict(options)] if options else adapter.variants(case.scene)
+                specs += [spec(case, e, Settings(integ, options=opts, **k), case_params)
+                          for opts in option_sets for k in knobs]
+    return specs, skipped

@@ -1,0 +1,93 @@
+"""Judging a run, once, at run time: is it within the case's tolerances, and is it stable?
+
+The verdict is stored with the run (``RunRecord.verdict``), so a report reads how a
+run was judged when it ran; changing a tolerance changes the case's version, never
+the judgement of runs already stored.
+
+A run is
+
+* ``stable`` when it stays finite over the whole horizon and every conserved
+  quantity the case bounds stays within the case's bound for it;
+* ``drifts`` when it stays finite but some conserved quantity leaves its bound;
+* ``diverged`` when the state became NaN/inf or blew up (the engine's own
+  detection included: its status is ``diverged``), or when a conserved
+  quantity changed by more than ``BLOWUP`` times its scale (a blow-up that is
+  still finite);
+* otherwise the run's own status (``failed``, ``timeout``, ``unsupported``).
+
+Within tolerance means every named tolerance of the case holds: errors against
+the truth (``dalembert.errors.QUANTITIES``) and drifts of conserved quantities.
+The bounds are the case's named tolerances, each with its reason; nothing here
+invents a bound.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from dalembert.errors import QUANTITIES
+
+__all__ = ["VERDICTS", "BLOWUP", "Judgement", "judge"]
+
+# A conserved quantity that changed by more than 100 times its own scale has
+# not drifted, it has blown up (e.g. energy x100): a divergence, though finite.
+BLOWUP = 100.0
+
+VERDICTS = ("stable", "drifts", "diverged", "failed", "timeout", "unsupported")
+
+
+@dataclass(frozen=True)
+class Judgement:
+    """How a run measured up to its case.
+
+    Attributes
+    ----------
+    beyond : tuple of str — names of the case's tolerances the run exceeds (empty unless ``ok``)
+    verdict : str — one of ``VERDICTS``
+    reason : str — why the verdict is not ``stable`` ("" when it is)
+    within_tolerance : bool or None — every tolerance holds; None for a run that did not finish
+    """
+
+    beyond: tuple
+    verdict: str
+    reason: str
+    within_tolerance: bool | None
+
+
+def judge(status, message, errors, drifts, tolerances):
+    """Judge one run.
+
+    Parameters
+    ----------
+    status, message : str — the run's status (``dalembert.record.STATUSES``) and message
+    errors : dict quantity -> float — max error over the horizon, in the unit of
+        ``dalembert.errors.QUANTITIES[quantity]``
+    drifts : dict name -> float — drift of each conserved quantity, scaled as in
+        ``dalembert.invariants.CONSERVED``
+    tolerances : dict name -> Tolerance — the case's bounds
+
+    Returns
+    -------
+    Judgement
+
+    A bounded quantity the run did not report counts as within; a non-finite one
+    as beyond.
+    """
+    if status != "ok":
+        return Judgement((), status, message, None)
+    beyond = tuple(name for name, tol in tolerances.items()
+                   if not (errors if name in QUANTITIES else drifts).get(name, 0.0) <= tol.value)
+    drifted = []
+    for name, tol in tolerances.items():
+        value = drifts.get(name)
+        if value is None:
+            continue
+        if math.isnan(value):
+            return Judgement(beyond, "diverged", f"{name} drift is not finite", False)
+        if value > BLOWUP:
+            return Judgement(beyond, "diverged", f"{name} changed by {value:.3g} times its scale (blow-up)", False)
+        if value > tol.value:
+            drifted.append(f"{name} drift {value:.2e} > {tol.value:g}")
+    verdict, reason = ("drifts", "; ".join(drifted)) if drifted else ("stable", "")
+    return Judgement(beyond, verdict, reason, not beyond)

@@ -1,0 +1,262 @@
+"""The record of one (case, engine, settings) run, ``RunRecord``, and its one row schema.
+
+A failure is data, not an exception that stops the suite (like scipy's
+``OdeResult``): every run ends in one of ``STATUSES`` with a message, and its
+verdict, judged once when it ran (``dalembert.judge``), is stored with it.
+
+``RunRecord.to_row()`` and ``RunRecord.from_row()`` are the only place a column
+name is spelled; every reader (report, compare, export, tests) goes through them.
+A row is strict JSON: non-finite numbers are stored as null (the status says why).
+
+Columns (``SCHEMA_VERSION`` 2):
+
+==============  ==================================================================
+identity        ``key``, ``schema_version``, ``case``, ``case_version``, ``params``
+                (JSON), ``engine``, ``engine_version``, ``integrator``, ``dt`` (s),
+                ``rtol``, ``atol``, ``options`` (JSON), ``settings`` (a label)
+outcome         ``status``, ``message``, ``t_final`` (s), ``t_diverged`` (s),
+                ``traceback``
+cost            ``build_s``, ``wall_s_median``, ``wall_s_min``, ``wall_s_max`` (stepping
+                alone), ``repeats``, ``n_steps``, ``n_rhs``, ``overhead_s``,
+                ``stepping_total_s``, ``worker_s`` (all s)
+errors          ``err_<quantity>_max``, ``err_<quantity>_final`` (``dalembert.errors.QUANTITIES``)
+drifts          ``drift_<name>``, ``drift_rate_<name>`` (1/s) per conserved quantity
+checks          ``orthonormality``, ``quaternion_norm``, ``joint_residual`` (maxima)
+judgement       ``within_tolerance``, ``beyond_tolerance`` (names, space-separated),
+                ``verdict``, ``verdict_reason``
+engine          ``audit`` (JSON), ``model`` (text), ``provenance`` (JSON: host, pid)
+files           ``trajectory`` (path relative to the store)
+==============  ==================================================================
+
+Schema 1 (stores written before the schema was versioned) has the same columns
+without ``schema_version``, ``verdict``, ``verdict_reason`` and ``provenance``;
+``from_row`` reads it with an empty verdict, so ``compare`` works across the change.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field, fields, replace
+
+__all__ = ["SCHEMA_VERSION", "READABLE_SCHEMAS", "STATUSES", "BAD_STATUSES", "CHECKS", "Cost", "RunRecord",
+           "SchemaError"]
+
+SCHEMA_VERSION = 2
+READABLE_SCHEMAS = (1, 2)
+
+# ok: finished; unsupported: the engine cannot represent the scene (reason in
+# message); diverged: NaN/inf or blow-up (time in message); failed: an error;
+# timeout: stopped at the per-run time limit.
+STATUSES = ("ok", "unsupported", "diverged", "failed", "timeout")
+# The statuses that are findings against an engine (``--strict`` exits 1 on them).
+BAD_STATUSES = ("failed", "diverged", "timeout")
+# Checks of the attitude representation and the joints, computed for every ok run.
+CHECKS = ("orthonormality", "quaternion_norm", "joint_residual")
+
+_NAN = float("nan")
+_COUNTS = ("repeats", "n_steps", "n_rhs")  # the integer fields of Cost
+
+
+class SchemaError(ValueError):
+    """A row or a store written with a schema this version of dalembert cannot read."""
+
+
+@dataclass(frozen=True)
+class Cost:
+    """What a run cost. Times in s; the stepping times exclude building the model.
+
+    Attributes
+    ----------
+    build_s : building the engine model
+    wall_s_median, wall_s_min, wall_s_max : stepping wall time over the timed repeats
+    repeats : timed repeats (after one untimed warm-up)
+    n_steps, n_rhs : steps and right-hand-side evaluations of one run
+    overhead_s : median time per repeat outside the engine's stepping (read-back)
+    stepping_total_s : stepping time of the warm-up and every repeat
+    worker_s : wall time of the whole run in its worker
+    """
+
+    build_s: float = _NAN
+    wall_s_median: float = _NAN
+    wall_s_min: float = _NAN
+    wall_s_max: float = _NAN
+    repeats: int = 0
+    n_steps: int = 0
+    n_rhs: int = 0
+    overhead_s: float = _NAN
+    stepping_total_s: float = _NAN
+    worker_s: float = _NAN
+
+
+@dataclass(frozen=True, eq=False)
+class RunRecord:
+    """One (case, engine, settings) run as stored.
+
+    Attributes
+    ----------
+    key : str — the run's file key in the store
+    case, case_version : str — the case and the content hash of the version run
+    params : dict — the case parameters given (the rest are the factory's defaults)
+    engine, engine_version, integrator : str
+    dt : float or None — fixed step, s; rtol, atol : float or None — adaptive tolerances
+    options : dict str -> str — engine options
+    status : str — one of ``STATUSES``; message : str — why, for anything but ``ok``
+    t_final : float — the case's horizon, s; t_diverged : float or None — first non-finite sample, s
+    cost : Cost
+    errors : dict quantity -> (max over the horizon, at the final time), units of
+        ``dalembert.errors.QUANTITIES``; NaN max when the run is not finite
+    drifts : dict conserved name -> drift (``dalembert.invariants.CONSERVED``)
+    drift_rates : dict conserved name -> slope of the relative change, 1/s (energy-like ones)
+    checks : dict name -> float — ``CHECKS``
+    beyond : tuple of str — the tolerances exceeded; verdict, verdict_reason : str
+        (``dalembert.judge``); within_tolerance : bool or None
+    audit : dict — effects read back from the engine; model : str — its model, as text
+    provenance : dict — where it ran (host, pid)
+    trajectory : str — path of its trajectory in the store, "" when none
+    traceback : str — for failed runs
+    schema_version : int
+    """
+
+    key: str
+    case: str
+    case_version: str
+    engine: str
+    integrator: str
+    dt: float | None = None
+    rtol: float | None = None
+    atol: float | None = None
+    options: dict = field(default_factory=dict)
+    params: dict = field(default_factory=dict)
+    status: str = "failed"
+    message: str = ""
+    engine_version: str = ""
+    t_final: float = _NAN
+    t_diverged: float | None = None
+    cost: Cost = field(default_factory=Cost)
+    errors: dict = field(default_factory=dict)
+    drifts: dict = field(default_factory=dict)
+    drift_rates: dict = field(default_factory=dict)
+    checks: dict = field(default_factory=dict)
+    beyond: tuple = ()
+    verdict: str = ""
+    verdict_reason: str = ""
+    within_tolerance: bool | None = None
+    audit: dict = field(default_factory=dict)
+    model: str = ""
+    provenance: dict = field(default_factory=dict)
+    trajectory: str = ""
+    traceback: str = ""
+    schema_version: int = SCHEMA_VERSION
+
+    def __post_init__(self):
+        if self.status not in STATUSES:
+            raise ValueError(f"status: unknown {self.status!r} — use one of {STATUSES}")
+
+    # -------------------------------------------------------------- derived
+    @property
+    def ok(self):
+        return self.status == "ok"
+
+    @property
+    def settings_label(self):
+        """``rk4 dt=0.001``, ``dop853 rtol=1e-09 atol=1e-09``, options appended."""
+        parts = [self.integrator] + [f"{n}={v:g}" for n, v in (("dt", self.dt), ("rtol", self.rtol),
+                                                                ("atol", self.atol)) if v is not None]
+        return " ".join(parts + [f"{k}={v}" for k, v in sorted(self.options.items())])
+
+    @property
+    def sweep_label(self):
+        """Where the run sits in its sweep: ``dt=0.001`` or ``tol=1e-09``."""
+        return f"dt={self.dt:g}" if self.dt is not None else f"tol={self.rtol:g}"
+
+    @property
+    def options_label(self):
+        """Engine options as ``key=value`` words ("" for the defaults)."""
+        return " ".join(f"{k}={v}" for k, v in sorted(self.options.items()))
+
+    def max_error(self, quantity):
+        """The max error over the horizon of ``quantity``, or NaN when not measured."""
+        return self.errors.get(quantity, (_NAN, _NAN))[0]
+
+    def with_trajectory(self, path):
+        return replace(self, trajectory=path)
+
+    # -------------------------------------------------------------- rows
+    def to_row(self):
+        """The flat, strict-JSON row (column names in the module docstring)."""
+        row = {"key": self.key, "schema_version": self.schema_version, "case": self.case,
+               "case_version": self.case_version, "params": json.dumps(self.params, sort_keys=True, default=list),
+               "engine": self.engine, "engine_version": self.engine_version, "integrator": self.integrator,
+               "dt": self.dt, "rtol": self.rtol, "atol": self.atol,
+               "options": json.dumps(self.options, sort_keys=True), "settings": self.settings_label,
+               "status": self.status, "message": self.message, "t_final": self.t_final,
+               "t_diverged": self.t_diverged, "traceback": self.traceback}
+        row.update(asdict(self.cost))
+        for q, (mx, final) in self.errors.items():
+            row[f"err_{q}_max"], row[f"err_{q}_final"] = mx, final
+        row.update({f"drift_{n}": v for n, v in self.drifts.items()})
+        row.update({f"drift_rate_{n}": v for n, v in self.drift_rates.items()})
+        row.update(self.checks)
+        row.update(within_tolerance=self.within_tolerance, beyond_tolerance=" ".join(self.beyond),
+                   verdict=self.verdict, verdict_reason=self.verdict_reason,
+                   audit=json.dumps(self.audit, sort_keys=True, default=str), model=self.model,
+                   provenance=json.dumps(self.provenance, sort_keys=True), trajectory=self.trajectory)
+        return {k: _strict(v) for k, v in row.items()}
+
+    @classmethod
+    def from_row(cls, row):
+        """Inverse of ``to_row``; reads ``READABLE_SCHEMAS``, raises ``SchemaError`` on others."""
+        schema = row.get("schema_version", 1)
+        if schema not in READABLE_SCHEMAS:
+            raise SchemaError(f"row {row.get('key', '?')!r}: schema {schema!r}, this dalembert reads "
+                              f"{list(READABLE_SCHEMAS)} — read it with the dalembert version that wrote it")
+        errors, drifts, rates = {}, {}, {}
+        for col, value in row.items():
+            if col.startswith("err_") and col.endswith("_max"):
+                q = col[len("err_"):-len("_max")]
+                errors[q] = (_num(value), _num(row.get(f"err_{q}_final")))
+            elif col.startswith("drift_rate_"):
+                rates[col[len("drift_rate_"):]] = _num(value)
+            elif col.startswith("drift_"):
+                drifts[col[len("drift_"):]] = _num(value)
+        within = row.get("within_tolerance")
+        return cls(
+            key=row["key"], case=row["case"], case_version=row["case_version"], engine=row["engine"],
+            integrator=row["integrator"], dt=_opt(row.get("dt")), rtol=_opt(row.get("rtol")),
+            atol=_opt(row.get("atol")), options=json.loads(row.get("options") or "{}"),
+            params={k: tuple(v) if isinstance(v, list) else v for k, v in json.loads(row.get("params") or "{}").items()},
+            status=row["status"], message=row.get("message") or "", engine_version=row.get("engine_version") or "",
+            t_final=_num(row.get("t_final")), t_diverged=_opt(row.get("t_diverged")),
+            cost=Cost(**{f.name: int(row[f.name] or 0) if f.name in _COUNTS else _num(row[f.name])
+                         for f in fields(Cost) if f.name in row}),
+            errors=errors, drifts=drifts, drift_rates=rates,
+            checks={c: _num(row[c]) for c in CHECKS if row.get(c) is not None},
+            beyond=tuple((row.get("beyond_tolerance") or "").split()), verdict=row.get("verdict") or "",
+            verdict_reason=row.get("verdict_reason") or "",
+            within_tolerance=None if within is None or within != within else bool(within),
+            audit=json.loads(row["audit"]) if isinstance(row.get("audit"), str) else {},
+            model=row.get("model") if isinstance(row.get("model"), str) else "",
+            provenance=json.loads(row["provenance"]) if isinstance(row.get("provenance"), str) else {},
+            trajectory=row.get("trajectory") if isinstance(row.get("trajectory"), str) else "",
+            traceback=row.get("traceback") if isinstance(row.get("traceback"), str) else "",
+            schema_version=schema)
+
+
+def _strict(v):
+    """JSON-safe: numpy scalars to Python, non-finite floats to None."""
+    if hasattr(v, "item") and not isinstance(v, (str, bytes)):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v
+
+
+def _num(v):
+    """A stored number back as float (null and NaN read as NaN)."""
+    return _NAN if v is None else float(v)
+
+
+def _opt(v):
+    """An optional stored number: None when absent or NaN (pandas reads None as NaN)."""
+    return None if v is None or v != v else float(v)
