@@ -9,29 +9,13 @@ from dalembert.adapters import get_adapter
 from dalembert import Settings, make_case, spatial
 from dalembert.errors import trajectory_errors
 from dalembert.reference import simulate
+from bounds import (BOX_COM_TOL, BOX_ORIENTATION_TOL, CROSS_CHECK_TOL, ORDER_SLACK, ROD_ANGLE_TOL,
+                    ROD_REACTION_TOL, TOP_ORIENTATION_TOL)
 from scenes import chain_case, free_body_world_loads_case
 
 mujoco = pytest.importorskip("mujoco")  # CI installs it: this never skips there
 
 ADAPTER = get_adapter("mujoco")
-# Upper bounds for RK4 at dt = 1e-3 against the closed forms. The rod's angle and the box's fall
-# are quadratic in t, which RK4 integrates exactly: what remains is roundoff, at most about one
-# rounding per step all of one sign, N eps |x| (2000 steps on 12 rad: 5e-12 rad; 20000 steps on
-# a 1960 m fall: 4e-9 m). The top's attitude carries RK4's truncation, C dt^4 t (fourth order:
-# test_rk4_is_fourth_order_on_the_top; 4.9e-9 rad at dt = 1e-2 over 2 s gives 5e-12 rad at 1e-3
-# over 20 s). Measured with MuJoCo 4.0.0: 8.5e-14 rad, 8.7e-14 N, 5.3e-12 rad, 1.1e-10 m and
-# 4.7e-14 rad.
-ROD_ANGLE_TOL = 1e-10  # rad: 20x the worst-case roundoff
-ROD_REACTION_TOL = 1e-9  # N: m a - F from the same exact motion, roundoff on reactions of up to 72 N
-TOP_ORIENTATION_TOL = 1e-8  # rad: 2000x the truncation; the order test pins the method
-BOX_COM_TOL = 1e-8  # m: 2.5x the worst-case roundoff of the fall
-BOX_ORIENTATION_TOL = 1e-8  # rad: as TOP_ORIENTATION_TOL (a slower spin, ~1.4 rad/s)
-# Against the reference (Kane, DOP853 at 1e-12): RK4 at dt = 1e-3 over 1 s on the test scenes has
-# truncation error ~1e-11; frames mixed up would give O(1).
-CROSS_CHECK_TOL = 1e-8
-# Observed order, log2 of the error ratio between dt and dt/2: the error is the max over time of
-# C(t) dt^p plus a next term O(dt) relative (measured 4.000 for RK4 on the top from 1e-2 to 5e-3).
-ORDER_SLACK = 0.3
 
 
 def run(case, settings):
