@@ -6,8 +6,8 @@ torque-free top, is run once in double and once in extended precision
 truncation errors are the same; their difference is the roundoff a double
 integrator accumulates over the horizon at that step, amplified by the motion's
 own sensitivity (large near the separatrix of the intermediate axis, where the
-times of the flips hang on the energy). No double-precision integrator taking as
-many steps can be expected to do better.
+time of each flip depends steeply on the energy). No double-precision integrator
+taking as many steps can be expected to do better.
 
 Checked (tests/test_roundoff.py) against truths that do not come from this
 module: the extended run converges to the closed form (``TorqueFreeTop``, itself

@@ -1,4 +1,4 @@
-"""Bounds shared by the engine tests (test_mujoco, test_pinocchio, test_exudyn).
+"""Bounds shared by the engine tests (test_mujoco, test_pinocchio, test_exudyn) and test_roundoff.
 
 Upper bounds on a fourth-order fixed-step method (RK4, Exudyn's rk44) at dt = 1e-3 against the
 closed forms of the canonical cases. The rod's angle and the box's fall are quadratic in t, which

@@ -9,11 +9,14 @@ extended precision. It is the roundoff of double arithmetic on the motion if
   and what is left is arithmetic;
 * that difference scales with the unit roundoff of the arithmetic: float32 against double must
   give 2^29 (eps32 / eps64) times what double against extended gives. A floor that were
-  truncation, or a difference between the equations of the two runs, would not scale at all.
+  truncation, or a difference between the equations of the two runs, would not scale with it
+  (such a difference shows once it exceeds the roundoff: 1e-11 relative in one moment of inertia
+  of the double runs moves the ratio to 0.03 times 2^29).
 
 Not asserted, because a single run does not obey them closely enough to separate them from
 other laws: the t^(3/2) growth of roundoff in the phase of an integrable motion (Brouwer's law,
-D. Brouwer, Astron. J. 46, 149 (1937)), seen at dt = 1e-3 on the stable top but not at 1e-2;
+D. Brouwer, "On the accumulation of errors in numerical integration", Astron. J. 46, 149
+(1937)), seen at dt = 1e-3 on the stable top but not at 1e-2;
 and exponential growth at the intermediate axis's rate before the first flip, which roundoff
 does not excite: its rounding in the small components is relative to their own size, so the
 error grows no faster than the deviation it rides on, and the phase error about the spin axis
@@ -31,14 +34,10 @@ from dalembert import make_case, spatial
 from dalembert.cases.free_top import FLOOR_DT
 from dalembert.reference.closed_form import TorqueFreeTop
 from dalembert.reference.roundoff import EXTENDED, rk4_top, top_roundoff
+from bounds import ORDER_SLACK  # the twin's observed order from dt = 1e-2 to 1e-3: 3.89 to 4.10
 
 pytestmark = pytest.mark.skipif(EXTENDED is None, reason="this platform's longdouble is plain double")
 
-# RK4 is fourth order; the observed order, log2 of the error ratio between dt and dt/2, is the
-# max over 20 s of an error whose next term is O(dt) relative to the leading one and whose
-# location moves with dt (measured 3.89 to 4.10 on the intermediate-axis top from dt = 1e-2
-# down to 1e-3): 0.3 is the slack the engines' order tests use too.
-ORDER_SLACK = 0.3
 # Unit roundoffs: eps(float32) / eps(float64) = 2^-23 / 2^-52 = 2^29.
 UNIT_RATIO = np.finfo(np.float32).eps / np.finfo(np.float64).eps
 # One floor is one sample of a sum of ~1e4 roundings, each a different fraction of an ulp in
