@@ -47,8 +47,10 @@ def particle_box(spacing=(1.0, 2.0, 3.0), mass=10.0, gravity=9.8, omega0=(0.0, 1
         gravity=g,
     )
     com = Ballistic((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), g)
-    # Uniform gravity exerts no torque about the COM (sum m_i u_i = 0): the box
-    # turns exactly like the torque-free body (seeds/README.md).
+    # Uniform gravity exerts no torque about the COM: sum_i u_i x m_i g = (sum_i m_i u_i) x g,
+    # and the first moment about the COM, sum_i m_i u_i, is zero. So the box turns exactly
+    # like the torque-free body while its COM falls (the rotation about the COM obeys the
+    # torque about it alone; Landau & Lifshitz, Mechanics, section 34).
     spin = TorqueFreeTop(body.inertia_matrix, np.asarray(omega0, dtype=float))
 
     def truth(t):

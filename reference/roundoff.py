@@ -5,12 +5,15 @@ torque-free top, is run once in double and once in extended precision
 (``numpy.longdouble``: 64-bit mantissa on x86-64 Linux, eps 1.1e-19). Their
 truncation errors are the same; their difference is the roundoff a double
 integrator accumulates over the horizon at that step, amplified by the motion's
-own sensitivity (exponential near the intermediate axis). No double-precision
-integrator taking as many steps can be expected to do better.
+own sensitivity (large near the separatrix of the intermediate axis, where the
+time of each flip depends steeply on the energy). No double-precision integrator
+taking as many steps can be expected to do better.
 
-Checked (tests/test_roundoff.py) against the measurements of issue 8 — about
-2e-8 rad at 20 s for the 5 rad/s intermediate-axis start, 3.5e-5 rad for the
-50 rad/s one — and the extended run against the closed form.
+Checked (tests/test_roundoff.py) against truths that do not come from this
+module: the extended run converges to the closed form (``TorqueFreeTop``, itself
+checked against a 40-digit Taylor integration) at RK4's fourth order, so it is
+RK4 on the right equations; and the floor scales with the unit roundoff of the
+arithmetic (float32 against double is 2^29 times double against extended).
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ def rk4_top(inertia, w0, times, dt, dtype=float, variant=0):
     w0 : (3,) initial angular velocity in body axes, rad/s (``w_WB_B``)
     times : (n,) sample times, s, from 0, evenly spaced; the attitude starts at identity
     dt : float — step, s (rounded so that it divides the sample interval)
-    dtype : float or ``numpy.longdouble``
+    dtype : float, ``numpy.longdouble`` or ``numpy.float32`` — the arithmetic of every operation
     variant : 0, 1 or 2 — the order of the products in Euler's equations and of the sums in
         the kinematics: the same exact method with different rounding
 
@@ -80,20 +83,28 @@ def rk4_top(inertia, w0, times, dt, dtype=float, variant=0):
     return out
 
 
-def top_roundoff(inertia, w0, times, dt):
-    """Largest attitude difference (rad) between the double RK4s (the three ``variant``s) and the
-    extended one of a torque-free top over ``times`` at step ``dt``; NaN where the platform has no
-    extended precision.
+def top_roundoff(inertia, w0, times, dt, working=float, extended=EXTENDED):
+    """Largest attitude difference (rad) between RK4 in the ``working`` precision (its three
+    ``variant``s) and the same RK4 in the ``extended`` one, on a torque-free top over ``times`` at
+    step ``dt``; NaN where ``extended`` is None (the platform has no extended precision).
 
-    The roundoff is a random process amplified by the motion: one double run is one sample
-    (measured on the 5 rad/s intermediate-axis top over 20 s: 3e-8 to 1.3e-7 rad as the rounding
-    changes), so the floor is the largest of three.
+    The defaults, double against the platform's extended precision, give the floor of a
+    double-precision integrator. Any pair works whose ``extended`` unit roundoff is far below the
+    ``working`` one (the tests measure float32 against double).
+
+    The roundoff is a random process amplified by the motion: one run is one sample (the three
+    orderings give 4.1e-8 to 1.2e-7 rad in double on the 5 rad/s intermediate-axis top over 20 s at
+    dt = 1e-3), so the floor is the largest of three.
     """
     from dalembert import spatial
 
-    if EXTENDED is None:
+    if extended is None:
         return float("nan")
-    unit = lambda q: (q / np.sqrt(np.sum(q * q, axis=1))[:, None]).astype(float)  # noqa: E731
-    extended = unit(rk4_top(inertia, w0, times, dt, EXTENDED))
-    return max(float(np.max(spatial.rotation_angle(unit(rk4_top(inertia, w0, times, dt, float, v)), extended)))
+
+    def unit(q):  # normalized in the extended precision: the comparison adds no rounding of the working one
+        q = np.asarray(q, dtype=extended)
+        return (q / np.sqrt(np.sum(q * q, axis=1))[:, None]).astype(float)
+
+    reference = unit(rk4_top(inertia, w0, times, dt, extended))
+    return max(float(np.max(spatial.rotation_angle(unit(rk4_top(inertia, w0, times, dt, working, v)), reference)))
                for v in range(3))

@@ -49,6 +49,9 @@ def test_separatrix_closed_form_is_still_exact():
     t = np.linspace(0.0, 20.0, 11)
     q_ref, _ = integrate_top((1.0, 2.0, 3.0), w0, spatial.IDENTITY_QUAT, t)
     top = TorqueFreeTop(np.diag([1.0, 2.0, 3.0]), np.array(w0))
+    # 1 - k^2 = (I3 - I1)(M^2 - 2E I2) / ((I3 - I2)(M^2 - 2E I1)) (Landau & Lifshitz, section 37)
+    # with M^2 - 2E I2 = gap M^2 and, for w0 ~ (0, spin, 0), M^2 - 2E I1 ~ M^2 (I2 - I1) / I2:
+    # (2 / 1) gap (2 / 1) = 4 gap; the off-axis components change it by O(gap) relative.
     assert top.m1 == pytest.approx(4e-9, rel=1e-6)
     assert np.max(spatial.rotation_angle(top.quaternion(t), q_ref)) < 1e-11
 
