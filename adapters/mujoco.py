@@ -50,7 +50,7 @@ import time
 
 import numpy as np
 
-from dalembert.adapters import Adapter, IntegratorSpec, Outcome, option_choice
+from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert import spatial
 from dalembert.scene import EFFECTS, WORLD
 from dalembert.settings import steps_per_interval

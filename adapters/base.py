@@ -1,0 +1,85 @@
+"""The adapter base class and what its methods take and return.
+
+The contract every adapter meets is the numbered checklist in
+``dalembert.adapters`` (its package docstring).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from dalembert.registry import suggest
+
+__all__ = ["Adapter", "IntegratorSpec", "Outcome", "option_choice"]
+
+
+@dataclass(frozen=True)
+class IntegratorSpec:
+    """What an engine's integrator takes: ``dt`` (fixed step) or ``rtol``/``atol``, and options."""
+
+    fixed_step: bool
+    options: tuple = ()
+    description: str = ""
+
+
+@dataclass(frozen=True, eq=False)
+class Outcome:
+    """What ``Adapter.run`` returns: trajectory, stepping wall time (s), steps, RHS evaluations."""
+
+    trajectory: object
+    wall_s: float
+    n_steps: int
+    n_rhs: int
+    info: dict = field(default_factory=dict)
+
+
+class Adapter:
+    """Base class with the shared checks; the contract is in ``dalembert.adapters``."""
+
+    name = ""
+    effects = frozenset()
+    integrators = {}
+
+    def version(self):
+        raise NotImplementedError
+
+    def check(self, scene, times, settings):
+        """Raise ValueError naming the field when ``settings`` cannot be run."""
+        from dalembert.settings import knob_problems
+
+        if settings.integrator not in self.integrators:
+            raise ValueError(f"integrator: {self.name} has no {settings.integrator!r}"
+                             f"{suggest(settings.integrator, self.integrators)}")
+        spec = self.integrators[settings.integrator]
+        problems = knob_problems(settings, f"{self.name} {settings.integrator!r}", spec.fixed_step, spec.options, times)
+        if problems:
+            raise ValueError("; ".join(problems))
+
+    def unsupported(self, scene, settings):
+        """The reason this engine cannot represent ``scene``, or None."""
+        missing = sorted(scene.effects - self.effects)
+        if missing:
+            return f"{self.name} adapter cannot represent {', '.join(missing)}"
+        return None
+
+    def variants(self, scene):
+        """Engine option sets the default matrix runs on ``scene`` (``[{}]``: the defaults only)."""
+        return [{}]
+
+    def prepare(self, scene, times, settings):
+        raise NotImplementedError
+
+    def run(self, prepared):
+        raise NotImplementedError
+
+    def audit(self, prepared, outcome):
+        return {}
+
+
+def option_choice(settings, key, choices):
+    """The value of engine option ``key`` (``choices[0]`` when absent); a ValueError naming the
+    option and its choices when it is not one of them."""
+    value = settings.options.get(key, choices[0])
+    if value not in choices:
+        raise ValueError(f"options.{key}: unknown {value!r} — use one of {list(choices)}")
+    return value
