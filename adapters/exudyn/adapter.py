@@ -232,7 +232,7 @@ class ExudynAdapter(Adapter):
                 f = body.mass * (series(name, "a", 3) - np.asarray(scene.gravity))
                 for ld in scene.loads:
                     if ld.body == name and ld.kind == "force":
-                        f -= R_WB[name] @ np.array(ld.vector) if ld.frame == "body" else np.array(ld.vector)
+                        f -= spatial.load_to_world(ld, R_WB[name])
                 for child in built["links"]:
                     if scene.joint(child).parent == name:
                         f += reactions[child]

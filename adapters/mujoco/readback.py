@@ -70,7 +70,7 @@ def read_back(p, Q, V):
             if p["load_path"] == "actuator":  # loads MuJoCo routed through joint space
                 for ld in scene.loads:
                     if ld.kind == "force" and ld.body in subtree[child]:
-                        f -= R_WB_all[ld.body] @ np.array(ld.vector) if ld.frame == "body" else np.array(ld.vector)
+                        f -= spatial.load_to_world(ld, R_WB_all[ld.body])
             reactions[child][k] = f
     # Free bodies: the attitude is MuJoCo's own quaternion as integrated (its norm is data).
     for bi, b in enumerate(scene.bodies):

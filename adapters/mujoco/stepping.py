@@ -21,6 +21,8 @@ import time
 
 import numpy as np
 
+from dalembert import spatial
+
 __all__ = ["step_rollout", "step_loop", "apply_xfrc", "ROLLOUT_CHUNK_STEPS"]
 
 # Longest rollout call: its state output (steps x nstate doubles) stays ~10 MB
@@ -112,7 +114,7 @@ def apply_xfrc(p, data):
         i = p["ids"][ld.body]
         p_MB, R_MB = p["frames"][ld.body]
         R_WB = data.xmat[i].reshape(3, 3) @ R_MB
-        vec = R_WB @ np.array(ld.vector) if ld.frame == "body" else np.array(ld.vector)
+        vec = spatial.load_to_world(ld, R_WB)
         if ld.kind == "force":
             r = R_WB @ np.array(ld.point)  # from the COM (= xipos) to the point
             data.xfrc_applied[i, :3] += vec
