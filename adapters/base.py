@@ -2,6 +2,24 @@
 
 The contract every adapter meets is the numbered checklist in
 ``dalembert.adapters`` (its package docstring).
+
+Frames. An engine carries each body in a frame of its own, E, which need not
+be the scene's body frame B (origin at the COM, DESIGN.md). Every adapter names
+the pose of B in E ``X_EB`` (monogram notation, ``dalembert.spatial``), held as
+``(p_EB, R_EB)`` with ``x_E = p_EB + R_EB x_B`` (a ``pin.SE3`` in Pinocchio);
+where E is B, ``X_EB`` is the identity. E is
+
+* MuJoCo: MuJoCo's body frame: B for a free body, the child joint frame for a
+  jointed one (``mujoco.mjcf.engine_frames``);
+* Pinocchio: the frame of the joint that carries the body: B for a
+  FreeFlyer, the child joint frame (B at a lever) for a revolute or spherical
+  joint, the parent's E for a body welded into its parent
+  (``PinocchioModel.X_EB``);
+* Exudyn: a kinematic-tree link's frame, the child joint frame turned so that
+  z is the joint axis (``exudyn.model.build``); B for a rigid body.
+
+The parent's frames, where a joint is placed, are ``Ep`` and ``P``: ``X_EpP``
+is the parent's ``X_EB``.
 """
 
 from __future__ import annotations

@@ -4,7 +4,9 @@ Conventions (DESIGN.md):
 
 * Quaternions are scalar first, ``(w, x, y, z)``, and rotate body vectors into
   the world: ``v_W = R(q_WB) v_B``.
-* Rotation matrices ``R_AB`` map coordinates in frame B to frame A.
+* Rotation matrices ``R_AB`` map coordinates in frame B to frame A; the pose
+  ``X_AB`` of frame B in frame A (monogram notation) is ``(p_AB, R_AB)``, the
+  position of B's origin in A and ``R_AB``: ``x_A = p_AB + R_AB x_B``.
 * Angular velocity ``w_WB_W`` is expressed in the world, ``w_WB_B`` in the body;
   ``w_WB_W = R_WB w_WB_B``.
 * Orientation error is the geodesic angle ``2 acos |<q1, q2>|`` (sign-blind).

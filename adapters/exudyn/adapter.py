@@ -214,9 +214,9 @@ class ExudynAdapter(Adapter):
 
         bodies, R_WB = {}, {}
         for b in scene.bodies:
-            R_WL = series(b.name, "R", 9).reshape(n, 3, 3)  # row-major in sensor output
-            R_LB = built["link_frames"].get(b.name, (None, np.eye(3)))[1]
-            R_WB[b.name] = R_WL @ R_LB
+            R_WE = series(b.name, "R", 9).reshape(n, 3, 3)  # row-major in sensor output
+            R_EB = built["X_EB"].get(b.name, (None, np.eye(3)))[1]  # a rigid body's E is B
+            R_WB[b.name] = R_WE @ R_EB
             finite = np.all(np.isfinite(R_WB[b.name]), axis=(1, 2))
             quat = np.full((n, 4), np.nan)
             quat[finite] = spatial.matrix_to_quat(R_WB[b.name][finite])

@@ -69,7 +69,7 @@ def build(scene, settings, assemble=True):
     unless ``assemble`` is False (for the summary alone).
 
     Returns a dict: ``SC``, ``mbs`` (the system container and system), ``sensors`` (body or
-    ``__q``/``__v``/``__joint:<child>`` -> quantity -> sensor number), ``link_frames``,
+    ``__q``/``__v``/``__joint:<child>`` -> quantity -> sensor number), ``X_EB`` (per link),
     ``links`` (the kinematic tree's bodies, in link order), ``redundant_joints`` (child ->
     joint frame in the parent's axes, ``R_PJ R_A``) and ``summary`` (text, for reports).
     """
@@ -131,7 +131,7 @@ def build(scene, settings, assemble=True):
                            f"{CONSTRAINED_AXES[j.kind]} (redundant coordinates)")
     # --- joints=minimal: revolute tree(s) in one kinematic tree
     links = [] if redundant else [b for b in scene.topological_order() if scene.joint(b.name).kind == "revolute"]
-    link_frames = {}  # body -> (p_LB, R_LB): x_L = p_LB + R_LB x_B
+    X_EB = {}  # link -> (p_EB, R_EB): its scene frame B in its link frame E, x_E = p_EB + R_EB x_B
     if links:
         index = {b.name: i for i, b in enumerate(links)}
         Ts, offsets, coms, inertias, masses, parents, q0, v0 = [], [], [], [], [], [], [], []
@@ -139,18 +139,18 @@ def build(scene, settings, assemble=True):
             j = scene.joint(b.name)
             R_CJ = spatial.quat_to_matrix(j.child_quat)
             R_A = axis_frame(j.axis)
-            R_LB = R_A.T @ R_CJ.T
-            p_LB = -R_LB @ np.array(j.child_point)
-            link_frames[b.name] = (p_LB, R_LB)
+            R_EB = R_A.T @ R_CJ.T
+            p_EB = -R_EB @ np.array(j.child_point)
+            X_EB[b.name] = (p_EB, R_EB)
             R_PJ = spatial.quat_to_matrix(j.parent_quat)
             if j.parent == WORLD:
-                p_PL, R_PL = np.zeros(3), np.eye(3)
+                p_EpP, R_EpP = np.zeros(3), np.eye(3)
             else:
-                p_PL, R_PL = link_frames[j.parent]
-            Ts.append(R_PL @ R_PJ @ R_A)
-            offsets.append(p_PL + R_PL @ np.array(j.parent_point))
-            coms.append(p_LB)
-            inertias.append(R_LB @ b.inertia_matrix @ R_LB.T)
+                p_EpP, R_EpP = X_EB[j.parent]  # the parent's scene frame P in its link frame Ep
+            Ts.append(R_EpP @ R_PJ @ R_A)
+            offsets.append(p_EpP + R_EpP @ np.array(j.parent_point))
+            coms.append(p_EB)
+            inertias.append(R_EB @ b.inertia_matrix @ R_EB.T)
             masses.append(b.mass)
             parents.append(-1 if j.parent == WORLD else index[j.parent])
             q0.append(j.q0[0])
@@ -166,11 +166,11 @@ def build(scene, settings, assemble=True):
         outputs = (("p", OV.Position), ("R", OV.RotationMatrix), ("v", OV.Velocity), ("w", OV.AngularVelocity),
                    ("a", OV.Acceleration))
         for b in links:
-            i, (p_LB, R_LB) = index[b.name], link_frames[b.name]
-            markers[b.name] = lambda p, i=i, p_LB=p_LB, R_LB=R_LB: mbs.AddMarker(MarkerKinematicTreeRigid(
-                objectNumber=tree, linkNumber=i, localPosition=list(p_LB + R_LB @ np.array(p))))
+            i, (p_EB, R_EB) = index[b.name], X_EB[b.name]
+            markers[b.name] = lambda p, i=i, p_EB=p_EB, R_EB=R_EB: mbs.AddMarker(MarkerKinematicTreeRigid(
+                objectNumber=tree, linkNumber=i, localPosition=list(p_EB + R_EB @ np.array(p))))
             sensors[b.name] = {k: mbs.AddSensor(SensorKinematicTree(
-                objectNumber=tree, linkNumber=i, localPosition=list(p_LB), outputVariableType=v))
+                objectNumber=tree, linkNumber=i, localPosition=list(p_EB), outputVariableType=v))
                 for k, v in outputs}
         sensors["__q"] = {"q": mbs.AddSensor(SensorNode(nodeNumber=node, outputVariableType=OV.Coordinates))}
         sensors["__v"] = {"v": mbs.AddSensor(SensorNode(nodeNumber=node, outputVariableType=OV.Coordinates_t))}
@@ -178,14 +178,14 @@ def build(scene, settings, assemble=True):
                        f"(minimal coordinates), gravity {g.tolist()}")
     # --- loads
     for ld in scene.loads:
-        R_LB = link_frames.get(ld.body, (None, np.eye(3)))[1]
+        R_EB = X_EB.get(ld.body, (None, np.eye(3)))[1]  # a rigid body's E is B
         marker = markers[ld.body](ld.point)
         follower = ld.frame == "body"
-        vec = list(R_LB @ np.array(ld.vector)) if follower else list(ld.vector)
+        vec = list(R_EB @ np.array(ld.vector)) if follower else list(ld.vector)
         Load = LoadForceVector if ld.kind == "force" else LoadTorqueVector
         mbs.AddLoad(Load(markerNumber=marker, loadVector=vec, bodyFixed=follower))
         summary.append(f"{Load.__name__} on {ld.body} at {list(ld.point)}, bodyFixed={follower}")
     if assemble:
         mbs.Assemble()
-    return dict(SC=SC, mbs=mbs, sensors=sensors, link_frames=link_frames, links=[b.name for b in links],
+    return dict(SC=SC, mbs=mbs, sensors=sensors, X_EB=X_EB, links=[b.name for b in links],
                 redundant_joints=redundant_joints, summary="\n".join(summary) + "\n")

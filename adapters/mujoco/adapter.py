@@ -66,9 +66,9 @@ class MujocoAdapter(Adapter):
         text = mjcf(scene, settings)
         model = mujoco.MjModel.from_xml_string(text)
         welds = settings.options.get("welds", "tree")
-        frames = engine_frames(scene, welds)
+        X_EB = engine_frames(scene, welds)
         ids = {b.name: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b.name) for b in scene.bodies}
-        self._check_mass_properties(model, scene, frames, ids)
+        self._check_mass_properties(model, scene, X_EB, ids)
         data = mujoco.MjData(model)
         qpos0, qvel0 = np.zeros(model.nq), np.zeros(model.nv)
         state0 = spatial.initial_body_states(scene) if welds == "equality" else {}
@@ -86,24 +86,24 @@ class MujocoAdapter(Adapter):
             qvel0[v:v + len(j.v0)] = j.v0
         steps = steps_per_interval(np.asarray(times, float), settings.dt)
         return dict(scene=scene, times=np.asarray(times, float), settings=settings, model=model, data=data,
-                    scratch=mujoco.MjData(model), qpos0=qpos0, qvel0=qvel0, steps=steps, frames=frames, ids=ids,
+                    scratch=mujoco.MjData(model), qpos0=qpos0, qvel0=qvel0, steps=steps, frames=X_EB, ids=ids,
                     mjcf=text, load_path=settings.options.get("loads", "actuator"), welds=welds)
 
     @staticmethod
-    def _check_mass_properties(model, scene, frames, ids):
+    def _check_mass_properties(model, scene, X_EB, ids):
         for b in scene.bodies:
             i = ids[b.name]
-            p_MB, R_MB = frames[b.name]
+            p_EB, R_EB = X_EB[b.name]
             R = spatial.quat_to_matrix(model.body_iquat[i])
-            I_M = R @ np.diag(model.body_inertia[i]) @ R.T
-            expected = R_MB @ b.inertia_matrix @ R_MB.T
+            I_E = R @ np.diag(model.body_inertia[i]) @ R.T
+            expected = R_EB @ b.inertia_matrix @ R_EB.T
             scale = np.abs(expected).max()
             if (abs(model.body_mass[i] - b.mass) > MASS_PROPERTY_REL_TOL * b.mass
-                    or np.abs(I_M - expected).max() > MASS_PROPERTY_REL_TOL * scale
-                    or np.abs(model.body_ipos[i] - p_MB).max() > MASS_PROPERTY_REL_TOL * max(1.0, np.abs(p_MB).max())):
+                    or np.abs(I_E - expected).max() > MASS_PROPERTY_REL_TOL * scale
+                    or np.abs(model.body_ipos[i] - p_EB).max() > MASS_PROPERTY_REL_TOL * max(1.0, np.abs(p_EB).max())):
                 raise RuntimeError(f"MuJoCo compiled body {b.name!r} with mass {model.body_mass[i]}, "
-                                   f"COM {model.body_ipos[i]} and inertia {I_M.tolist()}; the scene has "
-                                   f"{b.mass}, {p_MB.tolist()}, {expected.tolist()}")
+                                   f"COM {model.body_ipos[i]} and inertia {I_E.tolist()}; the scene has "
+                                   f"{b.mass}, {p_EB.tolist()}, {expected.tolist()}")
 
     # ------------------------------------------------------------- run
     def run(self, prepared):

@@ -62,13 +62,13 @@ def floating(j, welds):
 
 
 def engine_frames(scene, welds="tree"):
-    """Per body: the scene body frame B in the MuJoCo body frame M, as ``(p_MB, R_MB)``
-    with ``x_M = p_MB + R_MB x_B``."""
+    """Per body, ``X_EB`` (``dalembert.adapters.base``): the scene body frame B in MuJoCo's
+    body frame E, as ``(p_EB, R_EB)`` with ``x_E = p_EB + R_EB x_B``."""
     out = {}
     for j in scene.joints:
         if floating(j, welds):
             out[j.child] = (np.zeros(3), np.eye(3))
-        else:  # M = the child joint frame Jc
+        else:  # E = the child joint frame Jc
             R_CJ = spatial.quat_to_matrix(j.child_quat)
             out[j.child] = (-R_CJ.T @ np.array(j.child_point), R_CJ.T)
     return out
@@ -77,7 +77,7 @@ def engine_frames(scene, welds="tree"):
 def mjcf(scene, settings):
     """MJCF text of ``scene`` for ``settings`` (dt, integrator, options)."""
     welds = settings.options.get("welds", "tree")
-    frames = engine_frames(scene, welds)
+    X_EB = engine_frames(scene, welds)
     load_path = settings.options.get("loads", "actuator")
     weld_constraints = [j for j in scene.joints if j.kind == "weld" and welds == "equality"]
     state0 = spatial.initial_body_states(scene) if weld_constraints else {}  # the welded bodies' poses
@@ -98,23 +98,23 @@ def mjcf(scene, settings):
         lines.append('    <site name="world_origin" pos="0 0 0"/>')
 
     def body_xml(j, indent):
-        p_MB, R_MB = frames[j.child]
+        p_EB, R_EB = X_EB[j.child]
         body = scene.body(j.child)
         if j.kind == "free":
             pos, quat = np.array(j.q0[:3]), np.array(j.q0[3:])  # placed by qpos anyway
         elif floating(j, welds):  # a weld held by a constraint, at its initial pose: the weld's reference
             pos, quat = state0[j.child]["p"], spatial.matrix_to_quat(state0[j.child]["R"])
         else:
-            # M (= Jc) coincides with the parent joint frame Jp at q = 0.
-            # (p, R) of the parent's scene frame in the parent's MuJoCo frame: x_M = p + R x_B.
-            p_PM, R_PM = (np.zeros(3), np.eye(3)) if j.parent == WORLD else frames[j.parent]
+            # E (= Jc) coincides with the parent joint frame Jp at q = 0, placed in the parent's
+            # MuJoCo frame Ep, where the parent's scene frame P sits at X_EpP (its X_EB).
+            p_EpP, R_EpP = (np.zeros(3), np.eye(3)) if j.parent == WORLD else X_EB[j.parent]
             R_PJ = spatial.quat_to_matrix(j.parent_quat)
-            pos = p_PM + R_PM @ np.array(j.parent_point)
-            quat = spatial.matrix_to_quat(R_PM @ R_PJ)
-        I_M = R_MB @ body.inertia_matrix @ R_MB.T
-        fi = [I_M[0, 0], I_M[1, 1], I_M[2, 2], I_M[0, 1], I_M[0, 2], I_M[1, 2]]
+            pos = p_EpP + R_EpP @ np.array(j.parent_point)
+            quat = spatial.matrix_to_quat(R_EpP @ R_PJ)
+        I_E = R_EB @ body.inertia_matrix @ R_EB.T
+        fi = [I_E[0, 0], I_E[1, 1], I_E[2, 2], I_E[0, 1], I_E[0, 2], I_E[1, 2]]
         out = [f'{indent}<body name="{body.name}" pos="{_f(pos)}" quat="{_f(quat)}">',
-               f'{indent}  <inertial pos="{_f(p_MB)}" mass="{body.mass!r}" fullinertia="{_f(fi)}"/>']
+               f'{indent}  <inertial pos="{_f(p_EB)}" mass="{body.mass!r}" fullinertia="{_f(fi)}"/>']
         if floating(j, welds):
             out.append(f'{indent}  <freejoint name="{body.name}"/>')
         elif j.kind == "revolute":
@@ -126,9 +126,9 @@ def mjcf(scene, settings):
         if load_path == "actuator":
             for k, ld in enumerate(scene.loads):
                 if ld.body == body.name:
-                    site_pos = p_MB + R_MB @ np.array(ld.point)
+                    site_pos = p_EB + R_EB @ np.array(ld.point)
                     out.append(f'{indent}  <site name="load{k}" pos="{_f(site_pos)}" '
-                               f'quat="{_f(spatial.matrix_to_quat(R_MB))}"/>')
+                               f'quat="{_f(spatial.matrix_to_quat(R_EB))}"/>')
         for c in children.get(body.name, []):
             out += body_xml(c, indent + "  ")
         out.append(f"{indent}</body>")
@@ -142,12 +142,12 @@ def mjcf(scene, settings):
         lines.append("  <equality>")
         for j in weld_constraints:
             # relpose: the child's MuJoCo frame in the parent's, as the scene's weld holds them
-            X = {}
+            X_WE = {}
             for name in (j.parent, j.child):
-                s0, (p_MB, R_MB) = state0[name], frames.get(name, (np.zeros(3), np.eye(3)))
-                R_WM = s0["R"] @ R_MB.T
-                X[name] = (s0["p"] - R_WM @ p_MB, R_WM)
-            (p1, R1), (p2, R2) = X[j.parent], X[j.child]
+                s0, (p_EB, R_EB) = state0[name], X_EB.get(name, (np.zeros(3), np.eye(3)))
+                R_WE = s0["R"] @ R_EB.T
+                X_WE[name] = (s0["p"] - R_WE @ p_EB, R_WE)
+            (p1, R1), (p2, R2) = X_WE[j.parent], X_WE[j.child]
             relpose = np.concatenate([R1.T @ (p2 - p1), spatial.matrix_to_quat(R1.T @ R2)])
             body1 = "" if j.parent == WORLD else f' body1="{j.parent}"'
             lines.append(f'    <weld name="{j.child}"{body1} body2="{j.child}" relpose="{_f(relpose)}" '

@@ -54,11 +54,11 @@ def read_back(p, Q, V):
         R_WB_all = {}
         for bi, b in enumerate(scene.bodies):
             i = p["ids"][b.name]
-            p_MB, R_MB = p["frames"][b.name]
-            R_WM = d.xmat[i].reshape(3, 3)
-            R_WB = R_WM @ R_MB  # W <- M <- B
+            p_EB, R_EB = p["frames"][b.name]
+            R_WE = d.xmat[i].reshape(3, 3)
+            R_WB = R_WE @ R_EB  # W <- E <- B
             R_WB_all[b.name] = R_WB
-            r = R_WM @ p_MB
+            r = R_WE @ p_EB
             # XBODY: velocity at the body frame origin (mjOBJ_BODY would be at the COM), world axes
             mujoco.mj_objectVelocity(model, d, mujoco.mjtObj.mjOBJ_XBODY, i, res, 0)
             pos[bi, k] = d.xpos[i] + r

@@ -112,8 +112,8 @@ def apply_xfrc(p, data):
     mujoco.mj_kinematics(model, data)
     for ld in scene.loads:
         i = p["ids"][ld.body]
-        p_MB, R_MB = p["frames"][ld.body]
-        R_WB = data.xmat[i].reshape(3, 3) @ R_MB
+        R_EB = p["frames"][ld.body][1]
+        R_WB = data.xmat[i].reshape(3, 3) @ R_EB
         vec = spatial.load_to_world(ld, R_WB)
         if ld.kind == "force":
             r = R_WB @ np.array(ld.point)  # from the COM (= xipos) to the point

@@ -15,7 +15,7 @@ Conventions (converted only through ``dalembert.spatial``): FreeFlyer
 ``q = (x, y, z, qx, qy, qz, qw)`` (scalar LAST) and ``v = (v_local, w_local)``
 (linear velocity of the joint origin in the joint frame); spherical ``q`` is
 scalar-last too. External forces enter ``aba``/``rnea`` per joint in the
-joint's LOCAL frame about its origin: a load ``f`` at point ``p`` becomes
+joint's LOCAL frame (E) about its origin: a load ``f`` at point ``p`` becomes
 ``(f, p x f)``; world-frame loads are rotated into the local frame at every
 evaluation from ``data.oMi`` (refreshed by ``forwardKinematics``: ``aba``
 does not update it for us).
@@ -42,7 +42,10 @@ def _se3(R, p):
 
 
 class PinocchioModel:
-    """A scene as a ``pin.Model`` plus the maps the adapter needs.
+    """A scene as a ``pin.Model`` plus the maps the adapter needs: per body, ``carrier`` (the
+    joint that carries it), ``X_EB`` (its scene frame B in that joint's frame E, ``pin.SE3``;
+    ``dalembert.adapters.base``), ``joint_ids`` (its own joint, if it has one) and
+    ``frame_ids`` (the operational frame at B).
 
     ``welds="constraint"``: a welded body gets its own FreeFlyer, held to its parent by a 6D
     ``RigidConstraintModel``, and the dynamics is ``pin.constraintDynamics`` (no Baumgarte
@@ -57,36 +60,36 @@ class PinocchioModel:
         self.constraints = []  # (parent joint, placement in it, child joint, placement in it)
         model = pin.Model()
         model.gravity = pin.Motion(np.array(scene.gravity, dtype=float), np.zeros(3))
-        self.carrier, self.X_JB, self.joint_ids = {}, {}, {}
+        self.carrier, self.X_EB, self.joint_ids = {}, {}, {}
         lines = []
         for body in scene.topological_order():
             j = scene.joint(body.name)
             if j.parent == WORLD:
-                parent_id, X_parent = 0, _se3(np.eye(3), np.zeros(3))
+                parent_id, X_EpP = 0, _se3(np.eye(3), np.zeros(3))
             else:
-                parent_id, X_parent = self.carrier[j.parent], self.X_JB[j.parent]
+                parent_id, X_EpP = self.carrier[j.parent], self.X_EB[j.parent]
             X_PJ = _se3(spatial.quat_to_matrix(j.parent_quat), j.parent_point)  # Jp in parent body coords
             X_CJ = _se3(spatial.quat_to_matrix(j.child_quat), j.child_point)  # Jc in child body coords
             if j.kind == "free" or (j.kind == "weld" and welds == "constraint"):
                 jid = model.addJoint(0, pin.JointModelFreeFlyer(), _se3(np.eye(3), np.zeros(3)), body.name)
-                X_JB = _se3(np.eye(3), np.zeros(3))
+                X_EB = _se3(np.eye(3), np.zeros(3))
                 if j.kind == "weld":  # the weld frame, in the parent's joint frame and in the child's (= body)
-                    self.constraints.append((parent_id, X_parent * X_PJ, jid, X_CJ))
+                    self.constraints.append((parent_id, X_EpP * X_PJ, jid, X_CJ))
             elif j.kind in ("revolute", "ball"):
                 jm = (pin.JointModelRevoluteUnaligned(np.array(j.axis) / np.linalg.norm(j.axis))
                       if j.kind == "revolute" else pin.JointModelSpherical())
-                jid = model.addJoint(parent_id, jm, X_parent * X_PJ, body.name)
-                X_JB = X_CJ.inverse()
+                jid = model.addJoint(parent_id, jm, X_EpP * X_PJ, body.name)
+                X_EB = X_CJ.inverse()
             else:  # weld: rigidly on the parent's joint
                 jid = parent_id
-                X_JB = X_parent * X_PJ * X_CJ.inverse()
+                X_EB = X_EpP * X_PJ * X_CJ.inverse()
             if j.kind != "weld" or welds == "constraint":
                 self.joint_ids[body.name] = jid
-            self.carrier[body.name], self.X_JB[body.name] = jid, X_JB
-            R, p = X_JB.rotation, X_JB.translation
+            self.carrier[body.name], self.X_EB[body.name] = jid, X_EB
+            R, p = X_EB.rotation, X_EB.translation
             model.appendBodyToJoint(jid, pin.Inertia(body.mass, p, R @ body.inertia_matrix @ R.T),
                                     _se3(np.eye(3), np.zeros(3)))
-            model.addFrame(pin.Frame(body.name, jid, X_JB, pin.FrameType.OP_FRAME))
+            model.addFrame(pin.Frame(body.name, jid, X_EB, pin.FrameType.OP_FRAME))
             lines.append(f"{body.name}: {j.kind} -> pin joint {jid} "
                          f"({model.joints[jid].shortname() if jid else 'universe'}), mass {body.mass:g} kg")
         self.model = model
@@ -112,18 +115,18 @@ class PinocchioModel:
 
         model = self.model
         self.const_f = {}  # joint id -> constant local spatial force (follower loads)
-        self.world_loads = []  # (joint id, point in J, force_W or None, torque_W or None)
+        self.world_loads = []  # (joint id, point in E, force_W or None, torque_W or None)
         for ld in self.scene.loads:
             jid = self.carrier[ld.body]
-            X = self.X_JB[ld.body]
-            p_J = X.rotation @ np.array(ld.point) + X.translation
+            X_EB = self.X_EB[ld.body]
+            p_E = X_EB.rotation @ np.array(ld.point) + X_EB.translation
             vec = np.array(ld.vector)
             if ld.frame == "body":
-                v_J = X.rotation @ vec
-                f = pin.Force(v_J, np.cross(p_J, v_J)) if ld.kind == "force" else pin.Force(np.zeros(3), v_J)
+                v_E = X_EB.rotation @ vec
+                f = pin.Force(v_E, np.cross(p_E, v_E)) if ld.kind == "force" else pin.Force(np.zeros(3), v_E)
                 self.const_f[jid] = self.const_f.get(jid, pin.Force.Zero()) + f
             else:
-                self.world_loads.append((jid, p_J, vec if ld.kind == "force" else None,
+                self.world_loads.append((jid, p_E, vec if ld.kind == "force" else None,
                                          vec if ld.kind == "torque" else None))
         self.has_loads = bool(self.scene.loads)
         self.fext = pin.StdVec_Force()
@@ -139,13 +142,13 @@ class PinocchioModel:
             pin.forwardKinematics(self.model, self.data, q)
         for i in range(self.model.njoints):
             self.fext[i] = self.const_f.get(i, pin.Force.Zero())
-        for jid, p_J, f_W, t_W in self.world_loads:
-            R_WJ = self.data.oMi[jid].rotation
+        for jid, p_E, f_W, t_W in self.world_loads:
+            R_WE = self.data.oMi[jid].rotation
             if f_W is not None:
-                f_J = R_WJ.T @ f_W
-                self.fext[jid] = self.fext[jid] + pin.Force(f_J, np.cross(p_J, f_J))
+                f_E = R_WE.T @ f_W
+                self.fext[jid] = self.fext[jid] + pin.Force(f_E, np.cross(p_E, f_E))
             else:
-                self.fext[jid] = self.fext[jid] + pin.Force(np.zeros(3), R_WJ.T @ t_W)
+                self.fext[jid] = self.fext[jid] + pin.Force(np.zeros(3), R_WE.T @ t_W)
         return self.fext
 
     def acceleration(self, q, v):
