@@ -11,7 +11,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e ".[test]"
-	$(BIN)/python -m dalembert.adapters.pinocchio_native  # compile the Pinocchio stepper once (~2 min)
+	$(BIN)/python -m dalembert.adapters.pinocchio.native  # compile the Pinocchio stepper once (~2 min)
 	touch $(STAMP)
 
 setup: $(STAMP)

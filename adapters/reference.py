@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dalembert.adapters import Adapter, IntegratorSpec, Outcome
+from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
 from dalembert.scene import EFFECTS
 
 __all__ = ["ReferenceAdapter"]

@@ -28,7 +28,9 @@ import time
 import numpy as np
 
 from dalembert.adapters import get_adapter
-from dalembert.adapters.exudyn import ADAPTIVE, ON_TIME
+from dalembert.adapters.exudyn.adapter import ADAPTIVE
+from dalembert.adapters.exudyn.model import build
+from dalembert.adapters.exudyn.sampling import ON_TIME, solve_per_sample
 from dalembert import Settings
 from dalembert.case import load_cases
 
@@ -42,7 +44,7 @@ def bare_solve(adapter, prepared):
     stored, no user function): ``SolveDynamic``, or the adapter's per-sample loop."""
     import exudyn as exu
 
-    built = adapter._build(prepared["scene"], prepared["times"], prepared["settings"])
+    built = build(prepared["scene"], prepared["settings"])
     mbs, times = built["mbs"], prepared["times"]
     settings = adapter._settings(prepared)
     console, exu.config.printToConsole = exu.config.printToConsole, False
@@ -50,7 +52,7 @@ def bare_solve(adapter, prepared):
         t0 = time.perf_counter()
         if prepared["settings"].integrator in ADAPTIVE:
             tol = ON_TIME * settings.timeIntegration.minimumStepSize
-            adapter._solve_per_sample(exu.MainSolverExplicit(), mbs, settings, times, tol)
+            solve_per_sample(exu.MainSolverExplicit(), mbs, settings, times, tol)
         else:
             mbs.SolveDynamic(settings, solverType=settings.timeIntegration.solverType)
         return time.perf_counter() - t0

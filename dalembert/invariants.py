@@ -67,8 +67,7 @@ def load_power(scene, traj):
     for ld in scene.loads:
         b = traj.bodies[ld.body]
         R = _R(traj, ld.body)
-        vec = np.array(ld.vector)
-        vec_W = np.einsum("nij,j->ni", R, vec) if ld.frame == "body" else np.broadcast_to(vec, (len(traj.t), 3))
+        vec_W = spatial.load_to_world(ld, R)
         if ld.kind == "force":
             r_W = np.einsum("nij,j->ni", R, np.array(ld.point))
             v_point = b.velocity + np.cross(b.angular_velocity, r_W)

@@ -4,7 +4,9 @@ Conventions (DESIGN.md):
 
 * Quaternions are scalar first, ``(w, x, y, z)``, and rotate body vectors into
   the world: ``v_W = R(q_WB) v_B``.
-* Rotation matrices ``R_AB`` map coordinates in frame B to frame A.
+* Rotation matrices ``R_AB`` map coordinates in frame B to frame A; the pose
+  ``X_AB`` of frame B in frame A (monogram notation) is ``(p_AB, R_AB)``, the
+  position of B's origin in A and ``R_AB``: ``x_A = p_AB + R_AB x_B``.
 * Angular velocity ``w_WB_W`` is expressed in the world, ``w_WB_B`` in the body;
   ``w_WB_W = R_WB w_WB_B``.
 * Orientation error is the geodesic angle ``2 acos |<q1, q2>|`` (sign-blind).
@@ -38,6 +40,7 @@ __all__ = [
     "matrix_from_euler_zxz",
     "world_to_body",
     "body_to_world",
+    "load_to_world",
     "wxyz_to_xyzw",
     "xyzw_to_wxyz",
     "joint_coordinates",
@@ -218,6 +221,32 @@ def body_to_world(q_WB, v_B):
 def world_to_body(q_WB, v_W):
     """Vector in world coordinates to body coordinates (e.g. ``w_WB_W -> w_WB_B``)."""
     return quat_rotate(quat_conjugate(q_WB), v_W)
+
+
+def load_to_world(load, R_WB):
+    """The vector of ``load`` in world axes: force (N) or torque (N m).
+
+    A follower load (``load.frame == "body"``, vector in body axes) turns with
+    its body, ``v_W = R_WB v_B``; a world-frame load is as given, repeated once
+    per rotation. The point of application is not used (it stays in body
+    coordinates).
+
+    Parameters
+    ----------
+    load : dalembert.scene.Load
+    R_WB : array_like, shape (3, 3) or (n, 3, 3)
+        Rotation(s) of the loaded body, body to world.
+
+    Returns
+    -------
+    ndarray, shape (3,) or (n, 3)
+        A new array, world axes.
+    """
+    R_WB = np.asarray(R_WB, dtype=float)
+    vector = np.asarray(load.vector, dtype=float)
+    if load.frame == "body":
+        return R_WB @ vector
+    return np.broadcast_to(vector, R_WB.shape[:-1]).copy()
 
 
 def quat_exp(theta):

@@ -147,7 +147,7 @@ def test_stored_sampling_lands_on_every_sample_and_falls_back_when_late(monkeypa
     every sample after t = 296.6 s one step late (its accumulated time falls behind); the adapter's
     shortened schedule lands on all of them, and with the shortening removed it notices and samples
     from Python instead. Both read the same steps, so the samples are identical."""
-    import dalembert.adapters.exudyn as module
+    import dalembert.adapters.exudyn.sampling as module
 
     case = make_case("free_top", t_final=300.0, sample_interval=0.1)
     prepared = ADAPTER.prepare(case.scene, case.times, Settings("rk44", dt=1e-3))

@@ -1,8 +1,8 @@
 // The Pinocchio adapter's fixed-step loop in C++: the same integrators as its Python
-// loop (adapters/pinocchio.py: euler, rk4 = Runge-Kutta-Munthe-Kaas, rk4-naive), the
-// same model (passed as Pinocchio's own serialization of the Python-built pin.Model),
+// loop (adapters/pinocchio/integrators.py: euler, rk4 = Runge-Kutta-Munthe-Kaas, rk4-naive),
+// the same model (passed as Pinocchio's own serialization of the Python-built pin.Model),
 // the same loads, with no Python call per step. Compiled on first use by
-// adapters/pinocchio_native.py against the installed Pinocchio; called through ctypes.
+// adapters/pinocchio/native.py against the installed Pinocchio; called through ctypes.
 #include <cmath>
 #include <cstring>
 #include <exception>

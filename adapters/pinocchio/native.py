@@ -1,4 +1,4 @@
-"""The Pinocchio adapter's fixed-step loop, compiled: ``pinocchio_stepper.cpp``.
+"""The Pinocchio adapter's fixed-step loop, compiled: ``stepper.cpp``.
 
 A Python loop around Pinocchio's C++ calls costs 6-9x the calls themselves
 (``python -m benchmarks.pinocchio``), so the work-precision diagrams would
@@ -7,12 +7,12 @@ installed Pinocchio (headers and library from the ``pin`` wheel, Eigen from
 ``cmeel-eigen``) give the same numbers (tests/test_pinocchio.py) without a
 Python call per step.
 
-Built on first use (``make`` builds it at setup: ``python -m dalembert.adapters.pinocchio_native``)
+Built on first use (``make`` builds it at setup: ``python -m dalembert.adapters.pinocchio.native``)
 with the system's C++ compiler into a cache keyed by the source, the compiler
 flags and the Pinocchio version; where it cannot be built the adapter falls back
 to its Python loop and says why in the run's audit.
 
-    python -m dalembert.adapters.pinocchio_native     # build (or find) the library; print where, or why not
+    python -m dalembert.adapters.pinocchio.native     # build (or find) the library; print where, or why not
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ import numpy as np
 
 __all__ = ["library", "run_fixed", "METHODS"]
 
-SOURCE = os.path.join(os.path.dirname(__file__), "pinocchio_stepper.cpp")
+SOURCE = os.path.join(os.path.dirname(__file__), "stepper.cpp")
 METHODS = {"euler": 0, "rk4": 1, "rk4-naive": 2}
 # Pinocchio's own compile definitions for its users (lib/cmake/pinocchio/pinocchioTargets.cmake,
 # targets pinocchio_headers and pinocchio_default): Boost.MPL sizes its joint variant needs, and

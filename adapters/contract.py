@@ -1,0 +1,64 @@
+"""``check_adapter``: the adapter contract (``dalembert.adapters``) run on registered cases."""
+
+from __future__ import annotations
+
+from dalembert.adapters.registry import get_adapter
+
+__all__ = ["check_adapter"]
+
+
+def check_adapter(name, cases=None, settings=None):
+    """Run the contract on every registered case ``name`` supports; returns a list of problems.
+
+    Parameters
+    ----------
+    name : str — engine name
+    cases : iterable of Case, optional — default: every registered case (defaults)
+    settings : callable(integrator name, IntegratorSpec) -> Settings, optional —
+        default: dt = the sample interval for fixed-step, rtol = atol = 1e-8 otherwise
+    """
+    import numpy as np
+
+    from dalembert.case import load_cases
+    from dalembert.settings import Settings
+    from dalembert.trajectory import Trajectory
+
+    adapter = get_adapter(name)
+    problems = []
+    adapter.version()
+    if cases is None:
+        cases = [factory() for _, factory in load_cases().items()]
+    for case in cases:
+        for integ, spec in adapter.integrators.items():
+            if settings is not None:
+                s = settings(integ, spec)
+            elif spec.fixed_step:
+                s = Settings(integ, dt=float(case.times[1] - case.times[0]))
+            else:
+                s = Settings(integ, rtol=1e-8, atol=1e-8)
+            where = f"{name} {case.name} {s.label()}"
+            adapter.check(case.scene, case.times, s)
+            if adapter.unsupported(case.scene, s):
+                continue
+            prepared = adapter.prepare(case.scene, case.times, s)
+            first, second = adapter.run(prepared), adapter.run(prepared)
+            traj = first.trajectory
+            if not isinstance(traj, Trajectory):
+                problems.append(f"{where}: run() must return a Trajectory")
+                continue
+            if not np.array_equal(traj.t, case.times):
+                problems.append(f"{where}: not sampled at exactly the case's times")
+            if set(traj.bodies) != {b.name for b in case.scene.bodies}:
+                problems.append(f"{where}: bodies {sorted(traj.bodies)} != scene's")
+            for bname, b in traj.bodies.items():
+                if not np.array_equal(b.quaternion, second.trajectory.bodies[bname].quaternion,
+                                      equal_nan=True):
+                    problems.append(f"{where}: a repeated run gave different results")
+            if not (first.wall_s >= 0.0 and first.n_steps >= 0 and first.n_rhs >= 0):
+                problems.append(f"{where}: cost figures must be non-negative")
+            audit = adapter.audit(prepared, first)
+            if "gravity" not in audit:
+                problems.append(f"{where}: the audit must report the gravity vector")
+            elif not np.allclose(audit["gravity"], case.scene.gravity, rtol=0, atol=0):
+                problems.append(f"{where}: engine gravity {audit['gravity']} != scene {case.scene.gravity}")
+    return problems

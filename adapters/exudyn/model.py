@@ -1,0 +1,191 @@
+"""A scene as an Exudyn system: ``build``.
+
+Free bodies on rigid-body nodes, jointed trees in minimal coordinates
+(``ObjectKinematicTree``) or in redundant ones (rigid bodies held by joints).
+
+* Free bodies: ``CreateRigidBody`` with ``RigidBodyInertia(mass, I, com=0,
+  inertiaTensorAtCOM=True)`` — the inertia an ``ObjectRigidBody`` takes is
+  about the node reference point, so saying "at COM" explicitly matters (the
+  reference point is the COM here); ``initialAngularVelocity`` is given in
+  world axes and ``initialVelocity`` is the reference point's. Node type by
+  option ``node``: ``rotvec-lg`` (``NodeRigidBodyRotVecLG``, default: works
+  with explicit and implicit solvers), ``ep`` (Euler parameters: an algebraic
+  unit-norm constraint, so implicit solvers only), ``rxyz`` (Tait-Bryan angles,
+  singular at +-90 degrees of the middle angle).
+* Jointed scenes two ways (option ``joints``):
+
+  - ``minimal`` (default): one ``ObjectKinematicTree`` whose links rotate about
+    their local z; each link frame is the scene's child joint frame turned so
+    that z is the joint axis. It runs with every solver. Ball joints and welds
+    are not single-axis joints: ``unsupported``. The pivot reaction is read back
+    by Newton's law on each link, ``R = m a_com - F_ext - m g + sum R_children``,
+    with ``a_com`` from the tree's acceleration sensor;
+  - ``redundant``: every body an ``ObjectRigidBody`` (the node type as above),
+    each joint an ``ObjectJointGeneric`` (revolute: the five axes other than the
+    joint axis constrained; ball: translations; weld: all six) from a marker on
+    the parent (marker 0) to one on the child, each marker frame = joint frame. An index-3 DAE: implicit solvers
+    only. The reaction is the joint's ``ForceLocal``: the force on the marker-0
+    (parent) side in the marker-0 frame, so the force ON the child in world axes is
+    ``-R_WP R_PJ ForceLocal``. Initial body states come from the
+    scene's joint coordinates by forward kinematics.
+* Loads: ``LoadForceVector``/``LoadTorqueVector`` on a rigid marker at the
+  body point, ``bodyFixed=True`` for follower loads (with ``bodyFixed=False``
+  the force stays world-fixed: phi(2 s) = 2.44 rad instead of 12 on the rod).
+* Gravity only when the scene has it (Exudyn adds none by default).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dalembert import spatial
+from dalembert.scene import WORLD
+
+__all__ = ["build", "rigid_bodies", "axis_frame", "NODES", "JOINTS", "CONSTRAINED_AXES"]
+
+NODES = {"rotvec-lg": "RotationRotationVector", "ep": "RotationEulerParameters", "rxyz": "RotationRxyz"}
+JOINTS = ("minimal", "redundant")
+# ObjectJointGeneric's constrainedAxes (x, y, z translation; x, y, z rotation) in the
+# joint frame, whose z is a revolute joint's axis.
+CONSTRAINED_AXES = {"revolute": [1, 1, 1, 1, 1, 0], "ball": [1, 1, 1, 0, 0, 0], "weld": [1, 1, 1, 1, 1, 1]}
+
+
+def rigid_bodies(scene, redundant):
+    """Names of the bodies Exudyn models as ``ObjectRigidBody``: free ones, or all with redundant joints."""
+    return [b.name for b in scene.topological_order() if redundant or scene.joint(b.name).kind == "free"]
+
+
+def axis_frame(axis):
+    """A rotation whose third column is the unit ``axis`` (link z = joint axis)."""
+    z = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+def build(scene, settings, assemble=True):
+    """The Exudyn system of ``scene`` for ``settings.options`` (``node``, ``joints``), assembled
+    unless ``assemble`` is False (for the summary alone).
+
+    Returns a dict: ``SC``, ``mbs`` (the system container and system), ``sensors`` (body or
+    ``__q``/``__v``/``__joint:<child>`` -> quantity -> sensor number), ``X_EB`` (per link),
+    ``links`` (the kinematic tree's bodies, in link order), ``redundant_joints`` (child ->
+    joint frame in the parent's axes, ``R_PJ R_A``) and ``summary`` (text, for reports).
+    """
+    import exudyn as exu
+    from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid,
+                                      MarkerKinematicTreeRigid, NodeGenericODE2, ObjectGround,
+                                      ObjectJointGeneric, ObjectKinematicTree, SensorBody, SensorKinematicTree,
+                                      SensorNode, SensorObject)
+    from exudyn.rigidBodyUtilities import RigidBodyInertia
+
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    g = np.array(scene.gravity, dtype=float)
+    node_type = getattr(exu.NodeType, NODES[settings.options.get("node", "rotvec-lg")])
+    redundant = settings.options.get("joints", "minimal") == "redundant"
+    OV = exu.OutputVariableType
+    summary, sensors, markers, bodies = [], {}, {}, {}
+    # --- rigid bodies: free bodies, and every body with joints=redundant
+    rigid = rigid_bodies(scene, redundant)
+    state0 = spatial.initial_body_states(scene) if rigid else {}  # world states at t = 0
+    for name in rigid:
+        body, s0 = scene.body(name), state0[name]
+        kwargs = dict(inertia=RigidBodyInertia(body.mass, body.inertia_matrix, [0.0, 0.0, 0.0], True),
+                      referencePosition=list(s0["p"]), referenceRotationMatrix=s0["R"],
+                      initialVelocity=list(s0["v"]), initialAngularVelocity=list(s0["w"]),
+                      nodeType=node_type, returnDict=True)
+        if np.any(g):
+            kwargs["gravity"] = list(g)
+        obj = mbs.CreateRigidBody(**kwargs)["bodyNumber"]
+        bodies[name] = obj
+        markers[name] = lambda p, obj=obj: mbs.AddMarker(MarkerBodyRigid(bodyNumber=obj, localPosition=list(p)))
+        sensors[name] = {k: mbs.AddSensor(SensorBody(bodyNumber=obj, outputVariableType=v))
+                         for k, v in (("p", OV.Position), ("R", OV.RotationMatrix), ("v", OV.Velocity),
+                                      ("w", OV.AngularVelocity))}
+        summary.append(f"{name}: ObjectRigidBody on {node_type.name} node, mass {body.mass:g} kg, "
+                       f"inertia at COM (inertiaTensorAtCOM=True)")
+    # --- joints=redundant: generic joints between rigid bodies (marker 0 on the parent)
+    redundant_joints = {}
+    if redundant and any(j.kind != "free" for j in scene.joints):
+        ground = mbs.AddObject(ObjectGround())
+        for j in scene.joints:
+            if j.kind == "free":
+                continue
+            R_A = axis_frame(j.axis) if j.kind == "revolute" else np.eye(3)
+            R0 = spatial.quat_to_matrix(j.parent_quat) @ R_A  # joint frame in the parent's frame
+            R1 = spatial.quat_to_matrix(j.child_quat) @ R_A
+            parent = ground if j.parent == WORLD else bodies[j.parent]
+            # the marker frames are the joint frames (rotationMarker0/1 are deprecated since 1.12)
+            m0 = mbs.AddMarker(MarkerBodyRigid(bodyNumber=parent,
+                                               localHT=exu.HT(rotation=R0, translation=list(j.parent_point))))
+            m1 = mbs.AddMarker(MarkerBodyRigid(bodyNumber=bodies[j.child],
+                                               localHT=exu.HT(rotation=R1, translation=list(j.child_point))))
+            joint = mbs.AddObject(ObjectJointGeneric(markerNumbers=[m0, m1],
+                                                     constrainedAxes=CONSTRAINED_AXES[j.kind]))
+            sensors[f"__joint:{j.child}"] = {"f": mbs.AddSensor(SensorObject(
+                objectNumber=joint, outputVariableType=OV.ForceLocal))}
+            redundant_joints[j.child] = R0
+            summary.append(f"ObjectJointGeneric {j.parent} -> {j.child} ({j.kind}), constrainedAxes "
+                           f"{CONSTRAINED_AXES[j.kind]} (redundant coordinates)")
+    # --- joints=minimal: revolute tree(s) in one kinematic tree
+    links = [] if redundant else [b for b in scene.topological_order() if scene.joint(b.name).kind == "revolute"]
+    X_EB = {}  # link -> (p_EB, R_EB): its scene frame B in its link frame E, x_E = p_EB + R_EB x_B
+    if links:
+        index = {b.name: i for i, b in enumerate(links)}
+        Ts, offsets, coms, inertias, masses, parents, q0, v0 = [], [], [], [], [], [], [], []
+        for b in links:
+            j = scene.joint(b.name)
+            R_CJ = spatial.quat_to_matrix(j.child_quat)
+            R_A = axis_frame(j.axis)
+            R_EB = R_A.T @ R_CJ.T
+            p_EB = -R_EB @ np.array(j.child_point)
+            X_EB[b.name] = (p_EB, R_EB)
+            R_PJ = spatial.quat_to_matrix(j.parent_quat)
+            if j.parent == WORLD:
+                p_EpP, R_EpP = np.zeros(3), np.eye(3)
+            else:
+                p_EpP, R_EpP = X_EB[j.parent]  # the parent's scene frame P in its link frame Ep
+            Ts.append(R_EpP @ R_PJ @ R_A)
+            offsets.append(p_EpP + R_EpP @ np.array(j.parent_point))
+            coms.append(p_EB)
+            inertias.append(R_EB @ b.inertia_matrix @ R_EB.T)
+            masses.append(b.mass)
+            parents.append(-1 if j.parent == WORLD else index[j.parent])
+            q0.append(j.q0[0])
+            v0.append(j.v0[0])
+        n = len(links)
+        node = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0] * n, initialCoordinates=q0,
+                                           initialCoordinates_t=v0, numberOfODE2Coordinates=n))
+        tree = mbs.AddObject(ObjectKinematicTree(
+            nodeNumber=node, jointTypes=[exu.JointType.RevoluteZ] * n, linkParents=parents,
+            jointTransformations=exu.Matrix3DList(Ts), jointOffsets=exu.Vector3DList(offsets),
+            linkInertiasCOM=exu.Matrix3DList(inertias), linkCOMs=exu.Vector3DList(coms), linkMasses=masses,
+            baseOffset=[0.0, 0.0, 0.0], gravity=list(g)))
+        outputs = (("p", OV.Position), ("R", OV.RotationMatrix), ("v", OV.Velocity), ("w", OV.AngularVelocity),
+                   ("a", OV.Acceleration))
+        for b in links:
+            i, (p_EB, R_EB) = index[b.name], X_EB[b.name]
+            markers[b.name] = lambda p, i=i, p_EB=p_EB, R_EB=R_EB: mbs.AddMarker(MarkerKinematicTreeRigid(
+                objectNumber=tree, linkNumber=i, localPosition=list(p_EB + R_EB @ np.array(p))))
+            sensors[b.name] = {k: mbs.AddSensor(SensorKinematicTree(
+                objectNumber=tree, linkNumber=i, localPosition=list(p_EB), outputVariableType=v))
+                for k, v in outputs}
+        sensors["__q"] = {"q": mbs.AddSensor(SensorNode(nodeNumber=node, outputVariableType=OV.Coordinates))}
+        sensors["__v"] = {"v": mbs.AddSensor(SensorNode(nodeNumber=node, outputVariableType=OV.Coordinates_t))}
+        summary.append(f"ObjectKinematicTree: {n} RevoluteZ link(s) {[b.name for b in links]} "
+                       f"(minimal coordinates), gravity {g.tolist()}")
+    # --- loads
+    for ld in scene.loads:
+        R_EB = X_EB.get(ld.body, (None, np.eye(3)))[1]  # a rigid body's E is B
+        marker = markers[ld.body](ld.point)
+        follower = ld.frame == "body"
+        vec = list(R_EB @ np.array(ld.vector)) if follower else list(ld.vector)
+        Load = LoadForceVector if ld.kind == "force" else LoadTorqueVector
+        mbs.AddLoad(Load(markerNumber=marker, loadVector=vec, bodyFixed=follower))
+        summary.append(f"{Load.__name__} on {ld.body} at {list(ld.point)}, bodyFixed={follower}")
+    if assemble:
+        mbs.Assemble()
+    return dict(SC=SC, mbs=mbs, sensors=sensors, X_EB=X_EB, links=[b.name for b in links],
+                redundant_joints=redundant_joints, summary="\n".join(summary) + "\n")

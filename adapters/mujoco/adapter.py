@@ -1,0 +1,155 @@
+"""``MujocoAdapter``: the contract (``dalembert.adapters``) for MuJoCo.
+
+``prepare`` compiles the generated MJCF (``mjcf``) and checks the compiled mass
+properties against the scene's; ``run`` steps (``stepping``) with MuJoCo's
+warnings sent to the adapter, not to ``MUJOCO_LOG.TXT`` or the console, then
+reads the states back in body terms (``readback``); ``audit`` reads the
+compiled options back from the model.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dalembert import spatial
+from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
+from dalembert.adapters.mujoco.mjcf import LOAD_PATHS, WELDS, engine_frames, mjcf
+from dalembert.adapters.mujoco.readback import read_back
+from dalembert.adapters.mujoco.stepping import step_loop, step_rollout
+from dalembert.scene import EFFECTS
+from dalembert.settings import steps_per_interval
+
+__all__ = ["MujocoAdapter"]
+
+OPTIONS = ("loads", "welds")
+# Compiled mass properties must reproduce the scene's to this relative accuracy:
+# MuJoCo diagonalizes the full inertia (an eigen-solve), which costs a few ulps.
+MASS_PROPERTY_REL_TOL = 1e-10
+
+
+class MujocoAdapter(Adapter):
+    """MuJoCo (``mujoco`` Python bindings). Options: ``loads`` = ``actuator`` | ``xfrc_applied``;
+    ``welds`` = ``tree`` | ``equality``."""
+
+    name = "mujoco"
+    effects = EFFECTS
+    integrators = {
+        "euler": IntegratorSpec(True, OPTIONS, "semi-implicit Euler"),
+        "rk4": IntegratorSpec(True, OPTIONS, "classical RK4"),
+        "implicit": IntegratorSpec(True, OPTIONS, "implicit in velocity (Coriolis and damping)"),
+        "implicitfast": IntegratorSpec(True, OPTIONS, "implicit in velocity, no Coriolis derivatives"),
+        "discrete": IntegratorSpec(True, OPTIONS, "MuJoCo 4's discrete integrator"),
+    }
+
+    def version(self):
+        import mujoco
+
+        return mujoco.__version__
+
+    def check(self, scene, times, settings):
+        super().check(scene, times, settings)
+        option_choice(settings, "loads", LOAD_PATHS)
+        option_choice(settings, "welds", WELDS)
+
+    def variants(self, scene):
+        """Default matrix: where the scene has welds, also as equality constraints."""
+        return [{}, {"welds": "equality"}] if any(j.kind == "weld" for j in scene.joints) else [{}]
+
+    def describe(self, scene, settings):
+        """The generated model, for reports and ``dalembert show-model``."""
+        return mjcf(scene, settings)
+
+    # ------------------------------------------------------------- build
+    def prepare(self, scene, times, settings):
+        import mujoco
+
+        text = mjcf(scene, settings)
+        model = mujoco.MjModel.from_xml_string(text)
+        welds = settings.options.get("welds", "tree")
+        X_EB = engine_frames(scene, welds)
+        ids = {b.name: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b.name) for b in scene.bodies}
+        self._check_mass_properties(model, scene, X_EB, ids)
+        data = mujoco.MjData(model)
+        qpos0, qvel0 = np.zeros(model.nq), np.zeros(model.nv)
+        state0 = spatial.initial_body_states(scene) if welds == "equality" else {}
+        for j in scene.joints:
+            if j.kind == "weld" and welds == "tree":
+                continue
+            jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j.child)
+            a, v = model.jnt_qposadr[jid], model.jnt_dofadr[jid]
+            if j.kind == "weld":  # a free body at its initial state: qvel = (v world, w body)
+                s0 = state0[j.child]
+                qpos0[a:a + 7] = np.concatenate([s0["p"], spatial.matrix_to_quat(s0["R"])])
+                qvel0[v:v + 6] = np.concatenate([s0["v"], s0["R"].T @ s0["w"]])
+                continue
+            qpos0[a:a + len(j.q0)] = j.q0
+            qvel0[v:v + len(j.v0)] = j.v0
+        steps = steps_per_interval(np.asarray(times, float), settings.dt)
+        return dict(scene=scene, times=np.asarray(times, float), settings=settings, model=model, data=data,
+                    scratch=mujoco.MjData(model), qpos0=qpos0, qvel0=qvel0, steps=steps, frames=X_EB, ids=ids,
+                    mjcf=text, load_path=settings.options.get("loads", "actuator"), welds=welds)
+
+    @staticmethod
+    def _check_mass_properties(model, scene, X_EB, ids):
+        for b in scene.bodies:
+            i = ids[b.name]
+            p_EB, R_EB = X_EB[b.name]
+            R = spatial.quat_to_matrix(model.body_iquat[i])
+            I_E = R @ np.diag(model.body_inertia[i]) @ R.T
+            expected = R_EB @ b.inertia_matrix @ R_EB.T
+            scale = np.abs(expected).max()
+            if (abs(model.body_mass[i] - b.mass) > MASS_PROPERTY_REL_TOL * b.mass
+                    or np.abs(I_E - expected).max() > MASS_PROPERTY_REL_TOL * scale
+                    or np.abs(model.body_ipos[i] - p_EB).max() > MASS_PROPERTY_REL_TOL * max(1.0, np.abs(p_EB).max())):
+                raise RuntimeError(f"MuJoCo compiled body {b.name!r} with mass {model.body_mass[i]}, "
+                                   f"COM {model.body_ipos[i]} and inertia {I_E.tolist()}; the scene has "
+                                   f"{b.mass}, {p_EB.tolist()}, {expected.tolist()}")
+
+    # ------------------------------------------------------------- run
+    def run(self, prepared):
+        import mujoco
+
+        p = prepared
+        messages = []
+        previous = mujoco.get_mju_user_warning()
+        mujoco.set_mju_user_warning(messages.append)  # no MUJOCO_LOG.TXT, no printing
+        try:
+            if p["load_path"] == "actuator":
+                Q, V, wall, diverged_at = step_rollout(p)
+                if diverged_at is not None:  # locate the first bad sample
+                    messages.clear()
+                    Q, V, wall, diverged_at = step_loop(p)
+            else:
+                Q, V, wall, diverged_at = step_loop(p)
+        finally:
+            mujoco.set_mju_user_warning(previous)
+        n_steps = int(p["steps"][:diverged_at].sum()) if diverged_at else int(p["steps"].sum())
+        stages = 4 if p["settings"].integrator == "rk4" else 1
+        info = {"message": f"MuJoCo: {messages[0]}" if messages else "", "warnings": messages[:5]}
+        traj, audit = read_back(p, Q, V)
+        info["audit"] = audit
+        return Outcome(traj, wall, n_steps, n_steps * stages, info)
+
+    # ------------------------------------------------------------- audit
+    def audit(self, prepared, outcome):
+        import mujoco
+
+        model = prepared["model"]
+        disabled = [name[len("mjDSBL_"):].lower() for name in dir(mujoco.mjtDisableBit) if name.startswith("mjDSBL_")
+                    and model.opt.disableflags & int(getattr(mujoco.mjtDisableBit, name))]
+        enabled = [name[len("mjENBL_"):].lower() for name in dir(mujoco.mjtEnableBit) if name.startswith("mjENBL_")
+                   and model.opt.enableflags & int(getattr(mujoco.mjtEnableBit, name))]
+        return {
+            "gravity": tuple(float(g) for g in model.opt.gravity),
+            "disabled": sorted(disabled),
+            "enabled": sorted(enabled),
+            "integrator": mujoco.mjtIntegrator(model.opt.integrator).name,
+            "timestep": float(model.opt.timestep),
+            "mujoco_version": mujoco.__version__,
+            "load_path": prepared["load_path"],
+            "actuators": [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i) for i in range(model.nu)],
+            "max_armature": float(np.abs(model.dof_armature).max(initial=0.0)),
+            "max_damping": float(np.abs(model.dof_damping).max(initial=0.0)),
+            "ngeom": int(model.ngeom),
+            **outcome.info.get("audit", {}),
+        }

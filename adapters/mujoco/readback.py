@@ -1,0 +1,105 @@
+"""MuJoCo's states in body terms: poses, velocities, joint coordinates and reactions.
+
+After stepping, not timed: for every sample the state is set in a scratch
+``MjData`` and ``mj_forward`` + ``mj_rnePostConstraint`` recompute the derived
+quantities (right after ``mj_step`` they describe the previous state). Poses and
+velocities of the scene's body frames come from the MuJoCo frames through
+``dalembert.spatial``. The joint reaction on a child is ``cfrc_int``'s force
+part minus the loads that the site actuators routed through joint space onto
+the child's subtree (MuJoCo counts them as joint torques, not as external
+forces).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dalembert import spatial
+from dalembert.adapters.mujoco.mjcf import floating
+from dalembert.adapters.mujoco.stepping import apply_xfrc
+
+__all__ = ["read_back"]
+
+
+def read_back(p, Q, V):
+    """The ``Trajectory`` of the sampled states ``Q (n, nq)``, ``V (n, nv)`` (NaN rows stay
+    NaN), with the reaction forces on jointed children (N, world axes) as extras; and the
+    audit figures read on the way (contacts, constraint rows, passive forces)."""
+    import mujoco
+
+    from dalembert.trajectory import BodyStates, JointStates, Trajectory
+
+    model, d, scene = p["model"], p["scratch"], p["scene"]
+    n, nb = len(p["times"]), len(scene.bodies)
+    pos, quat = np.full((nb, n, 3), np.nan), np.full((nb, n, 4), np.nan)
+    vel, omega = np.full((nb, n, 3), np.nan), np.full((nb, n, 3), np.nan)
+    # a weld held by an equality constraint has no joint force to read (cfrc_int is zero)
+    reactions = {j.child: np.full((n, 3), np.nan) for j in scene.joints if not floating(j, p["welds"])}
+    max_ncon = max_nefc = 0
+    max_passive = 0.0
+    res = np.zeros(6)
+    if p["load_path"] == "actuator":
+        d.ctrl[:] = 1.0
+    subtree = {b.name: _subtree(scene, b.name, p["welds"]) for b in scene.bodies}
+    for k in range(n):
+        if not np.all(np.isfinite(Q[k])):
+            continue
+        d.qpos[:], d.qvel[:] = Q[k], V[k]
+        if p["load_path"] == "xfrc_applied":
+            apply_xfrc(p, d)
+        mujoco.mj_forward(model, d)
+        mujoco.mj_rnePostConstraint(model, d)
+        max_ncon, max_nefc = max(max_ncon, d.ncon), max(max_nefc, d.nefc)
+        max_passive = max(max_passive, float(np.abs(d.qfrc_passive).max(initial=0.0)))
+        R_WB_all = {}
+        for bi, b in enumerate(scene.bodies):
+            i = p["ids"][b.name]
+            p_EB, R_EB = p["frames"][b.name]
+            R_WE = d.xmat[i].reshape(3, 3)
+            R_WB = R_WE @ R_EB  # W <- E <- B
+            R_WB_all[b.name] = R_WB
+            r = R_WE @ p_EB
+            # XBODY: velocity at the body frame origin (mjOBJ_BODY would be at the COM), world axes
+            mujoco.mj_objectVelocity(model, d, mujoco.mjtObj.mjOBJ_XBODY, i, res, 0)
+            pos[bi, k] = d.xpos[i] + r
+            quat[bi, k] = spatial.matrix_to_quat(R_WB)
+            omega[bi, k] = res[:3]
+            vel[bi, k] = res[3:] + np.cross(res[:3], r)
+        for child in reactions:
+            f = d.cfrc_int[p["ids"][child], 3:].copy()
+            if p["load_path"] == "actuator":  # loads MuJoCo routed through joint space
+                for ld in scene.loads:
+                    if ld.kind == "force" and ld.body in subtree[child]:
+                        f -= spatial.load_to_world(ld, R_WB_all[ld.body])
+            reactions[child][k] = f
+    # Free bodies: the attitude is MuJoCo's own quaternion as integrated (its norm is data).
+    for bi, b in enumerate(scene.bodies):
+        j = scene.joint(b.name)
+        if floating(j, p["welds"]):
+            jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, b.name)
+            a = model.jnt_qposadr[jid]
+            quat[bi] = Q[:, a + 3:a + 7]
+    bodies = {b.name: BodyStates(pos[bi], quat[bi], vel[bi], omega[bi]) for bi, b in enumerate(scene.bodies)}
+    joints = {}
+    for j in scene.joints:
+        if j.kind == "weld":
+            continue
+        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j.child)
+        a, v = model.jnt_qposadr[jid], model.jnt_dofadr[jid]
+        joints[j.child] = JointStates(Q[:, a:a + len(j.q0)], V[:, v:v + len(j.v0)])
+    extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
+    audit = {"max_contacts": int(max_ncon), "max_constraint_rows": int(max_nefc),
+             "max_abs_passive_force": max_passive}
+    return Trajectory(p["times"], bodies, joints, extras), audit
+
+
+def _subtree(scene, name, welds="tree"):
+    """``name`` and the bodies below it in MuJoCo's tree (a weld held by a constraint is not)."""
+    out, frontier = {name}, [name]
+    while frontier:
+        parent = frontier.pop()
+        for j in scene.joints:
+            if j.parent == parent and j.child not in out and not floating(j, welds):
+                out.add(j.child)
+                frontier.append(j.child)
+    return out

@@ -1,0 +1,12 @@
+"""Pinocchio adapter: the scene through Pinocchio's dynamics, with the integrators owned here.
+
+Modules by job: ``model`` (``PinocchioModel``: the scene as a ``pin.Model``,
+its loads, accelerations and ``dexp^-1``), ``integrators`` (the fixed-step and
+adaptive loops in Python), ``native`` (the fixed-step loop compiled from
+``stepper.cpp``; ``python -m dalembert.adapters.pinocchio.native`` builds it),
+``adapter`` (``PinocchioAdapter``).
+"""
+
+from dalembert.adapters.pinocchio.adapter import PinocchioAdapter
+
+__all__ = ["PinocchioAdapter"]

@@ -1,0 +1,188 @@
+"""``PinocchioAdapter``: the contract (``dalembert.adapters``) for Pinocchio.
+
+The scene through Pinocchio's dynamics (ABA, RNEA; ``model``), with the
+integrators owned here (``integrators``), so their quality is part of what is
+measured. The fixed-step loops run compiled (``native``: the same integrators
+and loads in ``stepper.cpp`` against the installed Pinocchio, no Python call per
+step), or in Python with ``--option loop=python`` and wherever the compiled loop
+cannot be built (the audit says which ran).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from dalembert import spatial
+from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
+from dalembert.adapters.pinocchio.integrators import STAGES, adaptive, fixed_step
+from dalembert.adapters.pinocchio.model import WELDS, PinocchioModel
+from dalembert.scene import EFFECTS
+from dalembert.settings import steps_per_interval
+
+__all__ = ["PinocchioAdapter"]
+
+# Fixed-step loops: compiled (stepper.cpp, the default) or the Python one
+# (the same integrators, kept as the readable specification and the fallback).
+LOOPS = ("native", "python")
+
+
+class PinocchioAdapter(Adapter):
+    """Pinocchio (``pin``), integrators owned by the adapter."""
+
+    name = "pinocchio"
+    effects = EFFECTS
+    integrators = {
+        "euler": IntegratorSpec(True, ("loop", "welds"), "semi-implicit Euler on the group"),
+        "rk4": IntegratorSpec(True, ("loop", "welds"), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
+        "rk4-naive": IntegratorSpec(True, ("loop", "welds"), "RK4 with stagewise integrate, no dexp^-1 correction"),
+        "rk45": IntegratorSpec(False, ("welds",), "scipy RK45 in local coordinates"),
+        "dop853": IntegratorSpec(False, ("welds",), "scipy DOP853 in local coordinates"),
+    }
+
+    def version(self):
+        import pinocchio
+
+        return pinocchio.__version__
+
+    def check(self, scene, times, settings):
+        super().check(scene, times, settings)
+        option_choice(settings, "loop", LOOPS)
+        option_choice(settings, "welds", WELDS)
+
+    def unsupported(self, scene, settings):
+        reason = super().unsupported(scene, settings)
+        if reason or settings.options.get("welds", "tree") != "constraint":
+            return reason
+        if scene.loads:
+            return ("welds=constraint with loads: pin.constraintDynamics takes no external forces — "
+                    "use welds=tree")
+        if any(j.kind in ("revolute", "ball") for j in scene.joints):
+            return ("welds=constraint with revolute or ball joints: their reactions would miss the "
+                    "constraint forces — use welds=tree")
+        return None
+
+    def variants(self, scene):
+        """Default matrix: where the scene has welds, also as constraints (where supported)."""
+        out = [{}]
+        if any(j.kind == "weld" for j in scene.joints):
+            out.append({"welds": "constraint"})
+        return out
+
+    def describe(self, scene, settings):
+        return PinocchioModel(scene, settings.options.get("welds", "tree")).summary + "\n"
+
+    def prepare(self, scene, times, settings):
+        pm = PinocchioModel(scene, settings.options.get("welds", "tree"))
+        q0, v0 = pm.initial_state()
+        times = np.asarray(times, dtype=float)
+        steps = steps_per_interval(times, settings.dt) if settings.dt else None
+        return dict(scene=scene, pm=pm, q0=q0, v0=v0, times=times, settings=settings, steps=steps)
+
+    # ------------------------------------------------------------ stepping
+    def run(self, prepared):
+        p = prepared
+        method = p["settings"].integrator
+        info = {}
+        start = time.perf_counter()
+        if method in ("rk45", "dop853"):
+            s = p["settings"]
+            Q, V, n_steps, n_rhs = adaptive(p["pm"], method.upper(), p["q0"], p["v0"], p["times"], s.rtol, s.atol)
+            info["loop"] = "Python around scipy solve_ivp"
+        else:
+            Q, V, n_steps, n_rhs, info["loop"] = self._fixed_loop(p, method)
+        wall = time.perf_counter() - start
+        return Outcome(self._read_back(p, Q, V), wall, n_steps, n_rhs, info)
+
+    def _fixed_loop(self, p, method):
+        """The compiled loop (``native``) unless ``options.loop`` is ``python`` or it cannot be
+        built; the fifth item says which ran, and why not the compiled one."""
+        # imported here, not at the top: ``python -m dalembert.adapters.pinocchio.native`` imports
+        # this package before it runs native.py as __main__
+        from dalembert.adapters.pinocchio import native
+
+        pm = p["pm"]
+        args = (pm, method, p["q0"], p["v0"], p["times"], p["steps"])
+        if p["settings"].options.get("loop", "native") == "python":
+            return (*fixed_step(*args), "Python (options.loop = python)")
+        if pm.constraints:
+            return (*fixed_step(*args), "Python (constraint dynamics: the compiled loop has aba only)")
+        try:
+            Q, V, n, error = native.run_fixed(pm, method, min(pm.dexpinv_kind(), 2), p["q0"], p["v0"], p["times"],
+                                              p["steps"])
+        except RuntimeError as e:  # not built here: the Python loop, saying why
+            return (*fixed_step(*args), f"Python (the compiled loop is unavailable: {e})")
+        loop = "C++ (adapters/pinocchio/stepper.cpp)" + (f"; stopped: {error}" if error else "")
+        return Q, V, n, n * STAGES[method], loop
+
+    # ------------------------------------------------------------ read-back
+    def _read_back(self, p, Q, V):
+        import pinocchio as pin
+
+        from dalembert.trajectory import BodyStates, JointStates, Trajectory
+
+        pm, scene = p["pm"], p["scene"]
+        model, data = pm.model, pm.data
+        n = len(p["times"])
+        bodies = {b.name: [np.full((n, 3), np.nan), np.full((n, 4), np.nan), np.full((n, 3), np.nan),
+                           np.full((n, 3), np.nan)] for b in scene.bodies}
+        reacting = [j for j in scene.joints if j.kind in ("revolute", "ball")]
+        reactions = {j.child: np.full((n, 3), np.nan) for j in reacting}
+        for k in range(n):
+            q, v = Q[k], V[k]
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                continue
+            local = {}
+            if reacting:  # rnea with the external forces: data.f[joint] is the force through the joint
+                a = pm.acceleration(q, v)
+                if pm.has_loads:
+                    pin.rnea(model, data, q, v, a, pm.external_forces(q))
+                else:
+                    pin.rnea(model, data, q, v, a)
+                local = {j.child: data.f[pm.joint_ids[j.child]].linear.copy() for j in reacting}
+            # rnea does not refresh data.oMi: rotate with this sample's forward kinematics
+            pin.forwardKinematics(model, data, q, v)
+            pin.updateFramePlacements(model, data)
+            for child, f in local.items():
+                reactions[child][k] = data.oMi[pm.joint_ids[child]].rotation @ f
+            for name, arrs in bodies.items():
+                fid = pm.frame_ids[name]
+                X = data.oMf[fid]
+                vel = pin.getFrameVelocity(model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+                arrs[0][k], arrs[2][k], arrs[3][k] = X.translation, vel.linear, vel.angular
+                arrs[1][k] = spatial.matrix_to_quat(X.rotation)
+        joints = {}
+        for j in scene.joints:
+            if j.kind == "weld":
+                continue
+            jm = model.joints[pm.joint_ids[j.child]]
+            qj, vj = Q[:, jm.idx_q:jm.idx_q + jm.nq], V[:, jm.idx_v:jm.idx_v + jm.nv]
+            if j.kind == "free":  # the engine's own quaternion (its norm is data), scalar first
+                quat = spatial.xyzw_to_wxyz(qj[:, 3:])
+                bodies[j.child][1] = quat
+                R = spatial.quat_to_matrix(spatial.quat_normalize(np.nan_to_num(quat, nan=1.0)))
+                v_W = np.einsum("nij,nj->ni", R, vj[:, :3])
+                joints[j.child] = JointStates(np.concatenate([qj[:, :3], quat], axis=1),
+                                              np.concatenate([v_W, vj[:, 3:]], axis=1))
+            elif j.kind == "ball":
+                joints[j.child] = JointStates(spatial.xyzw_to_wxyz(qj), vj)
+            else:
+                joints[j.child] = JointStates(qj, vj)
+        traj_bodies = {name: BodyStates(*arrs) for name, arrs in bodies.items()}
+        extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
+        return Trajectory(p["times"], traj_bodies, joints, extras)
+
+    # ------------------------------------------------------------ audit
+    def audit(self, prepared, outcome):
+        pm = prepared["pm"]
+        return {
+            "gravity": tuple(float(g) for g in pm.model.gravity.linear),
+            "joints": {name: pm.model.joints[jid].shortname() for name, jid in pm.joint_ids.items()},
+            "external_forces_per_evaluation": [f"{ld.effect} on {ld.body}" for ld in prepared["scene"].loads],
+            "nq": int(pm.model.nq), "nv": int(pm.model.nv),
+            "integrator": prepared["settings"].integrator,
+            "loop": outcome.info.get("loop", ""),
+            "pinocchio_version": self.version(),
+            "contacts": 0, "constraint_rows": 0,
+        }
