@@ -18,7 +18,8 @@ outcome         ``status``, ``message``, ``t_final`` (s), ``t_diverged`` (s),
                 ``traceback``
 cost            ``build_s``, ``wall_s_median``, ``wall_s_min``, ``wall_s_max`` (stepping
                 alone), ``repeats``, ``n_steps``, ``n_rhs``, ``overhead_s``,
-                ``stepping_total_s``, ``worker_s`` (all s)
+                ``stepping_total_s``, ``worker_s`` (all s), ``concurrent`` (runs in
+                flight), ``load_start``, ``load_end`` (1-minute load average)
 errors          ``err_<quantity>_max``, ``err_<quantity>_final`` (``dalembert.errors.QUANTITIES``)
 drifts          ``drift_<name>``, ``drift_rate_<name>`` (1/s) per conserved quantity
 checks          ``orthonormality``, ``quaternion_norm``, ``joint_residual`` (maxima)
@@ -55,7 +56,7 @@ BAD_STATUSES = ("failed", "diverged", "timeout")
 CHECKS = ("orthonormality", "quaternion_norm", "joint_residual")
 
 _NAN = float("nan")
-_COUNTS = ("repeats", "n_steps", "n_rhs")  # the integer fields of Cost
+_COUNTS = ("repeats", "n_steps", "n_rhs", "concurrent")  # the integer fields of Cost
 
 
 class SchemaError(ValueError):
@@ -75,6 +76,10 @@ class Cost:
     overhead_s : median time per repeat outside the engine's stepping (read-back)
     stepping_total_s : stepping time of the warm-up and every repeat
     worker_s : wall time of the whole run in its worker
+    concurrent : runs in flight on this machine's pool when this one started, itself included
+        (its timings compete with that many; 1 with ``--jobs 1``)
+    load_start, load_end : the machine's 1-minute load average when the run started and ended
+        (a load above the cores means the timings were shared with other work)
     """
 
     build_s: float = _NAN
@@ -87,6 +92,9 @@ class Cost:
     overhead_s: float = _NAN
     stepping_total_s: float = _NAN
     worker_s: float = _NAN
+    concurrent: int = 0
+    load_start: float = _NAN
+    load_end: float = _NAN
 
 
 @dataclass(frozen=True, eq=False)

@@ -236,6 +236,14 @@ def _timestamped(prefix=""):
     return os.path.join("results", prefix + ("-" if prefix else "") + datetime.now().strftime("%Y-%m-%dT%H-%M-%S"))
 
 
+def _load_average():
+    """The machine's 1, 5 and 15-minute load averages (None where the OS has none)."""
+    try:
+        return list(os.getloadavg())
+    except OSError:
+        return None
+
+
 def _new_store(out, manifest):
     """A new store at ``out`` (created); ValueError naming ``--out`` when it cannot be."""
     from dalembert.store import Store
@@ -328,7 +336,8 @@ def cmd_run(args):
                 "machine": machine_info(),
                 "engines": {e: get_adapter(e).version() for e in sorted({s.engine for s in specs})},
                 "command": _command_line(), "started": now(), "ended": None, "timeout_s": timeout,
-                "timing": vars(timing), "specs": [s.to_json() for s in specs],
+                "timing": vars(timing), "jobs": args.jobs or os.cpu_count(), "scheduler": args.scheduler,
+                "load_average": {"start": _load_average(), "end": None}, "specs": [s.to_json() for s in specs],
             }
             store = _new_store(args.out or _timestamped(), manifest)
         except (UnknownNameError, ValueError, SceneError, ImportError, OSError) as e:
@@ -344,6 +353,7 @@ def cmd_run(args):
         run_matrix(specs, store, args.jobs, timeout, timing, progress)
     manifest = store.manifest()
     manifest["ended"] = now()
+    manifest.setdefault("load_average", {})["end"] = _load_average()
     store.write_manifest(manifest)
     records = store.records()
     by_status = {}

@@ -56,10 +56,19 @@ def unfinished(spec, status, message):
     return _record(spec, status, message)
 
 
-def execute(spec, timing=Timing(), truth=None):
+def _load():
+    """The machine's 1-minute load average (NaN where the OS has none)."""
+    try:
+        return os.getloadavg()[0]
+    except OSError:
+        return float("nan")
+
+
+def execute(spec, timing=Timing(), truth=None, concurrent=1):
     """Run ``spec`` in this process: ``(RunRecord, trajectory npz or None)``. Never raises.
 
-    ``truth``: the case's truth trajectory at its sample times (computed here when None).
+    ``truth``: the case's truth trajectory at its sample times (computed here when None);
+    ``concurrent``: runs in flight when this one started, itself included (stored with its cost).
     """
     from dalembert import invariants
     from dalembert.adapters import get_adapter
@@ -67,7 +76,7 @@ def execute(spec, timing=Timing(), truth=None):
     from dalembert.errors import trajectory_errors
     from dalembert.store import trajectory_to_npz
 
-    started = time.perf_counter()
+    started, load_start = time.perf_counter(), _load()
     found = {}  # what is known so far, for the record of a run that fails part-way
     try:
         adapter = get_adapter(spec.engine, spec.adapter)
@@ -92,7 +101,8 @@ def execute(spec, timing=Timing(), truth=None):
         if not traj.is_finite():
             t_bad = traj.first_nonfinite_time()
             cost = Cost(build_s=build_s, wall_s_median=first.wall_s, wall_s_min=first.wall_s,
-                        wall_s_max=first.wall_s, repeats=1, n_steps=first.n_steps, n_rhs=first.n_rhs)
+                        wall_s_max=first.wall_s, repeats=1, n_steps=first.n_steps, n_rhs=first.n_rhs,
+                        concurrent=concurrent, load_start=load_start, load_end=_load())
             return _record(spec, "diverged", f"non-finite state from t = {t_bad} s", t_diverged=t_bad, cost=cost,
                            **found), trajectory_to_npz(traj)
         walls, totals = [], []
@@ -108,7 +118,8 @@ def execute(spec, timing=Timing(), truth=None):
         cost = Cost(build_s=build_s, wall_s_median=float(np.median(walls)), wall_s_min=float(np.min(walls)),
                     wall_s_max=float(np.max(walls)), repeats=len(walls), n_steps=first.n_steps, n_rhs=first.n_rhs,
                     overhead_s=float(np.median(np.array(totals) - np.array(walls))),
-                    stepping_total_s=float(first.wall_s + sum(walls)), worker_s=time.perf_counter() - started)
+                    stepping_total_s=float(first.wall_s + sum(walls)), worker_s=time.perf_counter() - started,
+                    concurrent=concurrent, load_start=load_start, load_end=_load())
         return _record(spec, "ok", "", errors, summary.drifts, case.tolerances, drift_rates=summary.drift_rates,
                        checks=summary.checks, cost=cost, **found), npz
     except Exception as e:  # a failure is data

@@ -33,9 +33,9 @@ def _context():
     return ctx
 
 
-def _child(conn, spec, timing, truth):
+def _child(conn, spec, timing, truth, concurrent):
     try:
-        conn.send(execute(spec, timing, truth))
+        conn.send(execute(spec, timing, truth, concurrent))
     finally:
         conn.close()
 
@@ -66,8 +66,8 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
         while queue and len(running) < jobs:
             spec = queue.pop()
             parent, child = ctx.Pipe(duplex=False)
-            proc = ctx.Process(target=_child, args=(child, spec, timing, truths[(spec.case, spec.case_version)]),
-                               daemon=True)
+            proc = ctx.Process(target=_child, daemon=True,
+                               args=(child, spec, timing, truths[(spec.case, spec.case_version)], len(running) + 1))
             proc.start()
             child.close()
             running[parent] = (proc, spec, time.monotonic())
