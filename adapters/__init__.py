@@ -20,12 +20,16 @@ The contract — every adapter class:
    settings)`` returns the reason a valid request cannot be represented, or None;
 6. ``prepare(scene, times, settings)`` builds the engine model (not timed);
 7. ``run(prepared)`` simulates from the initial state and samples at exactly
-   ``times``, returning an ``Outcome``: a ``Trajectory`` in body terms
-   (converted through ``dalembert.spatial`` only), the wall time of the
-   stepping alone, steps and right-hand-side evaluations. It can be called
-   repeatedly on one prepared model and gives identical results each time (the
-   harness warms up once, then repeats for timing). A run that diverges
-   returns NaN from the point of divergence on, never an exception;
+   ``times``, returning an ``Outcome``: the wall time of the stepping alone,
+   steps and right-hand-side evaluations, and a ``read_back`` that turns the
+   sampled engine states into a ``Trajectory`` in body terms (converted
+   through ``dalembert.spatial`` only). The read-back runs once, when the
+   outcome's ``trajectory`` is first used, so the harness's timed repeats pay
+   for stepping only; everything that is not stepping (building, loading a
+   compiled library) belongs in ``prepare``. ``run`` can be called repeatedly
+   on one prepared model and gives identical results each time (the harness
+   warms up once, then repeats for timing). A run that diverges returns NaN
+   from the point of divergence on, never an exception;
 8. ``audit(prepared, outcome)`` returns what the engine actually simulated,
    read back from the engine: gravity vector, loads, joints, constraint rows,
    contacts, passive forces, the integrator as the engine names it;

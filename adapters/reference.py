@@ -70,7 +70,7 @@ class ReferenceAdapter(Adapter):
         start = time.perf_counter()
         Q, V, stats = INTEGRATORS[p["settings"].integrator]().run(p["system"], p["times"], p["settings"])
         wall = time.perf_counter() - start
-        return Outcome(p["system"].trajectory(p["times"], Q, V), wall, stats.n_steps, stats.n_rhs)
+        return Outcome(lambda: p["system"].trajectory(p["times"], Q, V), wall, stats.n_steps, stats.n_rhs)
 
     def audit(self, prepared, outcome):
         scene = prepared["scene"]

@@ -73,7 +73,8 @@ class Cost:
     wall_s_median, wall_s_min, wall_s_max : stepping wall time over the timed repeats
     repeats : timed repeats (after one untimed warm-up)
     n_steps, n_rhs : steps and right-hand-side evaluations of one run
-    overhead_s : median time per repeat outside the engine's stepping (read-back)
+    overhead_s : median time per timed repeat of ``Adapter.run`` outside its stepping (the
+        read-back is not in it: it runs once per run, ``Outcome.read_back``)
     stepping_total_s : stepping time of the warm-up and every repeat
     worker_s : wall time of the whole run in its worker
     concurrent : runs in flight on this machine's pool when this one started, itself included

@@ -168,15 +168,18 @@ class ExudynAdapter(Adapter):
                 missing, error = f"{missing}: {solved['stalled']}", None
             raise RuntimeError(f"Exudyn solver stopped at t = {solved['reached']:g} s of {times[-1]:g} s{missing}"
                                + (f": {error}" if error else ""))
-        if built["links"] and integrator in EXPLICIT:
-            self._initial_accelerations(p, solved["values"])
-        traj = self._read_back(p, built, solved["values"])
+
+        def read():
+            if built["links"] and integrator in EXPLICIT:
+                self._initial_accelerations(p, solved["values"])
+            return self._read_back(p, built, solved["values"])
+
         rejected = int(it.rejectedAutomaticStepSizeSteps) if it is not None else 0
         info = {"newton_steps": int(it.newtonStepsCount) if it is not None else 0, "rejected_steps": rejected,
                 "summary": built["summary"], "sampling": solved["sampling"],
                 "constraints": sum(sum(CONSTRAINED_AXES[p["scene"].joint(c).kind]) for c in built["redundant_joints"])}
         n_rhs = (solved["steps"] + rejected) * STAGES.get(integrator, 1)
-        return Outcome(traj, solved["wall"], solved["steps"], n_rhs, info)
+        return Outcome(read, solved["wall"], solved["steps"], n_rhs, info)
 
     def _solve(self, p, stored):
         """One solve on a fresh system (Exudyn keeps state): ``sampling.solve`` on it, and the

@@ -126,9 +126,12 @@ class MujocoAdapter(Adapter):
         n_steps = int(p["steps"][:diverged_at].sum()) if diverged_at else int(p["steps"].sum())
         stages = 4 if p["settings"].integrator == "rk4" else 1
         info = {"message": f"MuJoCo: {messages[0]}" if messages else "", "warnings": messages[:5]}
-        traj, audit = read_back(p, Q, V)
-        info["audit"] = audit
-        return Outcome(traj, wall, n_steps, n_steps * stages, info)
+
+        def read():
+            traj, info["audit"] = read_back(p, Q, V)
+            return traj
+
+        return Outcome(read, wall, n_steps, n_steps * stages, info)
 
     # ------------------------------------------------------------- audit
     def audit(self, prepared, outcome):
@@ -151,5 +154,11 @@ class MujocoAdapter(Adapter):
             "max_armature": float(np.abs(model.dof_armature).max(initial=0.0)),
             "max_damping": float(np.abs(model.dof_damping).max(initial=0.0)),
             "ngeom": int(model.ngeom),
-            **outcome.info.get("audit", {}),
+            **self._read_audit(outcome),
         }
+
+    @staticmethod
+    def _read_audit(outcome):
+        """The figures the read-back collects on its way (contacts, constraint rows, passive forces)."""
+        outcome.trajectory  # reads back, once, if nothing has yet
+        return outcome.info["audit"]

@@ -74,11 +74,20 @@ class PinocchioAdapter(Adapter):
         return PinocchioModel(scene, settings.options.get("welds", "tree")).summary + "\n"
 
     def prepare(self, scene, times, settings):
+        from dalembert.adapters.pinocchio import native
+
         pm = PinocchioModel(scene, settings.options.get("welds", "tree"))
         q0, v0 = pm.initial_state()
         times = np.asarray(times, dtype=float)
         steps = steps_per_interval(times, settings.dt) if settings.dt else None
-        return dict(scene=scene, pm=pm, q0=q0, v0=v0, times=times, settings=settings, steps=steps)
+        p = dict(scene=scene, pm=pm, q0=q0, v0=v0, times=times, settings=settings, steps=steps, native=None)
+        # the compiled loop is loaded (or built) here, with the model, never inside a timed run
+        if steps is not None and settings.options.get("loop", "native") == "native" and not pm.constraints:
+            try:
+                p["native"] = native.NativeModel(pm)
+            except RuntimeError as e:  # not built here: the Python loop runs, saying why
+                p["native_error"] = str(e)
+        return p
 
     # ------------------------------------------------------------ stepping
     def run(self, prepared):
@@ -93,26 +102,20 @@ class PinocchioAdapter(Adapter):
         else:
             Q, V, n_steps, n_rhs, info["loop"] = self._fixed_loop(p, method)
         wall = time.perf_counter() - start
-        return Outcome(self._read_back(p, Q, V), wall, n_steps, n_rhs, info)
+        return Outcome(lambda: self._read_back(p, Q, V), wall, n_steps, n_rhs, info)
 
     def _fixed_loop(self, p, method):
         """The compiled loop (``native``) unless ``options.loop`` is ``python`` or it cannot be
         built; the fifth item says which ran, and why not the compiled one."""
-        # imported here, not at the top: ``python -m dalembert.adapters.pinocchio.native`` imports
-        # this package before it runs native.py as __main__
-        from dalembert.adapters.pinocchio import native
-
         pm = p["pm"]
         args = (pm, method, p["q0"], p["v0"], p["times"], p["steps"])
         if p["settings"].options.get("loop", "native") == "python":
             return (*fixed_step(*args), "Python (options.loop = python)")
         if pm.constraints:
             return (*fixed_step(*args), "Python (constraint dynamics: the compiled loop has aba only)")
-        try:
-            Q, V, n, error = native.run_fixed(pm, method, min(pm.dexpinv_kind(), 2), p["q0"], p["v0"], p["times"],
-                                              p["steps"])
-        except RuntimeError as e:  # not built here: the Python loop, saying why
-            return (*fixed_step(*args), f"Python (the compiled loop is unavailable: {e})")
+        if p["native"] is None:
+            return (*fixed_step(*args), f"Python (the compiled loop is unavailable: {p['native_error']})")
+        Q, V, n, error = p["native"].run(method, p["q0"], p["v0"], p["times"], p["steps"])
         loop = "C++ (adapters/pinocchio/stepper.cpp)" + (f"; stopped: {error}" if error else "")
         return Q, V, n, n * STAGES[method], loop
 

@@ -27,7 +27,7 @@ import sys
 
 import numpy as np
 
-__all__ = ["library", "run_fixed", "METHODS"]
+__all__ = ["library", "NativeModel", "METHODS"]
 
 SOURCE = os.path.join(os.path.dirname(__file__), "stepper.cpp")
 METHODS = {"euler": 0, "rk4": 1, "rk4-naive": 2}
@@ -85,8 +85,10 @@ def library():
             key = hashlib.sha256(f.read() + repr((FLAGS, DEFINES, version, prefix)).encode()).hexdigest()[:16]
         cache = _cache_dir()
         path = os.path.join(cache, f"pinocchio_stepper-{key}.so")
-        with open(os.path.join(cache, "pinocchio_stepper.lock"), "w") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)  # worker processes wait for one build instead of racing
+        # one lock per build: worker processes wait for one build of this library instead of racing,
+        # and never for another venv's build of another one
+        with open(f"{path}.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
             if not os.path.exists(path):
                 tmp = f"{path}.{os.getpid()}.tmp"
                 proc = subprocess.run(_command(prefix, tmp), capture_output=True, text=True)
@@ -106,37 +108,51 @@ def library():
     return lib
 
 
-def run_fixed(pm, method, dexpinv_kind, q0, v0, times, steps):
-    """Step ``pm`` (a ``PinocchioModel``) through ``times`` with ``steps[k]`` substeps per interval.
-
-    Returns ``(Q (n, nq), V (n, nv), steps taken, error message or None)``; rows after a
-    non-finite state stay NaN, as in the Python loop.
+class NativeModel:
+    """A ``PinocchioModel`` made ready for the compiled loop: the library loaded (built if
+    needed), the model serialized and the constant loads packed, once (in the adapter's
+    ``prepare``, not timed). ``RuntimeError`` with the reason where the library cannot be had.
     """
-    lib = library()
-    model = pm.model
-    D, Li, In = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long), ctypes.POINTER(ctypes.c_int)
 
-    def arr(x, dtype=float):
-        return np.ascontiguousarray(x, dtype=dtype)
+    def __init__(self, pm):
+        self.lib = library()
+        model = pm.model
+        self.nq, self.nv = model.nq, model.nv
+        self.model_bytes = model.saveToString().encode()
+        self.dexpinv_kind = min(pm.dexpinv_kind(), 2)
+        self.has_loads = int(pm.has_loads)
+        self.const = np.zeros((model.njoints, 6))
+        for jid, force in pm.const_f.items():
+            self.const[jid] = force.vector
+        world = pm.world_loads
+        self.n_world = len(world)
+        self.w_joint = _arr([w[0] for w in world] or [0], np.int32)
+        self.w_point = _arr([w[1] for w in world] or [np.zeros(3)])
+        self.w_vec = _arr([w[2] if w[2] is not None else w[3] for w in world] or [np.zeros(3)])
+        self.w_torque = _arr([w[2] is None for w in world] or [0], np.int32)
 
-    const = np.zeros((model.njoints, 6))
-    for jid, force in pm.const_f.items():
-        const[jid] = force.vector
-    world = pm.world_loads
-    w_joint = arr([w[0] for w in world] or [0], np.int32)
-    w_point = arr([w[1] for w in world] or [np.zeros(3)])
-    w_vec = arr([w[2] if w[2] is not None else w[3] for w in world] or [np.zeros(3)])
-    w_torque = arr([w[2] is None for w in world] or [0], np.int32)
-    times, steps, q0, v0 = arr(times), arr(steps, np.int64), arr(q0), arr(v0)
-    Q = np.full((len(times), model.nq), np.nan)
-    V = np.full((len(times), model.nv), np.nan)
-    taken, err = ctypes.c_long(0), ctypes.create_string_buffer(_ERR_LEN)
-    rc = lib.dalembert_pin_fixed(
-        model.saveToString().encode(), METHODS[method], dexpinv_kind, q0.ctypes.data_as(D), v0.ctypes.data_as(D),
-        len(times), times.ctypes.data_as(D), steps.ctypes.data_as(Li), int(pm.has_loads), const.ctypes.data_as(D),
-        len(world), w_joint.ctypes.data_as(In), w_point.ctypes.data_as(D), w_vec.ctypes.data_as(D),
-        w_torque.ctypes.data_as(In), Q.ctypes.data_as(D), V.ctypes.data_as(D), ctypes.byref(taken), err, _ERR_LEN)
-    return Q, V, int(taken.value), (err.value.decode() if rc else None)
+    def run(self, method, q0, v0, times, steps):
+        """Step through ``times`` with ``steps[k]`` substeps per interval by ``method``.
+
+        Returns ``(Q (n, nq), V (n, nv), steps taken, error message or None)``; rows after a
+        non-finite state stay NaN, as in the Python loop.
+        """
+        D, Li, In = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long), ctypes.POINTER(ctypes.c_int)
+        times, steps, q0, v0 = _arr(times), _arr(steps, np.int64), _arr(q0), _arr(v0)
+        Q = np.full((len(times), self.nq), np.nan)
+        V = np.full((len(times), self.nv), np.nan)
+        taken, err = ctypes.c_long(0), ctypes.create_string_buffer(_ERR_LEN)
+        rc = self.lib.dalembert_pin_fixed(
+            self.model_bytes, METHODS[method], self.dexpinv_kind, q0.ctypes.data_as(D), v0.ctypes.data_as(D),
+            len(times), times.ctypes.data_as(D), steps.ctypes.data_as(Li), self.has_loads,
+            self.const.ctypes.data_as(D), self.n_world, self.w_joint.ctypes.data_as(In),
+            self.w_point.ctypes.data_as(D), self.w_vec.ctypes.data_as(D), self.w_torque.ctypes.data_as(In),
+            Q.ctypes.data_as(D), V.ctypes.data_as(D), ctypes.byref(taken), err, _ERR_LEN)
+        return Q, V, int(taken.value), (err.value.decode() if rc else None)
+
+
+def _arr(x, dtype=float):
+    return np.ascontiguousarray(x, dtype=dtype)
 
 
 if __name__ == "__main__":
