@@ -1,6 +1,6 @@
 """MuJoCo's states in body terms: poses, velocities, joint coordinates and reactions.
 
-After stepping, not timed: for every sample the state is set in a scratch
+Once per run, after stepping (never timed): for every sample the state is set in a scratch
 ``MjData`` and ``mj_forward`` + ``mj_rnePostConstraint`` recompute the derived
 quantities (right after ``mj_step`` they describe the previous state). Poses and
 velocities of the scene's body frames come from the MuJoCo frames through
@@ -24,62 +24,70 @@ __all__ = ["read_back"]
 def read_back(p, Q, V):
     """The ``Trajectory`` of the sampled states ``Q (n, nq)``, ``V (n, nv)`` (NaN rows stay
     NaN), with the reaction forces on jointed children (N, world axes) as extras; and the
-    audit figures read on the way (contacts, constraint rows, passive forces)."""
+    audit figures read on the way (contacts, constraint rows, passive forces).
+
+    MuJoCo recomputes each sample (one ``mj_forward``, plus ``mj_rnePostConstraint`` where
+    reactions are read); what it computed is copied out per sample, and the conversion to the
+    scene's body frames is done once, on every sample at a time.
+    """
     import mujoco
 
     from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
     model, d, scene = p["model"], p["scratch"], p["scene"]
     n, nb = len(p["times"]), len(scene.bodies)
-    pos, quat = np.full((nb, n, 3), np.nan), np.full((nb, n, 4), np.nan)
-    vel, omega = np.full((nb, n, 3), np.nan), np.full((nb, n, 3), np.nan)
+    ids = np.array([p["ids"][b.name] for b in scene.bodies])
     # a weld held by an equality constraint has no joint force to read (cfrc_int is zero)
-    reactions = {j.child: np.full((n, 3), np.nan) for j in scene.joints if not floating(j, p["welds"])}
+    children = [j.child for j in scene.joints if not floating(j, p["welds"])]
+    child_ids = np.array([p["ids"][c] for c in children], dtype=int)
+    xpos, xmat = np.full((n, nb, 3), np.nan), np.full((n, nb, 9), np.nan)
+    twist = np.full((n, nb, 6), np.nan)  # (w, v) at each MuJoCo body frame origin, world axes
+    cfrc = np.full((n, len(children), 3), np.nan)
     max_ncon = max_nefc = 0
     max_passive = 0.0
     res = np.zeros(6)
     if p["load_path"] == "actuator":
         d.ctrl[:] = 1.0
-    subtree = {b.name: _subtree(scene, b.name, p["welds"]) for b in scene.bodies}
-    for k in range(n):
-        if not np.all(np.isfinite(Q[k])):
-            continue
+    finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)
+    for k in np.flatnonzero(finite):
         d.qpos[:], d.qvel[:] = Q[k], V[k]
         if p["load_path"] == "xfrc_applied":
             apply_xfrc(p, d)
         mujoco.mj_forward(model, d)
-        mujoco.mj_rnePostConstraint(model, d)
+        if children:
+            mujoco.mj_rnePostConstraint(model, d)
+            cfrc[k] = d.cfrc_int[child_ids, 3:]
         max_ncon, max_nefc = max(max_ncon, d.ncon), max(max_nefc, d.nefc)
         max_passive = max(max_passive, float(np.abs(d.qfrc_passive).max(initial=0.0)))
-        R_WB_all = {}
-        for bi, b in enumerate(scene.bodies):
-            i = p["ids"][b.name]
-            p_EB, R_EB = p["frames"][b.name]
-            R_WE = d.xmat[i].reshape(3, 3)
-            R_WB = R_WE @ R_EB  # W <- E <- B
-            R_WB_all[b.name] = R_WB
-            r = R_WE @ p_EB
+        xpos[k], xmat[k] = d.xpos[ids], d.xmat[ids]
+        for bi, i in enumerate(ids):
             # XBODY: velocity at the body frame origin (mjOBJ_BODY would be at the COM), world axes
             mujoco.mj_objectVelocity(model, d, mujoco.mjtObj.mjOBJ_XBODY, i, res, 0)
-            pos[bi, k] = d.xpos[i] + r
-            quat[bi, k] = spatial.matrix_to_quat(R_WB)
-            omega[bi, k] = res[:3]
-            vel[bi, k] = res[3:] + np.cross(res[:3], r)
-        for child in reactions:
-            f = d.cfrc_int[p["ids"][child], 3:].copy()
-            if p["load_path"] == "actuator":  # loads MuJoCo routed through joint space
-                for ld in scene.loads:
-                    if ld.kind == "force" and ld.body in subtree[child]:
-                        f -= spatial.load_to_world(ld, R_WB_all[ld.body])
-            reactions[child][k] = f
+            twist[k, bi] = res
+    R_WE = xmat.reshape(n, nb, 3, 3)
+    p_EB = np.array([p["frames"][b.name][0] for b in scene.bodies])  # (nb, 3)
+    R_EB = np.array([p["frames"][b.name][1] for b in scene.bodies])  # (nb, 3, 3)
+    R_WB = R_WE @ R_EB  # W <- E <- B
+    r = (R_WE @ p_EB[:, :, None])[..., 0]  # from the origin of E to that of B, world axes
+    pos = xpos + r
+    quat = spatial.matrix_to_quat(R_WB)
+    omega = twist[..., :3]
+    vel = twist[..., 3:] + np.cross(omega, r)
     # Free bodies: the attitude is MuJoCo's own quaternion as integrated (its norm is data).
     for bi, b in enumerate(scene.bodies):
-        j = scene.joint(b.name)
-        if floating(j, p["welds"]):
-            jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, b.name)
-            a = model.jnt_qposadr[jid]
-            quat[bi] = Q[:, a + 3:a + 7]
-    bodies = {b.name: BodyStates(pos[bi], quat[bi], vel[bi], omega[bi]) for bi, b in enumerate(scene.bodies)}
+        if floating(scene.joint(b.name), p["welds"]):
+            a = model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, b.name)]
+            quat[:, bi] = Q[:, a + 3:a + 7]
+    order = {b.name: bi for bi, b in enumerate(scene.bodies)}
+    reactions = {}
+    for ci, child in enumerate(children):
+        f = cfrc[:, ci].copy()
+        if p["load_path"] == "actuator":  # loads MuJoCo routed through joint space
+            for ld in scene.loads:
+                if ld.kind == "force" and ld.body in _subtree(scene, child, p["welds"]):
+                    f -= spatial.load_to_world(ld, R_WB[:, order[ld.body]])
+        reactions[child] = f
+    bodies = {b.name: BodyStates(pos[:, bi], quat[:, bi], vel[:, bi], omega[:, bi]) for bi, b in enumerate(scene.bodies)}
     joints = {}
     for j in scene.joints:
         if j.kind == "weld":

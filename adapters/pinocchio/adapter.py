@@ -128,8 +128,9 @@ class PinocchioAdapter(Adapter):
         pm, scene = p["pm"], p["scene"]
         model, data = pm.model, pm.data
         n = len(p["times"])
-        bodies = {b.name: [np.full((n, 3), np.nan), np.full((n, 4), np.nan), np.full((n, 3), np.nan),
+        bodies = {b.name: [np.full((n, 3), np.nan), None, np.full((n, 3), np.nan),
                            np.full((n, 3), np.nan)] for b in scene.bodies}
+        R_WB = {b.name: np.full((n, 3, 3), np.nan) for b in scene.bodies}  # to quaternions once, below
         reacting = [j for j in scene.joints if j.kind in ("revolute", "ball")]
         reactions = {j.child: np.full((n, 3), np.nan) for j in reacting}
         for k in range(n):
@@ -154,7 +155,9 @@ class PinocchioAdapter(Adapter):
                 X = data.oMf[fid]
                 vel = pin.getFrameVelocity(model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
                 arrs[0][k], arrs[2][k], arrs[3][k] = X.translation, vel.linear, vel.angular
-                arrs[1][k] = spatial.matrix_to_quat(X.rotation)
+                R_WB[name][k] = X.rotation
+        for name, arrs in bodies.items():
+            arrs[1] = spatial.matrix_to_quat(R_WB[name])
         joints = {}
         for j in scene.joints:
             if j.kind == "weld":
