@@ -19,6 +19,9 @@ from dalembert.record import RunRecord
 from dalembert.store import Store
 
 FAST = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
+# The kernel kills a worker when its parent dies; this only bounds how long a busy machine may
+# take to schedule that, and is far below CI's own limit.
+ORPHAN_GRACE_S = 60.0
 
 
 ENGINES = adapter_names()  # before the test-only adapters below are registered
@@ -231,3 +234,23 @@ def test_the_store_carries_the_case_as_run(tmp_path):
     assert stored.sample_times == case.sample_times and stored.truth == "closed form"
     truth = store.truth("pivoted_rod", case.version)
     assert np.array_equal(truth.joints["rod"].q, case.exact(case.times).joints["rod"].q)
+
+
+def test_no_worker_outlives_its_matrix(tmp_path):
+    """SIGKILL the parent of a running matrix (no handler of its own can run): its workers are
+    gone at once (the kernel's parent-death signal), not left running as orphans."""
+    import psutil
+
+    proc = _cli("run", "--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--integrator", "rkmk4",
+                "--dt", "1e-4",
+                "--jobs", "2", "--out", str(tmp_path / "r"))
+    parent = psutil.Process(proc.pid)
+    workers = []
+    while len(workers) < 2 and proc.poll() is None:  # each run takes ~25 s: the workers are busy
+        workers = parent.children()
+        time.sleep(0.1)
+    assert len(workers) == 2, proc.communicate()[1][-2000:]
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    gone, alive = psutil.wait_procs(workers, timeout=ORPHAN_GRACE_S)
+    assert not alive, [w.pid for w in alive]

@@ -347,10 +347,15 @@ def cmd_run(args):
     print(f"dalembert: {len(specs)} runs, {len(specs) - len(store.done_keys())} to do -> {store.path}",
           file=sys.stderr)
     progress = _progress_printer()
-    if args.scheduler:
-        run_matrix_dask(specs, store, args.scheduler, timeout, timing, progress)
-    else:
-        run_matrix(specs, store, args.jobs, timeout, timing, progress)
+    try:
+        if args.scheduler:
+            run_matrix_dask(specs, store, args.scheduler, timeout, timing, progress)
+        else:
+            run_matrix(specs, store, args.jobs, timeout, timing, progress)
+    except KeyboardInterrupt:  # every finished run is stored; the workers are gone
+        print(f"\ndalembert: interrupted; {len(store.done_keys())} of {len(specs)} runs stored in {store.path} — "
+              f"finish with: dalembert run --resume {store.path}", file=sys.stderr)
+        return 130
     manifest = store.manifest()
     manifest["ended"] = now()
     manifest.setdefault("load_average", {})["end"] = _load_average()

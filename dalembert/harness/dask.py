@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import pickle
 import subprocess
 import sys
@@ -22,7 +23,7 @@ def execute_isolated(spec_json, timing_json, truth_npz, timeout):
     multiprocessing children; the subprocess also gives a hard timeout.
     """
     spec = RunSpec.from_json(spec_json)
-    payload = pickle.dumps({"spec": spec_json, "timing": timing_json, "truth": truth_npz})
+    payload = pickle.dumps({"spec": spec_json, "timing": timing_json, "truth": truth_npz, "parent": os.getpid()})
     try:
         proc = subprocess.run([sys.executable, "-m", "dalembert.harness.worker"], input=payload, capture_output=True,
                               timeout=timeout)

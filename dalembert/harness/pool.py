@@ -1,7 +1,12 @@
-"""Running a matrix on this machine: each run in its own worker process, with a timeout.
+"""Running a matrix on this machine: a pool of long-lived worker processes.
 
-Every finished run is written to the store at once; a failure, a divergence or
-a timeout is a stored result, and the rest of the matrix goes on.
+Each worker is forked once, with the engines already imported, and runs one
+spec at a time for as long as the matrix lasts. Every run keeps its own
+timeout: a run that hangs past it, or a worker that dies, costs only that
+worker, which is killed and replaced; the run is stored as ``timeout`` or
+``failed`` and the rest of the matrix goes on. Every finished run is written to
+the store at once. Workers die with the process that started them
+(``dalembert.harness.lifetime``).
 """
 
 from __future__ import annotations
@@ -13,12 +18,17 @@ import time
 from multiprocessing.connection import wait
 
 from dalembert.harness.execute import Timing, execute, unfinished
+from dalembert.harness.lifetime import die_with_parent
 from dalembert.harness.truths import prepare_cases
 from dalembert.record import BAD_STATUSES
 
 __all__ = ["run_matrix", "DEFAULT_TIMEOUT_S", "finish"]
 
 DEFAULT_TIMEOUT_S = 600.0
+# How long the parent waits for a worker's next message before checking the timeouts again.
+POLL_S = 0.05
+# How long a worker may take to leave when the matrix is done before it is killed.
+SHUTDOWN_S = 5.0
 
 
 def _context():
@@ -33,11 +43,58 @@ def _context():
     return ctx
 
 
-def _child(conn, spec, timing, truth, concurrent):
-    try:
-        conn.send(execute(spec, timing, truth, concurrent))
-    finally:
-        conn.close()
+def _serve(conn, parent_pid):
+    """A worker's life: run each ``(spec, timing, truth, concurrent)`` it is sent, answer with
+    ``(record, npz)``; a truth is sent once per case version (``None`` afterwards: kept here)."""
+    die_with_parent(parent_pid)
+    truths = {}
+    while True:
+        try:
+            job = conn.recv()
+        except EOFError:  # the parent closed the pipe: the matrix is over
+            return
+        if job is None:
+            return
+        spec, timing, truth, concurrent = job
+        key = (spec.case, spec.case_version)
+        if truth is not None:
+            truths[key] = truth
+        conn.send(execute(spec, timing, truths[key], concurrent))
+
+
+class _Worker:
+    """The parent's handle on one worker: its pipe, its process, the run it is doing."""
+
+    def __init__(self, ctx):
+        self.conn, child = ctx.Pipe()
+        # a forked worker's parent is this process; a forkserver's child's is the forkserver
+        parent = os.getpid() if ctx.get_start_method() == "fork" else None
+        self.proc = ctx.Process(target=_serve, args=(child, parent), daemon=True)
+        self.proc.start()
+        child.close()
+        self.spec, self.started, self.truths = None, 0.0, set()
+
+    def submit(self, spec, timing, truth, concurrent):
+        key = (spec.case, spec.case_version)
+        self.conn.send((spec, timing, None if key in self.truths else truth, concurrent))
+        self.truths.add(key)
+        self.spec, self.started = spec, time.monotonic()
+
+    def kill(self):
+        self.proc.kill()
+        self.proc.join()
+        self.conn.close()
+
+    def stop(self):
+        try:
+            self.conn.send(None)
+        except OSError:
+            pass
+        self.proc.join(SHUTDOWN_S)
+        if self.proc.is_alive():
+            self.proc.kill()
+            self.proc.join()
+        self.conn.close()
 
 
 def finish(store, record, npz, progress, counts):
@@ -51,44 +108,46 @@ def finish(store, record, npz, progress, counts):
 
 
 def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None):
-    """Run ``specs`` not yet in ``store``, ``jobs`` at a time, each in a forked worker.
+    """Run ``specs`` not yet in ``store`` on ``jobs`` long-lived workers (default: the cores).
 
     Returns the list of keys run now.
     """
     truths = prepare_cases(specs, store)
     todo = [s for s in specs if s.key not in store.done_keys()]
-    jobs = max(1, jobs or os.cpu_count() or 1)
+    jobs = max(1, min(jobs or os.cpu_count() or 1, len(todo) or 1))
     ctx = _context()
     counts = {"done": 0, "bad": 0, "total": len(todo)}
-    running = {}  # connection -> (process, spec, start)
     queue = list(reversed(todo))
-    while queue or running:
-        while queue and len(running) < jobs:
-            spec = queue.pop()
-            parent, child = ctx.Pipe(duplex=False)
-            proc = ctx.Process(target=_child, daemon=True,
-                               args=(child, spec, timing, truths[(spec.case, spec.case_version)], len(running) + 1))
-            proc.start()
-            child.close()
-            running[parent] = (proc, spec, time.monotonic())
-        ready = wait(list(running), timeout=0.05)
-        for conn in ready:
-            proc, spec, _ = running.pop(conn)
-            try:
-                record, npz = conn.recv()
-            except EOFError:  # the worker died without an answer (crash, killed)
-                proc.join()
-                record, npz = unfinished(spec, "failed", f"worker process died (exit code {proc.exitcode})"), None
-            proc.join()
-            conn.close()
-            finish(store, record, npz, progress, counts)
-        for conn, (proc, spec, start) in list(running.items()):
-            if time.monotonic() - start > timeout:
-                proc.kill()
-                proc.join()
-                conn.close()
-                running.pop(conn)
-                finish(store, unfinished(spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"), None,
-                       progress, counts)
-    store.write_table()
+    idle, busy = [], {}  # busy: connection -> worker
+    try:
+        idle = [_Worker(ctx) for _ in range(jobs if todo else 0)]
+        while queue or busy:
+            while queue and idle:
+                worker, spec = idle.pop(), queue.pop()
+                worker.submit(spec, timing, truths[(spec.case, spec.case_version)], len(busy) + 1)
+                busy[worker.conn] = worker
+            for conn in wait(list(busy), timeout=POLL_S):
+                worker = busy.pop(conn)
+                try:
+                    record, npz = conn.recv()
+                except EOFError:  # the worker died without an answer (crash, killed): replace it
+                    worker.kill()
+                    record, npz = unfinished(worker.spec, "failed",
+                                             f"worker process died (exit code {worker.proc.exitcode})"), None
+                    worker = _Worker(ctx)
+                finish(store, record, npz, progress, counts)
+                idle.append(worker)
+            for conn, worker in list(busy.items()):
+                if time.monotonic() - worker.started > timeout:
+                    busy.pop(conn)
+                    worker.kill()
+                    finish(store, unfinished(worker.spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"),
+                           None, progress, counts)
+                    idle.append(_Worker(ctx))
+    finally:  # normal end, an error or Ctrl-C: no worker is left behind
+        for worker in idle:
+            worker.stop()
+        for worker in busy.values():
+            worker.kill()
+        store.write_table()
     return [s.key for s in todo]

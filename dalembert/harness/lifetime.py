@@ -1,0 +1,51 @@
+"""Worker processes never outlive the process that started them.
+
+A worker calls ``die_with_parent`` first thing: on Linux the kernel sends it
+SIGKILL the moment its parent dies (``prctl(PR_SET_PDEATHSIG)``), whatever
+killed the parent (SIGKILL included, which no handler of the parent can see);
+elsewhere a watchdog thread notices within ``WATCH_INTERVAL_S`` that the parent
+is gone. Workers also ignore SIGINT: Ctrl-C reaches the whole process group,
+and the parent alone ends the matrix (and its workers) cleanly.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import sys
+import threading
+import time
+
+__all__ = ["die_with_parent", "WATCH_INTERVAL_S"]
+
+PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+# How often the watchdog (platforms without PR_SET_PDEATHSIG) checks the parent.
+WATCH_INTERVAL_S = 0.5
+
+
+def die_with_parent(parent_pid=None):
+    """End this process when its parent dies.
+
+    ``parent_pid``: the parent as the caller knows it (a forked worker's is the matrix
+    process), so that a parent already dead before this call is noticed; None when the
+    parent is an intermediary (a forkserver, which itself ends with the matrix process).
+    """
+    parent_pid = parent_pid or os.getppid()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    armed = False
+    if sys.platform.startswith("linux"):
+        try:
+            armed = ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
+        except (OSError, AttributeError):
+            armed = False
+    if not armed:
+        threading.Thread(target=_watch, args=(parent_pid,), daemon=True).start()
+    if os.getppid() != parent_pid:  # the parent died before the signal was armed
+        os._exit(1)
+
+
+def _watch(parent_pid):
+    while os.getppid() == parent_pid:
+        time.sleep(WATCH_INTERVAL_S)
+    os._exit(1)
