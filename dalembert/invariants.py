@@ -7,7 +7,6 @@ relative to a scale stated per quantity (``CONSERVED``).
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -197,14 +196,17 @@ def pairwise_distance_change(scene, traj):
         local.append(u)
     if len(owner) < 2:
         return np.zeros(len(traj.t))
-    x, owner, local = np.concatenate(points, axis=1), np.array(owner), np.concatenate(local)
-    i, k = np.array(list(itertools.combinations(range(len(owner)), 2))).T
-    d = np.linalg.norm(x[:, i] - x[:, k], axis=2)
-    # nominal distances: within a body, from its definition (so a stretched attitude shows from t = 0);
-    # across bodies (held by joints), as at the first sample
-    same = owner[i] == owner[k]
-    nominal = np.where(same, np.linalg.norm(local[i] - local[k], axis=1), d[0])
-    return np.abs(d - nominal).max(axis=1)
+    owner, local = np.array(owner), np.concatenate(local)
+    x = np.ascontiguousarray(np.concatenate(points, axis=1).transpose(1, 0, 2))  # (k, n, 3): one track each
+    worst = np.zeros(len(traj.t))
+    for a in range(len(owner) - 1):  # particle a against every later one (no (n, pairs, 3) temporaries)
+        d = np.linalg.norm(x[a] - x[a + 1:], axis=2)  # (later, n)
+        # nominal distances: within a body, from its definition (so a stretched attitude shows from
+        # t = 0); across bodies (held by joints), as at the first sample
+        same = owner[a] == owner[a + 1:]
+        nominal = np.where(same[:, None], np.linalg.norm(local[a] - local[a + 1:], axis=1)[:, None], d[:, :1])
+        worst = np.maximum(worst, np.abs(d - nominal).max(axis=0))
+    return worst
 
 
 def _rel_drift_vector(x):

@@ -78,7 +78,9 @@ def trajectory_to_npz(traj):
     for name, x in traj.extras.items():
         arrays[f"extra.{name}"] = x
     buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
+    # uncompressed: doubles' mantissas barely compress (11% smaller for 18x the time, measured on a
+    # 2001-sample body), and this is written once per run inside the worker
+    np.savez(buf, **arrays)
     return buf.getvalue()
 
 
