@@ -41,29 +41,29 @@ def read_back(p, Q, V):
     children = [j.child for j in scene.joints if not floating(j, p["welds"])]
     child_ids = np.array([p["ids"][c] for c in children], dtype=int)
     xpos, xmat = np.full((n, nb, 3), np.nan), np.full((n, nb, 9), np.nan)
-    twist = np.full((n, nb, 6), np.nan)  # (w, v) at each MuJoCo body frame origin, world axes
+    roots = model.body_rootid[ids]
+    cvel = np.full((n, nb, 6), np.nan)  # MuJoCo's (w, v) of each body at its tree's centre of mass, world axes
+    com = np.full((n, nb, 3), np.nan)  # that centre of mass (subtree_com of the body's root)
     cfrc = np.full((n, len(children), 3), np.nan)
     max_ncon = max_nefc = 0
-    max_passive = 0.0
-    res = np.zeros(6)
+    passive = np.zeros((n, model.nv))
     if p["load_path"] == "actuator":
         d.ctrl[:] = 1.0
     finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)
+    # views of MjData's arrays, taken once: each attribute access builds a new array object
+    qpos, qvel, d_xpos, d_xmat, d_cvel, d_com = d.qpos, d.qvel, d.xpos, d.xmat, d.cvel, d.subtree_com
+    d_passive, d_cfrc = d.qfrc_passive, d.cfrc_int
     for k in np.flatnonzero(finite):
-        d.qpos[:], d.qvel[:] = Q[k], V[k]
+        qpos[:], qvel[:] = Q[k], V[k]
         if p["load_path"] == "xfrc_applied":
             apply_xfrc(p, d)
         mujoco.mj_forward(model, d)
         if children:
             mujoco.mj_rnePostConstraint(model, d)
-            cfrc[k] = d.cfrc_int[child_ids, 3:]
+            cfrc[k] = d_cfrc[child_ids, 3:]
         max_ncon, max_nefc = max(max_ncon, d.ncon), max(max_nefc, d.nefc)
-        max_passive = max(max_passive, float(np.abs(d.qfrc_passive).max(initial=0.0)))
-        xpos[k], xmat[k] = d.xpos[ids], d.xmat[ids]
-        for bi, i in enumerate(ids):
-            # XBODY: velocity at the body frame origin (mjOBJ_BODY would be at the COM), world axes
-            mujoco.mj_objectVelocity(model, d, mujoco.mjtObj.mjOBJ_XBODY, i, res, 0)
-            twist[k, bi] = res
+        passive[k] = d_passive
+        xpos[k], xmat[k], cvel[k], com[k] = d_xpos[ids], d_xmat[ids], d_cvel[ids], d_com[roots]
     R_WE = xmat.reshape(n, nb, 3, 3)
     p_EB = np.array([p["frames"][b.name][0] for b in scene.bodies])  # (nb, 3)
     R_EB = np.array([p["frames"][b.name][1] for b in scene.bodies])  # (nb, 3, 3)
@@ -71,8 +71,10 @@ def read_back(p, Q, V):
     r = (R_WE @ p_EB[:, :, None])[..., 0]  # from the origin of E to that of B, world axes
     pos = xpos + r
     quat = spatial.matrix_to_quat(R_WB)
-    omega = twist[..., :3]
-    vel = twist[..., 3:] + np.cross(omega, r)
+    # the velocity at each MuJoCo body frame's origin, as mj_objectVelocity(mjOBJ_XBODY) shifts it
+    # (mju_transformSpatial: v - (x - c) x w)
+    omega = cvel[..., :3]
+    vel = (cvel[..., 3:] - np.cross(xpos - com, omega)) + np.cross(omega, r)
     # Free bodies: the attitude is MuJoCo's own quaternion as integrated (its norm is data).
     for bi, b in enumerate(scene.bodies):
         if floating(scene.joint(b.name), p["welds"]):
@@ -97,7 +99,7 @@ def read_back(p, Q, V):
         joints[j.child] = JointStates(Q[:, a:a + len(j.q0)], V[:, v:v + len(j.v0)])
     extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
     audit = {"max_contacts": int(max_ncon), "max_constraint_rows": int(max_nefc),
-             "max_abs_passive_force": max_passive}
+             "max_abs_passive_force": float(np.abs(passive).max(initial=0.0))}
     return Trajectory(p["times"], bodies, joints, extras), audit
 
 
