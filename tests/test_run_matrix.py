@@ -22,6 +22,7 @@ FAST = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
 # The kernel kills a worker when its parent dies; this only bounds how long a busy machine may
 # take to schedule that, and is far below CI's own limit.
 ORPHAN_GRACE_S = 60.0
+CONTRACT_HORIZON = 0.5  # s: 50 samples of every case
 
 
 ENGINES = adapter_names()  # before the test-only adapters below are registered
@@ -34,8 +35,9 @@ for _name, _cls in (("broken", Broken), ("no-follower", NoFollower)):
 def test_every_adapter_meets_the_contract(engine):
     from dalembert.case import load_cases
 
-    # every registered case; the hard ones on a short horizon (their full ones take minutes)
-    cases = [f(t_final=2.0) if "hard" in f.tags else f() for _, f in load_cases().items()]
+    # every registered case, on a short horizon: the contract is about behaviour (sampling,
+    # repeatability, the audit), not accuracy, and the 27-body cases cost seconds per second in Python
+    cases = [f(t_final=CONTRACT_HORIZON) for _, f in load_cases().items()]
     assert check_adapter(engine, cases=cases) == []
 
 
@@ -101,7 +103,7 @@ def _cli(*args, **kw):
 
 def test_interrupted_run_resumes_to_the_same_store(tmp_path):
     selection = ["--case", "free_top", "--case", "pivoted_rod", "--engine", "reference", "--dt", "1e-2,5e-3",
-                 "--rtol", "1e-6", "--param", "t_final=2", "--jobs", "1"]
+                 "--rtol", "1e-6", "--param", "t_final=1", "--jobs", "1"]
     full = tmp_path / "full"
     assert _cli("run", *selection, "--out", str(full)).wait() == 0
     cut = tmp_path / "cut"
