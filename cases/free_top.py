@@ -57,14 +57,14 @@ def _top_case(name, inertia, omega0, t_final, sample_interval, orientation=ORIEN
     )
 
 
-@case(tags=("canonical", "free", "torque-free"), units=UNITS)
+@case(tags=("canonical", "free", "torque-free"), units=UNITS, positive=("inertia",))
 def free_top(inertia=(1.0, 2.0, 3.0), omega0=(0.1, 0.0, 5.0), t_final=20.0, sample_interval=0.01):
     """Torque-free asymmetric top (unit mass, principal moments ``inertia``),
     a stable spin near the axis of largest moment; ``omega0`` in the body frame."""
     return _top_case("free_top", inertia, omega0, t_final, sample_interval)
 
 
-@case(tags=("canonical", "free", "torque-free", "intermediate-axis"), units=UNITS)
+@case(tags=("canonical", "free", "torque-free", "intermediate-axis"), units=UNITS, positive=("inertia",))
 def free_top_intermediate(inertia=(1.0, 2.0, 3.0), omega0=(1e-3, 5.0, 1e-3), t_final=20.0, sample_interval=0.01):
     """The same top spinning 1e-3 rad/s off the intermediate axis: unstable, it flips."""
     return _top_case("free_top_intermediate", inertia, omega0, t_final, sample_interval,

@@ -209,12 +209,14 @@ def _canonical(obj):
 
 @dataclass(frozen=True)
 class CaseFactory:
-    """A registered case family: the factory, its tags and parameter units."""
+    """A registered case family: the factory, its tags, parameter units, and the parameters that
+    must be positive (every component of a vector one)."""
 
     name: str
     func: Callable
     tags: tuple
     units: dict
+    positive: tuple = ()
 
     @property
     def params(self):
@@ -240,18 +242,25 @@ class CaseFactory:
             default = known[key]
             if isinstance(default, tuple) and (not isinstance(value, (tuple, list)) or len(value) != len(default)):
                 problems.append(f"parameter {key!r}: expected {len(default)} numbers like {default!r}, got {value!r}")
+        merged = {**known, **params}
+        for key in self.positive:
+            value = merged[key]
+            if not all(math.isfinite(v) and v > 0.0 for v in (value if isinstance(value, (tuple, list)) else (value,))):
+                unit = f" ({self.units[key]})" if key in self.units else ""
+                problems.append(f"parameter {key!r}: must be positive{unit}, got {value!r}")
         if problems:
             raise SceneError(f"case {self.name!r}", problems)
         made = self.func(**params)
-        merged = {**known, **params}
         return Case(made.name, made.scene, made.t_final, made.sample_times, made.exact, made.conserved,
                     made.tolerances, tuple(sorted(set(made.tags) | set(self.tags))), merged, made.floor_fn)
 
 
-def case(tags=(), units=None):
+def case(tags=(), units=None, positive=()):
     """Register a case factory under its function name.
 
-    Every parameter must have a default (a case runs without arguments).
+    Every parameter must have a default (a case runs without arguments). ``positive`` names the
+    parameters that must be positive and finite (lengths, masses, radii: a zero-length rod would
+    run "ok" with every error exactly 0), checked before the factory runs.
     """
 
     def register(func):
@@ -259,7 +268,11 @@ def case(tags=(), units=None):
         missing = [p.name for p in sig.parameters.values() if p.default is inspect.Parameter.empty]
         if missing:
             raise TypeError(f"case {func.__name__!r}: parameters {missing} need defaults")
-        CASES.register(func.__name__, CaseFactory(func.__name__, func, tuple(tags), dict(units or {})))
+        unknown = sorted(set(positive) - set(sig.parameters))
+        if unknown:
+            raise TypeError(f"case {func.__name__!r}: positive={unknown} are not parameters of it")
+        CASES.register(func.__name__, CaseFactory(func.__name__, func, tuple(tags), dict(units or {}),
+                                                  tuple(positive)))
         return func
 
     return register

@@ -12,6 +12,12 @@ __all__ = ["Settings", "SettingsError", "steps_per_interval", "knob_problems", "
 # dt divides a sample interval when interval/dt is within this of an integer
 # (sample times and dt are decimals, never exact in binary).
 DIVIDES_REL_TOL = 1e-9
+# Steps beyond 2^53 cannot even be counted exactly in double precision (nor by the int64
+# step counters of the engines' loops): such a dt is refused, whatever the user asks.
+MAX_COUNTABLE_STEPS = 2.0**53
+# Below 100 unit roundoffs a relative tolerance asks more than double precision can deliver;
+# scipy.integrate's solvers raise such an rtol to this themselves (with a warning).
+RTOL_MIN = 100.0 * np.finfo(float).eps
 
 
 class FrozenOptions(dict):
@@ -85,6 +91,9 @@ class Settings:
 def steps_per_interval(times, dt):
     """Steps per sample interval, ndarray (n-1,) of int; ValueError if ``dt`` does not divide."""
     ratio = np.diff(times) / dt
+    if np.sum(ratio) > MAX_COUNTABLE_STEPS:
+        raise ValueError(f"dt: {dt!r} s would take {np.sum(ratio):.3g} steps over {times[-1] - times[0]:g} s, more "
+                         f"than double precision can count ({MAX_COUNTABLE_STEPS:.3g}) — use a larger step")
     n = np.rint(ratio)
     bad = np.abs(ratio - n) > DIVIDES_REL_TOL * np.maximum(ratio, 1.0)
     if np.any(bad) or np.any(n < 1):
@@ -130,5 +139,8 @@ def knob_problems(settings, who, fixed_step, options, times):
             problems.append(f"rtol/atol: {who} is fixed-step — give dt, not tolerances")
     elif settings.dt is not None:
         problems.append(f"dt: {who} is adaptive — give rtol/atol, not dt")
+    elif settings.rtol is not None and settings.rtol < RTOL_MIN:
+        problems.append(f"rtol: {settings.rtol!r} is below what double precision resolves ({RTOL_MIN:.2g}, 100 unit "
+                        f"roundoffs) — use rtol >= {RTOL_MIN:.2g}")
     return problems
 

@@ -31,6 +31,7 @@ a message that says so.
 
 from __future__ import annotations
 
+import fcntl
 import io
 import json
 import os
@@ -47,7 +48,7 @@ from dalembert.case import CaseRecord
 from dalembert.record import SCHEMA_VERSION, RunRecord, SchemaError
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
-__all__ = ["Store", "StoreError", "atomic_write", "trajectory_to_npz", "trajectory_from_npz", "machine_info", "harness_commit"]
+__all__ = ["Store", "StoreError", "StoreLock", "atomic_write", "trajectory_to_npz", "trajectory_from_npz", "machine_info", "harness_commit"]
 
 
 def atomic_write(path, data):
@@ -138,6 +139,25 @@ def now():
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
 
+class StoreLock:
+    """A held one-writer lock on a store (``Store.writer``); ``release()`` or leave its ``with``."""
+
+    def __init__(self, fh, stale):
+        self._fh, self.stale = fh, stale
+
+    def release(self):
+        if not self._fh.closed:
+            self._fh.truncate(0)  # an empty lock file: its last holder released it
+            fcntl.flock(self._fh, fcntl.LOCK_UN)
+            self._fh.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.release()
+
+
 class StoreError(ValueError):
     """A results directory that cannot be read as asked; the message names the file and the fix."""
 
@@ -179,8 +199,18 @@ class Store:
         atomic_write(os.path.join(self.path, "manifest.json"), json.dumps(manifest, indent=2, sort_keys=True))
 
     def manifest(self):
-        with open(os.path.join(self.path, "manifest.json")) as fh:
-            return json.load(fh)
+        return self._json(os.path.join(self.path, "manifest.json"), "its manifest",
+                          "it is damaged: a store cannot be resumed or reported without it")
+
+    def _json(self, path, what, fix):
+        """The JSON in ``path``; ``StoreError`` naming the file, ``what`` it is and the ``fix``."""
+        try:
+            with open(path) as fh:
+                return json.load(fh)
+        except FileNotFoundError:
+            raise StoreError(f"{path}: missing ({what}) — {fix}") from None
+        except (OSError, ValueError) as e:
+            raise StoreError(f"{path}: cannot be read as {what} ({type(e).__name__}: {e}) — {fix}") from None
 
     def schema_version(self):
         """The store's schema (1 for stores written before the schema was recorded)."""
@@ -188,6 +218,34 @@ class Store:
 
     def exists(self):
         return os.path.exists(os.path.join(self.path, "manifest.json"))
+
+    # -------------------------------------------------------------- one writer
+    def writer(self, command=""):
+        """Take the store's one-writer lock (``run`` and ``--resume`` hold it while they write).
+
+        Returns a ``StoreLock`` (a context manager; the kernel also releases the lock when its
+        process ends, however it ends). ``StoreError`` naming the holder (PID, host, since when,
+        its command) when another process holds it. ``StoreLock.stale`` names a previous holder
+        that ended without releasing it (killed), which is only worth a note.
+        """
+        os.makedirs(self.path, exist_ok=True)
+        path = os.path.join(self.path, ".lock")
+        fh = open(path, "a+")
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            fh.seek(0)
+            owner = fh.read().strip() or "an unknown process"
+            fh.close()
+            raise StoreError(f"{self.path}: already being written by {owner} — wait for it to end, or stop it; "
+                             "one store takes one writer") from None
+        fh.seek(0)
+        stale = fh.read().strip()
+        fh.seek(0)
+        fh.truncate()
+        fh.write(f"PID {os.getpid()} on {socket.gethostname()} since {now()} ({command or 'dalembert'})")
+        fh.flush()
+        return StoreLock(fh, stale)
 
     # -------------------------------------------------------------- runs
     def write_record(self, record, trajectory_npz=None):
@@ -204,16 +262,28 @@ class Store:
         return {f[:-5] for f in os.listdir(self.rows_dir) if f.endswith(".json") and not f.startswith(".tmp-")}
 
     def rows(self):
-        """Every stored row as written (a dict of columns), sorted by key."""
-        out = []
-        for key in sorted(self.done_keys()):
-            with open(os.path.join(self.rows_dir, f"{key}.json")) as fh:
-                out.append(json.load(fh))
-        return out
+        """Every stored row as written (a dict of columns), sorted by key. Only ``rows/*.json`` are
+        rows (other files there are ignored); a damaged one is a ``StoreError`` naming it."""
+        return [self._json(os.path.join(self.rows_dir, f"{key}.json"), "a stored run", self._redo(key))
+                for key in sorted(self.done_keys())]
+
+    def _redo(self, key, delete="it"):
+        """The fix for a damaged file of run ``key``: redo the run."""
+        return f"delete {delete} and run `dalembert run --resume {self.path}` to redo that run"
 
     def records(self):
         """Every stored run as a ``RunRecord``, sorted by key."""
-        return [RunRecord.from_row(r) for r in self.rows()]
+        out = []
+        for row in self.rows():
+            try:
+                out.append(RunRecord.from_row(row))
+            except SchemaError:
+                raise
+            except (KeyError, TypeError, ValueError) as e:
+                key = row.get("key", "?") if isinstance(row, dict) else "?"
+                raise StoreError(f"{os.path.join(self.rows_dir, f'{key}.json')}: not a run dalembert wrote "
+                                 f"({type(e).__name__}: {e}) — {self._redo(key)}") from None
+        return out
 
     def table(self):
         """All rows as a pandas DataFrame (one column per row field; ``RunRecord`` names them)."""
@@ -230,7 +300,15 @@ class Store:
         return df
 
     def trajectory(self, key):
-        return trajectory_from_npz(os.path.join(self.traj_dir, f"{key}.npz"))
+        """The stored trajectory of run ``key``; ``StoreError`` naming the file when it is missing or damaged."""
+        path = os.path.join(self.traj_dir, f"{key}.npz")
+        try:
+            return trajectory_from_npz(path)
+        except FileNotFoundError:
+            raise StoreError(f"{path}: missing — {self._redo(key, f'rows/{key}.json')}") from None
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            raise StoreError(f"{path}: cannot be read as a trajectory ({type(e).__name__}: {e}) — "
+                             f"{self._redo(key, f'it and rows/{key}.json')}") from None
 
     # -------------------------------------------------------------- cases and truths
     def _case_file(self, directory, name, version, ext):
@@ -253,8 +331,12 @@ class Store:
         if not os.path.exists(path):
             raise StoreError(f"{self.path}: no record of case {name!r} version {version} (cases/) — "
                              "the store is incomplete; rerun the matrix")
-        with open(path) as fh:
-            return CaseRecord.from_json(json.load(fh))
+        data = self._json(path, "a case record", "the store is damaged; rerun the matrix")
+        try:
+            return CaseRecord.from_json(data)
+        except (KeyError, TypeError, ValueError) as e:
+            raise StoreError(f"{path}: not a case record dalembert wrote ({type(e).__name__}: {e}) — the store is "
+                             "damaged; rerun the matrix") from None
 
     def truth(self, name, version):
         """The case's stored truth trajectory, or None."""

@@ -111,6 +111,13 @@ class Trajectory:
         arrays += [a for j in self.joints.values() for a in (j.q, j.v)] + list(self.extras.values())
         return all(np.all(np.isfinite(a)) for a in arrays)
 
+    def is_still(self):
+        """True when nothing moves: every body's position and attitude, and every joint's
+        coordinates, equal their first sample at every sample (exactly)."""
+        arrays = [a for b in self.bodies.values() for a in (b.position, b.quaternion)]
+        arrays += [j.q for j in self.joints.values()]
+        return all(np.array_equal(a, np.broadcast_to(a[:1], a.shape)) for a in arrays)
+
     def first_nonfinite_time(self):
         """Earliest sample time with a NaN/inf in any body state, or None."""
         bad = np.zeros(len(self.t), dtype=bool)

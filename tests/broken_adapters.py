@@ -42,3 +42,13 @@ class NoFollower(ReferenceAdapter):
     """The reference without follower forces: scenes with them are unsupported."""
 
     effects = ReferenceAdapter.effects - {"load:follower_force"}
+
+
+class Still(ReferenceAdapter):
+    """The reference physics without the scene's loads: a driven body never moves (an engine
+    that silently left out what drives the motion)."""
+
+    def prepare(self, scene, times, settings):
+        from dataclasses import replace
+
+        return super().prepare(replace(scene, loads=()), times, settings)

@@ -6,6 +6,7 @@ Engines are imported lazily: listing and help work without any engine installed.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 
@@ -37,6 +38,7 @@ def _floats(text):
 def _parser():
     p = argparse.ArgumentParser(prog="dalembert", description="Validation harness for multibody physics engines.",
                                 epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--debug", action="store_true", help="show the traceback of an error instead of its message")
     sub = p.add_subparsers(dest="command", required=True)
 
     c = sub.add_parser("cases", help="list the registered cases",
@@ -72,6 +74,8 @@ def _parser():
     r.add_argument("--scheduler", metavar="ADDRESS", help="run on a Dask cluster, e.g. tcp://host:8786")
     r.add_argument("--out", metavar="DIR", help="results directory (default results/<timestamp>)")
     r.add_argument("--resume", metavar="DIR", help="finish an interrupted run directory")
+    r.add_argument("--force", action="store_true",
+                   help=f"allow runs of more than 1e8 steps (refused by default: usually a typo in --dt)")
     r.add_argument("--strict", action="store_true",
                    help="exit 1 when any run failed, diverged or timed out (for CI; by default those are "
                         "findings in the report, and the exit is 0 once every run is stored)")
@@ -164,19 +168,17 @@ def cmd_truth(args):
 def cmd_validate(args):
     from dalembert.harness.validation import to_markdown, validate, validation_specs, write_csv
 
-    try:
-        if args.jobs is not None and args.jobs < 1:
-            raise ValueError(f"--jobs: must be at least 1, got {args.jobs}")
-        validation_specs(args.case)  # unknown names and bad settings fail here, before anything runs
-        store = _new_store(args.out or _timestamped("validation"), {"command": _command_line(), "specs": []})
-    except (UnknownNameError, ValueError, SceneError, OSError) as e:
-        return _fail(str(e))
-    records = validate(store, args.case, args.jobs, _progress_printer())
-    md = to_markdown(store)
-    md_path = os.path.join(store.path, "reference-validation.md")
-    csv_path = os.path.join(store.path, "reference-validation.csv")
-    atomic_write(md_path, md)
-    write_csv(store, csv_path)
+    if args.jobs is not None and args.jobs < 1:
+        raise ValueError(f"--jobs: must be at least 1, got {args.jobs}")
+    validation_specs(args.case)  # unknown names and bad settings fail here, before anything runs
+    store, lock = _new_store(args.out or _timestamped("validation"), {"command": _command_line(), "specs": []})
+    with lock:
+        records = validate(store, args.case, args.jobs, _progress_printer())
+        md = to_markdown(store)
+        md_path = os.path.join(store.path, "reference-validation.md")
+        csv_path = os.path.join(store.path, "reference-validation.csv")
+        atomic_write(md_path, md)
+        write_csv(store, csv_path)
     print()
     print(md)
     print(f"wrote {md_path} and {csv_path}")
@@ -245,29 +247,48 @@ def _load_average():
 
 
 def _new_store(out, manifest):
-    """A new store at ``out`` (created); ValueError naming ``--out`` when it cannot be."""
+    """A new store at ``out`` (created) and its one-writer lock, taken before the check that no
+    run is there yet (two runs into one ``--out`` cannot both pass it); ValueError naming ``--out``
+    when it cannot be."""
     from dalembert.store import Store
 
-    if os.path.exists(os.path.join(out, "manifest.json")):
-        raise ValueError(f"--out: {out!r} already holds a run — use --resume {out} or another directory")
     try:
         os.makedirs(out, exist_ok=True)
     except OSError as err:
         raise ValueError(f"--out: cannot create {out!r}: {err.strerror}") from None
     if not os.access(out, os.W_OK):
         raise ValueError(f"--out: cannot write to {out!r}")
-    return Store(out).create(manifest)
+    store = Store(out)
+    lock = store.writer(manifest.get("command", ""))
+    if store.exists():
+        lock.release()
+        raise ValueError(f"--out: {out!r} already holds a run — use --resume {out} or another directory")
+    return store.create(manifest), lock
 
 
 def _resumable(path):
-    """The store at ``path`` and its specs, if this dalembert may finish it: same schema, and
-    every case still at the version the matrix was made for. ValueError naming what differs."""
+    """The store at ``path`` and its specs, if this dalembert may finish it: same schema, every
+    stored run one of the manifest's, every engine registered here (its adapter is imported from
+    the registry, never from a name the store holds), every case still at the version the matrix
+    was made for. ValueError naming what does not belong together."""
+    from dataclasses import replace
+
+    from dalembert.adapters import adapter_names, adapter_path
     from dalembert.case import load_cases
     from dalembert.harness.matrix import RunSpec
     from dalembert.store import Store
 
     store = Store.open(path)
-    specs = [RunSpec.from_json(d) for d in store.manifest()["specs"]]
+    try:
+        specs = [RunSpec.from_json(d) for d in store.manifest()["specs"]]
+    except (KeyError, TypeError) as e:
+        raise ValueError(f"--resume {path}: manifest.json does not list the matrix's runs ({type(e).__name__}: {e}) "
+                         "— it is not a manifest dalembert wrote; start a new matrix with --out") from None
+    unknown = sorted({s.engine for s in specs} - set(adapter_names()))
+    if unknown:
+        raise ValueError(f"--resume {path}: engine(s) {unknown} are not registered here — install them, or start a "
+                         "new matrix without them")
+    specs = [replace(s, adapter=adapter_path(s.engine)) for s in specs]
     registry = load_cases()
     changed = []
     for name, params, version in sorted({(s.case, s.params, s.case_version) for s in specs}):
@@ -280,92 +301,124 @@ def _resumable(path):
     if changed:
         raise ValueError(f"--resume {path}: " + "; ".join(changed) + " — finishing it would mix two versions of a "
                          "case; start a new matrix with --out")
+    strays = sorted(store.done_keys() - {s.key for s in specs})
+    if strays:
+        raise ValueError(f"--resume {path}: {len(strays)} stored run(s) are not in its manifest (e.g. rows/{strays[0]}"
+                         ".json): the rows and the manifest come from different matrices — start a new matrix")
     return store, specs
 
 
+def _connect(address, debug=False):
+    """A Dask client on ``address``; ValueError naming ``--scheduler`` when it cannot be reached
+    (before anything is written). Dask's own log is kept to its critical messages (a lost
+    scheduler is reported once, as runs not run) unless ``debug``."""
+    import logging
+
+    try:
+        from distributed import Client
+    except ImportError as e:
+        raise ImportError(f"--scheduler: Dask's distributed is not installed ({e}) — pip install distributed") from None
+    if not debug:  # after the import: distributed configures its loggers' levels when imported
+        for name in list(logging.root.manager.loggerDict):
+            if name == "distributed" or name.startswith("distributed."):
+                logging.getLogger(name).setLevel(logging.CRITICAL)
+    try:
+        return Client(address, timeout=SCHEDULER_CONNECT_S)
+    except (OSError, TimeoutError, ValueError) as e:
+        raise ValueError(f"--scheduler {address}: cannot connect ({type(e).__name__}: {e}) — start the scheduler or "
+                         "check the address; nothing was written") from None
+
+
+def _stop_on_sigterm():
+    """SIGTERM ends a matrix as Ctrl-C does: every finished run stored, the workers gone."""
+    import signal
+
+    def stop(signum, frame):
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
+
+
 def cmd_run(args):
-    from dalembert.case import load_cases, parse_param
     from dalembert.harness.dask import run_matrix_dask
     from dalembert.harness.execute import Timing
-    from dalembert.harness.matrix import expand
     from dalembert.harness.pool import DEFAULT_TIMEOUT_S, run_matrix
-    from dalembert.store import harness_commit, machine_info, now
+    from dalembert.harness.selection import select
+    from dalembert.store import Store, harness_commit, machine_info, now
 
     timing = Timing()
     if args.resume:
+        given = [flag for flag, value in (("--case", args.case), ("--tag", args.tag), ("--engine", args.engine),
+                                          ("--integrator", args.integrator), ("--dt", args.dt), ("--rtol", args.rtol),
+                                          ("--param", args.param), ("--option", args.option), ("--out", args.out),
+                                          ("--timeout", args.timeout), ("--force", args.force)) if value]
+        if given:
+            return _fail(f"--resume {args.resume}: {', '.join(given)} cannot change a matrix already made (its "
+                         "manifest fixes it) — drop them, or start a new matrix with --out")
+        store = Store.open(args.resume)
+        lock = store.writer(_command_line())
         try:
             store, specs = _resumable(args.resume)
-        except (ValueError, UnknownNameError, SceneError, ImportError) as e:
-            return _fail(str(e))
-        manifest = store.manifest()
-        timeout = manifest.get("timeout_s", DEFAULT_TIMEOUT_S)
+        except BaseException:
+            lock.release()
+            raise
+        timeout = store.manifest().get("timeout_s", DEFAULT_TIMEOUT_S)
+        jobs = min(args.jobs or os.cpu_count(), os.cpu_count())
+        client = _connect(args.scheduler, args.debug) if args.scheduler else None
     else:
-        try:
-            if args.jobs is not None and args.jobs < 1:
-                raise ValueError(f"--jobs: must be at least 1, got {args.jobs}")
-            if args.timeout is not None and args.timeout <= 0:
-                raise ValueError(f"--timeout: must be positive, got {args.timeout}")
-            dts = [x for xs in args.dt or [] for x in xs]
-            rtols = [x for xs in args.rtol or [] for x in xs]
-            for flag, xs in (("--dt", dts), ("--rtol", rtols)):
-                bad = [x for x in xs if not (x > 0 and x < float("inf"))]
-                if bad:
-                    raise ValueError(f"{flag}: must be positive and finite, got {bad}")
-            params = {}
-            registry = load_cases()
-            for text in args.param:
-                key = text.split("=", 1)[0]
-                owners = [f for _, f in registry.items() if key in f.params]
-                if not owners:
-                    raise ValueError(f"--param {key!r}: no case has this parameter")
-                params.update([parse_param(owners[0], text)])
-            options = {}
-            for text in args.option:
-                if "=" not in text:
-                    raise ValueError(f"--option {text!r}: write KEY=VALUE")
-                k, v = text.split("=", 1)
-                options[k] = v
-            specs, skipped = expand(args.case, args.tag, args.engine, args.integrator, dts or None, rtols or None,
-                                    params, options)
-            from dalembert.adapters import get_adapter
-            import dalembert
-
-            timeout = args.timeout or DEFAULT_TIMEOUT_S
-            manifest = {
-                "harness_version": dalembert.__version__, "harness_commit": harness_commit(),
-                "machine": machine_info(),
-                "engines": {e: get_adapter(e).version() for e in sorted({s.engine for s in specs})},
-                "command": _command_line(), "started": now(), "ended": None, "timeout_s": timeout,
-                "timing": vars(timing), "jobs": args.jobs or os.cpu_count(), "scheduler": args.scheduler,
-                "load_average": {"start": _load_average(), "end": None}, "specs": [s.to_json() for s in specs],
-            }
-            store = _new_store(args.out or _timestamped(), manifest)
-        except (UnknownNameError, ValueError, SceneError, ImportError, OSError) as e:
-            return _fail(str(e))
-        for s in skipped:
+        chosen = select(args, os.cpu_count() or 1)
+        specs, timeout, jobs = chosen.specs, chosen.timeout, chosen.jobs
+        for note in chosen.notes:
+            print(f"dalembert: note: {note}", file=sys.stderr)
+        for s in chosen.skipped:
             print(f"dalembert: skipping engine {s}", file=sys.stderr)
-    print(f"dalembert: {len(specs)} runs, {len(specs) - len(store.done_keys())} to do -> {store.path}",
-          file=sys.stderr)
-    progress = _progress_printer()
-    try:
-        if args.scheduler:
-            run_matrix_dask(specs, store, args.scheduler, timeout, timing, progress)
-        else:
-            run_matrix(specs, store, args.jobs, timeout, timing, progress)
-    except KeyboardInterrupt:  # every finished run is stored; the workers are gone
-        print(f"\ndalembert: interrupted; {len(store.done_keys())} of {len(specs)} runs stored in {store.path} — "
-              f"finish with: dalembert run --resume {store.path}", file=sys.stderr)
-        return 130
-    manifest = store.manifest()
-    manifest["ended"] = now()
-    manifest.setdefault("load_average", {})["end"] = _load_average()
-    store.write_manifest(manifest)
-    records = store.records()
+        client = _connect(args.scheduler, args.debug) if args.scheduler else None
+        from dalembert.adapters import get_adapter
+        import dalembert
+
+        manifest = {
+            "harness_version": dalembert.__version__, "harness_commit": harness_commit(),
+            "machine": machine_info(),
+            "engines": {e: get_adapter(e).version() for e in sorted({s.engine for s in specs})},
+            "command": _command_line(), "started": now(), "ended": None, "timeout_s": timeout,
+            "timing": vars(timing), "jobs": jobs, "scheduler": args.scheduler,
+            "load_average": {"start": _load_average(), "end": None}, "specs": [s.to_json() for s in specs],
+        }
+        store, lock = _new_store(args.out or _timestamped(), manifest)
+    with lock:
+        if lock.stale:
+            print(f"dalembert: note: the last writer of {store.path} ended without releasing it ({lock.stale}); "
+                  "what it stored is kept", file=sys.stderr)
+        print(f"dalembert: {len(specs)} runs, {len(specs) - len(store.done_keys())} to do -> {store.path}",
+              file=sys.stderr)
+        _stop_on_sigterm()
+        progress = _progress_printer()
+        try:
+            if client is not None:
+                lost = run_matrix_dask(specs, store, client, timeout, timing, progress)
+            else:
+                lost = run_matrix(specs, store, jobs, timeout, timing, progress)
+        except KeyboardInterrupt:  # every finished run is stored; the workers are gone
+            print(f"\ndalembert: interrupted; {len(store.done_keys())} of {len(specs)} runs stored in {store.path} — "
+                  f"finish with: dalembert run --resume {store.path}", file=sys.stderr)
+            return 130
+        finally:
+            if client is not None:
+                client.close()
+        manifest = store.manifest()
+        manifest["ended"] = now()
+        manifest.setdefault("load_average", {})["end"] = _load_average()
+        store.write_manifest(manifest)
+        records = store.records()
     by_status = {}
     for r in records:
         by_status[r.status] = by_status.get(r.status, 0) + 1
     print(f"dalembert: {len(records)} runs stored in {store.path}: "
           + ", ".join(f"{n} {s}" for s, n in sorted(by_status.items())), file=sys.stderr)
+    if lost:  # the infrastructure's failure, not the runs': nothing stored, --resume runs them
+        print(f"dalembert: {len(lost)} run(s) not run, lost to the infrastructure (first: {lost[0][1]}) — "
+              f"finish with: dalembert run --resume {store.path}", file=sys.stderr)
+        return 4
     return 1 if args.strict and any(r.status in BAD_STATUSES for r in records) else 0
 
 
@@ -417,8 +470,9 @@ def cmd_compare(args):
         stores = [_open(d, READABLE_SCHEMAS) for d in (args.run_a, args.run_b)]
     except ValueError as e:
         return _fail(str(e))
-    if not args.threshold > 1.0:
-        return _fail(f"--threshold: must be greater than 1, got {args.threshold}")
+    for flag, value in (("--threshold", args.threshold), ("--cost-threshold", args.cost_threshold)):
+        if value is not None and not (math.isfinite(value) and value > 1.0):
+            return _fail(f"{flag}: a growth factor, must be finite and greater than 1, got {value}")
     schemas = [s.schema_version() for s in stores]
     if schemas[0] != schemas[1]:
         print(f"dalembert: note: the stores have schemas {schemas[0]} and {schemas[1]}; runs are matched by case, "
@@ -456,12 +510,37 @@ def cmd_show_model(args):
     return 0
 
 
+# How long ``--scheduler`` may take to answer before the run is refused (nothing written).
+SCHEDULER_CONNECT_S = 10.0
+# What a user can get wrong (a name, a value, a file): a message naming it, exit 2.
+USER_ERRORS = (ValueError, KeyError, ImportError, OSError)
+
+
 def main(argv=None):
+    """Run one command; every error a user can cause is a one-line message (``--debug``: the
+    traceback), an unexpected one says so and how to report it."""
     args = _parser().parse_args(argv)
     commands = {"cases": cmd_cases, "truth": cmd_truth, "validate": cmd_validate, "engines": cmd_engines,
                 "run": cmd_run, "report": cmd_report, "export": cmd_export,
                 "show-model": cmd_show_model, "compare": cmd_compare}
-    return commands[args.command](args)
+    try:
+        return commands[args.command](args)
+    except BrokenPipeError:  # the reader left (e.g. `dalembert cases | head`): not an error
+        sys.stderr.close()
+        return 0
+    except KeyboardInterrupt:
+        print("\ndalembert: interrupted", file=sys.stderr)
+        return 130
+    except USER_ERRORS as e:
+        if args.debug:
+            raise
+        return _fail(str(e.args[0]) if type(e) is KeyError and e.args else str(e))
+    except Exception as e:  # a bug of dalembert's, not the user's
+        if args.debug:
+            raise
+        print(f"dalembert: internal error: {type(e).__name__}: {e} — rerun with --debug for the traceback and "
+              "report it", file=sys.stderr)
+        return 3
 
 
 if __name__ == "__main__":

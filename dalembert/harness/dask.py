@@ -35,7 +35,12 @@ def execute_isolated(spec_json, timing_json, truth_npz, timeout):
 
 
 def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None):
-    """Like ``dalembert.harness.pool.run_matrix`` on the Dask cluster at ``scheduler`` (address or Client)."""
+    """Like ``dalembert.harness.pool.run_matrix`` on the Dask cluster at ``scheduler`` (address or Client).
+
+    A run whose task the cluster lost (the scheduler gone, a worker lost) is the infrastructure's
+    failure: it is not stored, and is returned in ``[(key, reason)]`` for ``--resume`` to run again.
+    (A run's own failure never reaches here as an exception: ``execute_isolated`` returns it.)
+    """
     from distributed import Client, as_completed
 
     from dalembert.store import trajectory_to_npz
@@ -46,13 +51,19 @@ def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=T
     counts = {"done": 0, "bad": 0, "total": len(todo)}
     futures = {client.submit(execute_isolated, s.to_json(), asdict(timing), truths[(s.case, s.case_version)],
                              timeout, pure=False): s for s in todo}
-    for fut in as_completed(futures):
-        try:
-            record, npz = fut.result()
-        except Exception as e:
-            record, npz = unfinished(futures[fut], "failed", f"dask task failed: {type(e).__name__}: {e}"), None
-        finish(store, record, npz, progress, counts)
-    store.write_table()
-    if client is not scheduler:
-        client.close()
-    return [s.key for s in todo]
+    lost = []
+    try:
+        for fut in as_completed(futures):
+            try:
+                record, npz = fut.result()
+            except Exception as e:  # noqa: BLE001 - whatever the cluster raises, the run was not run
+                spec = futures[fut]
+                lost.append((spec.key, f"{spec.case} {spec.engine} {spec.settings.label()}: the cluster lost its task "
+                                       f"({type(e).__name__}: {e})"))
+                continue
+            finish(store, record, npz, progress, counts)
+    finally:
+        store.write_table()
+        if client is not scheduler:
+            client.close()
+    return lost

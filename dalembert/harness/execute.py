@@ -105,6 +105,14 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
                         concurrent=concurrent, load_start=load_start, load_end=_load())
             return _record(spec, "diverged", f"non-finite state from t = {t_bad} s", t_diverged=t_bad, cost=cost,
                            **found), trajectory_to_npz(traj)
+        truth = truth if truth is not None else _truth(case)
+        if first.n_steps == 0:  # e.g. a step too small to count: never a result that looks right
+            return _record(spec, "failed", f"the engine took no step over the {case.t_final:g}-s horizon",
+                           **found), None
+        if traj.is_still() and not truth.is_still():
+            return _record(spec, "failed", f"the state never left its initial value over {case.t_final:g} s while "
+                                           "the truth moves: the engine did not integrate it, or left out what "
+                                           "drives it", **found), None
         walls, totals = [], []
         while ((len(walls) < timing.min_repeats or sum(walls) < timing.min_total_s) and len(walls) < timing.max_repeats
                and not (walls and first.wall_s + sum(walls) > timing.max_total_s)):
@@ -112,7 +120,7 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
             out = adapter.run(prepared)
             totals.append(time.perf_counter() - t0)
             walls.append(out.wall_s)
-        errors = trajectory_errors(traj, truth if truth is not None else _truth(case))
+        errors = trajectory_errors(traj, truth)
         summary = invariants.summary(case.scene, traj, case.conserved)
         npz = trajectory_to_npz(traj)
         cost = Cost(build_s=build_s, wall_s_median=float(np.median(walls)), wall_s_min=float(np.min(walls)),

@@ -21,6 +21,10 @@ DEFAULT_DTS = (1e-2, 1e-3)
 DEFAULT_RTOLS = (1e-6, 1e-9)
 # atol = rtol * ATOL_PER_RTOL: the states are O(1) in SI units for the cases here.
 ATOL_PER_RTOL = 1.0
+# A guard against typos (1e-300 for 1e-3): the finest default step (1e-3 s) over the longest
+# built-in horizon (1000 s) is 1e6 steps; a run of more than 100x that is refused unless the
+# user says it is meant (``force``).
+MAX_STEPS_PER_RUN = 1e8
 
 
 @dataclass(frozen=True)
@@ -64,11 +68,16 @@ class RunSpec:
         return cls(**d)
 
 
-def spec(case, engine, settings, params=()):
+def spec(case, engine, settings, params=(), force=False):
     """The spec of running ``case`` (a Case made with ``params``) on ``engine`` with ``settings``;
-    ValueError naming the field when the engine cannot take the settings."""
+    ValueError naming the field when the engine cannot take the settings, or when the run would
+    take more than ``MAX_STEPS_PER_RUN`` steps and ``force`` is not given."""
     from dalembert.adapters import adapter_path, get_adapter
 
+    if settings.dt is not None and not force and case.t_final / settings.dt > MAX_STEPS_PER_RUN:
+        raise ValueError(f"dt: {settings.dt:g} s over the {case.t_final:g}-s horizon of {case.name!r} is "
+                         f"{case.t_final / settings.dt:.3g} steps, more than {MAX_STEPS_PER_RUN:.0e} — check the "
+                         "value, or pass --force if the run is meant")
     adapter = get_adapter(engine)
     made = RunSpec(case.name, engine, settings.integrator, settings.dt, settings.rtol, settings.atol,
                    tuple(sorted(settings.options.items())), tuple(sorted(dict(params).items())), case.version,
@@ -78,7 +87,7 @@ def spec(case, engine, settings, params=()):
 
 
 def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=None, params=None,
-           options=None):
+           options=None, force=False):
     """Turn a selection into run specs. Raises ValueError/KeyError before anything runs.
 
     Parameters
@@ -88,8 +97,10 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
     integrators : integrator names (default: every integrator of each engine)
     dts, rtols : step sizes (s) for fixed-step and tolerances for adaptive integrators
     params : dict of case parameter overrides (applied to every selected case that has them)
-    options : dict of engine options (applied to every run; default: each
-        engine's ``variants`` for each case)
+    options : dict of engine options, applied to every run whose integrator accepts them (a
+        ValueError when no selected one accepts one of them); the other runs, and every run when
+        none is given, take each engine's ``variants`` for each case
+    force : bool — allow runs of more than ``MAX_STEPS_PER_RUN`` steps
 
     Returns
     -------
@@ -145,8 +156,14 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
                     knobs = [dict(dt=dt) for dt in dts]
                 else:
                     knobs = [dict(rtol=r, atol=r * ATOL_PER_RTOL) for r in rtols]
-                # given options apply to every run; else each engine's own variants for this scene
-                option_sets = [dict(options)] if options else adapter.variants(case.scene)
-                specs += [spec(case, e, Settings(integ, options=opts, **k), case_params)
+                # given options apply where the integrator takes them; else the engine's own variants
+                mine = {k: v for k, v in (options or {}).items() if k in ispec.options}
+                option_sets = [mine] if mine else adapter.variants(case.scene)
+                specs += [spec(case, e, Settings(integ, options=opts, **k), case_params, force)
                           for opts in option_sets for k in knobs]
+    for key in options or {}:
+        if not any(key in ispec.options for a in adapters.values() for name, ispec in a.integrators.items()
+                   if not integrators or name in integrators):
+            offered = {o for a in adapters.values() for ispec in a.integrators.values() for o in ispec.options}
+            raise ValueError(f"--option {key}: no selected engine's integrator takes it{suggest(key, offered)}")
     return specs, skipped

@@ -4,7 +4,10 @@ Each worker is forked once, with the engines already imported, and runs one
 spec at a time for as long as the matrix lasts. Every run keeps its own
 timeout: a run that hangs past it, or a worker that dies, costs only that
 worker, which is killed and replaced; the run is stored as ``timeout`` or
-``failed`` and the rest of the matrix goes on. Every finished run is written to
+``failed`` (an engine that crashes its process is a finding) and the rest of
+the matrix goes on. A worker killed from outside by SIGKILL (the system's
+out-of-memory killer, an operator) is the infrastructure's failure, not the
+run's: that run is not stored, and ``--resume`` runs it again. Every finished run is written to
 the store at once. Workers die with the process that started them
 (``dalembert.harness.lifetime``).
 """
@@ -13,6 +16,7 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import os
+import signal
 import threading
 import time
 from multiprocessing.connection import wait
@@ -110,7 +114,7 @@ def finish(store, record, npz, progress, counts):
 def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None):
     """Run ``specs`` not yet in ``store`` on ``jobs`` long-lived workers (default: the cores).
 
-    Returns the list of keys run now.
+    Returns the runs lost to the infrastructure, not stored: ``[(key, reason)]``.
     """
     truths = prepare_cases(specs, store)
     todo = [s for s in specs if s.key not in store.done_keys()]
@@ -118,7 +122,7 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
     ctx = _context()
     counts = {"done": 0, "bad": 0, "total": len(todo)}
     queue = list(reversed(todo))
-    idle, busy = [], {}  # busy: connection -> worker
+    idle, busy, lost = [], {}, []  # busy: connection -> worker
     try:
         idle = [_Worker(ctx) for _ in range(jobs if todo else 0)]
         while queue or busy:
@@ -132,9 +136,15 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
                     record, npz = conn.recv()
                 except EOFError:  # the worker died without an answer (crash, killed): replace it
                     worker.kill()
-                    record, npz = unfinished(worker.spec, "failed",
-                                             f"worker process died (exit code {worker.proc.exitcode})"), None
-                    worker = _Worker(ctx)
+                    dead, code = worker.spec, worker.proc.exitcode
+                    idle.append(_Worker(ctx))
+                    if code == -signal.SIGKILL:  # killed from outside: not the run's doing, not stored
+                        lost.append((dead.key, f"{dead.case} {dead.engine} {dead.settings.label()}: its worker was "
+                                               "killed by SIGKILL from outside (out of memory?)"))
+                    else:
+                        finish(store, unfinished(dead, "failed", f"worker process died (exit code {code})"), None,
+                               progress, counts)
+                    continue
                 finish(store, record, npz, progress, counts)
                 idle.append(worker)
             for conn, worker in list(busy.items()):
@@ -150,4 +160,4 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
         for worker in busy.values():
             worker.kill()
         store.write_table()
-    return [s.key for s in todo]
+    return lost

@@ -1,0 +1,306 @@
+"""Reliability: every bad input refused cleanly before anything runs, no silent wrong result,
+nothing lost when a run, a worker, the parent or the cluster fails, a store is data, one writer.
+
+Each bad input: the command, its exit status, a phrase its message must hold, and that
+nothing was written.
+"""
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from dalembert.harness.cli import main
+from dalembert.store import Store
+
+TINY = ["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2", "--param", "t_final=0.5"]
+
+BAD_RUNS = [  # (flags of `dalembert run`, phrase of the message)
+    (["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--param", "t_final=2", "--dt", "1e-300"],
+     "more than 1e+08"),
+    (["--case", "pivoted_rod", "--param", "length=0"], "'length': must be positive (m), got 0.0"),
+    (["--case", "pivoted_rod", "--param", "radius=-0.01"], "'radius': must be positive"),
+    (["--case", "particle_box", "--param", "spacing=1,0,3"], "'spacing': must be positive"),
+    (["--case", "free_top", "--param", "length=5"], "--param length: no selected case has this parameter"),
+    (["--case", "pivoted_rod", "--param", "lenght=2"], "did you mean 'length'"),
+    (["--param", "t_final=1", "--param", "t_final=2"], "--param t_final: given twice"),
+    (["--case", "free_top", "--param", "t_final=1e12"], "1e+14 samples"),
+    (["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--rtol", "1e-6"],
+     "--rtol: no selected integrator is adaptive"),
+    (["--case", "free_top", "--engine", "reference", "--integrator", "dop853", "--dt", "1e-3"],
+     "--dt: no selected integrator takes a fixed step"),
+    (["--case", "free_top", "--engine", "reference", "--integrator", "dop853", "--rtol", "1e-300"],
+     "below what double precision resolves"),
+    (["--dt", ","], "--dt: no value given"),
+    (["--rtol=-1e-6"], "--rtol: must be positive"),
+    (["--timeout", "nan"], "--timeout: must be a positive number"),
+    (["--timeout", "-5"], "--timeout: must be a positive number"),
+    (["--jobs", "0"], "--jobs: must be at least 1"),
+    (["--out", ""], "--out: empty"),
+    (["--engine", "mujoco", "--option", "node=ep"], "--option node: no selected engine's integrator takes it"),
+    (["--engine", "exudyn", "--option", "node=quaternion"], "options.node: unknown 'quaternion'"),
+    (["--case", "free_tops"], "did you mean 'free_top'"),
+    (["--resume", "nowhere"], "is not a results directory"),
+]
+
+
+@pytest.mark.parametrize("flags,phrase", BAD_RUNS, ids=[" ".join(f) for f, _ in BAD_RUNS])
+def test_a_bad_run_command_is_refused_and_writes_nothing(flags, phrase, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", *flags]) == 2
+    err = capsys.readouterr().err
+    assert phrase in err and "Traceback" not in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_unreachable_scheduler_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["run", *TINY, "--scheduler", "tcp://127.0.0.1:9", "--out", str(out)]) == 2
+    assert "--scheduler tcp://127.0.0.1:9: cannot connect" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_duplicates_are_merged_and_jobs_capped_with_a_word(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["run", *TINY, "--dt", "1e-2", "--jobs", "1000", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "--dt: 0.01 given more than once" in err and "--jobs 1000" in err
+    assert len(Store(out).records()) == 1 and Store(out).manifest()["jobs"] == os.cpu_count()
+
+
+def test_flags_given_with_resume_are_refused(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["run", *TINY, "--out", str(out)]) == 0
+    assert main(["run", "--resume", str(out), "--dt", "1e-3", "--case", "free_top"]) == 2
+    assert "--case, --dt cannot change a matrix already made" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------- no silent wrong result
+def test_a_run_that_never_moved_is_a_failure_not_ok():
+    """An engine that leaves the state where it started while the truth moves (here: one that
+    drops the follower force, so the rod stays put) is stored failed, never ok with 'errors'."""
+    from broken_adapters import Still
+    from dalembert.adapters import adapter_names, register_adapter
+    from dalembert.harness.execute import Timing, execute
+    from dalembert.harness.matrix import expand
+
+    if "still" not in adapter_names():
+        register_adapter("still", Still)
+    (spec,), _ = expand(cases=["pivoted_rod"], engines=["still"], integrators=["rk4"], dts=[1e-2])
+    record, npz = execute(spec, Timing(min_repeats=1, min_total_s=0.0, max_repeats=1))
+    assert record.status == "failed" and "never left its initial value" in record.message and npz is None
+
+
+# ---------------------------------------------------------------- damaged and tampered stores
+@pytest.fixture
+def store(tmp_path):
+    out = tmp_path / "store"
+    assert main(["run", *TINY, "--integrator", "euler", "--out", str(out)]) == 0
+    return Store(out)
+
+
+def _damage(path, text="{\"key\": "):
+    with open(path, "w") as fh:
+        fh.write(text)
+
+
+@pytest.mark.parametrize("damage,phrase", [
+    (lambda s: _damage(os.path.join(s.rows_dir, sorted(s.done_keys())[0] + ".json")), "cannot be read as a stored run"),
+    (lambda s: _damage(os.path.join(s.path, "manifest.json")), "manifest.json: cannot be read as its manifest"),
+    (lambda s: [os.remove(os.path.join(s.traj_dir, f)) for f in os.listdir(s.traj_dir)], ".npz: missing"),
+    (lambda s: [_damage(os.path.join(s.traj_dir, f), "not a zip") for f in os.listdir(s.traj_dir)],
+     "cannot be read as a trajectory"),
+    (lambda s: _damage(os.path.join(s.rows_dir, sorted(s.done_keys())[0] + ".json"), "{\"key\": 1}"),
+     "not a run dalembert wrote"),
+])
+def test_a_damaged_store_gets_a_message_naming_the_file(store, damage, phrase, tmp_path, capsys):
+    damage(store)
+    assert main(["report", store.path]) == 2
+    err = capsys.readouterr().err
+    assert phrase in err and store.path in err and "Traceback" not in err, err
+
+
+def test_stray_files_in_a_store_are_not_rows(store):
+    with open(os.path.join(store.rows_dir, "notes.txt"), "w") as fh:
+        fh.write("mine")
+    assert main(["report", store.path]) == 0
+
+
+def test_resume_imports_no_module_a_store_names(store, tmp_path):
+    """A manifest whose spec names another module as the adapter: resume takes the adapter from
+    the registry (the module named here would exit the process with status 42 if imported)."""
+    evil = tmp_path / "evil_adapter.py"
+    evil.write_text("import os\nos._exit(42)\n")
+    manifest = store.manifest()
+    for spec in manifest["specs"]:
+        spec["adapter"] = "evil_adapter:Adapter"
+    store.write_manifest(manifest)
+    os.remove(os.path.join(store.rows_dir, sorted(store.done_keys())[0] + ".json"))
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    proc = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--resume", store.path], env=env,
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert [r.status for r in store.records()] == ["ok", "ok"]
+
+
+def test_resume_refuses_rows_of_another_matrix(store, tmp_path, capsys):
+    other = tmp_path / "other"
+    assert main(["run", *TINY, "--integrator", "rkmk4", "--out", str(other)]) == 0
+    shutil.copy(os.path.join(other, "manifest.json"), os.path.join(store.path, "manifest.json"))
+    assert main(["run", "--resume", store.path]) == 2
+    assert "not in its manifest" in capsys.readouterr().err
+
+
+def test_a_run_writes_nothing_outside_its_store(tmp_path, monkeypatch):
+    """Every engine, from a clean working directory: only --out is written (no engine log files)."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "--case", "pivoted_rod", "--dt", "1e-2", "--rtol", "1e-6", "--param", "t_final=0.2",
+                 "--out", "r"]) == 0
+    assert sorted(os.listdir(tmp_path)) == ["r"]
+
+
+def test_rows_are_strict_json(tmp_path):
+    """A diverged run's row holds no bare NaN (strict JSON readers reject it): null, status says why."""
+    out = tmp_path / "r"
+    assert main(["run", "--case", "free_top_fast_spin", "--engine", "reference", "--integrator", "euler", "--dt",
+                 "1e-2", "--param", "spin=500", "--param", "t_final=2", "--out", str(out)]) == 0
+    (row,) = Store(out).rows()
+    assert row["status"] == "diverged"
+    text = open(os.path.join(out, "rows", row["key"] + ".json")).read()
+    json.loads(text, parse_constant=lambda c: pytest.fail(f"non-standard JSON constant {c}"))
+
+
+# ---------------------------------------------------------------- one writer, faults of the parent
+def _cli(*args, **kw):
+    return subprocess.Popen([sys.executable, "-m", "dalembert.harness.cli", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, **kw)
+
+
+SLOW = ["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--integrator", "rkmk4", "--dt", "1e-4",
+        "--jobs", "2"]
+
+
+def _busy_workers(proc, n=2):
+    import psutil
+
+    parent, workers = psutil.Process(proc.pid), []
+    while len(workers) < n and proc.poll() is None:
+        workers = parent.children()
+        time.sleep(0.1)
+    return workers
+
+
+def test_a_second_writer_is_refused_naming_the_first(tmp_path):
+    out = tmp_path / "r"
+    first = _cli("run", *SLOW, "--out", str(out))
+    try:
+        assert len(_busy_workers(first)) == 2
+        second = _cli("run", "--resume", str(out))
+        _, err = second.communicate()
+        assert second.returncode == 2 and f"PID {first.pid} on" in err and "one store takes one writer" in err, err
+        third = _cli("run", *TINY, "--out", str(out))  # a fresh run into the same --out
+        _, err = third.communicate()
+        assert third.returncode == 2 and "already being written" in err, err
+    finally:
+        first.kill()
+        first.wait()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_stopping_the_parent_ends_cleanly_and_says_how_to_resume(sig, tmp_path):
+    """SIGTERM, or Ctrl-C (SIGINT to the whole process group, as a terminal sends it): exit 130,
+    every finished run stored, no worker left, no traceback, the --resume command printed."""
+    import psutil
+
+    out = tmp_path / "r"
+    proc = _cli("run", *SLOW, "--out", str(out), start_new_session=True)
+    workers = _busy_workers(proc)
+    assert len(workers) == 2
+    if sig == signal.SIGINT:
+        os.killpg(proc.pid, signal.SIGINT)
+    else:
+        proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate()
+    assert proc.returncode == 130 and f"dalembert run --resume {out}" in err and "Traceback" not in err, err
+    gone, alive = psutil.wait_procs(workers, timeout=60)
+    assert not alive
+    Store(out).writer().release()  # the lock was released: --resume can take it
+
+
+# ---------------------------------------------------------------- the cluster fails
+class _Cluster:
+    """A Dask scheduler and one worker, each its own process on loopback (so the scheduler can be killed)."""
+
+    def __init__(self, path):
+        self.file = str(path / "scheduler.json")
+        self.scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host",
+                                           "127.0.0.1", "--port", "0", "--no-dashboard", "--scheduler-file", self.file],
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        while not os.path.exists(self.file):
+            time.sleep(0.1)
+        time.sleep(0.5)  # the file is written before the scheduler listens
+        self.worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", "--scheduler-file",
+                                        self.file, "--nworkers", "1", "--nthreads", "1", "--no-dashboard"],
+                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+    @property
+    def address(self):
+        with open(self.file) as fh:
+            return json.load(fh)["address"]
+
+    def stop(self):
+        for proc in (self.worker, self.scheduler):
+            proc.kill()
+            proc.wait()
+
+
+# everything but where and how long a run ran
+TIMING_FIELDS = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "build_s", "worker_s", "stepping_total_s",
+                 "provenance", "load_start", "load_end", "concurrent"}
+
+
+def test_a_lost_scheduler_loses_no_work(tmp_path):
+    """The scheduler killed mid-matrix: the runs it lost are not stored (exit 4, the --resume
+    command printed), and --resume on a new cluster finishes the matrix identical to an
+    uninterrupted local one."""
+    selection = ["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--integrator", "euler",
+                 "--dt", "1e-3,5e-4", "--param", "t_final=1"]
+    out = tmp_path / "dask"
+    (tmp_path / "a").mkdir()
+    first = _Cluster(tmp_path / "a")
+    try:
+        proc = _cli("run", *selection, "--scheduler", first.address, "--out", str(out))
+        while len(Store(out).done_keys()) < 1 and proc.poll() is None:
+            time.sleep(0.1)
+        first.scheduler.kill()
+        _, err = proc.communicate()
+    finally:
+        first.stop()
+    stored = len(Store(out).done_keys())
+    assert proc.returncode == 4 and "lost to the infrastructure" in err and f"--resume {out}" in err, err
+    assert "Traceback" not in err and 1 <= stored < 4
+    assert all(r.status == "ok" for r in Store(out).records())  # nothing lost was stored as failed
+    (tmp_path / "b").mkdir()
+    second = _Cluster(tmp_path / "b")
+    try:
+        resumed = _cli("run", "--resume", str(out), "--scheduler", second.address)
+        _, err = resumed.communicate()
+    finally:
+        second.stop()
+    assert resumed.returncode == 0, err
+    local = tmp_path / "local"
+    assert main(["run", *selection, "--out", str(local)]) == 0
+    strip = lambda rows: [{k: v for k, v in r.items() if k not in TIMING_FIELDS} for r in rows]  # noqa: E731
+    assert strip(Store(out).rows()) == strip(Store(local).rows())
+
+
+@pytest.mark.parametrize("flags,phrase", [(["--cost-threshold", "-1"], "--cost-threshold: a growth factor"),
+                                          (["--threshold", "nan"], "--threshold: a growth factor")])
+def test_compare_refuses_a_meaningless_threshold(store, flags, phrase, capsys):
+    assert main(["compare", store.path, store.path, *flags]) == 2
+    assert phrase in capsys.readouterr().err
