@@ -12,8 +12,10 @@ Columns (``SCHEMA_VERSION`` 2):
 
 ==============  ==================================================================
 identity        ``key``, ``schema_version``, ``case``, ``case_version``, ``params``
-                (JSON), ``engine``, ``engine_version``, ``integrator``, ``dt`` (s),
-                ``rtol``, ``atol``, ``options`` (JSON), ``settings`` (a label)
+                (JSON), ``param_<name>`` per given case parameter (a number, or a
+                vector as JSON: swept values filter like any column), ``engine``,
+                ``engine_version``, ``integrator``, ``dt`` (s), ``rtol``, ``atol``,
+                ``options`` (JSON), ``settings`` (a label)
 outcome         ``status``, ``message``, ``t_final`` (s), ``t_diverged`` (s),
                 ``traceback``
 cost            ``build_s``, ``wall_s_median``, ``wall_s_min``, ``wall_s_max`` (stepping
@@ -199,6 +201,8 @@ class RunRecord:
                "engine": self.engine, "engine_version": self.engine_version, "integrator": self.integrator,
                "dt": self.dt, "rtol": self.rtol, "atol": self.atol,
                "options": json.dumps(self.options, sort_keys=True), "settings": self.settings_label,
+               **{f"param_{k}": json.dumps(list(v)) if isinstance(v, (tuple, list)) else v
+                  for k, v in self.params.items()},
                "status": self.status, "message": self.message, "t_final": self.t_final,
                "t_diverged": self.t_diverged, "traceback": self.traceback}
         row.update(asdict(self.cost))

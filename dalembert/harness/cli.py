@@ -6,6 +6,7 @@ Engines are imported lazily: listing and help work without any engine installed.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import sys
@@ -74,6 +75,12 @@ def _parser():
     r.add_argument("--scheduler", metavar="ADDRESS", help="run on a Dask cluster, e.g. tcp://host:8786")
     r.add_argument("--out", metavar="DIR", help="results directory (default results/<timestamp>)")
     r.add_argument("--resume", metavar="DIR", help="finish an interrupted run directory")
+    r.add_argument("--search", choices=["dt"],
+                   help="find each fixed-step integrator's stability boundary in the step by bisection within "
+                        "the bracket the --dt values give (stored probes are reused)")
+    r.add_argument("--resolution", type=float, default=None,
+                   help="with --search: stop when the failing step is within this factor of the passing one "
+                        "(default 1.2)")
     r.add_argument("--force", action="store_true",
                    help=f"allow runs of more than 1e8 steps (refused by default: usually a typo in --dt)")
     r.add_argument("--strict", action="store_true",
@@ -339,6 +346,25 @@ def _stop_on_sigterm():
     signal.signal(signal.SIGTERM, stop)
 
 
+def _search(store, plan, run):
+    """Run the boundary search the manifest's ``plan`` describes; each round's probes join the
+    manifest's specs before they run (so ``--resume`` knows them)."""
+    from dalembert.harness.matrix import RunSpec
+    from dalembert.harness.search import search
+
+    def run_round(batch):
+        manifest = store.manifest()
+        known = {json.dumps(s, sort_keys=True) for s in manifest["specs"]}
+        manifest["specs"] += [s.to_json() for s in batch if json.dumps(s.to_json(), sort_keys=True) not in known]
+        store.write_manifest(manifest)
+        return run(batch)
+
+    def said(rnd, probes):
+        print(f"dalembert: search round {rnd}: {len(probes)} probe(s)", file=sys.stderr)
+
+    return search([RunSpec.from_json(s) for s in plan["first"]], store, run_round, plan["resolution"], said)
+
+
 def cmd_run(args):
     from dalembert.harness.dask import run_matrix_dask
     from dalembert.harness.execute import Timing
@@ -351,7 +377,8 @@ def cmd_run(args):
         given = [flag for flag, value in (("--case", args.case), ("--tag", args.tag), ("--engine", args.engine),
                                           ("--integrator", args.integrator), ("--dt", args.dt), ("--rtol", args.rtol),
                                           ("--param", args.param), ("--option", args.option), ("--out", args.out),
-                                          ("--timeout", args.timeout), ("--force", args.force)) if value]
+                                          ("--timeout", args.timeout), ("--force", args.force),
+                                          ("--search", args.search), ("--resolution", args.resolution)) if value]
         if given:
             return _fail(f"--resume {args.resume}: {', '.join(given)} cannot change a matrix already made (its "
                          "manifest fixes it) — drop them, or start a new matrix with --out")
@@ -384,6 +411,9 @@ def cmd_run(args):
             "timing": vars(timing), "jobs": jobs, "scheduler": args.scheduler,
             "load_average": {"start": _load_average(), "end": None}, "specs": [s.to_json() for s in specs],
         }
+        if chosen.search:
+            manifest["search"] = {"parameter": "dt", "resolution": chosen.resolution,
+                                  "first": [s.to_json() for s in specs]}
         store, lock = _new_store(args.out or _timestamped(), manifest)
     with lock:
         if lock.stale:
@@ -393,11 +423,18 @@ def cmd_run(args):
               file=sys.stderr)
         _stop_on_sigterm()
         progress = _progress_printer()
-        try:
+
+        def run(batch):
             if client is not None:
-                lost = run_matrix_dask(specs, store, client, timeout, timing, progress)
+                return run_matrix_dask(batch, store, client, timeout, timing, progress)
+            return run_matrix(batch, store, jobs, timeout, timing, progress)
+
+        try:
+            plan = store.manifest().get("search")
+            if plan:
+                lost = _search(store, plan, run)
             else:
-                lost = run_matrix(specs, store, jobs, timeout, timing, progress)
+                lost = run(specs)
         except KeyboardInterrupt:  # every finished run is stored; the workers are gone
             print(f"\ndalembert: interrupted; {len(store.done_keys())} of {len(specs)} runs stored in {store.path} — "
                   f"finish with: dalembert run --resume {store.path}", file=sys.stderr)

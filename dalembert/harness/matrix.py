@@ -7,6 +7,7 @@ before anything runs; ``spec(...)`` makes one spec from explicit settings.
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 from dataclasses import asdict, dataclass
 
@@ -96,7 +97,9 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
     engines : engine names (default: every registered engine whose engine imports)
     integrators : integrator names (default: every integrator of each engine)
     dts, rtols : step sizes (s) for fixed-step and tolerances for adaptive integrators
-    params : dict of case parameter overrides (applied to every selected case that has them)
+    params : dict of case parameter overrides (applied to every selected case that has them); a
+        list of values sweeps the parameter (one case variant per value; several swept
+        parameters form their product), a tuple is one vector value
     options : dict of engine options, applied to every run whose integrator accepts them (a
         ValueError when no selected one accepts one of them); the other runs, and every run when
         none is given, take each engine's ``variants`` for each case
@@ -144,9 +147,12 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
     rtols = tuple(rtols or DEFAULT_RTOLS)
     params = dict(params or {})
     specs = []
+    variants = []  # (factory, parameters of one case variant)
     for name in names:
         factory = registry[name]
-        case_params = {k: v for k, v in params.items() if k in factory.params}
+        mine = {k: v if isinstance(v, list) else [v] for k, v in params.items() if k in factory.params}
+        variants += [(factory, dict(zip(mine, values))) for values in itertools.product(*mine.values())]
+    for factory, case_params in variants:
         case = factory(**case_params)
         for e, adapter in adapters.items():
             for integ, ispec in adapter.integrators.items():

@@ -6,12 +6,20 @@ non-finite steps, tolerances, timeouts; a parameter no selected case has
 empty ``--out``; ``--rtol`` when no selected integrator is adaptive, ``--dt``
 when none is fixed-step. Merged and said once: a value given twice in a list.
 Capped and said: ``--jobs`` beyond the cores (the timings would share them).
+
+A parameter sweeps when given several values: ``spin=5,50,500`` (a scalar's values
+comma-separated), ``spin=log:5,500,7`` or ``lin:0,1,5`` (``n`` values log- or evenly
+spaced from ``a`` to ``b``), ``omega0=0,1,5;0,2,5`` (a vector's values separated by ``;``).
+Each value makes its own case variant (its own version); several swept parameters form
+their product.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+import numpy as np
 
 from dalembert.registry import suggest
 
@@ -27,6 +35,8 @@ class Selection:
     notes: list  # merged duplicates, capped jobs, options that apply to some engines only
     jobs: int
     timeout: float
+    search: str | None = None  # "dt": the specs are the first probes of a boundary search
+    resolution: float | None = None
 
 
 def numbers(flag, groups, notes, lower=0.0):
@@ -48,6 +58,34 @@ def numbers(flag, groups, notes, lower=0.0):
     return unique
 
 
+def sweep(factory, key, text):
+    """The values ``text`` gives parameter ``key`` of ``factory`` (one or several: a sweep), each
+    typed as the parameter's default; ValueError naming ``--param`` otherwise."""
+    from dalembert.case import parse_param
+
+    default = factory.params[key]
+    grid = text.split(":", 1)
+    if len(grid) == 2 and grid[0] in ("log", "lin"):
+        if not isinstance(default, float):
+            raise ValueError(f"--param {key}={text}: a {grid[0]}: grid sweeps a real number; {key!r} is "
+                             f"{type(default).__name__} like {default!r}")
+        try:
+            a, b, n = (float(x) for x in grid[1].split(","))
+        except ValueError:
+            raise ValueError(f"--param {key}={text}: write {grid[0]}:FIRST,LAST,COUNT") from None
+        if not (n >= 2 and n == int(n)) or (grid[0] == "log" and not (a > 0 and b > 0)):
+            raise ValueError(f"--param {key}={text}: COUNT must be an integer >= 2"
+                             + (", FIRST and LAST positive" if grid[0] == "log" else ""))
+        points = (np.geomspace if grid[0] == "log" else np.linspace)(a, b, int(n))
+        return [float(v) for v in points]
+    parts = text.split(";") if isinstance(default, tuple) else text.split(",")
+    if any(not p.strip() for p in parts):
+        raise ValueError(f"--param {key}={text}: an empty value — separate values with "
+                         + ("';' (a vector's numbers with ',')" if isinstance(default, tuple) else "','"))
+    values = [parse_param(factory, f"{key}={p}")[1] for p in parts]
+    return list(dict.fromkeys(values))
+
+
 def _pairs(flag, texts):
     """``KEY=VALUE`` texts as (key, value) pairs; ValueError on a malformed or repeated key."""
     pairs = {}
@@ -56,7 +94,8 @@ def _pairs(flag, texts):
             raise ValueError(f"{flag} {text!r}: write KEY=VALUE")
         key, value = text.split("=", 1)
         if key in pairs:
-            raise ValueError(f"{flag} {key}: given twice ({pairs[key]!r} and {value!r}) — give it once")
+            raise ValueError(f"{flag} {key}: given twice ({pairs[key]!r} and {value!r}) — give it once"
+                             + (" (several values sweep it: KEY=V1,V2)" if flag == "--param" else ""))
         pairs[key] = value
     return pairs
 
@@ -68,7 +107,7 @@ def select(args, cores):
     KeyError (unknown names, with did-you-mean) or ImportError (a named engine not installed),
     each naming the flag, before anything runs.
     """
-    from dalembert.case import load_cases, parse_param
+    from dalembert.case import load_cases
     from dalembert.harness.matrix import expand
     from dalembert.harness.pool import DEFAULT_TIMEOUT_S
 
@@ -99,7 +138,8 @@ def select(args, cores):
         if not owners:
             known = {k for f in selected for k in f.params}
             raise ValueError(f"--param {key}: no selected case has this parameter{suggest(key, known)}")
-        params.update([parse_param(owners[0], f"{key}={value}")])
+        values = sweep(owners[0], key, value)
+        params[key] = values if len(values) > 1 else values[0]
     options = _pairs("--option", args.option)
     specs, skipped = expand(args.case, args.tag, args.engine, args.integrator, dts or None, rtols or None, params,
                             options, force=args.force)
@@ -113,4 +153,21 @@ def select(args, cores):
         engines = sorted({s.engine for s in specs if key in dict(s.options)})
         if engines != sorted({s.engine for s in specs}):
             notes.append(f"--option {key}: applies to {', '.join(engines)} only; the other engines run their defaults")
-    return Selection(specs, skipped, notes, jobs, timeout)
+    resolution = None
+    if args.search:
+        from dalembert.harness.search import RESOLUTION
+
+        resolution = RESOLUTION if args.resolution is None else args.resolution
+        if not (math.isfinite(resolution) and resolution > 1.0):
+            raise ValueError(f"--resolution: a factor between steps, must be greater than 1, got {resolution}")
+        if len(dts) < 2:
+            raise ValueError("--search dt: give the bracket as --dt SMALLEST,LARGEST (e.g. --dt 1e-4,1e-2)")
+        adaptive = sorted({f"{s.engine} {s.integrator}" for s in specs if s.dt is None})
+        if adaptive:
+            notes.append(f"--search dt: adaptive integrators have no step to search, left out: {', '.join(adaptive)}")
+        specs = [s for s in specs if s.dt is not None]
+        if not specs:
+            raise ValueError("--search dt: no selected integrator takes a fixed step")
+    elif args.resolution is not None:
+        raise ValueError("--resolution: only with --search")
+    return Selection(specs, skipped, notes, jobs, timeout, args.search, resolution)

@@ -1,0 +1,59 @@
+"""Parameter sweeps and the boundary search in the step."""
+
+import numpy as np
+import pytest
+
+from dalembert.boundary import Bracket, bracket
+from dalembert.harness.cli import main
+from dalembert.harness.matrix import expand
+from dalembert.store import Store
+
+
+def test_a_swept_parameter_makes_one_case_version_per_value():
+    specs, _ = expand(cases=["free_top_fast_spin"], engines=["reference"], integrators=["rk4"], dts=[1e-2],
+                      params={"spin": [5.0, 50.0], "offset": [1e-3, 2e-3], "t_final": 1.0})
+    assert len(specs) == 4 and len({s.case_version for s in specs}) == 4  # the product of the two sweeps
+    assert {dict(s.params)["spin"] for s in specs} == {5.0, 50.0}
+
+
+@pytest.mark.parametrize("text,values", [("spin=5,50,500", [5.0, 50.0, 500.0]),
+                                         ("spin=log:5,500,3", [5.0, 50.0, 500.0]),
+                                         ("spin=lin:0,1,3", [0.0, 0.5, 1.0])])
+def test_sweep_syntax(text, values):
+    from dalembert.case import load_cases
+    from dalembert.harness.selection import sweep
+
+    key, value = text.split("=", 1)
+    assert np.allclose(sweep(load_cases()["free_top_fast_spin"], key, value), values, rtol=1e-15, atol=0)
+
+
+def test_a_vector_parameter_sweeps_by_semicolons(tmp_path):
+    out = tmp_path / "r"
+    assert main(["run", "--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2",
+                 "--param", "omega0=0,1,5;0,2,5", "--param", "t_final=0.2", "--out", str(out)]) == 0
+    table = Store(out).table()
+    assert sorted(table["param_omega0"]) == ["[0.0, 1.0, 5.0]", "[0.0, 2.0, 5.0]"]  # swept values are columns
+
+
+@pytest.mark.parametrize("probes,expected", [
+    ([(1e-3, "stable"), (1e-2, "drifts"), (1e-1, "diverged")], Bracket(1e-3, 1e-2, True)),
+    ([(1e-3, "stable"), (1e-1, "stable")], Bracket(1e-1, None, True)),
+    ([(1e-3, "drifts"), (1e-1, "diverged")], Bracket(None, 1e-3, True)),
+    ([(1e-3, "stable"), (1e-2, "drifts"), (5e-2, "stable")], Bracket(1e-3, 1e-2, False)),
+])
+def test_the_stable_bracket_of_probes(probes, expected):
+    assert bracket(probes, lambda v: v == "stable") == expected
+
+
+def test_the_search_bisects_to_the_resolution(tmp_path):
+    """The reference's RK4 on a 500 rad/s spin, sampled every 0.1 s so that steps up to 0.1 s divide
+    it: the search narrows both boundaries to the resolution, each probe a stored run."""
+    from dalembert.boundary import boundaries
+
+    out = tmp_path / "r"
+    assert main(["run", "--case", "free_top_fast_spin", "--param", "spin=500", "--param", "t_final=0.5",
+                 "--param", "sample_interval=0.1", "--engine", "reference", "--integrator", "rk4", "--search", "dt",
+                 "--dt", "1e-4,1e-1", "--resolution", "1.5", "--out", str(out)]) == 0
+    (b,) = boundaries(Store(out).records())
+    assert b.stable.ratio <= 1.5 and b.finite.ratio <= 1.5 and b.stable.monotone and b.finite.monotone
+    assert b.stable.passed <= b.finite.passed and b.probes == len(Store(out).records())
