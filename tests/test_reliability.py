@@ -304,3 +304,26 @@ def test_a_lost_scheduler_loses_no_work(tmp_path):
 def test_compare_refuses_a_meaningless_threshold(store, flags, phrase, capsys):
     assert main(["compare", store.path, store.path, *flags]) == 2
     assert phrase in capsys.readouterr().err
+
+
+def test_debug_shows_the_traceback_the_message_hides():
+    plain = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--case", "free_tops"],
+                           capture_output=True, text=True)
+    debug = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "--debug", "run", "--case", "free_tops"],
+                           capture_output=True, text=True)
+    assert plain.returncode == 2 and "Traceback" not in plain.stderr and "did you mean" in plain.stderr
+    assert debug.returncode != 0 and "Traceback" in debug.stderr and "UnknownNameError" in debug.stderr
+
+
+def test_a_closed_pipe_is_not_an_error(monkeypatch, capsys):
+    """`dalembert cases | head -1`: the reader leaves early and the next write breaks the pipe;
+    that ends the command quietly, not with a BrokenPipeError traceback."""
+    class Closed:
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self):
+            pass
+
+    monkeypatch.setattr(sys, "stdout", Closed())
+    assert main(["cases", "--verbose"]) == 0

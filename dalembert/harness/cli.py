@@ -563,7 +563,10 @@ def main(argv=None):
     try:
         return commands[args.command](args)
     except BrokenPipeError:  # the reader left (e.g. `dalembert cases | head`): not an error
-        sys.stderr.close()
+        try:  # Python's documented recipe: stdout to /dev/null, so the final flush cannot fail again
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        except (AttributeError, OSError, ValueError):
+            pass
         return 0
     except KeyboardInterrupt:
         print("\ndalembert: interrupted", file=sys.stderr)
