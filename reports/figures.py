@@ -27,6 +27,7 @@ __all__ = ["engine_colours", "pareto_summary", "work_precision", "stability", "t
 
 MAX_POINTS = 400  # per time-series line: figures stay small; the data stay in the store
 PANEL_W, PANEL_H = 3.3, 2.8  # inches per small-multiple panel: four fit across the page
+ROW_W, MAX_PANEL_W = 4 * PANEL_W, 4.4  # a row of fewer panels shares the same width, up to this per panel
 # Okabe & Ito's colour-blind-safe qualitative palette (engines: at most this many per report).
 ENGINE_PALETTE = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#F0E442")
 # Integrators within one panel: matplotlib's tab10 plus two darks, so Exudyn's twelve stay distinct.
@@ -61,10 +62,14 @@ def _columns(n, most=4):
     return min((most, most - 1), key=lambda c: (-(-n // c) * c - n, -c))
 
 
+def _panel_width(ncols):
+    return min(MAX_PANEL_W, ROW_W / ncols)
+
+
 def _grid(n, ncols=4, sharex=True, sharey=True, height=PANEL_H):
     ncols = _columns(n, ncols)
     nrows = math.ceil(n / ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(PANEL_W * ncols, height * nrows), sharex=sharex,
+    fig, axes = plt.subplots(nrows, ncols, figsize=(_panel_width(ncols) * ncols, height * nrows), sharex=sharex,
                              sharey=sharey, squeeze=False)
     flat = axes.ravel()
     for ax in flat[n:]:
@@ -126,7 +131,7 @@ def work_precision(panels, ylabel, floor=None, tolerance=None, xlabel="stepping 
     """
     ncols = _columns(len(panels))
     nrows = math.ceil(len(panels) / ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(PANEL_W * ncols, 3.9 * nrows), sharex=True, sharey=True,
+    fig, axes = plt.subplots(nrows, ncols, figsize=(_panel_width(ncols) * ncols, 3.9 * nrows), sharex=True, sharey=True,
                              squeeze=False, layout="constrained")
     flat = axes.ravel()
     for ax in flat[len(panels):]:
@@ -251,7 +256,7 @@ def time_grid(rows, engines, sweep_colours):
     sweep_colours : dict sweep label -> colour
     """
     n_rows, n_cols = len(rows), len(engines)
-    fig, axes = plt.subplots(n_rows, n_cols, figsize=(PANEL_W * n_cols, 2.0 * n_rows + 0.5), sharex=True,
+    fig, axes = plt.subplots(n_rows, n_cols, figsize=(_panel_width(n_cols) * n_cols, 2.0 * n_rows + 0.5), sharex=True,
                              sharey="row", squeeze=False)
     for i, row in enumerate(rows):
         for j, engine in enumerate(engines):

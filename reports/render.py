@@ -17,19 +17,21 @@ import json
 import math
 import os
 
+import numpy as np
 import pandas as pd
 
 from dalembert.errors import QUANTITIES
 from dalembert.invariants import CONSERVED
 from dalembert.reports import figures, time_series
 from dalembert.reports.findings import ACCURACY_TARGETS, ENERGY_HAZARD, ENERGY_LIKE, HAZARDS, NAMED, find, run_name, settings_text
-from dalembert.reports.tables import SORT_SCRIPT, Cell, Table, escape_html, escape_md, num
+from dalembert.reports.tables import MISSING, SORT_SCRIPT, Cell, Table, escape_html, escape_md, num
 from dalembert.reports.timing import timing_note
 from dalembert.reports.work_precision import cheapest_reaching, cost_per_sim_s, series, sweep_key
 from dalembert.store import atomic_write
 
 __all__ = ["build_report"]
 
+DECADES = 100.0  # a time plot's values spanning more than this factor (two decades) get a log axis
 HAZARD_TITLES = {"diverged": "Diverged", "failed": "Stopped early", "energy": "Energy not kept",
                  "tolerance": "Finite but beyond the tolerance", "disagreement": "Engines disagree",
                  "unsupported": "Not supported (not run, not drawn)"}
@@ -118,7 +120,7 @@ def _summary_table(found, titles):
             if e.best:
                 cells += [num(e.best.error, suffix=f" {f.unit}"), _run_link(e.best.run)]
             else:
-                cells += [Cell("—", math.nan), Cell("no finished run")]
+                cells += [Cell(MISSING, math.nan), Cell("no finished run")]
             for reach in e.reaches:
                 p = reach.point
                 if p:  # the setting on one line, its cost below it
@@ -202,7 +204,7 @@ def _case_header(doc, f, title):
     doc.para(f"Version {case.version}; parameters {f.runs[0].params or 'defaults'}; horizon {case.t_final:g} s; "
              f"effects {', '.join(sorted(case.scene.effects))}; truth: {case.truth}; {len(f.runs)} runs.")
     doc.table(Table(["tolerance", "value", "reason"],
-                    [[k, num(t.value, "{:g}"), t.reason] for k, t in sorted(case.tolerances.items())]),
+                    [[k, num(t.value, "{:g}"), Cell(t.reason, wrap=True)] for k, t in sorted(case.tolerances.items())]),
               note_constant=False, collapsed=f"the case's {len(case.tolerances)} tolerances and their reasons")
 
 
@@ -270,8 +272,9 @@ def _stability(doc, f, name):
     bound = f.case.tolerances.get(measure)
     doc.figure(figures.stability(blocks, label, bound.value if bound else None),
                f"{name}: {label} per run (colour, log scale; the bar marks the case's bound) and its stored verdict "
-               "(word); fixed-step and adaptive runs apart. Black: diverged (at the time shown); grey, hatched: "
-               "stopped early.", f"{name}-stability")
+               "(word: it weighs every conserved quantity the case bounds, the colour this one); fixed-step and "
+               "adaptive runs apart. Black: diverged (at the time shown); grey, hatched: stopped early.",
+               f"{name}-stability")
     n_unsupported = len(f.runs) - len(shown)
     if n_unsupported:
         doc.para(f"{n_unsupported} unsupported runs are not drawn; the hazards above list them with the reason.")
@@ -332,10 +335,13 @@ def _against_time(doc, store, f, name):
                                                                 *time_series.drift_series(store, r, f.case, cname)))
             if row["series"]:
                 rows.append(row)
+        for row in rows:  # a log axis where the values span decades, a linear one where they do not
+            values = [v for runs in row["series"].values() for *_, y in runs for v in y[np.isfinite(y) & (y > 0)]]
+            row["log"] = bool(values) and max(values) > DECADES * min(values)
         doc.figure(figures.time_grid(rows, list(reps), colours),
                    f"{name}: each engine's most accurate run at each step size and tolerance (colour), its "
-                   f"{f.quantity} error and the drift of each conserved quantity against time (log scales); dashed: "
-                   "the case's tolerance on each.",
+                   f"{f.quantity} error and the drift of each conserved quantity against time (log scales where "
+                   "they span decades); dashed: the case's tolerance on each.",
                    f"{name}-time")
     if divs:
         panels = {}
@@ -377,10 +383,10 @@ def _every_run(doc, f):
         spread = (Cell(f"{r.cost.wall_s_min / horizon:.2g}–{r.cost.wall_s_max / horizon:.2g}",
                        r.cost.wall_s_max / horizon - r.cost.wall_s_min / horizon,
                        title=f"{r.cost.repeats} timed repeats; {r.cost.concurrent} runs in flight")
-                  if math.isfinite(r.cost.wall_s_min) else Cell("—", math.nan))
-        rows.append([Cell(r.engine), Cell(settings_text(r)), status, num(cost_per_sim_s(r), "{:.2g}"), spread]
+                  if math.isfinite(r.cost.wall_s_min) else Cell(MISSING, math.nan))
+        rows.append([Cell(r.engine), Cell(settings_text(r), wrap=True), status, num(cost_per_sim_s(r), "{:.2g}"), spread]
                     + [num(r.max_error(q)) for q in errs] + [num(r.drifts.get(n)) for n in drifts]
-                    + [Cell(", ".join(r.beyond) if r.ok else "—"), Cell(r.verdict, title=r.verdict_reason)])
+                    + [Cell(", ".join(r.beyond) if r.ok else MISSING, wrap=True), Cell(r.verdict, title=r.verdict_reason)])
     doc.heading("Every run", 3)
     doc.table(Table(head, rows, row_ids=[f"run-{r.key}" for r in runs], row_classes=[r.verdict for r in runs]),
               collapsed=f"all {len(runs)} runs of {f.case.name}: click to open; click a header to sort")
@@ -400,7 +406,8 @@ def _engines_simulated(doc, f):
 CSS = """body{font-family:system-ui,sans-serif;margin:1.5em auto;max-width:1320px;padding:0 12px;color:#222;
 font-size:14px;line-height:1.4}h2{border-bottom:1px solid #ddd;padding-bottom:2px;margin-top:1.8em}
 table{border-collapse:collapse;margin:0.4em 0 1.2em;font-size:12px;max-width:100%}
-td,th{border:1px solid #ccc;padding:2px 5px;overflow-wrap:anywhere;vertical-align:top}
+td,th{border:1px solid #ccc;padding:2px 5px;vertical-align:top}td{white-space:nowrap}
+td.w{white-space:normal;overflow-wrap:anywhere;min-width:9em}th{overflow-wrap:anywhere}
 th{background:#f3f3f3;cursor:pointer;position:sticky;top:0}th[data-dir]{background:#e3ecf7}
 tr.stable td:last-child{background:#dff0d8}tr.drifts td:last-child{background:#fcf1d0}
 tr.diverged td:last-child{background:#f4cccc}tr.failed td:last-child,tr.timeout td:last-child{background:#e7d7ef}

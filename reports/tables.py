@@ -18,7 +18,7 @@ import math
 import re
 from dataclasses import dataclass
 
-__all__ = ["Cell", "Table", "num", "escape_html", "escape_md", "SORT_SCRIPT"]
+__all__ = ["MISSING", "Cell", "Table", "num", "escape_html", "escape_md", "SORT_SCRIPT"]
 
 
 def escape_html(text):
@@ -45,18 +45,23 @@ class Cell:
     sort : float or str or None — what its column sorts by (default: ``text``)
     title : str — hover text in HTML (e.g. a full message)
     html : str or None — ready markup for HTML (built from escaped parts), else the escaped text
+    wrap : bool — may break across lines (long text); other cells keep to one line, so numbers stay whole
     """
 
     text: str
     sort: object = None
     title: str = ""
     html: str | None = None
+    wrap: bool = False
+
+
+MISSING = "—"  # a value not measured
 
 
 def num(x, fmt="{:.2e}", suffix=""):
-    """A number as a cell: shown with ``fmt`` (+ ``suffix``), sorted by its value; "—" when missing."""
+    """A number as a cell: shown with ``fmt`` (+ ``suffix``), sorted by its value; ``MISSING`` when missing."""
     if x is None or (isinstance(x, float) and math.isnan(x)):
-        return Cell("—", math.nan)
+        return Cell(MISSING, math.nan)
     return Cell(fmt.format(x) + suffix, float(x))
 
 
@@ -85,15 +90,20 @@ class Table:
 
     def split_constant(self, keep=()):
         """``(table without its constant columns, [(header, text)] of those columns)``; columns in
-        ``keep`` stay. A table of one row keeps everything (nothing is constant across one thing)."""
+        ``keep`` stay. A table of one row keeps everything (nothing is constant across one thing);
+        a column whose measured values are all one is constant "where measured"."""
         if len(self.rows) < 2:
             return self, []
-        constant = [j for j, h in enumerate(self.head)
-                    if h not in keep and len({r[j].text for r in self.rows}) == 1]
+
+        def values(j):  # a missing value ("—": not measured, e.g. a run that did not finish) does not count
+            return {r[j].text for r in self.rows} - {MISSING}
+
+        constant = [j for j, h in enumerate(self.head) if h not in keep and len(values(j)) == 1]
         keep_idx = [j for j in range(len(self.head)) if j not in constant]
         table = Table([self.head[j] for j in keep_idx], [[r[j] for j in keep_idx] for r in self.rows],
                       self.row_ids, self.row_classes, self.cls)
-        return table, [(self.head[j], self.rows[0][j].text) for j in constant]
+        return table, [(self.head[j], (values(j).pop() or "none") + (
+            "" if all(r[j].text != MISSING for r in self.rows) else " (where measured)")) for j in constant]
 
     def html(self, caption=""):
         head = "".join(f'<th title="click to sort">{escape_html(h)}</th>' for h in self.head)
@@ -124,6 +134,8 @@ def _td(c):
         attrs += f' data-v="{escape_html(sort)}"'
     if c.title:
         attrs += f' title="{escape_html(c.title)}"'
+    if c.wrap:
+        attrs += ' class="w"'
     return f"<td{attrs}>{c.html if c.html is not None else escape_html(c.text)}</td>"
 
 

@@ -121,3 +121,23 @@ def test_a_run_that_now_diverges_is_a_regression(store, tmp_path):
                                     errors={q: (math.nan, math.nan) for q in r.errors}))
     cmp = compare_stores(store, other)
     assert cmp.regressed and any("status ok -> diverged" in n for c in cmp.changes for n in c.notes)
+
+
+def test_a_schema_1_store_compares_with_a_current_one(store, tmp_path, capsys):
+    """Stores written before the schema was versioned (no verdicts) still compare, run by run."""
+    import json
+    import os
+
+    old = _copy(store, tmp_path / "old")
+    manifest = old.manifest()
+    del manifest["schema_version"]
+    old.write_manifest(manifest)
+    for key in old.done_keys():
+        path = os.path.join(old.rows_dir, f"{key}.json")
+        row = json.load(open(path))
+        for col in ("schema_version", "verdict", "verdict_reason", "provenance"):
+            row.pop(col)
+        json.dump(row, open(path, "w"))
+    assert main(["compare", old.path, store.path]) == 0
+    captured = capsys.readouterr()
+    assert "schemas 1 and 2" in captured.err and "4 runs in both: 0 worse" in captured.out
