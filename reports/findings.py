@@ -23,7 +23,7 @@ stored numbers only; verdicts are the stored ones, never judged again here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from dalembert.errors import QUANTITIES
 from dalembert.record import BAD_STATUSES
@@ -77,9 +77,6 @@ class EngineSummary:
     reaches: tuple  # Reach per ACCURACY_TARGETS
     best: object  # the Point of its most accurate finished run, or None
     front: tuple  # its Pareto front (Points by increasing cost)
-
-    def count(self, predicate):
-        return sum(1 for r in self.runs if predicate(r))
 
 
 @dataclass(frozen=True)
@@ -148,7 +145,7 @@ def _case_findings(case, runs):
         hazards += _unsupported(e)
     hazards.sort(key=lambda h: HAZARDS.index(h.kind))
     found = CaseFindings(case, tuple(runs), quantity, tuple(engines), tuple(hazards), ())
-    return CaseFindings(case, tuple(runs), quantity, tuple(engines), tuple(hazards), tuple(_sentences(found)))
+    return replace(found, sentences=tuple(_sentences(found)))  # the prose reads the rest
 
 
 # ---------------------------------------------------------------------------------------------- hazards
