@@ -23,7 +23,8 @@ import pandas as pd
 from dalembert.errors import QUANTITIES
 from dalembert.invariants import CONSERVED
 from dalembert.reports import figures, time_series
-from dalembert.reports.findings import ACCURACY_TARGETS, ENERGY_HAZARD, ENERGY_LIKE, HAZARDS, NAMED, find, run_name, settings_text
+from dalembert.reports.findings import (ACCURACY_TARGETS, DISAGREEMENT_FACTOR, ENERGY_HAZARD, ENERGY_LIKE, HAZARDS,
+                                         NAMED, find, run_name, settings_text)
 from dalembert.reports.tables import MISSING, SORT_SCRIPT, Cell, Table, escape_html, escape_md, num
 from dalembert.reports.timing import timing_note
 from dalembert.reports.work_precision import cheapest_reaching, cost_per_sim_s, series, sweep_key
@@ -172,8 +173,9 @@ def _findings(doc, found, titles, colours):
 def _hazards(doc, found, titles):
     doc.heading("Hazards", 2, anchor="hazards")
     doc.para("What to know before trusting a setting: every run named is in its case's table of runs. Energy is "
-             "judged against 1 % of its scale over the horizon, disagreement at an order of magnitude between "
-             "engines with the same integrator and step beyond the case's tolerance.")
+             f"judged against {100 * ENERGY_HAZARD:g} % of its scale over the horizon, disagreement at a factor "
+             f"{DISAGREEMENT_FACTOR:g} between engines with the same integrator and step, beyond the case's "
+             "tolerance.")
     for f in found:
         if not f.hazards:
             continue
