@@ -91,10 +91,10 @@ class _Doc:
                     text.rstrip().replace("```", "'''"), "```", "", "</details>", ""]
 
 
-def _run_link(r, text=None):
+def _run_link(r, text=None, wrap=False):
     """A cell naming a run, linked to its row in its case's every-run table."""
     text = text if text is not None else settings_text(r)
-    return Cell(text, html=f'<a href="#run-{escape_html(r.key)}">{escape_html(text)}</a>')
+    return Cell(text, html=f'<a href="#run-{escape_html(r.key)}">{escape_html(text)}</a>', wrap=wrap)
 
 
 def _section_id(f):
@@ -116,17 +116,17 @@ def _summary_table(found, titles):
     rows, csv_rows = [], []
     for f in found:
         for e in f.engines:
-            cells = [Cell(titles[f], html=f'<a href="#{escape_html(_section_id(f))}">{escape_html(titles[f])}</a>'),
-                     Cell(e.engine)]
+            cells = [Cell(titles[f], html=f'<a href="#{escape_html(_section_id(f))}">{escape_html(titles[f])}</a>',
+                          wrap=True), Cell(e.engine)]
             if e.best:
-                cells += [num(e.best.error, suffix=f" {f.unit}"), _run_link(e.best.run)]
+                cells += [num(e.best.error, suffix=f" {f.unit}"), _run_link(e.best.run, wrap=True)]
             else:
                 cells += [Cell(MISSING, math.nan), Cell("no finished run")]
             for reach in e.reaches:
                 p = reach.point
                 if p:  # the setting on one line, its cost below it
                     link = _run_link(p.run)
-                    cells.append(Cell(f"{link.text} · {p.cost:.2g}", p.cost,
+                    cells.append(Cell(f"{link.text} · {p.cost:.2g}", p.cost, wrap=True,
                                       html=f'{link.html}<br><span class="cost">{p.cost:.2g}</span>'))
                 else:
                     cells.append(Cell("never", math.nan))
@@ -409,7 +409,7 @@ CSS = """body{font-family:system-ui,sans-serif;margin:1.5em auto;max-width:1320p
 font-size:14px;line-height:1.4}h2{border-bottom:1px solid #ddd;padding-bottom:2px;margin-top:1.8em}
 table{border-collapse:collapse;margin:0.4em 0 1.2em;font-size:12px;max-width:100%}
 td,th{border:1px solid #ccc;padding:2px 5px;vertical-align:top}td{white-space:nowrap}
-td.w{white-space:normal;overflow-wrap:anywhere;min-width:9em}th{overflow-wrap:anywhere}
+td.w{white-space:normal;overflow-wrap:anywhere;min-width:7em}
 th{background:#f3f3f3;cursor:pointer;position:sticky;top:0}th[data-dir]{background:#e3ecf7}
 tr.stable td:last-child{background:#dff0d8}tr.drifts td:last-child{background:#fcf1d0}
 tr.diverged td:last-child{background:#f4cccc}tr.failed td:last-child,tr.timeout td:last-child{background:#e7d7ef}
@@ -419,7 +419,7 @@ max-height:30em}nav a{margin-right:1em}p.warning{background:#fff3cd;border:1px s
 p.note{font-size:12px;color:#555;margin:0.2em 0}p.hz{font-weight:bold;margin:0.6em 0 0.1em}
 ul{margin-top:0.2em}li{margin:0.15em 0}details{margin:0.3em 0 0.8em}summary{cursor:pointer;color:#0b5394}
 li>details{display:inline;margin:0 0 0 0.4em}li>details[open]{display:block}p.case{font-weight:bold;margin:0.8em 0 0}
-table.summary{width:100%}table.summary th{white-space:nowrap}table.summary td:nth-child(-n+2){white-space:nowrap}
+table.summary{width:100%}
 span.cost{color:#555}"""
 
 # Self-check for readers and for the browser test: counts figures drawn with a non-zero size and,
