@@ -286,13 +286,14 @@ CSV_COLUMNS = ("case", "params", "engine", "integrator", "dt", "rtol", "atol", "
 
 def csv_rows(cmp):
     """Long rows (``CSV_COLUMNS``): one per run and error, one per run for the cost (with both
-    spreads), one per run in a single store (``in`` = A or B)."""
+    spreads), one per run in a single store (``in`` = A or B); ``change`` is that quantity's."""
     rows = []
     for c in cmp.changes:
         ident = {**_identity(c.b), "params": json.dumps(c.b.params, sort_keys=True, default=list), "in": "both"}
         for q, (x, y, r) in c.errors.items():
+            change = {"+": "worse", "-": "better"}.get(_mark(r, cmp.threshold), "same") if math.isfinite(r) else ""
             rows.append({**ident, "quantity": q, "unit": QUANTITIES[q], "before": x, "after": y, "ratio": r,
-                         "change": c.change})
+                         "change": change})
         ca, cb = c.a.cost, c.b.cost
         rows.append({**ident, "quantity": "cost", "unit": "s", "before": ca.wall_s_median, "after": cb.wall_s_median,
                      "ratio": c.cost_ratio, "before_min": ca.wall_s_min, "before_max": ca.wall_s_max,
