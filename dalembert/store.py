@@ -51,12 +51,29 @@ from dalembert.trajectory import BodyStates, JointStates, Trajectory
 __all__ = ["Store", "StoreError", "StoreLock", "atomic_write", "trajectory_to_npz", "trajectory_from_npz", "machine_info", "harness_commit"]
 
 
+def _umask():
+    """The process umask, read without changing it where the OS tells it (Linux's
+    /proc/self/status): setting and restoring it would race with other threads' files."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def atomic_write(path, data):
-    """Write ``data`` (bytes or str) to ``path`` atomically."""
+    """Write ``data`` (bytes or str) to ``path`` atomically, with the mode ``open()`` would give it
+    (0o666 less the umask: ``mkstemp`` makes 0600 files, which a report served or shared cannot be)."""
     mode = "wb" if isinstance(data, bytes) else "w"
     directory = os.path.dirname(os.path.abspath(path))
     fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp-", suffix=os.path.basename(path))
     try:
+        os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, mode) as fh:
             fh.write(data)
         os.replace(tmp, path)

@@ -1,73 +1,304 @@
-"""Compare two results stores: what got better, worse, or stayed the same.
+"""Compare two results stores, as ``asv compare`` compares two benchmark runs: for every run in
+both, each error and the cost before, after and their ratio; runs in one store only, apart.
 
-Runs are matched by case, engine, integrator, dt, tolerances and options.
-A run whose case version differs between the stores is flagged, not compared
-(unless asked: ``across_versions``, e.g. when only the way versions are computed
-changed). An error counts as a regression when it grows by more than
-``threshold`` times (errors at roundoff level, below ``ERROR_FLOOR``, are
-compared as if they were ``ERROR_FLOOR``); a status that turns from ok into
-failed/diverged/timeout is a regression too. Cost ratios are reported; they count
-as regressions only with ``cost_threshold`` (timings on shared machines are noisy).
+Runs are matched by case, parameters, engine, integrator, dt, tolerances and
+options. A run whose case version differs between the stores is listed as not
+compared (unless asked: ``across_versions``, e.g. when only the way versions are
+computed changed).
+
+An error is worse when it grows by more than ``threshold`` times, better when it
+shrinks by as much (errors at roundoff level, below ``ERROR_FLOOR``, are
+compared as if they were ``ERROR_FLOOR``); a run that finished before and now
+fails, diverges or times out is worse too. Either is a regression: the exit status
+of ``dalembert compare`` (the CI gate).
+
+Cost is the stepping wall time. Timings are noisy, so a cost is slower only when
+the two runs' measured spreads do not overlap (the fastest repeat after is slower
+than the slowest before) and the median grew by more than ``COST_NOTICE``; it is
+a regression only when asked (``cost_threshold``) and the median grew by more
+than that factor as well.
 """
 
 from __future__ import annotations
 
+import json
 import math
+from dataclasses import dataclass, field
 
+from dalembert.errors import QUANTITIES
 from dalembert.record import BAD_STATUSES
+from dalembert.reports.findings import settings_text
+from dalembert.reports.work_precision import headline_quantity
 
-__all__ = ["ERROR_FLOOR", "compare_stores"]
+__all__ = ["ERROR_FLOOR", "COST_NOTICE", "Change", "Comparison", "compare_stores", "to_text", "to_json",
+           "csv_rows", "MACHINE_FIELDS"]
 
-# Errors below this are roundoff; a change among them is not a regression.
+# Errors below this are roundoff; a change among them is neither better nor worse.
 ERROR_FLOOR = 1e-13
+# A median stepping time that moved by less than this factor is not worth a line, whatever the
+# spreads: repeats of one run on one machine scatter by ~10 % (the stores' min-max spreads).
+COST_NOTICE = 1.2
+# What must be equal for two stores' timings to compare (manifest "machine").
+MACHINE_FIELDS = ("cpu", "cores", "os", "python", "host")
+CHANGES = ("worse", "better", "status", "same")
 
 
-def _match(r):
-    """What identifies a run across stores, as a dict (also the comparison row's label)."""
-    return {"case": r.case, "engine": r.engine, "integrator": r.integrator, "dt": r.dt, "rtol": r.rtol,
-            "atol": r.atol, "options": r.options_label}
+def _key(r):
+    """What identifies a run across stores."""
+    return (r.case, json.dumps(r.params, sort_keys=True, default=list), r.engine, r.integrator, r.dt, r.rtol, r.atol,
+            r.options_label)
+
+
+def label(r):
+    """``case engine integrator dt=... options`` (and parameters when given)."""
+    params = " ".join(f"{k}={v}" for k, v in sorted(r.params.items()))
+    return " ".join(x for x in (r.case, f"[{params}]" if params else "", r.engine, settings_text(r)) if x)
+
+
+@dataclass(frozen=True)
+class Change:
+    """One run present in both stores.
+
+    Attributes
+    ----------
+    a, b : RunRecord — before and after
+    change : str — one of ``CHANGES`` (worse, better, status, same)
+    regression : bool — counts against the exit status
+    notes : tuple of str — what changed, in words
+    errors : dict quantity -> (before, after, ratio) — max errors (ratio NaN when either is missing)
+    cost_ratio : float — median stepping time after / before
+    cost_change : str — "slower", "faster" or "same" (judged against both spreads)
+    """
+
+    a: object
+    b: object
+    change: str
+    regression: bool
+    notes: tuple
+    errors: dict
+    cost_ratio: float
+    cost_change: str
+
+    @property
+    def label(self):
+        return label(self.b)
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Everything ``compare_stores`` found."""
+
+    changes: tuple  # Change per run in both stores, worst first
+    only_in_a: tuple  # RunRecords
+    only_in_b: tuple
+    not_compared: tuple  # (a, b, reason)
+    warnings: tuple  # sentences: machines or engine versions differ
+    paths: tuple = ()
+    threshold: float = 2.0
+    cost_threshold: float | None = None
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def regressed(self):
+        return any(c.regression for c in self.changes)
+
+
+def _ratio(before, after):
+    if not (math.isfinite(before) and math.isfinite(after)):
+        return math.nan
+    return max(after, ERROR_FLOOR) / max(before, ERROR_FLOOR)
+
+
+def _cost(a, b, cost_threshold):
+    """(ratio of medians, slower/faster/same, regression?) judged against both runs' spreads."""
+    ca, cb = a.cost, b.cost
+    ratio = cb.wall_s_median / ca.wall_s_median if ca.wall_s_median and math.isfinite(ca.wall_s_median) else math.nan
+    if not math.isfinite(ratio):
+        return ratio, "same", False
+    if cb.wall_s_min > ca.wall_s_max and ratio > COST_NOTICE:
+        return ratio, "slower", cost_threshold is not None and ratio > cost_threshold
+    if cb.wall_s_max < ca.wall_s_min and ratio < 1.0 / COST_NOTICE:
+        return ratio, "faster", False
+    return ratio, "same", False
+
+
+def _change(a, b, threshold, cost_threshold):
+    errors = {q: (a.max_error(q), b.max_error(q), _ratio(a.max_error(q), b.max_error(q)))
+              for q in QUANTITIES if q in a.errors or q in b.errors}
+    cost_ratio, cost_change, cost_regressed = (_cost(a, b, cost_threshold) if a.ok and b.ok
+                                               else (math.nan, "same", False))
+    if a.status != b.status:
+        regression = a.ok and b.status in BAD_STATUSES
+        change = "worse" if regression else "better" if b.ok and a.status in BAD_STATUSES else "status"
+        note = f"status {a.status} -> {b.status}" + (f" ({b.message.splitlines()[0]})" if b.message else "")
+        return Change(a, b, change, regression, (note,), errors, cost_ratio, cost_change)
+    worse = [q for q, (_, _, r) in errors.items() if r > threshold]
+    better = [q for q, (_, _, r) in errors.items() if r < 1.0 / threshold]
+    notes = [f"{q} x{errors[q][2]:.3g}" for q in worse + better]
+    if a.verdict and b.verdict and a.verdict != b.verdict:
+        notes.append(f"verdict {a.verdict} -> {b.verdict}")
+    if cost_change != "same":
+        notes.append(f"cost x{cost_ratio:.3g} ({cost_change}, beyond both spreads)")
+    blew_up = b.verdict == "diverged" and a.verdict not in ("diverged", "")
+    regression = bool(worse) or cost_regressed or blew_up
+    if regression or cost_change == "slower":
+        change = "worse"
+    elif better or cost_change == "faster":
+        change = "better"
+    else:
+        change = "status" if notes else "same"
+    return Change(a, b, change, regression, tuple(notes), errors, cost_ratio, cost_change)
+
+
+def _differences(ma, mb, records_a, records_b):
+    """Warnings: the machines, or an engine's version, differ between the stores (and how)."""
+    out = []
+    xa, xb = ma.get("machine") or {}, mb.get("machine") or {}
+    differ = [f"{k} {xa.get(k)!r} vs {xb.get(k)!r}" for k in MACHINE_FIELDS if xa.get(k) != xb.get(k)]
+    if differ:
+        out.append("the machines differ (" + "; ".join(differ) + "): costs compare across machines only roughly")
+    va = {**{r.engine: r.engine_version for r in records_a if r.engine_version}, **(ma.get("engines") or {})}
+    vb = {**{r.engine: r.engine_version for r in records_b if r.engine_version}, **(mb.get("engines") or {})}
+    engines = [f"{e} {va[e]} -> {vb[e]}" for e in sorted(set(va) & set(vb)) if va[e] != vb[e]]
+    if engines:
+        out.append("engine versions differ: " + ", ".join(engines))
+    return out
 
 
 def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_versions=False):
-    """Rows of the comparison and whether any regression was found: ``(rows, regressed)``."""
-    a = {tuple(_match(r).values()): r for r in store_a.records()}
-    b = {tuple(_match(r).values()): r for r in store_b.records()}
-    rows, regressed = [], False
-    for key in sorted(set(a) | set(b), key=str):
-        ra, rb = a.get(key), b.get(key)
-        label = _match(ra or rb)
-        if ra is None or rb is None:
-            rows.append({**label, "change": "only in " + ("B" if ra is None else "A")})
+    """Compare ``store_a`` (before) with ``store_b`` (after); a ``Comparison``."""
+    ra, rb = store_a.records(), store_b.records()
+    a, b = {_key(r): r for r in ra}, {_key(r): r for r in rb}
+    changes, not_compared = [], []
+    for key in sorted(set(a) & set(b), key=str):
+        x, y = a[key], b[key]
+        if x.case_version != y.case_version and not across_versions:
+            not_compared.append((x, y, f"case version differs ({x.case_version} vs {y.case_version})"))
             continue
-        if ra.case_version != rb.case_version and not across_versions:
-            rows.append({**label, "change": f"case version differs ({ra.case_version} vs {rb.case_version}): "
-                                            "not compared"})
-            continue
-        if ra.status == "ok" and rb.status in BAD_STATUSES:
-            rows.append({**label, "change": f"REGRESSION: status ok -> {rb.status} ({rb.message})"})
-            regressed = True
-            continue
-        if not (ra.ok and rb.ok):
-            rows.append({**label, "change": "same" if ra.status == rb.status else f"status {ra.status} -> {rb.status}"})
-            continue
-        worst, notes = 1.0, []
-        for q in sorted(set(ra.errors) & set(rb.errors)):
-            ea, eb = ra.max_error(q), rb.max_error(q)
-            if math.isnan(ea) or math.isnan(eb):
-                continue
-            ratio = max(eb, ERROR_FLOOR) / max(ea, ERROR_FLOOR)
-            if ratio > threshold or ratio < 1.0 / threshold:
-                notes.append(f"{q} x{ratio:.3g}")
-            worst = max(worst, ratio)
-        wa, wb = ra.cost.wall_s_median, rb.cost.wall_s_median
-        cost = wb / wa if wa and not math.isnan(wa) else float("nan")
-        change = "same"
-        if worst > threshold:
-            change, regressed = "REGRESSION: " + ", ".join(notes), True
-        elif notes:
-            change = "better: " + ", ".join(notes)
-        if cost_threshold is not None and cost == cost and cost > cost_threshold:
-            change = ("REGRESSION: " if not change.startswith("REGRESSION") else change + "; ") + f"cost x{cost:.3g}"
-            regressed = True
-        rows.append({**label, "error_ratio": worst, "cost_ratio": cost, "change": change})
-    return rows, regressed
+        changes.append(_change(x, y, threshold, cost_threshold))
+    changes.sort(key=lambda c: (not c.regression, CHANGES.index(c.change), c.label))
+    only_a = tuple(sorted((a[k] for k in set(a) - set(b)), key=label))
+    only_b = tuple(sorted((b[k] for k in set(b) - set(a)), key=label))
+    stats = {c: sum(1 for x in changes if x.change == c) for c in CHANGES}
+    return Comparison(tuple(changes), only_a, only_b, tuple(not_compared),
+                      tuple(_differences(store_a.manifest(), store_b.manifest(), ra, rb)),
+                      (store_a.path, store_b.path), threshold, cost_threshold, stats)
+
+
+# ---------------------------------------------------------------------------------------------- output
+MARKS = {"worse": "+", "better": "-", "status": "!", "same": " "}
+
+
+def _fmt(x):
+    return "—" if x is None or not math.isfinite(x) else f"{x:.3e}"
+
+
+def _mark(ratio, threshold):
+    return "+" if ratio > threshold else "-" if ratio < 1.0 / threshold else " "
+
+
+def _lines(c, only_changed, threshold):
+    """Text lines of one change, each marked by its own change: the headline error and the cost,
+    and every error that changed (with ``only_changed``: the changed lines alone)."""
+    if only_changed and c.change == "same":
+        return []
+    if not (c.a.ok and c.b.ok):  # nothing measured on one side: its status says what happened
+        what = c.notes[0] if c.notes else f"{c.b.status} in both"
+        return [f"{'+' if c.regression else '!'} {'':>10} {'':>10} {'':>8}  {'status':<24} {c.label}: {what}"]
+    headline = headline_quantity([c.a, c.b])
+    out = []
+    for q, (before, after, ratio) in c.errors.items():
+        mark = _mark(ratio, threshold) if math.isfinite(ratio) else " "
+        if (mark != " " or q == headline) and not (only_changed and mark == " "):
+            out.append(f"{mark} {_fmt(before):>10} {_fmt(after):>10} {ratio:>8.3g}  "
+                       f"{q + ' (' + QUANTITIES[q] + ')':<24} {c.label}")
+    ca, cb = c.a.cost, c.b.cost
+    mark = {"slower": "+", "faster": "-"}.get(c.cost_change, " ")
+    if not (only_changed and mark == " "):
+        out.append(f"{mark} {_fmt(ca.wall_s_median):>10} {_fmt(cb.wall_s_median):>10} {c.cost_ratio:>8.3g}  "
+                   f"{'cost (s)':<24} {c.label}  [min–max {_fmt(ca.wall_s_min)}–{_fmt(ca.wall_s_max)} -> "
+                   f"{_fmt(cb.wall_s_min)}–{_fmt(cb.wall_s_max)}]")
+    if c.a.verdict != c.b.verdict and c.a.verdict and c.b.verdict:
+        out.append(f"{'+' if c.b.verdict == 'diverged' else '!'} {'':>10} {'':>10} {'':>8}  {'verdict':<24} "
+                   f"{c.label}: {c.a.verdict} -> {c.b.verdict}")
+    return out
+
+
+def to_text(cmp, only_changed=False):
+    """The comparison as asv prints one: before, after, ratio, what, which run; then the runs in
+    one store only; then a one-line count."""
+    out = [f"before: {cmp.paths[0]}", f"after:  {cmp.paths[1]}"] if cmp.paths else []
+    out += [f"warning: {w}" for w in cmp.warnings]
+    body = [line for c in cmp.changes for line in _lines(c, only_changed, cmp.threshold)]
+    if body:
+        out += ["", f"  {'before':>10} {'after':>10} {'ratio':>8}  {'quantity':<24} run",
+                f"  (+ worse, - better by more than x{cmp.threshold:g} for errors (maxima over the horizon), beyond "
+                f"both min–max spreads and x{COST_NOTICE:g} for the cost (median stepping time); ! status or "
+                "verdict changed)"]
+        out += body
+    for title, runs in (("only in A (before)", cmp.only_in_a), ("only in B (after)", cmp.only_in_b)):
+        if runs:
+            out += ["", f"{title}: {len(runs)}"] + [f"  {label(r)}" for r in runs]
+    if cmp.not_compared:
+        out += ["", f"not compared: {len(cmp.not_compared)}"] + [f"  {label(y)}: {why}" for _, y, why in
+                                                                 cmp.not_compared]
+    s = cmp.stats
+    out += ["", f"{len(cmp.changes)} runs in both: {s['worse']} worse, {s['better']} better, {s['status']} changed "
+                f"status, {s['same']} unchanged; {len(cmp.only_in_a)} only in A, {len(cmp.only_in_b)} only in B, "
+                f"{len(cmp.not_compared)} not compared" + (" — REGRESSION" if cmp.regressed else "")]
+    return "\n".join(out) + "\n"
+
+
+def _identity(r):
+    return {"case": r.case, "params": r.params, "engine": r.engine, "integrator": r.integrator, "dt": r.dt,
+            "rtol": r.rtol, "atol": r.atol, "options": r.options_label, "label": label(r)}
+
+
+def _num(x):
+    return x if x is not None and math.isfinite(x) else None
+
+
+def _cost_json(cost):
+    return {"median": _num(cost.wall_s_median), "min": _num(cost.wall_s_min), "max": _num(cost.wall_s_max),
+            "repeats": cost.repeats}
+
+
+def to_json(cmp):
+    """The comparison as a JSON-able dict: before/after/ratio per run for every error and the cost."""
+    runs = [{**_identity(c.b), "change": c.change, "regression": c.regression, "notes": list(c.notes),
+             "status": {"before": c.a.status, "after": c.b.status},
+             "verdict": {"before": c.a.verdict, "after": c.b.verdict},
+             "errors": {q: {"unit": QUANTITIES[q], "before": _num(x), "after": _num(y), "ratio": _num(r)}
+                        for q, (x, y, r) in c.errors.items()},
+             "cost": {"unit": "s", "before": _cost_json(c.a.cost), "after": _cost_json(c.b.cost),
+                      "ratio": _num(c.cost_ratio), "change": c.cost_change}} for c in cmp.changes]
+    return {"before": cmp.paths[0] if cmp.paths else None, "after": cmp.paths[1] if cmp.paths else None,
+            "threshold": cmp.threshold, "cost_threshold": cmp.cost_threshold, "warnings": list(cmp.warnings),
+            "regressed": cmp.regressed, "counts": dict(cmp.stats), "runs": runs,
+            "only_in_a": [_identity(r) for r in cmp.only_in_a], "only_in_b": [_identity(r) for r in cmp.only_in_b],
+            "not_compared": [{**_identity(y), "reason": why} for _, y, why in cmp.not_compared]}
+
+
+CSV_COLUMNS = ("case", "params", "engine", "integrator", "dt", "rtol", "atol", "options", "label", "in",
+               "quantity", "unit", "before", "after", "ratio", "before_min", "before_max", "after_min", "after_max",
+               "change")
+
+
+def csv_rows(cmp):
+    """Long rows (``CSV_COLUMNS``): one per run and error, one per run for the cost (with both
+    spreads), one per run in a single store (``in`` = A or B); ``change`` is that quantity's."""
+    rows = []
+    for c in cmp.changes:
+        ident = {**_identity(c.b), "params": json.dumps(c.b.params, sort_keys=True, default=list), "in": "both"}
+        for q, (x, y, r) in c.errors.items():
+            change = {"+": "worse", "-": "better"}.get(_mark(r, cmp.threshold), "same") if math.isfinite(r) else ""
+            rows.append({**ident, "quantity": q, "unit": QUANTITIES[q], "before": x, "after": y, "ratio": r,
+                         "change": change})
+        ca, cb = c.a.cost, c.b.cost
+        rows.append({**ident, "quantity": "cost", "unit": "s", "before": ca.wall_s_median, "after": cb.wall_s_median,
+                     "ratio": c.cost_ratio, "before_min": ca.wall_s_min, "before_max": ca.wall_s_max,
+                     "after_min": cb.wall_s_min, "after_max": cb.wall_s_max, "change": c.cost_change})
+    for side, runs in (("A", cmp.only_in_a), ("B", cmp.only_in_b)):
+        rows += [{**_identity(r), "params": json.dumps(r.params, sort_keys=True, default=list), "in": side}
+                 for r in runs]
+    return [{k: row.get(k, "") for k in CSV_COLUMNS} for row in rows]

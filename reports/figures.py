@@ -1,18 +1,40 @@
-"""Figures as SVG text (matplotlib, Agg): embedded in the HTML, written beside the Markdown."""
+"""Figures as SVG text (matplotlib, Agg): embedded in the HTML, written beside the Markdown.
+
+Each function takes data already chosen from the store (points, cells, series)
+and draws it; none reads a store. Colours mean one thing per figure: engines
+in the summary (``engine_colours``, the same in every figure of a report),
+integrators within a work-precision panel, sweep values in time plots.
+"""
 
 from __future__ import annotations
 
 import io
+import math
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.colors import LogNorm  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 
-plt.rcParams.update({"svg.fonttype": "none", "font.size": 9, "axes.grid": True, "grid.alpha": 0.3})
+plt.rcParams.update({"svg.fonttype": "none", "font.size": 9, "axes.grid": True, "grid.alpha": 0.3,
+                     "legend.fontsize": 7, "axes.titlesize": 10})
 
-MAX_POINTS = 400  # per line: figures stay small; the data stay in the store
+__all__ = ["engine_colours", "pareto_summary", "work_precision", "stability", "time_grid", "diverged_runs",
+           "MAX_POINTS"]
+
+MAX_POINTS = 400  # per time-series line: figures stay small; the data stay in the store
+PANEL_W, PANEL_H = 3.3, 2.8  # inches per small-multiple panel: four fit across the page
+ROW_W, MAX_PANEL_W = 4 * PANEL_W, 4.4  # a row of fewer panels shares the same width, up to this per panel
+# Okabe & Ito's colour-blind-safe qualitative palette (engines: at most this many per report).
+ENGINE_PALETTE = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#F0E442")
+# Integrators within one panel: matplotlib's tab10 plus two darks, so Exudyn's twelve stay distinct.
+INTEGRATOR_PALETTE = tuple(plt.get_cmap("tab10").colors) + ("#000000", "#8c6d31")
+OPTION_STYLES = ("-", "--", ":", "-.")
+FLOOR_STYLE = dict(color="k", ls=":", lw=1.2)
+TOLERANCE_STYLE = dict(color="#c0392b", ls="--", lw=1.0)
 
 
 def _svg(fig):
@@ -23,65 +45,269 @@ def _svg(fig):
     return text[text.index("<svg"):]
 
 
-def _thin(t, *ys):
+def _thin(t, y):
     step = max(1, len(t) // MAX_POINTS)
-    return (t[::step],) + tuple(y[::step] for y in ys)
+    return t[::step], y[::step]
 
 
-def work_precision(lines, ylabel, floor=None, title=""):
-    """Log-log error against stepping time per simulated second, one line per engine + integrator."""
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
-    for label, pts in sorted(lines.items()):
-        c, e, names = zip(*pts)
-        (h,) = ax.loglog(c, e, "o-", label=label, ms=4)
-        for ci, ei, name in zip(c, e, names):
-            ax.annotate(name, (ci, ei), fontsize=6, color=h.get_color(), xytext=(3, 3), textcoords="offset points")
+def engine_colours(engines):
+    """One colour per engine name, in sorted order (the same engine, the same colour, in every figure)."""
+    return {e: ENGINE_PALETTE[i % len(ENGINE_PALETTE)] for i, e in enumerate(sorted(engines))}
+
+
+def _columns(n, most=4):
+    """Panels per row: four, or three when that leaves fewer empty slots (six panels: 3 x 2)."""
+    if n <= most:
+        return max(1, n)
+    return min((most, most - 1), key=lambda c: (-(-n // c) * c - n, -c))
+
+
+def _panel_width(ncols):
+    return min(MAX_PANEL_W, ROW_W / ncols)
+
+
+def _grid(n, ncols=4, sharex=True, sharey=True, height=PANEL_H):
+    ncols = _columns(n, ncols)
+    nrows = math.ceil(n / ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(_panel_width(ncols) * ncols, height * nrows), sharex=sharex,
+                             sharey=sharey, squeeze=False)
+    flat = axes.ravel()
+    for ax in flat[n:]:
+        ax.set_visible(False)
+    return fig, flat[:n]
+
+
+def _levels(ax, floor, tolerance):
+    """The case's roundoff floor and tolerance as horizontal lines (labelled in the legend)."""
     if floor:
-        ax.axhline(floor, color="k", ls=":", lw=1, label="roundoff floor (double RK4 at dt = 1e-3 vs extended precision)")
-    ax.set_xlabel("stepping wall time per simulated second (s/s)")
-    ax.set_ylabel(ylabel)
-    ax.set_title(title)
-    ax.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5))
+        ax.axhline(floor, **FLOOR_STYLE, label="roundoff floor")
+    if tolerance:
+        ax.axhline(tolerance, **TOLERANCE_STYLE, label="tolerance")
+
+
+# ---------------------------------------------------------------------------------------------- summary
+def pareto_summary(panels, colours, xlabel="stepping time per simulated second (s/s)"):
+    """Per case, each engine's Pareto front: the best error it reaches at each cost.
+
+    Parameters
+    ----------
+    panels : list of dict — ``title``, ``ylabel``, ``fronts`` {engine: [(cost, error), ...] by cost},
+        ``floor``, ``tolerance`` (None when absent)
+    colours : dict engine -> colour
+    """
+    fig, axes = _grid(len(panels), sharey=False)
+    for ax, p in zip(axes, panels):
+        for engine, front in sorted(p["fronts"].items()):
+            c, e = zip(*front)
+            # a step down at each point: at a cost between two points, the cheaper one's error is the best
+            ax.step(list(c) + [c[-1] * 3], list(e) + [e[-1]], where="post", color=colours[engine], lw=1.6,
+                    label=engine)
+            ax.plot(c, e, "o", color=colours[engine], ms=3.5)
+        _levels(ax, p.get("floor"), p.get("tolerance"))
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(p["title"])
+        ax.set_ylabel(p["ylabel"])
+        ax.set_xlabel(xlabel)
+    handles = [Line2D([], [], color=colours[e], lw=2, marker="o", ms=4) for e in sorted(colours)]
+    labels = sorted(colours)
+    handles += [Line2D([], [], **TOLERANCE_STYLE), Line2D([], [], **FLOOR_STYLE)]
+    labels += ["case tolerance", "roundoff floor"]
+    fig.legend(handles, labels, loc="upper center", ncol=len(labels), bbox_to_anchor=(0.5, 1.0), frameon=False,
+               fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.93 if len(axes) <= 4 else 0.96))
     return _svg(fig)
 
 
-def time_series(t, curves, ylabel, log=False, title="", truth=None):
-    """Curves ``{label: y (n,) or (n, k)}`` against time; ``truth`` drawn dashed."""
-    fig, ax = plt.subplots(figsize=(7.5, 3.2))
-    if truth is not None:
-        tt, *yy = _thin(t, np.atleast_2d(truth.T).T)
-        ax.plot(tt, yy[0], "k--", lw=1.2, label="truth")
-    for label, y in sorted(curves.items()):
-        tt, yy = _thin(t, y)
-        if log:
-            ax.semilogy(tt, np.maximum(np.abs(yy), 1e-17), lw=1, label=label)
-        else:
-            ax.plot(tt, yy, lw=1, label=label)
-    ax.set_xlabel("t (s)")
-    ax.set_ylabel(ylabel)
-    ax.set_title(title)
-    ax.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5))
+# ---------------------------------------------------------------------------------------------- work-precision
+def work_precision(panels, ylabel, floor=None, tolerance=None, xlabel="stepping time per simulated second (s/s)"):
+    """Small multiples on shared axes, a panel per engine (and per option variant of it): a line per
+    integrator along its sweep, the sweep value written at each end only.
+
+    Parameters
+    ----------
+    panels : list of dict — ``title``, ``engine``, ``lines`` [dict ``integrator``,
+        ``points`` [(cost, error, sweep label), ...] from coarse to fine]
+    """
+    ncols = _columns(len(panels))
+    nrows = math.ceil(len(panels) / ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(_panel_width(ncols) * ncols, 3.9 * nrows), sharex=True, sharey=True,
+                             squeeze=False, layout="constrained")
+    flat = axes.ravel()
+    for ax in flat[len(panels):]:
+        ax.set_visible(False)
+    # an integrator keeps its colour in every panel of its engine
+    colour = {}
+    for p in panels:
+        names = sorted({ln["integrator"] for q in panels if q["engine"] == p["engine"] for ln in q["lines"]})
+        colour.update({(p["engine"], i): INTEGRATOR_PALETTE[k % len(INTEGRATOR_PALETTE)] for k, i in enumerate(names)})
+    for ax, p in zip(flat, panels):
+        placed = []
+        for ln in sorted(p["lines"], key=lambda ln: ln["integrator"]):
+            c, e, names = zip(*ln["points"])
+            col = colour[(p["engine"], ln["integrator"])]
+            ax.plot(c, e, "-", color=col, lw=1.3, label=ln["integrator"])
+            ax.plot(c[:1], e[:1], "o", mfc="white", mec=col, ms=4.5)  # open: the coarse end
+            ax.plot(c[-1:], e[-1:], "o", color=col, ms=4.5)  # filled: the fine end
+            for k in sorted({0, len(c) - 1}):
+                _end_label(ax, placed, c[k], e[k], names[k], col)
+        _levels(ax, floor, tolerance)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(p["title"])
+        ax.set_xlabel(xlabel)
+        handles = [h for h in ax.get_lines() if not h.get_label().startswith("_") and h.get_label() in
+                   {ln["integrator"] for ln in p["lines"]}]
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, fontsize=7,
+                  frameon=False, handlelength=1.4, columnspacing=0.9)
+    for row in axes:
+        row[0].set_ylabel(ylabel)
     return _svg(fig)
 
 
-VERDICT_COLOURS = {"stable": "#3c9a4b", "drifts": "#e0a526", "diverged": "#c0392b", "failed": "#7f3c8d",
-                   "timeout": "#555555", "unsupported": "#cfcfcf"}
+def _end_label(ax, placed, x, y, text, colour):
+    """Write a sweep value beside a line's end, unless the same text is already written close by
+    (lines that end together share one label instead of a smudge of overlapping ones)."""
+    lx, ly = math.log10(x), math.log10(y)
+    if any(t == text and abs(lx - px) < 0.25 and abs(ly - py) < 0.6 for t, px, py in placed):
+        return
+    placed.append((text, lx, ly))
+    ax.annotate(text, (x, y), xytext=(3, 2), textcoords="offset points", fontsize=6, color=colour)
 
 
-def stability_grid(rows, columns, cells, title=""):
-    """Colour-coded grid: ``cells[(row, column)] = verdict``."""
-    fig, ax = plt.subplots(figsize=(max(4, 0.9 * len(columns) + 2.5), 0.32 * len(rows) + 1.2))
-    for i, r in enumerate(rows):
-        for j, c in enumerate(columns):
-            v = cells.get((r, c))
-            if v is None:
-                continue
-            ax.add_patch(plt.Rectangle((j, i), 1, 1, color=VERDICT_COLOURS.get(v, "#ffffff")))
-            ax.text(j + 0.5, i + 0.5, v, ha="center", va="center", fontsize=6)
-    ax.set_xlim(0, len(columns))
-    ax.set_ylim(len(rows), 0)
-    ax.set_xticks(np.arange(len(columns)) + 0.5, columns, rotation=30, ha="right", fontsize=7)
-    ax.set_yticks(np.arange(len(rows)) + 0.5, rows, fontsize=7)
-    ax.grid(False)
-    ax.set_title(title)
+# ---------------------------------------------------------------------------------------------- stability
+def stability(blocks, label, bound=None, cmap="YlOrRd"):
+    """Magnitude per run on a log colour scale, with its stored verdict written in the cell;
+    a block per kind of sweep (fixed-step, adaptive) side by side, a row per engine, integrator and
+    options.
+
+    Parameters
+    ----------
+    blocks : list of dict — ``title``, ``rows`` [label], ``columns`` [sweep label], ``cells``
+        {(row, column): (value or None, verdict, note)}
+    label : str — what the colour measures (colour-bar label)
+    bound : float or None — the case's bound on it, marked on the colour bar
+    """
+    values = [v for b in blocks for v, _, _ in b["cells"].values() if v is not None and v > 0 and math.isfinite(v)]
+    norm = LogNorm(vmin=min(values), vmax=max(values)) if values else None
+    if norm is not None and norm.vmin == norm.vmax:
+        norm = LogNorm(vmin=norm.vmin / 10, vmax=norm.vmax * 10)
+    colormap = plt.get_cmap(cmap)
+    # sizes in inches: every cell the same size whatever its block's row count
+    cell_w, cell_h, label_w, top, bottom = 1.25, 0.24, 2.5, 0.55, 0.15
+    rows = max(len(b["rows"]) for b in blocks)
+    widths = [label_w + cell_w * len(b["columns"]) for b in blocks]
+    fig_w, fig_h = sum(widths) + 1.4, top + bottom + cell_h * rows
+    fig = plt.figure(figsize=(fig_w, fig_h))
+    x = 0.0
+    axes = []
+    for b, w in zip(blocks, widths):
+        h = cell_h * len(b["rows"])
+        ax = fig.add_axes(((x + label_w) / fig_w, (fig_h - top - h) / fig_h, (w - label_w) / fig_w, h / fig_h))
+        axes.append(ax)
+        x += w
+        for i, r in enumerate(b["rows"]):
+            for j, c in enumerate(b["columns"]):
+                if (r, c) not in b["cells"]:
+                    continue
+                value, verdict, note = b["cells"][(r, c)]
+                if value is not None and value > 0 and math.isfinite(value) and norm is not None:
+                    face = colormap(norm(value))
+                    text = f"{value:.1e} {verdict}"
+                    dark = sum(face[:3]) < 1.3
+                elif verdict == "diverged":
+                    face, text, dark = "#222222", f"diverged {note}".strip(), True
+                else:
+                    face, text, dark = "#e8e8e8", f"{verdict} {note}".strip(), False
+                ax.add_patch(plt.Rectangle((j, i), 1, 1, facecolor=face, edgecolor="white", lw=1,
+                                           hatch="//" if verdict in ("failed", "timeout") else None))
+                ax.text(j + 0.5, i + 0.5, text, ha="center", va="center", fontsize=6.5,
+                        weight="normal" if verdict == "stable" else "bold", color="white" if dark else "black")
+        ax.set_xlim(0, len(b["columns"]))
+        ax.set_ylim(len(b["rows"]), 0)
+        ax.set_xticks(np.arange(len(b["columns"])) + 0.5, b["columns"], fontsize=8)
+        ax.xaxis.tick_top()
+        ax.set_yticks(np.arange(len(b["rows"])) + 0.5, b["rows"], fontsize=7)
+        ax.tick_params(length=0)
+        ax.grid(False)
+        ax.set_title(b["title"], loc="left", fontsize=9, pad=16)
+    if norm is not None:
+        cax = fig.add_axes(((fig_w - 1.1) / fig_w, bottom / fig_h, 0.15 / fig_w, (fig_h - top - bottom) / fig_h))
+        bar = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=colormap), cax=cax, label=label)
+        if bound and norm.vmin <= bound <= norm.vmax:
+            bar.ax.axhline(bound, color="k", lw=2)
+            bar.ax.text(-0.3, bound, "bound", ha="right", va="center", fontsize=7, transform=bar.ax.get_yaxis_transform())
+    return _svg(fig)
+
+
+# ---------------------------------------------------------------------------------------------- time plots
+SWEEP_COLOURS = ("#1b4f9c", "#6baed6", "#b2182b", "#f4a582", "#4d4d4d", "#a6a6a6")
+
+
+def time_grid(rows, engines, sweep_colours):
+    """Quantities against time: a row per quantity (shared y), a column per engine (shared x), a
+    line per run (coloured by its sweep value).
+
+    Parameters
+    ----------
+    rows : list of dict — ``ylabel``, ``log`` (bool), ``series`` {engine: [(label, sweep, t, y), ...]},
+        ``bound`` (the case's tolerance on the quantity, drawn dashed; None for none)
+    engines : list of str — the columns
+    sweep_colours : dict sweep label -> colour
+    """
+    n_rows, n_cols = len(rows), len(engines)
+    fig, axes = plt.subplots(n_rows, n_cols, figsize=(_panel_width(n_cols) * n_cols, 2.0 * n_rows + 0.5), sharex=True,
+                             sharey="row", squeeze=False)
+    for i, row in enumerate(rows):
+        for j, engine in enumerate(engines):
+            ax = axes[i, j]
+            for label, sweep, t, y in row["series"].get(engine, []):
+                tt, yy = _thin(t, y)
+                if row["log"]:
+                    ax.semilogy(tt, np.where(np.isfinite(yy), np.maximum(np.abs(yy), 1e-17), np.nan), lw=1,
+                                color=sweep_colours[sweep], label=label)
+                else:
+                    ax.plot(tt, yy, lw=1, color=sweep_colours[sweep], label=label)
+            if row.get("bound"):
+                ax.axhline(row["bound"], **TOLERANCE_STYLE)
+            if i == 0:
+                ax.set_title(engine)
+                if ax.lines:
+                    ax.legend(fontsize=6, loc="lower right", framealpha=0.85)
+            if j == 0:
+                ax.set_ylabel(row["ylabel"])
+            if i == n_rows - 1:
+                ax.set_xlabel("t (s)")
+    fig.tight_layout()
+    return _svg(fig)
+
+
+def diverged_runs(panels, ylabel):
+    """Runs that diverged: their error until it stopped being finite, the divergence time marked;
+    a panel per engine, one above the other, the runs named beside it.
+
+    Parameters
+    ----------
+    panels : dict engine -> list of (label, t, y, t_diverged or None)
+    """
+    fig, axes = plt.subplots(len(panels), 1, figsize=(9.5, 2.9 * len(panels)), squeeze=False, layout="constrained")
+    for ax, (engine, runs) in zip(axes[:, 0], sorted(panels.items())):
+        finite = []
+        for k, (label, t, y, t_div) in enumerate(runs):
+            colour = INTEGRATOR_PALETTE[k % len(INTEGRATOR_PALETTE)]
+            tt, yy = _thin(t, y)
+            yy = np.where(np.isfinite(yy) & (yy > 0), yy, np.nan)
+            finite.append(yy[np.isfinite(yy)])
+            ax.semilogy(tt, yy, lw=1, color=colour, label=label + (f" (t = {t_div:.3g} s)" if t_div is not None else ""))
+            if t_div is not None:
+                ax.axvline(t_div, color=colour, ls=":", lw=1)
+                ax.plot([t_div], [1], "x", color=colour, ms=7, mew=2, transform=ax.get_xaxis_transform(),
+                        clip_on=False)
+        values = np.concatenate(finite) if finite else np.array([])
+        if values.size:  # start where the errors are, not at the roundoff of the first samples
+            ax.set_ylim(bottom=max(np.percentile(values, 5), values.max() * 1e-12))
+        ax.set_title(f"{engine}: runs that diverged (x: when)", loc="left")
+        ax.set_xlabel("t (s)")
+        ax.set_ylabel(ylabel)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     return _svg(fig)

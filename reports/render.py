@@ -3,36 +3,43 @@ beside it, and ``summary.csv`` — built from a results store only: runs as
 stored records (their verdicts judged when they ran), each case as its stored
 record (scene, tolerances, floor), truths and trajectories from the store. It
 never rebuilds a case from code and never runs an engine or an integrator.
+
+It opens with what was found (``findings``): per case and engine, the cheapest
+run reaching each target accuracy, the Pareto fronts, the hazards naming their
+runs. Each case's section then shows what accuracy costs (work-precision small
+multiples), stability (drift magnitude with the stored verdicts), the runs that
+matter against time, and every run in a sortable table.
 """
 
 from __future__ import annotations
 
-import html
 import json
 import math
 import os
 
+import numpy as np
 import pandas as pd
 
-from dalembert import invariants
-from dalembert.errors import QUANTITIES, error_series
+from dalembert.errors import QUANTITIES
+from dalembert.invariants import CONSERVED
+from dalembert.reports import figures, time_series
+from dalembert.reports.findings import (ACCURACY_TARGETS, DISAGREEMENT_FACTOR, ENERGY_HAZARD, ENERGY_LIKE, HAZARDS,
+                                         NAMED, find, run_name, settings_text)
+from dalembert.reports.tables import MISSING, SORT_SCRIPT, Cell, Table, escape_html, escape_md, num
+from dalembert.reports.timing import timing_note
+from dalembert.reports.work_precision import cheapest_reaching, cost_per_sim_s, series, sweep_key
 from dalembert.store import atomic_write
-from dalembert.reports import figures
-from dalembert.reports.work_precision import TARGETS, cost_to_reach, line_label, series
 
 __all__ = ["build_report"]
 
-SUMMARY_TARGET = 1e-6  # the accuracy whose cost the summary quotes
-
-
-def _num(x, fmt="{:.2e}"):
-    if x is None or (isinstance(x, float) and math.isnan(x)):
-        return "—"
-    return fmt.format(x)
+DECADES = 100.0  # a time plot's values spanning more than this factor (two decades) get a log axis
+HAZARD_TITLES = {"diverged": "Diverged", "failed": "Stopped early", "energy": "Energy not kept",
+                 "tolerance": "Finite but beyond the tolerance", "disagreement": "Engines disagree",
+                 "unsupported": "Not supported (not run, not drawn)"}
 
 
 class _Doc:
-    """Collects the same content as HTML and Markdown."""
+    """Collects the same content as HTML and Markdown; figures go to ``files_dir``."""
 
     def __init__(self, files_dir, rel):
         self.html, self.md = [], []
@@ -40,207 +47,405 @@ class _Doc:
         self.n_fig = 0
 
     def heading(self, text, level, anchor=None):
-        a = f' id="{anchor}"' if anchor else ""
-        self.html.append(f"<h{level}{a}>{html.escape(text)}</h{level}>")
-        self.md += ["#" * level + " " + text, ""]
+        a = f' id="{escape_html(anchor)}"' if anchor else ""
+        self.html.append(f"<h{level}{a}>{escape_html(text)}</h{level}>")
+        self.md += ["#" * level + " " + escape_md(text), ""]
 
-    def para(self, text_html, text_md=None):
-        self.html.append(f"<p>{text_html}</p>")
-        self.md += [text_md if text_md is not None else text_html, ""]
+    def para(self, text, cls=None):
+        """A paragraph of plain text (escaped here)."""
+        c = f' class="{cls}"' if cls else ""
+        self.html.append(f"<p{c}>{escape_html(text)}</p>")
+        self.md += [("> **" + escape_md(text) + "**") if cls == "warning" else escape_md(text), ""]
 
-    def table(self, head, rows, classes=None):
-        h = "".join(f"<th>{html.escape(c)}</th>" for c in head)
-        body = []
-        for k, r in enumerate(rows):
-            cls = f' class="{classes[k]}"' if classes and classes[k] else ""
-            body.append(f"<tr{cls}>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>")
-        self.html.append(f"<table><thead><tr>{h}</tr></thead><tbody>{''.join(body)}</tbody></table>")
-        strip = lambda c: str(c).replace("|", "\\\\|").replace("<b>", "**").replace("</b>", "**")  # noqa: E731
-        self.md += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-        self.md += ["| " + " | ".join(strip(_plain(c)) for c in r) + " |" for r in rows]
-        self.md.append("")
+    def items(self, texts):
+        self.html.append("<ul>" + "".join(f"<li>{escape_html(t)}</li>" for t in texts) + "</ul>")
+        self.md += [f"- {escape_md(t)}" for t in texts] + [""]
+
+    def table(self, table, note_constant=True, caption="", collapsed=None):
+        """A ``Table``; its constant columns become one sentence; ``collapsed``: inside a closed <details>."""
+        shown, constant = table.split_constant() if note_constant else (table, [])
+        inner = shown.html(caption)
+        md = shown.markdown()
+        if constant:
+            note = "In every row: " + "; ".join(f"{h} {v}" for h, v in constant) + "."
+            inner = f'<p class="note">{escape_html(note)}</p>' + inner
+            md = [escape_md(note), ""] + md
+        if collapsed:
+            self.html.append(f"<details><summary>{escape_html(collapsed)}</summary>{inner}</details>")
+            self.md += [f"<details><summary>{escape_html(collapsed)}</summary>", ""] + md + ["</details>", ""]
+        else:
+            self.html.append(inner)
+            self.md += md
 
     def figure(self, svg, caption, name):
         self.n_fig += 1
         fname = f"{self.n_fig:02d}-{name}.svg"
         atomic_write(os.path.join(self.files_dir, fname), svg)
-        self.html.append(f'<figure class="plot">{svg}<figcaption>{html.escape(caption)}</figcaption></figure>')
-        self.md += [f"![{caption}]({self.rel}/{fname})", ""]
+        self.html.append(f'<figure class="plot" id="fig-{escape_html(name)}">{svg}'
+                         f"<figcaption>{escape_html(caption)}</figcaption></figure>")
+        self.md += [f"![{escape_md(caption)}]({self.rel}/{fname})", ""]
 
     def details(self, summary, text):
-        self.html.append(f"<details><summary>{html.escape(summary)}</summary><pre>{html.escape(text)}</pre></details>")
-        self.md += [f"<details><summary>{summary}</summary>", "", "```", text.rstrip(), "```", "", "</details>", ""]
+        self.html.append(f"<details><summary>{escape_html(summary)}</summary><pre>{escape_html(text)}</pre></details>")
+        self.md += [f"<details><summary>{escape_html(summary)}</summary>", "", "```",
+                    text.rstrip().replace("```", "'''"), "```", "", "</details>", ""]
 
 
-def _plain(c):
-    import re
-
-    return re.sub(r"<(?!/?b>)[^>]+>", "", str(c))
-
-
-def _grid_labels(r):
-    """(row, column) of a run in the per-case grids: engine + integrator (+ options), dt or tol."""
-    return line_label(r), r.sweep_label
+def _run_link(r, text=None, wrap=False):
+    """A cell naming a run, linked to its row in its case's every-run table."""
+    text = text if text is not None else settings_text(r)
+    return Cell(text, html=f'<a href="#run-{escape_html(r.key)}">{escape_html(text)}</a>', wrap=wrap)
 
 
-def _sweep_order(label):
-    """Grid columns: fixed steps first, then tolerances, each from coarse to fine."""
-    return label.startswith("tol"), -float(label.split("=")[1])
+def _section_id(f):
+    return f"case-{f.case.name}-{f.case.version}"
 
 
-def _drift_rates(doc, runs):
-    """Energy drift per simulated second, engine + integrator x step: a steady slope is secular
-    drift (most integrators), a slope near zero bounded oscillation (symplectic, geometric ones)."""
-    names = [n for n in ("energy", "energy_balance") if any(n in r.drift_rates for r in runs)]
-    if not names:
+def _title(f, several_versions):
+    """A case's name, with its version and parameters when the store holds more than one of it."""
+    if not several_versions:
+        return f.case.name
+    given = f.runs[0].params
+    return f"{f.case.name} ({', '.join(f'{k}={v}' for k, v in sorted(given.items())) or 'defaults'}; {f.case.version})"
+
+
+# ---------------------------------------------------------------------------------------------- findings
+def _summary_table(found, titles):
+    head = ["case", "engine", "best error", "best at"] + [f"cheapest to {t:g} (s/s)" for t in ACCURACY_TARGETS]
+    head += ["diverged", "stopped", f"energy > {100 * ENERGY_HAZARD:g} %", "beyond tol.", "runs"]
+    rows, csv_rows = [], []
+    for f in found:
+        for e in f.engines:
+            cells = [Cell(titles[f], html=f'<a href="#{escape_html(_section_id(f))}">{escape_html(titles[f])}</a>',
+                          wrap=True), Cell(e.engine)]
+            if e.best:
+                cells += [num(e.best.error, suffix=f" {f.unit}"), _run_link(e.best.run, wrap=True)]
+            else:
+                cells += [Cell(MISSING, math.nan), Cell("no finished run")]
+            for reach in e.reaches:
+                p = reach.point
+                if p:  # the setting on one line, its cost below it
+                    link = _run_link(p.run)
+                    cells.append(Cell(f"{link.text} · {p.cost:.2g}", p.cost, wrap=True,
+                                      html=f'{link.html}<br><span class="cost">{p.cost:.2g}</span>'))
+                else:
+                    cells.append(Cell("never", math.nan))
+            counts = {k: sum(len(h.runs) for h in f.hazards_of(e.engine, k)) for k in ("diverged", "failed",
+                                                                                     "energy", "tolerance")}
+            cells += [Cell(str(counts[k]), float(counts[k])) for k in ("diverged", "failed", "energy", "tolerance")]
+            cells.append(Cell(str(len(e.runs)), float(len(e.runs))))
+            rows.append(cells)
+            csv_rows.append(dict(case=f.case.name, case_version=f.case.version, engine=e.engine,
+                                 quantity=f.quantity or "", unit=f.unit,
+                                 best_error=e.best.error if e.best else math.nan,
+                                 best_settings=e.best.run.settings_label if e.best else "",
+                                 **{f"cheapest_to_{t:g}": (r.point.run.settings_label if r.point else "never")
+                                    for t, r in zip(ACCURACY_TARGETS, e.reaches)},
+                                 **{f"cost_to_{t:g}": (r.point.cost if r.point else math.nan)
+                                    for t, r in zip(ACCURACY_TARGETS, e.reaches)},
+                                 **{k: n for k, n in counts.items()}, runs=len(e.runs)))
+    return Table(head, rows, cls="summary"), csv_rows
+
+
+def _findings(doc, found, titles, colours):
+    doc.heading("Findings", 2, anchor="findings")
+    panels = [dict(title=titles[f], ylabel=f"best {f.quantity} error ({f.unit})",
+                   fronts={e.engine: [(p.cost, p.error) for p in e.front] for e in f.engines if e.front},
+                   floor=f.case.floor.get(f.quantity), tolerance=f.tolerance) for f in found if f.quantity]
+    panels = [p for p in panels if p["fronts"]]
+    if panels:
+        doc.figure(figures.pareto_summary(panels, colours),
+                   "Each engine's best error at each cost (Pareto front: a point is a run no cheaper run of the "
+                   "engine beats); lower left is better. Dashed: the case's tolerance; dotted: the double-precision "
+                   "roundoff floor.", "summary")
+    table, csv_rows = _summary_table(found, titles)
+    doc.para("Per case and engine: the most accurate run, the cheapest run that reaches each accuracy in the "
+             "case's headline error (stepping seconds per simulated second; \"never\": no run did), and how many "
+             "of its runs are hazards (listed below). Click a header to sort, a setting to see its run.")
+    doc.table(table)
+    for f in found:
+        doc.html.append(f'<p class="case"><a href="#{escape_html(_section_id(f))}">{escape_html(titles[f])}</a></p>')
+        doc.md += [f"**{escape_md(titles[f])}**", ""]
+        doc.items(f.sentences)
+    return csv_rows
+
+
+def _hazards(doc, found, titles):
+    doc.heading("Hazards", 2, anchor="hazards")
+    doc.para("What to know before trusting a setting: every run named is in its case's table of runs. Energy is "
+             f"judged against {100 * ENERGY_HAZARD:g} % of its scale over the horizon, disagreement at a factor "
+             f"{DISAGREEMENT_FACTOR:g} between engines with the same integrator and step, beyond the case's "
+             "tolerance.")
+    for f in found:
+        if not f.hazards:
+            continue
+        doc.heading(titles[f], 3)
+        for kind in HAZARDS:
+            mine = [h for h in f.hazards if h.kind == kind]
+            if not mine:
+                continue
+            doc.html.append(f'<p class="hz">{escape_html(HAZARD_TITLES[kind])}</p><ul>')
+            doc.md += [f"*{escape_md(HAZARD_TITLES[kind])}*", ""]
+            for h in mine:
+                listed = len(h.details) > NAMED  # the sentence names only a few: every run in a list beside it
+                runs = (f"<details><summary>the {len(h.details)} runs</summary><ul>"
+                        + "".join(f"<li>{escape_html(d)}</li>" for d in h.details) + "</ul></details>") if listed else ""
+                doc.html.append(f"<li>{escape_html(h.text)}{runs}</li>")
+                doc.md.append(f"- {escape_md(h.text)}")
+                if listed:
+                    doc.md += [f"  <details><summary>the {len(h.details)} runs</summary>", ""]
+                    doc.md += [f"  - {escape_md(d)}" for d in h.details] + ["", "  </details>"]
+            doc.html.append("</ul>")
+            doc.md.append("")
+
+
+# ---------------------------------------------------------------------------------------------- a case
+def _case_header(doc, f, title):
+    case = f.case
+    doc.heading(title, 2, anchor=_section_id(f))
+    doc.para(f"Version {case.version}; parameters {f.runs[0].params or 'defaults'}; horizon {case.t_final:g} s; "
+             f"effects {', '.join(sorted(case.scene.effects))}; truth: {case.truth}; {len(f.runs)} runs.")
+    doc.table(Table(["tolerance", "value", "reason"],
+                    [[k, num(t.value, "{:g}"), Cell(t.reason, wrap=True)] for k, t in sorted(case.tolerances.items())]),
+              note_constant=False, collapsed=f"the case's {len(case.tolerances)} tolerances and their reasons")
+
+
+def _work_precision(doc, f, name):
+    lines = series(f.runs, f.quantity)
+    if not lines:
         return
-    name = names[0]
-    ok = [r for r in runs if r.ok and not math.isnan(r.drift_rates.get(name, math.nan))]
+    doc.heading("What accuracy costs", 3)
+    panels = {}  # a panel per engine and option variant, the engine's defaults first
+    for pts in lines.values():
+        r = pts[0].run
+        panel = panels.setdefault((r.engine, bool(r.options), r.options_label), dict(
+            title=" ".join(x for x in (r.engine, r.options_label) if x), engine=r.engine, lines=[]))
+        panel["lines"].append(dict(integrator=r.integrator, points=[(p.cost, p.error, p.run.sweep_label) for p in pts]))
+    panels = [panels[k] for k in sorted(panels)]
+    doc.figure(figures.work_precision(panels, f"max {f.quantity} error ({f.unit})", floor=f.case.floor.get(f.quantity),
+                                      tolerance=f.tolerance),
+               f"{name}: max {f.quantity} error against stepping time per simulated second, a panel per engine and "
+               "option variant on shared axes (lower left is better); colour: integrator; open marker: the "
+               "coarsest step or tolerance, filled: the finest. Dashed: the case's tolerance; dotted: the roundoff "
+               "floor.", f"{name}-wp")
+    rows = []
+    for label, pts in sorted(lines.items()):
+        r = pts[0].run
+        best = min(pts, key=lambda p: p.error)
+        cells = [Cell(r.engine), Cell(r.integrator), Cell(r.options_label or "defaults"),
+                 num(best.error), Cell(best.run.sweep_label)]
+        for t in ACCURACY_TARGETS:
+            p = cheapest_reaching(pts, t)
+            cells.append(Cell(f"{p.run.sweep_label} · {p.cost:.2g}", p.cost) if p else Cell("never", math.nan))
+        rows.append(cells)
+    doc.table(Table(["engine", "integrator", "options", f"best ({f.unit})", "at"]
+                    + [f"cheapest to {t:g} (s/s)" for t in ACCURACY_TARGETS], rows),
+              collapsed=f"per integrator: best error and the cheapest run to each accuracy ({len(rows)} lines)")
+
+
+def _grid_row(r):
+    return " ".join(x for x in (r.engine, r.integrator, r.options_label) if x)
+
+
+def _stability(doc, f, name):
+    energy = next((n for n in ENERGY_LIKE if n in f.case.conserved), None)
+    measure = energy or f.quantity
+    if measure is None:
+        return
+    label = (f"{measure} drift (relative)" if energy else f"max {measure} error ({f.unit})")
+    shown = [r for r in f.runs if r.status != "unsupported"]
+    blocks = []
+    for title, fixed in (("fixed step", True), ("adaptive", False)):
+        runs = sorted((r for r in shown if (r.dt is not None) == fixed), key=lambda r: (_grid_row(r), sweep_key(r)))
+        if not runs:
+            continue
+        cells = {}
+        for r in runs:
+            value = r.drifts.get(measure) if energy else r.max_error(measure)
+            note = f"t={r.t_diverged:.3g} s" if r.t_diverged is not None else ""
+            cells[(_grid_row(r), r.sweep_label)] = (value if r.ok and value is not None and math.isfinite(value)
+                                                    else None, r.verdict, note)
+        blocks.append(dict(title=title, cells=cells,
+                           rows=sorted({k[0] for k in cells}),
+                           columns=[c for c in dict.fromkeys(r.sweep_label for r in sorted(runs, key=sweep_key))]))
+    if not blocks:
+        return
+    doc.heading("Stability", 3)
+    bound = f.case.tolerances.get(measure)
+    doc.figure(figures.stability(blocks, label, bound.value if bound else None),
+               f"{name}: {label} per run (colour, log scale; the bar marks the case's bound) and its stored verdict "
+               "(word: it weighs every conserved quantity the case bounds, the colour this one); fixed-step and "
+               "adaptive runs apart. Black: diverged (at the time shown); grey, hatched: stopped early.",
+               f"{name}-stability")
+    n_unsupported = len(f.runs) - len(shown)
+    if n_unsupported:
+        doc.para(f"{n_unsupported} unsupported runs are not drawn; the hazards above list them with the reason.")
+    reasons = [f"{run_name(r)}: {r.verdict} — {r.verdict_reason}" for r in shown if r.verdict_reason
+               and r.verdict != "stable"]
+    if reasons:
+        doc.details(f"why {len(reasons)} run(s) are not stable (stored verdict reasons)", "\n".join(reasons))
+    _drift_rates(doc, f)
+
+
+def _drift_rates(doc, f):
+    """Energy drift per simulated second: a steady slope is secular drift (most integrators), a
+    slope near zero bounded oscillation (symplectic, geometric ones)."""
+    name = next((n for n in ENERGY_LIKE if any(n in r.drift_rates for r in f.runs)), None)
+    ok = [r for r in f.runs if r.ok and name and not math.isnan(r.drift_rates.get(name, math.nan))]
     if not ok:
         return
-    rates = {_grid_labels(r): r.drift_rates[name] for r in ok}
-    row_labels = sorted({rl for rl, _ in rates})
-    col_labels = sorted({cl for _, cl in rates}, key=_sweep_order)
-    what = "energy" if name == "energy" else "energy balance (E - work of the loads)"
+    rates = {(_grid_row(r), r.sweep_label): r.drift_rates[name] for r in ok}
+    cols = list(dict.fromkeys(r.sweep_label for r in sorted(ok, key=sweep_key)))
+    rows = [[Cell(row)] + [num(rates.get((row, c)), "{:+.2e}", " /s") for c in cols]
+            for row in sorted({k[0] for k in rates})]
+    what = "energy" if name == "energy" else "energy balance (E less the work of the loads)"
     doc.heading("Energy drift rate", 3)
-    doc.para(html.escape(f"Least-squares slope of the relative change of the {what}, per simulated second "
-                         f"(negative: lost). Bounded oscillation shows as a slope near zero, secular drift as a "
-                         f"steady one; successful runs only."))
-    doc.table(["engine + integrator"] + col_labels,
-              [[html.escape(rl)] + [_num(rates[(rl, c)], "{:+.2e} /s") if (rl, c) in rates else "—"
-                                    for c in col_labels] for rl in row_labels])
+    doc.para(f"Least-squares slope of the relative change of the {what} per simulated second (negative: lost); "
+             "bounded oscillation shows as a slope near zero, secular drift as a steady one. Finished runs only.")
+    doc.table(Table(["engine integrator options"] + [f"{c} (1/s)" for c in cols], rows), note_constant=False,
+              collapsed=f"{len(rows)} rows")
 
 
-def _case_section(doc, store, runs, summary_rows):
-    """The section of one case: ``runs`` are its records (one case version)."""
-    case = store.case(runs[0].case, runs[0].case_version)
-    name = case.name
-    truth = store.truth(name, case.version)
-    doc.heading(f"{name}", 2, anchor=f"case-{name}")
-    doc.para(html.escape(f"version {case.version}; parameters {runs[0].params or 'defaults'}; "
-                         f"horizon {case.t_final:g} s; effects {', '.join(sorted(case.scene.effects))}; "
-                         f"truth: {case.truth}."))
-    doc.table(["tolerance", "value", "reason"], [[k, f"{t.value:g}", html.escape(t.reason)]
-                                                  for k, t in case.tolerances.items()])
-    # --- work-precision
-    lines, quantity = series(runs)
-    if lines:
-        doc.heading("What accuracy costs", 3)
-        unit = QUANTITIES[quantity]
-        doc.figure(figures.work_precision(lines, f"max {quantity} error ({unit})", floor=case.floor.get(quantity),
-                                          title=f"{name}: work-precision"),
-                   f"{name}: max {quantity} error against stepping time per simulated second", f"{name}-wp")
-        rows = []
-        for label, pts in sorted(lines.items()):
-            costs = [cost_to_reach(pts, t) for t in TARGETS]
-            rows.append([html.escape(label), _num(min(p[1] for p in pts))]
-                        + [_num(c, "{:.3g} s/s") if c is not None else "not reached" for c in costs])
-        doc.table(["engine + integrator", "best error"] + [f"cost to reach {t:g}" for t in TARGETS], rows)
-    # --- stability grid
-    cells, reasons = {}, []
+def _against_time(doc, store, f, name):
+    truth = store.truth(f.case.name, f.case.version)
+    if truth is None or f.quantity is None:
+        return
+    reps = time_series.representatives(f.runs, f.quantity)
+    divs = time_series.diverged(f.runs)
+    if not reps and not divs:
+        return
+    doc.heading("Against time", 3)
+    if reps:
+        sweeps = list(dict.fromkeys(r.sweep_label for rs in reps.values() for r in sorted(rs, key=sweep_key)))
+        sweeps.sort(key=lambda s: (s.startswith("tol"), -float(s.split("=")[1])))
+        colours = {s: figures.SWEEP_COLOURS[i % len(figures.SWEEP_COLOURS)] for i, s in enumerate(sweeps)}
+        rows = [dict(ylabel=f"{f.quantity} error ({f.unit})", log=True, series={}, bound=f.tolerance)]
+        for e, rs in reps.items():
+            for r in rs:
+                s = time_series.headline_series(store, r, truth, f.quantity)
+                if s:
+                    label = " ".join(x for x in (r.sweep_label, r.integrator, r.options_label) if x)
+                    rows[0]["series"].setdefault(e, []).append((label, r.sweep_label, *s))
+        for cname in f.case.conserved:
+            tol = f.case.tolerances.get(cname)
+            row = dict(ylabel=f"{cname} drift ({_drift_unit(cname)})", log=True, series={},
+                       bound=tol.value if tol else None)
+            for e, rs in reps.items():
+                for r in rs:
+                    if r.drifts.get(cname, 0.0) > 0.0:  # identically conserved: nothing to draw on a log axis
+                        row["series"].setdefault(e, []).append((r.sweep_label, r.sweep_label,
+                                                                *time_series.drift_series(store, r, f.case, cname)))
+            if row["series"]:
+                rows.append(row)
+        for row in rows:  # a log axis where the values span decades, a linear one where they do not
+            values = [v for runs in row["series"].values() for *_, y in runs for v in y[np.isfinite(y) & (y > 0)]]
+            row["log"] = bool(values) and max(values) > DECADES * min(values)
+        doc.figure(figures.time_grid(rows, list(reps), colours),
+                   f"{name}: each engine's most accurate run at each step size and tolerance (colour), its "
+                   f"{f.quantity} error and the drift of each conserved quantity against time (log scales where "
+                   "they span decades); dashed: the case's tolerance on each.",
+                   f"{name}-time")
+    if divs:
+        panels = {}
+        for e, rs in divs.items():
+            for r in rs:
+                s = time_series.headline_series(store, r, truth, f.quantity)
+                if s:
+                    panels.setdefault(e, []).append((settings_text(r), *s, r.t_diverged))
+        if panels:
+            n = sum(len(v) for v in panels.values())
+            doc.figure(figures.diverged_runs(panels, f"{f.quantity} error ({f.unit})"),
+                       f"{name}: the {n} runs that diverged, their {f.quantity} error until it stopped being finite; "
+                       "x and dotted line: the time the run diverged.", f"{name}-diverged")
+
+
+def _drift_unit(name):
+    """The unit of a stored drift, from how ``invariants.CONSERVED`` scales it."""
+    how = CONSERVED.get(name, "")
+    if how.startswith("relative"):
+        return "relative"
+    if how.startswith("absolute, "):
+        return how[len("absolute, "):]
+    return "absolute when zero, else relative"
+
+
+def _every_run(doc, f):
+    runs = sorted(f.runs, key=lambda r: (r.engine, r.integrator, r.options_label, sweep_key(r)))
+    errs = [q for q in QUANTITIES if any(not math.isnan(r.max_error(q)) for r in runs)]
+    errs.sort(key=lambda q: q != f.quantity)  # the headline error first
+    drifts = [n for n in f.case.conserved if any(not math.isnan(r.drifts.get(n, math.nan)) for r in runs)]
+    head = (["engine", "settings", "status", "cost (s/s)", "cost min–max (s/s)"]
+            + [f"{q} ({QUANTITIES[q]})" for q in errs] + [f"{n} drift ({_drift_unit(n)})" for n in drifts]
+            + ["beyond tolerance", "verdict"])
+    rows = []
     for r in runs:
-        rl, cl = _grid_labels(r)
-        cells[(rl, cl)] = r.verdict
-        if r.verdict_reason and r.verdict != "stable":
-            reasons.append(f"{rl} {cl}: {r.verdict} — {r.verdict_reason}")
-    row_labels = sorted({rl for rl, _ in cells})
-    col_labels = sorted({cl for _, cl in cells}, key=_sweep_order)
-    doc.heading("Stability", 3)
-    doc.figure(figures.stability_grid(row_labels, col_labels, cells, title=f"{name}: verdicts"),
-               f"{name}: stability verdict per engine, integrator and step", f"{name}-stability")
-    if reasons:
-        doc.details(f"why {len(reasons)} run(s) are not stable", "\n".join(reasons))
-    _drift_rates(doc, runs)
-    # --- every run
+        status = Cell(r.status, title=r.message) if r.ok or not r.message else Cell(
+            f"{r.status}" + (f" t={r.t_diverged:.3g} s" if r.t_diverged is not None else ""), title=r.message)
+        horizon = r.t_final if math.isfinite(r.t_final) and r.t_final > 0 else math.nan
+        spread = (Cell(f"{r.cost.wall_s_min / horizon:.2g}–{r.cost.wall_s_max / horizon:.2g}",
+                       r.cost.wall_s_max / horizon - r.cost.wall_s_min / horizon,
+                       title=f"{r.cost.repeats} timed repeats; {r.cost.concurrent} runs in flight")
+                  if math.isfinite(r.cost.wall_s_min) else Cell(MISSING, math.nan))
+        rows.append([Cell(r.engine), Cell(settings_text(r), wrap=True), status, num(cost_per_sim_s(r), "{:.2g}"), spread]
+                    + [num(r.max_error(q)) for q in errs] + [num(r.drifts.get(n)) for n in drifts]
+                    + [Cell(", ".join(r.beyond) if r.ok else MISSING, wrap=True), Cell(r.verdict, title=r.verdict_reason)])
     doc.heading("Every run", 3)
-    errs = [q for q in ("position", "orientation", "velocity", "angular_velocity", "joint", "reaction_force")
-            if any(not math.isnan(r.max_error(q)) for r in runs)]
-    drifts = sorted({n for r in runs for n, v in r.drifts.items() if not math.isnan(v)})
-    table_rows, classes = [], []
-    for r in sorted(runs, key=lambda r: (r.engine, r.integrator, r.dt or math.inf, r.rtol or math.inf)):
-        status = r.status if r.ok else f"{r.status}: {html.escape(r.message)}"
-        okcell = "—" if not r.ok else ("yes" if r.within_tolerance else f"<b>no</b>: {' '.join(r.beyond)}")
-        table_rows.append([r.engine, html.escape(r.settings_label), status, _num(r.cost.wall_s_median)]
-                          + [_num(r.max_error(q)) for q in errs] + [_num(r.drifts.get(n)) for n in drifts]
-                          + [okcell, r.verdict])
-        classes.append(r.verdict)
-    doc.table(["engine", "settings", "status", "wall s"] + errs + [f"{n} drift" for n in drifts]
-              + ["within tol", "verdict"], table_rows, classes)
-    # --- trajectories of each engine's most accurate run
-    best = {}
-    if quantity:
-        for r in runs:
-            if r.ok and r.trajectory and (r.engine not in best
-                                          or r.max_error(quantity) < best[r.engine].max_error(quantity)):
-                best[r.engine] = r
-    if truth is not None and best:
-        doc.heading("Trajectories (each engine's most accurate run)", 3)
-        t = truth.t
-        trajs = {e: store.trajectory(r.key) for e, r in best.items()}
-        label = {e: f"{e} {r.settings_label}" for e, r in best.items()}
-        if quantity == "joint":
-            jname = next(iter(truth.joints))
-            doc.figure(figures.time_series(t, {label[e]: tr.joints[jname].q[:, 0] for e, tr in trajs.items()},
-                                           "joint angle (rad)", truth=truth.joints[jname].q[:, 0],
-                                           title=f"{name}: joint angle"),
-                       f"{name}: joint angle against the truth", f"{name}-angle")
-        else:
-            bname = next(iter(truth.bodies))
-            doc.figure(figures.time_series(t, {label[e]: tr.bodies[bname].angular_velocity_body
-                                               for e, tr in trajs.items()}, "w_B components (rad/s)",
-                                           truth=truth.bodies[bname].angular_velocity_body,
-                                           title=f"{name}: body angular velocity"),
-                       f"{name}: body-frame angular velocity against the truth", f"{name}-omega")
-        doc.figure(figures.time_series(t, {label[e]: error_series(tr, truth)[quantity] for e, tr in trajs.items()},
-                                       f"{quantity} error ({QUANTITIES[quantity]})", log=True,
-                                       title=f"{name}: error against time"),
-                   f"{name}: {quantity} error against time", f"{name}-error")
-        if case.conserved:
-            cname = case.conserved[0]
-            doc.figure(figures.time_series(t, {label[e]: invariants.drift_series(cname, case.scene, tr)
-                                               for e, tr in trajs.items()}, f"{cname} drift", log=True,
-                                           title=f"{name}: {cname} drift ({invariants.CONSERVED[cname]})"),
-                       f"{name}: {cname} drift against time", f"{name}-drift")
-    # --- what each engine computed
+    doc.table(Table(head, rows, row_ids=[f"run-{r.key}" for r in runs], row_classes=[r.verdict for r in runs]),
+              collapsed=f"all {len(runs)} runs of {f.case.name}: click to open; click a header to sort")
+
+
+def _engines_simulated(doc, f):
     doc.heading("What each engine simulated", 3)
-    shown = best or {e: next(r for r in runs if r.engine == e) for e in sorted({r.engine for r in runs})}
-    for engine, r in sorted(shown.items()):
+    for e in f.engines:
+        r = e.best.run if e.best else e.runs[0]
         if r.audit:
-            doc.details(f"{engine}: effects audit ({r.settings_label})", json.dumps(r.audit, indent=2))
+            doc.details(f"{e.engine}: effects audit ({settings_text(r)})", json.dumps(r.audit, indent=2))
         if r.model:
-            doc.details(f"{engine}: generated model", r.model)
-    # --- summary rows
-    for engine in sorted({r.engine for r in runs}):
-        mine = [r for r in runs if r.engine == engine]
-        ok = [r for r in mine if r.ok and not math.isnan(r.max_error(quantity or ""))]
-        top = min(ok, key=lambda r: r.max_error(quantity)) if ok else None
-        costs = [c for c in (cost_to_reach(pts, SUMMARY_TARGET) for label, pts in lines.items()
-                             if label.startswith(engine + " ")) if c is not None]
-        counts = {}
-        for r in mine:
-            counts[r.verdict] = counts.get(r.verdict, 0) + 1
-        summary_rows.append(dict(case=name, engine=engine, agrees=any(r.ok and r.within_tolerance for r in mine),
-                                 best_error=top.max_error(quantity) if top else math.nan,
-                                 best_settings=top.settings_label if top else "", quantity=quantity or "",
-                                 cost_of_1e_6=min(costs) if costs else math.nan,
-                                 verdicts=", ".join(f"{n} {v}" for v, n in sorted(counts.items())),
-                                 runs=len(mine)))
+            doc.details(f"{e.engine}: generated model", r.model)
 
 
-CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1200px;color:#222}
-table{border-collapse:collapse;margin:0.5em 0 1.5em;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px}
-th{background:#f3f3f3}tr.stable td:last-child{background:#dff0d8}tr.drifts td:last-child{background:#fcf1d0}
-tr.diverged td:last-child{background:#f4cccc}tr.failed td:last-child{background:#e7d7ef}
-figure.plot{margin:1em 0}figure.plot svg{max-width:100%;height:auto}figcaption{font-size:12px;color:#555}
-pre{background:#f7f7f7;padding:0.5em;overflow:auto;font-size:11px}nav a{margin-right:1em}"""
+# ---------------------------------------------------------------------------------------------- page
+CSS = """body{font-family:system-ui,sans-serif;margin:1.5em auto;max-width:1320px;padding:0 12px;color:#222;
+font-size:14px;line-height:1.4}h2{border-bottom:1px solid #ddd;padding-bottom:2px;margin-top:1.8em}
+table{border-collapse:collapse;margin:0.4em 0 1.2em;font-size:12px;max-width:100%}
+td,th{border:1px solid #ccc;padding:2px 5px;vertical-align:top}td{white-space:nowrap}
+td.w{white-space:normal;overflow-wrap:anywhere;min-width:7em}
+th{background:#f3f3f3;cursor:pointer;position:sticky;top:0}th[data-dir]{background:#e3ecf7}
+tr.stable td:last-child{background:#dff0d8}tr.drifts td:last-child{background:#fcf1d0}
+tr.diverged td:last-child{background:#f4cccc}tr.failed td:last-child,tr.timeout td:last-child{background:#e7d7ef}
+tr:target{outline:2px solid #0072B2}figure.plot{margin:0.8em 0}figure.plot svg{max-width:100%;height:auto}
+figcaption{font-size:12px;color:#555}pre{background:#f7f7f7;padding:0.5em;overflow:auto;font-size:11px;
+max-height:30em}nav a{margin-right:1em}p.warning{background:#fff3cd;border:1px solid #e0c36b;padding:6px 10px}
+p.note{font-size:12px;color:#555;margin:0.2em 0}p.hz{font-weight:bold;margin:0.6em 0 0.1em}
+ul{margin-top:0.2em}li{margin:0.15em 0}details{margin:0.3em 0 0.8em}summary{cursor:pointer;color:#0b5394}
+li>details{display:inline;margin:0 0 0 0.4em}li>details[open]{display:block}p.case{font-weight:bold;margin:0.8em 0 0}
+table.summary{width:100%}
+span.cost{color:#555}"""
 
-# Self-check for readers and for the browser test: counts figures drawn with a non-zero size.
+# Self-check for readers and for the browser test: counts figures drawn with a non-zero size and,
+# with every <details> open, whether anything is wider than the window (then closes them again).
 SELF_CHECK = """<script>
 window.addEventListener('load', function () {
-  var figs = document.querySelectorAll('figure.plot svg');
-  var drawn = 0;
+  var figs = document.querySelectorAll('figure.plot svg'), drawn = 0;
   figs.forEach(function (s) { var r = s.getBoundingClientRect(); if (r.width > 0 && r.height > 0) drawn++; });
   document.body.setAttribute('data-figures', drawn + '/' + figs.length);
+  var closed = Array.prototype.filter.call(document.querySelectorAll('details'), function (d) { return !d.open; });
+  closed.forEach(function (d) { d.open = true; });
+  var wide = [];
+  document.querySelectorAll('body *').forEach(function (el) {
+    if (el.closest('pre')) return;
+    var r = el.getBoundingClientRect();
+    if (r.right > document.documentElement.clientWidth + 1) wide.push(el.tagName.toLowerCase() + (el.id ? '#' + el.id : ''));
+  });
+  var page = document.documentElement.scrollWidth <= window.innerWidth;
+  document.body.setAttribute('data-overflow', page && !wide.length ? 'none' : wide.slice(0, 5).join(' ') || 'page');
+  closed.forEach(function (d) { d.open = false; });
+  var at = {};  // where each figure and section starts, for screenshots of one of them
+  document.querySelectorAll('figure[id], h2[id]').forEach(function (el) {
+    at[el.id] = Math.round(el.getBoundingClientRect().top + window.scrollY);
+  });
+  document.body.setAttribute('data-at', JSON.stringify(at));
+  document.body.setAttribute('data-height', document.documentElement.scrollHeight);
 });
 </script>"""
 
@@ -252,38 +457,41 @@ def build_report(store, out_dir=None):
     os.makedirs(files_dir, exist_ok=True)
     records = store.records()
     manifest = store.manifest()
+    found = find(store, records)
+    names = [f.case.name for f in found]
+    titles = {f: _title(f, names.count(f.case.name) > 1) for f in found}
+    colours = figures.engine_colours({r.engine for r in records})
     doc = _Doc(files_dir, "report_files")
-    summary_rows = []
-    cases = sorted({r.case for r in records})
-    body = _Doc(files_dir, "report_files")
-    for case_name in cases:
-        _case_section(body, store, [r for r in records if r.case == case_name], summary_rows)
     machine = manifest.get("machine", {})
     doc.heading("dalembert report", 1)
-    doc.para(html.escape(f"harness {manifest.get('harness_version')} at commit {manifest.get('harness_commit')}; "
-                         f"{machine.get('cpu')} ({machine.get('cores')} cores), {machine.get('os')}, "
-                         f"Python {machine.get('python')}; engines: "
-                         + ", ".join(f"{k} {v}" for k, v in sorted(manifest.get("engines", {}).items()))
-                         + f"; command: {manifest.get('command')}; {manifest.get('started')} to {manifest.get('ended')}."))
-    doc.html.append("<nav>" + "".join(f'<a href="#case-{c}">{c}</a>' for c in cases) + "</nav>")
-    doc.heading("Summary", 2)
-    doc.para("Per case and engine: whether any run agrees with the truth within every one of the case's tolerances, "
-             "the best accuracy reached (the case's headline error: joint angle, else orientation), the cheapest "
-             f"interpolated cost of reaching {SUMMARY_TARGET:g} (stepping seconds per simulated second), and the "
-             "stability verdicts of all its runs.")
-    sm = pd.DataFrame(summary_rows)
-    rows = [[f'<a href="#case-{r.case}">{r.case}</a>', r.engine, "yes" if r.agrees else "<b>no</b>",
-             f"{_num(r.best_error)} {QUANTITIES.get(r.quantity, '')}", html.escape(r.best_settings),
-             _num(r.cost_of_1e_6, "{:.3g} s/s") if not math.isnan(r.cost_of_1e_6) else "not reached",
-             r.verdicts] for r in sm.itertuples()] if len(sm) else []
-    doc.table(["case", "engine", "agrees", "best accuracy", "at", f"cost of {SUMMARY_TARGET:g}", "verdicts"], rows)
-    doc.html += body.html
-    doc.md += body.md
+    doc.para(f"{len(records)} runs on {machine.get('cpu')} ({machine.get('cores')} cores), {machine.get('os')}, "
+             f"Python {machine.get('python')}; engines "
+             + ", ".join(f"{k} {v}" for k, v in sorted(manifest.get("engines", {}).items()))
+             + f"; harness {manifest.get('harness_version')} at {manifest.get('harness_commit')}; "
+             f"command: {manifest.get('command')}; {manifest.get('started')} to {manifest.get('ended')}.")
+    note = timing_note(manifest, records)
+    if note:
+        doc.para(note, cls="warning")
+    doc.html.append("<nav>" + "".join(f'<a href="#{escape_html(a)}">{escape_html(t)}</a>' for a, t in
+                                      [("findings", "findings"), ("hazards", "hazards")]
+                                      + [(_section_id(f), titles[f]) for f in found]) + "</nav>")
+    summary_rows = _findings(doc, found, titles, colours)
+    _hazards(doc, found, titles)
+    for f in found:
+        name = f"{f.case.name}-{f.case.version}" if names.count(f.case.name) > 1 else f.case.name
+        _case_header(doc, f, titles[f])
+        if f.quantity:
+            _work_precision(doc, f, name)
+        _stability(doc, f, name)
+        _against_time(doc, store, f, name)
+        _every_run(doc, f)
+        _engines_simulated(doc, f)
     page = (f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>dalembert report</title>"
-            f"<style>{CSS}</style></head><body>{''.join(doc.html)}{SELF_CHECK}</body></html>")
+            f"<style>{CSS}</style></head><body>{''.join(doc.html)}{SORT_SCRIPT}{SELF_CHECK}</body></html>")
     html_path, md_path = os.path.join(out_dir, "report.html"), os.path.join(out_dir, "report.md")
     csv_path = os.path.join(out_dir, "summary.csv")
     atomic_write(html_path, page)
     atomic_write(md_path, "\n".join(doc.md) + "\n")
+    sm = pd.DataFrame(summary_rows)
     atomic_write(csv_path, sm.to_csv(index=False, float_format="%.17g") if len(sm) else "")
     return html_path, md_path, csv_path

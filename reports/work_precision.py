@@ -1,21 +1,33 @@
-"""What accuracy costs in time: work-precision series and "cost to reach" a target error.
+"""What accuracy costs in time: work-precision points and lines, Pareto fronts, "cost to reach".
 
-For one case: every ok run becomes a point (stepping wall time per simulated
-second, headline error), grouped by engine + integrator (+ options) and
-ordered along its dt/tolerance sweep. ``cost_to_reach`` interpolates each line
-log-log between its two sweep points that bracket the target error.
+For one case every finished run is a point: its stepping wall time per simulated
+second (the median of its timed repeats over the case's horizon) against its
+headline error (the max over the horizon). Points group into lines by engine,
+integrator and options, ordered along their sweep from the coarsest step or
+tolerance to the finest. An engine's Pareto front is the best error it reaches
+at each cost: its points that no cheaper point beats. What a target accuracy costs is
+the cost of the cheapest run that reached it (a run that was made, never an
+interpolation between two).
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
-__all__ = ["TARGETS", "ERROR_DISPLAY_FLOOR", "headline_quantity", "line_label", "series", "cost_to_reach"]
+__all__ = ["ERROR_DISPLAY_FLOOR", "Point", "headline_quantity", "cost_per_sim_s", "line_label",
+           "sweep_key", "points", "series", "pareto_front", "cheapest_reaching"]
 
-# Error levels of the "cost to reach" table (in the unit of the headline error).
-TARGETS = (1e-2, 1e-4, 1e-6, 1e-8)
 # Errors of exactly 0 are drawn at this level on log axes (below any double-precision roundoff).
 ERROR_DISPLAY_FLOOR = 1e-17
+
+
+class Point(NamedTuple):
+    """One finished run on the work-precision plane."""
+
+    cost: float  # stepping wall time per simulated second, s/s
+    error: float  # max headline error over the horizon (ERROR_DISPLAY_FLOOR where it is 0)
+    run: object  # the RunRecord
 
 
 def headline_quantity(records):
@@ -27,41 +39,53 @@ def headline_quantity(records):
     return None
 
 
+def cost_per_sim_s(r):
+    """Median stepping wall time per simulated second (s/s), NaN when not timed."""
+    horizon = r.t_final if math.isfinite(r.t_final) and r.t_final > 0 else math.nan
+    return r.cost.wall_s_median / horizon
+
+
 def line_label(r):
     """A work-precision line: ``engine integrator`` and its options."""
     return " ".join(x for x in (r.engine, r.integrator, r.options_label) if x)
 
 
-def series(records):
-    """``({label: [(cost_per_sim_s, error, point_label), ...]}, quantity)`` sorted by cost, ok runs only."""
-    quantity = headline_quantity(records)
-    out = {}
-    if quantity is None:
-        return out, None
+def sweep_key(r):
+    """Order along a sweep and across a grid: fixed steps before tolerances, each coarse to fine."""
+    return (r.dt is None, -(r.dt if r.dt is not None else (r.rtol or 0.0)))
+
+
+def points(records, quantity):
+    """The ``Point`` of every finished run with a finite error and cost, in the records' order."""
+    out = []
     for r in records:
-        err, wall = r.max_error(quantity), r.cost.wall_s_median
-        if not r.ok or not (math.isfinite(err) and math.isfinite(wall)):
-            continue
-        horizon = r.t_final if math.isfinite(r.t_final) and r.t_final > 0 else 1.0
-        out.setdefault(line_label(r), []).append((wall / horizon, max(err, ERROR_DISPLAY_FLOOR), r.sweep_label))
+        err, cost = r.max_error(quantity), cost_per_sim_s(r)
+        if r.ok and math.isfinite(err) and math.isfinite(cost):
+            out.append(Point(cost, max(err, ERROR_DISPLAY_FLOOR), r))
+    return out
+
+
+def series(records, quantity):
+    """``{line_label: [Point, ...]}``, each line ordered along its sweep (coarse to fine)."""
+    out = {}
+    for p in points(records, quantity):
+        out.setdefault(line_label(p.run), []).append(p)
     for pts in out.values():
-        pts.sort()
-    return out, quantity
+        pts.sort(key=lambda p: sweep_key(p.run))
+    return out
 
 
-def cost_to_reach(points, target):
-    """Interpolated cost (s per simulated s) to reach ``target`` along one line, or None.
+def pareto_front(pts):
+    """The points no cheaper (or equally cheap) point beats in error, by increasing cost."""
+    front = []
+    for p in sorted(pts, key=lambda p: (p.cost, p.error)):
+        if not front or p.error < front[-1].error:
+            front.append(p)
+    return front
 
-    ``points``: [(cost, error, label)] sorted by cost. The cheapest point already
-    below target is exact; otherwise log-log interpolation between consecutive
-    points that bracket the target.
-    """
-    if not points:
-        return None
-    if points[0][1] <= target:
-        return points[0][0]
-    for (c0, e0, _), (c1, e1, _) in zip(points, points[1:]):
-        if e1 <= target < e0:
-            f = (math.log(target) - math.log(e0)) / (math.log(e1) - math.log(e0))
-            return math.exp(math.log(c0) + f * (math.log(c1) - math.log(c0)))
-    return None
+
+def cheapest_reaching(pts, target):
+    """The cheapest point whose error is at most ``target``, or None: a run that was made, not an
+    interpolation."""
+    reached = [p for p in pts if p.error <= target]
+    return min(reached, key=lambda p: p.cost) if reached else None

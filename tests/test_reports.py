@@ -1,25 +1,19 @@
-"""Reports: built from a small store made here; checked as files, in a real browser, and by compare."""
+"""Reports: built from a small store made here; checked as files and in a real browser."""
 
+import html
 import json
 import os
 import re
 import shutil
 import subprocess
-from dataclasses import replace
 
-import numpy as np
 import pandas as pd
 import pytest
 
-from dalembert.harness.execute import Timing
-from dalembert.harness.matrix import expand
-from dalembert.harness.pool import run_matrix
-from dalembert.record import RunRecord
 from dalembert.store import Store
-from dalembert.reports.compare import compare_stores
 from dalembert.reports.render import build_report
+from stores import small_store
 
-FAST = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
 # Screenshots go where DALEMBERT_ARTIFACTS says (CI may keep them), else into the test's own
 # temporary directory: a test writes nothing into the checkout.
 ARTIFACTS = os.environ.get("DALEMBERT_ARTIFACTS")
@@ -27,13 +21,21 @@ ARTIFACTS = os.environ.get("DALEMBERT_ARTIFACTS")
 
 @pytest.fixture(scope="module")
 def store(tmp_path_factory):
-    path = tmp_path_factory.mktemp("store")
-    specs, _ = expand(cases=["pivoted_rod", "free_top"], engines=["reference"], integrators=["rk4", "euler"],
-                      dts=[1e-2, 5e-3], params={"t_final": 1.0})
-    s = Store(path).create({"harness_version": "test", "engines": {"reference": "test"}, "specs": []})
-    run_matrix(specs, s, jobs=2, timing=FAST)
+    engines = ("reference", "mujoco") if _importable("mujoco") else ("reference",)
+    s = small_store(tmp_path_factory.mktemp("store"), engines=engines)
     build_report(s)
     return s
+
+
+def _importable(name):
+    import importlib.util
+
+    return importlib.util.find_spec(name) is not None
+
+
+def _section(md, case):
+    """The Markdown of one case's section (from its heading to the next case's)."""
+    return md.split(f"\n## {case}\n")[1].split("\n## ")[0]
 
 
 def _headline(case):
@@ -49,8 +51,8 @@ def test_report_files_and_values_equal_the_store(store):
         mine = [r.max_error(_headline(s.case)) for r in records if r.case == s.case and r.engine == s.engine]
         assert s.best_error == min(mine)  # full precision in the CSV
     md = open(os.path.join(store.path, "report.md")).read()
-    for r in records:  # every stored headline error appears as shown (3 significant digits)
-        assert f"{r.max_error(_headline(r.case)):.2e}" in md
+    for r in records:  # every stored headline error appears as shown (3 significant digits) in its case's runs
+        assert f"{r.max_error(_headline(r.case)):.2e}" in _section(md, r.case)
     figures = re.findall(r"!\[[^\]]*\]\((report_files/[^)]+)\)", md)
     assert figures and all(os.path.exists(os.path.join(store.path, f)) for f in figures)
 
@@ -59,8 +61,8 @@ def test_energy_drift_rates_are_shown_as_stored(store):
     """The drift-rate table: every successful run's stored slope, signed, per engine + integrator
     and step (explicit Euler's secular drift and RK4's near-zero one side by side)."""
     md = open(os.path.join(store.path, "report.md")).read()
-    section = md.split("## free_top")[1].split("### Energy drift rate")[1].split("###")[0]
-    top = [r for r in store.records() if r.case == "free_top" and r.ok]
+    section = _section(md, "free_top").split("### Energy drift rate")[1].split("###")[0]
+    top = [r for r in store.records() if r.case == "free_top" and r.ok and r.engine == "reference"]
     assert len(top) == 4
     for r in top:
         line = next(x for x in section.splitlines() if x.startswith(f"| {r.engine} {r.integrator} |"))
@@ -69,18 +71,11 @@ def test_energy_drift_rates_are_shown_as_stored(store):
     assert euler > 1e3 * rk4
 
 
-def _tamper(store, change):
-    """Rewrite the first stored run of ``store`` as ``change(record)`` returns it."""
-    key = sorted(store.done_keys())[0]
-    path = os.path.join(store.rows_dir, f"{key}.json")
-    json.dump(change(RunRecord.from_row(json.load(open(path)))).to_row(), open(path, "w"))
-
-
 def test_report_is_self_contained(store):
     page = open(os.path.join(store.path, "report.html")).read()
     # no resource is fetched from anywhere: every src/href is local (anchors) or inline
     refs = re.findall(r'(?:src|href)="([^"]*)"', page)
-    assert refs and all(r.startswith("#") for r in refs), [r for r in refs if not r.startswith("#")]
+    assert refs and all(r.startswith(("#", "data:")) for r in refs), [r for r in refs if not r.startswith("#")]
     assert "<link" not in page and "@import" not in page
 
 
@@ -88,56 +83,63 @@ def _chromium():
     return shutil.which("chromium") or shutil.which("chromium-browser")
 
 
+# What the browser test photographs: the findings, then one of each kind of figure (element ids in
+# report.html; the first case's figures).
+# Each shot runs from its element to the next one listed in data-at, or to the given one (the findings:
+# the summary figure, table and sentences, up to the hazards).
+SHOTS = {"summary": ("findings", "hazards"), "work-precision": ("fig-{case}-wp", None),
+         "stability": ("fig-{case}-stability", None), "time": ("fig-{case}-time", None)}
+WIDTH = 1400  # px: a laptop's browser window; nothing may be wider
+
+
 def test_report_renders_in_a_real_browser(store, tmp_path):
+    """Every figure drawn, no console error, nothing fetched, nothing wider than 1400 px (with every
+    <details> open), and screenshots of the findings, a work-precision figure, a stability figure and
+    a time plot. DALEMBERT_REPORT_STORE may name a default-matrix store to photograph instead of
+    this module's small one (it is copied; the copy gets the report)."""
     browser = _chromium()
     if browser is None:
         if os.environ.get("CI"):
             pytest.fail("CI must install Debian's chromium (see .ci/run)")
         pytest.skip("chromium not installed (apt-get install chromium); CI installs it")
-    url = "file://" + os.path.join(store.path, "report.html")
+    from PIL import Image
+
+    source = store
+    if os.environ.get("DALEMBERT_REPORT_STORE"):
+        shutil.copytree(os.environ["DALEMBERT_REPORT_STORE"], tmp_path / "big")
+        source = Store.open(tmp_path / "big")
+        build_report(source)
+    url = "file://" + os.path.join(source.path, "report.html")
     flags = [browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-             "--disable-background-networking", "--disable-component-update", "--disable-sync",
+             "--disable-background-networking", "--disable-component-update", "--disable-sync", "--hide-scrollbars",
              f"--user-data-dir={tmp_path / 'profile'}", "--enable-logging=stderr", "--v=0",
-             "--virtual-time-budget=5000", "--window-size=1300,2000"]
-    dom = subprocess.run(flags + ["--dump-dom", url], capture_output=True, text=True, timeout=120)
+             "--virtual-time-budget=5000"]
+    dom = subprocess.run(flags + [f"--window-size={WIDTH},2000", "--dump-dom", url], capture_output=True, text=True,
+                         timeout=120)
     drawn = re.search(r'data-figures="(\d+)/(\d+)"', dom.stdout)
     assert drawn, "the report's self-check did not run"
     assert int(drawn.group(2)) > 0 and drawn.group(1) == drawn.group(2), f"figures drawn: {drawn.group(0)}"
+    assert re.search(r'data-overflow="([^"]*)"', dom.stdout).group(1) == "none", "wider than the window"
     console = [line for line in dom.stderr.splitlines() if "CONSOLE" in line]
     assert console == [], console
     assert not re.search(r"net::ERR_|Failed to load resource", dom.stderr)
+    at = json.loads(html.unescape(re.search(r'data-at="([^"]*)"', dom.stdout).group(1)))
+    height = int(re.search(r'data-height="(\d+)"', dom.stdout).group(1))
     artifacts = ARTIFACTS or str(tmp_path)
     os.makedirs(artifacts, exist_ok=True)
-    shot = os.path.join(artifacts, "report-summary.png")
-    subprocess.run(flags + [f"--screenshot={shot}", url], capture_output=True, timeout=120)
-    assert os.path.getsize(shot) > 10_000
-
-
-def test_compare_detects_a_tenfold_error_regression(store, tmp_path):
-    same, regressed = compare_stores(store, store)
-    assert not regressed and all(r["change"] == "same" for r in same)
-    worse = Store(tmp_path / "worse")
-    shutil.copytree(store.path, worse.path)
-    _tamper(worse, lambda r: replace(r, errors={q: (mx * 10.0 if mx > 1e-10 else mx, final)
-                                                for q, (mx, final) in r.errors.items()}))
-    rows, regressed = compare_stores(store, worse)
-    assert regressed
-    assert [r for r in rows if r["change"].startswith("REGRESSION")][0]["error_ratio"] == pytest.approx(10.0)
-    from dalembert.harness.cli import main
-
-    assert main(["compare", store.path, worse.path]) == 1
-    assert main(["compare", store.path, store.path]) == 0
-
-
-def test_compare_flags_a_changed_case_instead_of_comparing(store, tmp_path):
-    other = Store(tmp_path / "other")
-    shutil.copytree(store.path, other.path)
-    _tamper(other, lambda r: replace(r, case_version="different", errors={q: (1.0, 1.0) for q in r.errors}))
-    rows, regressed = compare_stores(store, other)
-    assert not regressed
-    assert any("case version differs" in r["change"] for r in rows)
-    rows, regressed = compare_stores(store, other, across_versions=True)  # asked to compare anyway
-    assert regressed
+    page = os.path.join(artifacts, "report-page.png")
+    subprocess.run(flags + [f"--window-size={WIDTH},{height}", f"--screenshot={page}", url], capture_output=True,
+                   timeout=120)
+    full = Image.open(page)
+    assert full.size[0] == WIDTH
+    case = sorted(r.case for r in source.records())[0]
+    tops = sorted(at.values())
+    for name, (start, end) in SHOTS.items():
+        top = at[start.format(case=case)]
+        bottom = min([at[end] if end else min([t for t in tops if t > top], default=height), height, top + 1800])
+        shot = os.path.join(artifacts, f"report-{name}.png")
+        full.crop((0, max(0, top - 10), WIDTH, bottom)).save(shot)
+        assert os.path.getsize(shot) > 5_000
 
 
 def test_report_reads_only_the_store(store, tmp_path):

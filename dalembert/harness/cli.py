@@ -92,20 +92,35 @@ def _parser():
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     rp.add_argument("run_dir")
 
-    x = sub.add_parser("export", help="write one stored trajectory as CSV",
-                       epilog="example:\n  dalembert export results/latest --case free_top --engine reference "
-                              "--integrator rk4 --dt 1e-3 --csv top.csv",
+    x = sub.add_parser("export", help="write stored trajectories (bodies, joints, reaction forces) as CSV or Parquet",
+                       epilog="examples:\n  dalembert export results/latest --case free_top --engine reference "
+                              "--integrator rk4 --dt 1e-3 --csv top.csv\n"
+                              "  dalembert export results/latest --case free_top --engine exudyn --integrator "
+                              "generalized-alpha --dt 1e-3 --option node=ep --csv ep.csv\n"
+                              "  dalembert export results/latest --key free_top__mujoco__rk4__0123456789ab --csv run.csv\n"
+                              "  dalembert export results/latest --all --parquet runs.parquet\n\n"
+                              "One long-format table: a row per run, sample time and body, joint or reaction force "
+                              "(columns kind, name); see dalembert.reports.export.",
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     x.add_argument("run_dir")
-    x.add_argument("--case", required=True)
-    x.add_argument("--engine", required=True)
-    x.add_argument("--integrator", required=True)
+    x.add_argument("--key", action="append", default=[], help="a run's key (repeatable; the report's run tables "
+                                                              "and runs.parquet list them)")
+    x.add_argument("--case")
+    x.add_argument("--engine")
+    x.add_argument("--integrator")
     x.add_argument("--dt", type=float)
     x.add_argument("--rtol", type=float)
-    x.add_argument("--csv", required=True, metavar="FILE")
+    x.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                   help="engine option the run had (repeatable; KEY= for a run that did not set it)")
+    x.add_argument("--all", action="store_true", help="every run that matches (all runs when nothing else is "
+                                                      "given), into one file; without it exactly one must match")
+    out = x.add_mutually_exclusive_group(required=True)
+    out.add_argument("--csv", metavar="FILE", help="CSV, 17 significant digits")
+    out.add_argument("--parquet", metavar="FILE", help="Parquet")
 
     cp = sub.add_parser("compare", help="compare two results directories; non-zero exit on a regression",
-                        epilog="example:\n  dalembert compare results/before results/after --threshold 2",
+                        epilog="examples:\n  dalembert compare results/before results/after --threshold 2\n"
+                               "  dalembert compare A B --only-changed --json changes.json",
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     cp.add_argument("run_a")
     cp.add_argument("run_b")
@@ -115,15 +130,22 @@ def _parser():
     cp.add_argument("--across-versions", action="store_true",
                     help="compare runs whose case version differs (e.g. after a change that only reworded a "
                          "case or re-hashed it); by default they are flagged, not compared")
+    cp.add_argument("--only-changed", action="store_true", help="print only the runs that changed")
+    cp.add_argument("--json", metavar="FILE", help="also write the comparison as JSON (- for stdout, instead of the text)")
+    cp.add_argument("--csv", metavar="FILE",
+                    help="also write it as CSV, a row per run and quantity (- for stdout, instead of the text)")
 
     sm = sub.add_parser("show-model", help="print the model an engine builds for a case (e.g. MJCF)",
-                        epilog="example:\n  dalembert show-model pivoted_rod --engine mujoco",
+                        epilog="examples:\n  dalembert show-model pivoted_rod --engine mujoco\n"
+                               "  dalembert show-model free_top --engine exudyn --option node=ep",
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     sm.add_argument("case")
     sm.add_argument("--engine", required=True)
-    sm.add_argument("--integrator", default=None, help="default: the engine's first")
+    sm.add_argument("--integrator", default=None, help="default: the engine's first that runs the case")
     sm.add_argument("--dt", type=float, default=1e-3)
     sm.add_argument("--param", action="append", default=[], metavar="KEY=VALUE")
+    sm.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                    help="engine option (repeatable), e.g. joints=redundant for Exudyn")
 
     v = sub.add_parser("validate", help="run every case (not tagged hard) with the reference solver against its truth",
                        epilog="example:\n  dalembert validate --case pivoted_rod",
@@ -479,29 +501,51 @@ def cmd_report(args):
 
 
 def cmd_export(args):
-    from dalembert.trajectory import write_csv
+    from dalembert.reports.export import frame, select, write
+    from dalembert.reports.findings import run_name
 
     try:
         store = _open(args.run_dir)
+        options = dict(_key_value("--option", text) for text in args.option)
     except ValueError as e:
         return _fail(str(e))
     records = store.records()
-    chosen = [r for r in records if r.case == args.case and r.engine == args.engine and r.integrator == args.integrator
-              and (args.dt is None or r.dt == args.dt) and (args.rtol is None or r.rtol == args.rtol)]
-    if len(chosen) != 1:
-        choices = sorted({f"{r.case} {r.engine} {r.settings_label}" for r in records})
-        return _fail(f"{len(chosen)} stored runs match (need exactly one; add --dt or --rtol). Stored: "
-                     + "; ".join(choices))
-    if not chosen[0].trajectory:
+    chosen = select(records, set(args.key), args.case, args.engine, args.integrator, args.dt, args.rtol, options)
+    path = args.csv or args.parquet
+    if not args.all and len(chosen) != 1:
+        listed = chosen or records
+        return _fail(f"{len(chosen)} stored runs match (need exactly one: add --dt, --rtol, --option or --key, or "
+                     f"--all for every match). {'Matching' if chosen else 'Stored'}: "
+                     + "; ".join(f"{r.key} ({r.case} {run_name(r)}, {r.status})" for r in listed[:40])
+                     + (f"; and {len(listed) - 40} more" if len(listed) > 40 else ""))
+    if not args.all and not chosen[0].trajectory:
         return _fail(f"that run has no trajectory (status {chosen[0].status}: {chosen[0].message})")
-    write_csv(store.trajectory(chosen[0].key), args.csv)
-    print(f"wrote {args.csv}")
+    df = frame(store, chosen)
+    out_dir = os.path.dirname(os.path.abspath(path))
+    if not os.access(out_dir, os.W_OK):
+        return _fail(f"--{'csv' if args.csv else 'parquet'}: cannot write to {out_dir!r}")
+    write(df, path)
+    with_traj = sum(1 for r in chosen if r.trajectory)
+    print(f"wrote {path}: {with_traj} run(s), {len(df)} rows"
+          + (f" ({len(chosen) - with_traj} matching run(s) left no trajectory)" if with_traj < len(chosen) else ""))
     return 0
 
 
+def _key_value(flag, text):
+    """``KEY=VALUE`` as a pair; ValueError naming ``flag`` otherwise."""
+    if "=" not in text:
+        raise ValueError(f"{flag} {text!r}: write KEY=VALUE")
+    key, value = text.split("=", 1)
+    return key, value
+
+
 def cmd_compare(args):
+    import csv
+    import io
+    import json
+
     from dalembert.record import READABLE_SCHEMAS
-    from dalembert.reports.compare import compare_stores
+    from dalembert.reports.compare import CSV_COLUMNS, compare_stores, csv_rows, to_json, to_text
 
     try:
         stores = [_open(d, READABLE_SCHEMAS) for d in (args.run_a, args.run_b)]
@@ -514,15 +558,26 @@ def cmd_compare(args):
     if schemas[0] != schemas[1]:
         print(f"dalembert: note: the stores have schemas {schemas[0]} and {schemas[1]}; runs are matched by case, "
               "engine and settings", file=sys.stderr)
-    rows, regressed = compare_stores(*stores, threshold=args.threshold, cost_threshold=args.cost_threshold,
-                                     across_versions=args.across_versions)
-    changed = [r for r in rows if r["change"] != "same"]
-    for r in changed:
-        setting = f"dt={r['dt']:g}" if r.get("dt") else f"rtol={r['rtol']:g}" if r.get("rtol") else ""
-        print(f"{r['case']:<24} {r['engine']:<10} {r['integrator']:<18} {setting:<12} {r['change']}")
-    print(f"{len(rows)} runs compared: {len(rows) - len(changed)} unchanged, {len(changed)} changed"
-          + (" — REGRESSION" if regressed else ""))
-    return 1 if regressed else 0
+    cmp = compare_stores(*stores, threshold=args.threshold, cost_threshold=args.cost_threshold,
+                         across_versions=args.across_versions)
+    outputs = {}
+    if args.json:
+        outputs[args.json] = json.dumps(to_json(cmp), indent=1, allow_nan=False) + "\n"
+    if args.csv:
+        buf = io.StringIO()
+        writer = csv.DictWriter(buf, CSV_COLUMNS, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows({k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()} for row in csv_rows(cmp))
+        outputs[args.csv] = buf.getvalue()
+    if "-" not in outputs:
+        sys.stdout.write(to_text(cmp, args.only_changed))
+    for path, text in outputs.items():
+        if path == "-":
+            sys.stdout.write(text)
+        else:
+            atomic_write(path, text)
+            print(f"wrote {path}", file=sys.stderr)
+    return 1 if cmp.regressed else 0
 
 
 def cmd_show_model(args):
@@ -533,15 +588,50 @@ def cmd_show_model(args):
     try:
         factory = load_cases()[args.case]
         case = factory(**dict(parse_param(factory, p) for p in args.param))
+        options = dict(_key_value("--option", text) for text in args.option)
         adapter = get_adapter(args.engine)
-        integ = args.integrator or next(iter(adapter.integrators))
-        spec = adapter.integrators.get(integ)
-        settings = Settings(integ, dt=args.dt) if spec is None or spec.fixed_step else Settings(integ, rtol=1e-8,
-                                                                                                  atol=1e-8)
-        adapter.check(case.scene, case.times, settings)
+
+        def settings(integ, opts):
+            spec = adapter.integrators.get(integ)
+            if spec is None or spec.fixed_step:
+                return Settings(integ, dt=args.dt, options=opts)
+            return Settings(integ, rtol=1e-8, atol=1e-8, options=opts)
+
+        def first_supported(opts):
+            """(settings, None) for the first integrator that runs the case with ``opts``, else
+            (the last settings tried, the reason)."""
+            reason = None
+            for integ in [args.integrator] if args.integrator else list(adapter.integrators):
+                chosen = settings(integ, opts)
+                adapter.check(case.scene, case.times, chosen)
+                reason = adapter.unsupported(case.scene, chosen)
+                if reason is None:
+                    return chosen, None
+            return chosen, reason
+
+        chosen, reason = first_supported(options)
+        if reason is not None:  # say so, and which of the engine's own variants would run it
+            runs = [o for o in adapter.variants(case.scene) if o != options and first_supported(o)[1] is None]
+            hint = ("; it runs with " + " or ".join(" ".join(f"--option {k}={v}" for k, v in sorted(o.items()))
+                                                    or "its default options" for o in runs)) if runs else ""
+            what = " ".join(f"{k}={v}" for k, v in sorted(options.items())) or "its default options"
+            if args.integrator:  # the same options may run with another integrator
+                others = [i for i in adapter.integrators if i != args.integrator
+                          and adapter.unsupported(case.scene, settings(i, options)) is None]
+                if others:
+                    hint += f"; with {what} it runs {', '.join(others)}"
+            print(f"dalembert: unsupported: {args.engine} does not run {args.case} "
+                  f"({chosen.integrator if args.integrator else 'any integrator'}, {what}): {reason}{hint}",
+                  file=sys.stderr)
+            return 1
         if not hasattr(adapter, "describe"):
             raise ValueError(f"engine {args.engine!r} does not describe its model")
-        print(adapter.describe(case.scene, settings), end="")
+        text = adapter.describe(case.scene, chosen)
+        if not text.strip():
+            print(f"dalembert: {args.engine} describes no model for {args.case} with {chosen.integrator}",
+                  file=sys.stderr)
+            return 1
+        print(text, end="" if text.endswith("\n") else "\n")
     except (UnknownNameError, ValueError, SceneError, ImportError) as e:
         return _fail(str(e))
     return 0

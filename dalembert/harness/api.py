@@ -1,0 +1,144 @@
+"""dalembert from Python: run a selection and get its records as a DataFrame, load a store, read
+what it found, build its report, compare two stores, and take its trajectories as one table.
+
+Everything the command line does, for a notebook or a script::
+
+    from dalembert.harness import api
+
+    runs = api.run(cases=["free_top"], engines=["reference", "mujoco"], integrators=["rk4"],
+                   dts=[1e-2, 1e-3], params={"t_final": 2.0}, out="results/top")
+    runs[["engine", "settings", "err_orientation_max", "wall_s_median", "verdict"]]
+    store = api.load("results/top")            # a Store: records(), table(), case(), trajectory()
+    api.findings(store)[0].sentences           # what the report says first, as data
+    api.report(store)                          # report.html, report.md, summary.csv
+    api.compare("results/before", "results/top").regressed
+    api.trajectories(store, engine="mujoco")   # every sample of every run, long format
+
+A record's columns are ``dalembert.record.RunRecord``'s (``to_row``): one per
+identity field, ``err_<quantity>_max``/``_final``, ``drift_<name>``, the cost,
+the stored verdict. The trajectory table's are ``dalembert.reports.export``'s.
+
+Why ``dalembert.harness.api`` and not ``dalembert.api``: running a selection
+needs the cases, the engines' adapters and the worker pool, which sit above the
+core; ``dalembert`` itself is the core, which imports none of them (the layers in
+DESIGN.md; ``tests/test_layers.py`` walks every import, function-level ones
+included, so not even a lazy re-export from ``dalembert/__init__.py`` would
+hold). The harness is the layer that joins them all, as the command line does,
+so the API is one module of it: importing it costs what importing the command
+line costs, and ``import dalembert`` stays as light as it is.
+"""
+
+from __future__ import annotations
+
+import os
+
+from dalembert.harness.cli import _load_average, _new_store, _timestamped
+from dalembert.harness.execute import Timing
+from dalembert.harness.matrix import expand
+from dalembert.harness.pool import DEFAULT_TIMEOUT_S, run_matrix
+from dalembert.record import READABLE_SCHEMAS, SCHEMA_VERSION
+from dalembert.store import Store, harness_commit, machine_info, now
+
+__all__ = ["run", "load", "table", "findings", "report", "compare", "trajectories"]
+
+
+def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=None, params=None, options=None,
+        out=None, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=None, progress=None):
+    """Run a selection of the matrix into a new store and return its records as a DataFrame.
+
+    Parameters
+    ----------
+    cases, tags : list of str or None — case names, or tags selecting cases (default: every case
+        not tagged ``hard``)
+    engines, integrators : list of str or None — default: every installed engine, every integrator
+    dts : list of float or None — fixed steps, s (default 1e-2, 1e-3)
+    rtols : list of float or None — tolerances of adaptive integrators (default 1e-6, 1e-9)
+    params : dict or None — case parameters, e.g. ``{"t_final": 2.0}``
+    options : dict or None — engine options for every run (default: each engine's variants)
+    out : str or None — the new store's directory (default ``results/<time>``); must not hold a run
+    jobs : int or None — worker processes (default: every core)
+    timeout : float — per-run limit, s
+    timing : dalembert.harness.execute.Timing or None — how each run is timed (repeats)
+    progress : callable or None — ``progress(done, total, failures, record)`` after each run
+
+    Returns
+    -------
+    pandas.DataFrame — one row per run (``Store.table``); ``.attrs["store"]`` is the store's path
+
+    Raises ValueError (or KeyError with a "did you mean") on an unknown name or a bad setting,
+    before anything runs; a run that fails, diverges or times out is a row, not an exception.
+    """
+    import dalembert
+    from dalembert.adapters import get_adapter
+
+    specs, _ = expand(cases, tags, engines, integrators, dts, rtols, params, options)
+    timing = timing or Timing()
+    given = {k: v for k, v in dict(cases=cases, tags=tags, engines=engines, integrators=integrators, dts=dts,
+                                   rtols=rtols, params=params, options=options).items() if v}
+    manifest = {
+        "harness_version": dalembert.__version__, "harness_commit": harness_commit(), "machine": machine_info(),
+        "engines": {e: get_adapter(e).version() for e in sorted({s.engine for s in specs})},
+        "command": "dalembert.harness.api.run(" + ", ".join(f"{k}={v!r}" for k, v in given.items()) + ")",
+        "started": now(), "ended": None, "timeout_s": timeout, "timing": vars(timing),
+        "jobs": jobs or os.cpu_count(), "scheduler": None, "load_average": {"start": _load_average(), "end": None},
+        "specs": [s.to_json() for s in specs],
+    }
+    store = _new_store(out or _timestamped(), manifest)
+    run_matrix(specs, store, jobs, timeout, timing, progress)
+    manifest = store.manifest()
+    manifest["ended"] = now()
+    manifest["load_average"]["end"] = _load_average()
+    store.write_manifest(manifest)
+    df = store.table()
+    df.attrs["store"] = store.path
+    return df
+
+
+def load(path, any_schema=False):
+    """The store at ``path`` (``dalembert.store.Store``); with ``any_schema``, one written by an older
+    dalembert too (as ``compare`` reads them), else only this version's schema."""
+    return Store.open(path, READABLE_SCHEMAS if any_schema else (SCHEMA_VERSION,))
+
+
+def _store(store):
+    return store if isinstance(store, Store) else load(store)
+
+
+def table(store):
+    """Every run of ``store`` (a Store or a path) as a DataFrame, one row per ``RunRecord``."""
+    return _store(store).table()
+
+
+def findings(store):
+    """What the report opens with, as data: a ``dalembert.reports.findings.CaseFindings`` per case
+    (cheapest run per target accuracy and engine, hazards naming their runs, the sentences)."""
+    from dalembert.reports.findings import find
+
+    return find(_store(store))
+
+
+def report(store, out_dir=None):
+    """Write the report of ``store`` (into ``out_dir``, default the store); returns the paths of
+    report.html, report.md and summary.csv."""
+    from dalembert.reports.render import build_report
+
+    return build_report(_store(store), out_dir)
+
+
+def compare(before, after, threshold=2.0, cost_threshold=None, across_versions=False):
+    """Compare two stores (Stores or paths) as ``dalembert compare`` does; a
+    ``dalembert.reports.compare.Comparison`` (``.regressed``, ``.changes``, ``.only_in_a``, ...;
+    ``dalembert.reports.compare.to_json`` turns it into plain data)."""
+    from dalembert.reports.compare import compare_stores
+
+    a, b = (s if isinstance(s, Store) else load(s, any_schema=True) for s in (before, after))
+    return compare_stores(a, b, threshold, cost_threshold, across_versions)
+
+
+def trajectories(store, keys=(), case=None, engine=None, integrator=None, dt=None, rtol=None, options=None):
+    """The stored trajectories of the runs that match (all by default) as one long-format DataFrame
+    (``dalembert.reports.export``: a row per run, sample time and body, joint or reaction force)."""
+    from dalembert.reports.export import frame, select
+
+    s = _store(store)
+    return frame(s, select(s.records(), set(keys), case, engine, integrator, dt, rtol, options))

@@ -1,0 +1,391 @@
+"""What a store shows, computed once from its records and case records: the findings
+the report opens with.
+
+Per case, for each engine: the cheapest run that reaches each of
+``ACCURACY_TARGETS`` in the case's headline error (or "never", with the best it
+reached), and the hazards a user must know before trusting a setting:
+
+* ``diverged`` — runs that blew up, and when (their stored verdict);
+* ``failed`` — runs that stopped with an error or at the time limit;
+* ``energy`` — finished runs that lost or gained more than ``ENERGY_HAZARD`` of
+  their energy over the horizon;
+* ``tolerance`` — runs that stay finite but leave the case's tolerance (and of
+  those, the ones whose conserved quantities hold: only the truth shows them);
+* ``disagreement`` — engines that, with the same integrator and the same step
+  or tolerance, differ by more than ``DISAGREEMENT_FACTOR`` in the headline error
+  beyond the case's tolerance, or where one finishes within it and another does not;
+* ``unsupported`` — integrators an engine cannot run on the case, with its reason.
+
+Every sentence names the runs it is about (engine and settings) and quotes
+stored numbers only; verdicts are the stored ones, never judged again here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from dalembert.errors import QUANTITIES
+from dalembert.record import BAD_STATUSES
+from dalembert.reports.work_precision import (cheapest_reaching, headline_quantity, pareto_front, points,
+                                              sweep_key)
+
+__all__ = ["ACCURACY_TARGETS", "ENERGY_HAZARD", "DISAGREEMENT_FACTOR", "HAZARDS", "Reach", "EngineSummary",
+           "Hazard", "CaseFindings", "find", "run_name", "settings_text"]
+
+# Three accuracies a user asks for, three decades apart: an engineering answer (1e-3),
+# a careful simulation (1e-6), and near what double precision can resolve over a horizon (1e-9).
+ACCURACY_TARGETS = (1e-3, 1e-6, 1e-9)
+# Energy lost or gained over the horizon beyond which a simulation is visibly not the physics
+# any more (a pendulum's amplitude, a top's spin, off by about the square root of it): 1%.
+ENERGY_HAZARD = 0.01
+# Two engines running the same integrator at the same step that differ in error by more than an
+# order of magnitude are not computing the same method (or not the same model).
+DISAGREEMENT_FACTOR = 10.0
+# Hazard kinds, in the order the report lists them.
+HAZARDS = ("diverged", "failed", "energy", "tolerance", "disagreement", "unsupported")
+ENERGY_LIKE = ("energy", "energy_balance")
+
+
+def settings_text(r):
+    """A run's settings as the report writes them: ``RunRecord.settings_label`` without an atol equal
+    to the rtol (the default matrix's choice, which would double every adaptive label)."""
+    if r.atol is not None and r.atol == r.rtol:
+        return " ".join(x for x in (r.integrator, f"rtol={r.rtol:g}", r.options_label) if x)
+    return r.settings_label
+
+
+def run_name(r):
+    """How a finding names a run: ``engine integrator dt=... options``."""
+    return f"{r.engine} {settings_text(r)}"
+
+
+@dataclass(frozen=True)
+class Reach:
+    """The cheapest run of an engine whose headline error is at most ``target`` (``point`` None: never)."""
+
+    target: float
+    point: object  # work_precision.Point or None
+
+
+@dataclass(frozen=True)
+class EngineSummary:
+    """One engine on one case."""
+
+    engine: str
+    runs: tuple  # every run of the engine on the case
+    reaches: tuple  # Reach per ACCURACY_TARGETS
+    best: object  # the Point of its most accurate finished run, or None
+    front: tuple  # its Pareto front (Points by increasing cost)
+
+
+@dataclass(frozen=True)
+class Hazard:
+    """A finding against one engine (``engine``) or between engines (``engine`` "").
+
+    ``text`` is one sentence (naming the runs when they are few, else what they share and the
+    worst); ``details`` one line per run it is about, naming it. Plain text: the renderer escapes.
+    """
+
+    kind: str  # one of HAZARDS
+    engine: str
+    runs: tuple  # the runs it is about
+    text: str
+    details: tuple = ()
+
+
+@dataclass(frozen=True)
+class CaseFindings:
+    """Everything found about one case (one case version)."""
+
+    case: object  # CaseRecord
+    runs: tuple
+    quantity: str | None  # the headline error
+    engines: tuple  # EngineSummary per engine, by name
+    hazards: tuple  # Hazard, in HAZARDS order
+    sentences: tuple  # the case's findings in prose
+
+    @property
+    def unit(self):
+        return QUANTITIES.get(self.quantity, "")
+
+    @property
+    def tolerance(self):
+        """The case's tolerance on its headline error, or None."""
+        tol = self.case.tolerances.get(self.quantity)
+        return tol.value if tol else None
+
+    def hazards_of(self, engine, kind=None):
+        return [h for h in self.hazards if h.engine == engine and (kind is None or h.kind == kind)]
+
+
+def find(store, records=None):
+    """The ``CaseFindings`` of every case version in ``store`` (``records``: its records, if read
+    already), by case name."""
+    groups = {}
+    for r in records if records is not None else store.records():
+        groups.setdefault((r.case, r.case_version), []).append(r)
+    return [_case_findings(store.case(name, version), runs) for (name, version), runs in sorted(groups.items())]
+
+
+def _case_findings(case, runs):
+    quantity = headline_quantity(runs)
+    engines = []
+    for engine in sorted({r.engine for r in runs}):
+        mine = tuple(r for r in runs if r.engine == engine)
+        pts = points(mine, quantity) if quantity else []
+        best = min(pts, key=lambda p: p.error) if pts else None
+        engines.append(EngineSummary(engine, mine, tuple(Reach(t, cheapest_reaching(pts, t)) for t in ACCURACY_TARGETS),
+                                     best, tuple(pareto_front(pts))))
+    hazards = []
+    for e in engines:
+        hazards += _diverged(e, case) + _failed(e) + _energy(e, case) + _beyond(e, case)
+    hazards += _disagreements(runs, quantity, case)
+    for e in engines:
+        hazards += _unsupported(e)
+    hazards.sort(key=lambda h: HAZARDS.index(h.kind))
+    found = CaseFindings(case, tuple(runs), quantity, tuple(engines), tuple(hazards), ())
+    return replace(found, sentences=tuple(_sentences(found)))  # the prose reads the rest
+
+
+# ---------------------------------------------------------------------------------------------- hazards
+def _list(items):
+    """'a', 'a and b', 'a, b and c'."""
+    items = list(items)
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def _runs_word(n):
+    return f"{n} run" + ("" if n == 1 else "s")
+
+
+def _verb(n, one, many):
+    return one if n == 1 else many
+
+
+def _by_sweep(runs):
+    return sorted(runs, key=lambda r: (r.integrator, r.options_label, sweep_key(r)))
+
+
+# A hazard sentence names its runs when they are at most this many; past it, what they share and
+# the worst, and the list of every run beside it.
+NAMED = 3
+
+
+def _shared(runs):
+    """What every one of ``runs`` has in common ("all rk44 with node=rxyz"), or ""."""
+    parts = []
+    for get, word in ((lambda r: r.integrator, ""), (lambda r: r.sweep_label, "at "),
+                      (lambda r: r.options_label, "with ")):
+        values = {get(r) for r in runs}
+        if len(values) == 1 and next(iter(values)):
+            parts.append(word + next(iter(values)))
+    return ("all " + " ".join(parts)) if parts and len(runs) > 1 else ""
+
+
+def _hazard(kind, e, runs, lead, line, worst=None, tail=""):
+    """A hazard of ``runs`` of engine summary ``e``: ``lead`` (what happened), then the runs named by
+    ``line(run)`` — every one when few, else what they share and the ``worst`` — then ``tail``."""
+    runs = tuple(runs)
+    if len(runs) <= NAMED:
+        text = f"{e.engine}: {lead}: {_list(map(line, runs))}."
+    else:
+        shared = _shared(runs)
+        text = f"{e.engine}: {lead}" + (f", {shared}" if shared else "")
+        text += f"; worst: {line(worst)}." if worst is not None else "."
+    return Hazard(kind, e.engine, runs, text + (f" {tail}" if tail else ""), tuple(map(line, runs)))
+
+
+def _diverged(e, case):
+    bad = _by_sweep(r for r in e.runs if r.verdict == "diverged")
+    if not bad:
+        return []
+    times = [r.t_diverged for r in bad if r.t_diverged is not None]
+
+    def line(r):
+        if r.t_diverged is not None:
+            return f"{settings_text(r)} at t = {r.t_diverged:.3g} s"
+        return f"{settings_text(r)} ({r.verdict_reason or r.message})"
+
+    when = (f" between t = {min(times):.3g} s and {max(times):.3g} s" if len(times) > 1 and len(bad) > NAMED else "")
+    return [_hazard("diverged", e, bad, f"{_runs_word(len(bad))} diverged{when} (horizon {case.t_final:g} s)",
+                    line, min(bad, key=lambda r: r.t_diverged if r.t_diverged is not None else math.inf))]
+
+
+def _failed(e):
+    bad = _by_sweep(r for r in e.runs if r.status in BAD_STATUSES and r.verdict != "diverged")
+    if not bad:
+        return []
+
+    def line(r):
+        return f"{settings_text(r)} ({r.status}: {r.message.splitlines()[0] if r.message else 'no message'})"
+
+    return [_hazard("failed", e, bad, f"{_runs_word(len(bad))} stopped early", line, bad[0])]
+
+
+def _energy_name(case):
+    return next((n for n in ENERGY_LIKE if n in case.conserved), None)
+
+
+def _energy(e, case):
+    name = _energy_name(case)
+    if name is None:
+        return []
+    bad = _by_sweep(r for r in e.runs if r.ok and r.verdict != "diverged" and r.drifts.get(name, 0.0) > ENERGY_HAZARD)
+    if not bad:
+        return []
+    what = "energy" if name == "energy" else "energy balance (energy less the work of the loads)"
+
+    def line(r):
+        rate = r.drift_rates.get(name, math.nan)
+        trend = "" if math.isnan(rate) else (f", losing {-100 * rate:.3g} %/s" if rate < 0
+                                              else f", gaining {100 * rate:.3g} %/s")
+        return f"{settings_text(r)} (up to {100 * r.drifts[name]:.3g} %{trend})"
+
+    return [_hazard("energy", e, bad, f"{_runs_word(len(bad))} {_verb(len(bad), 'changes', 'change')} the {what} by "
+                                      f"more than {100 * ENERGY_HAZARD:g} % over the {case.t_final:g} s horizon",
+                    line, max(bad, key=lambda r: r.drifts[name]))]
+
+
+def _beyond(e, case):
+    finished = [r for r in e.runs if r.ok and r.verdict != "diverged"]
+    bad = _by_sweep(r for r in finished if r.within_tolerance is False)
+    if not bad:
+        return []
+    counts = {}
+    for r in bad:
+        for name in r.beyond:
+            counts[name] = counts.get(name, 0) + 1
+    quiet = [r for r in bad if r.verdict == "stable"]
+    tail = ""
+    if quiet:
+        if len(quiet) == len(bad):
+            who = {1: "It keeps", 2: "Both keep"}.get(len(bad), f"All {len(bad)} keep")
+        elif len(quiet) <= NAMED:
+            who = f"{_list(settings_text(r) for r in quiet)} {_verb(len(quiet), 'keeps', 'keep')}"
+        else:
+            shared = _shared(quiet)
+            who = f"{len(quiet)} of them{' (' + shared + ')' if shared else ''} keep"
+        tail = (f"{who} every conserved quantity within its bound: only the comparison with the truth shows "
+                + _verb(len(quiet), "it.", "them."))
+    lead = (f"{len(bad)} of {len(finished)} finished runs stay finite but leave the case's tolerance ("
+            + ", ".join(f"{name} {n}" for name, n in sorted(counts.items(), key=lambda kv: -kv[1])) + ")")
+
+    def line(r):
+        return f"{settings_text(r)} (beyond {', '.join(r.beyond)})"
+
+    return [_hazard("tolerance", e, bad, lead, line, tail=tail)]
+
+
+def _representative(runs):
+    """An engine's run at one setting: its default variant (no options) if it ran one, else its
+    most accurate variant."""
+    plain = [r for r in runs if not r.options]
+    return plain[0] if plain else runs[0]
+
+
+def _disagreements(runs, quantity, case):
+    if quantity is None:
+        return []
+    unit = QUANTITIES[quantity]
+    tol = case.tolerances.get(quantity)
+    groups = {}
+    for r in runs:
+        if r.status != "unsupported":
+            groups.setdefault((r.integrator, r.dt, r.rtol, r.atol), {}).setdefault(r.engine, []).append(r)
+    out = []
+    for (integrator, dt, rtol, _), by_engine in sorted(groups.items(), key=lambda kv: (kv[0][0], kv[0][1] is None,
+                                                                                      -(kv[0][1] or kv[0][2] or 0))):
+        if len(by_engine) < 2:
+            continue
+        chosen = {e: _representative(sorted(rs, key=lambda r: (bool(r.options), _err(r, quantity))))
+                  for e, rs in sorted(by_engine.items())}
+        sample = next(iter(chosen.values()))
+        setting = " ".join([integrator, sample.sweep_label.replace("tol=", "rtol=")])
+        finite = {e: r for e, r in chosen.items() if r.ok and math.isfinite(r.max_error(quantity))}
+        within = [e for e, r in finite.items() if tol is None or r.max_error(quantity) <= tol.value]
+        broken = [e for e, r in chosen.items() if r.verdict in ("diverged", "failed", "timeout")]
+        if within and broken:
+            text = (f"at {setting}, {_list(within)} {'stays' if len(within) == 1 else 'stay'} within the "
+                    f"{quantity} tolerance while " + _list(f"{e} {chosen[e].verdict}" for e in broken) + ".")
+            out.append(Hazard("disagreement", "", tuple(chosen.values()), text))
+            continue
+        if len(finite) < 2:
+            continue
+        errs = {e: max(r.max_error(quantity), 1e-300) for e, r in finite.items()}
+        hi, lo = max(errs.values()), min(errs.values())
+        if hi / lo > DISAGREEMENT_FACTOR and (tol is None or hi > tol.value):
+            values = _list(f"{e} {errs[e]:.2e}" + (f" ({finite[e].options_label})" if finite[e].options else "")
+                           for e in sorted(errs, key=errs.get))
+            bound = f" (tolerance {tol.value:g} {unit})" if tol else ""
+            out.append(Hazard("disagreement", "", tuple(finite.values()),
+                              f"at {setting} the engines' {quantity} errors differ {hi / lo:.2g}-fold: {values} {unit}"
+                              f"{bound}."))
+    return out
+
+
+def _err(r, quantity):
+    e = r.max_error(quantity)
+    return e if math.isfinite(e) else math.inf
+
+
+def _unsupported(e):
+    by_reason = {}
+    for r in e.runs:
+        if r.status == "unsupported":
+            by_reason.setdefault(r.message, []).append(r)
+    out = []
+    for reason, rs in sorted(by_reason.items()):
+        options = {r.options_label for r in rs}
+        integrators = sorted({r.integrator for r in rs})
+        what = _list(integrators)
+        if len(options) == 1 and next(iter(options)):
+            what += f" with {next(iter(options))}"
+        elif len(options) > 1:
+            what = _list(sorted({" ".join(x for x in (r.integrator, r.options_label) if x) for r in rs}))
+        out.append(Hazard("unsupported", e.engine, tuple(_by_sweep(rs)), f"{e.engine} cannot run {what}: {reason}"))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- prose
+def _sentences(f):
+    if f.quantity is None:
+        return ["No run measured an error against the truth."]
+    unit = f.unit
+    tol = f.tolerance
+    out = [f"Headline error: {f.quantity} ({unit}), the max over the {f.case.t_final:g} s horizon"
+           + (f"; the case's tolerance is {tol:g} {unit}." if tol else ".")]
+    ranked = sorted((e for e in f.engines if e.best), key=lambda e: e.best.error)
+    if ranked:
+        top = ranked[0]
+        out.append(f"Most accurate: {top.engine}, {top.best.error:.2e} {unit} with {settings_text(top.best.run)}"
+                   + (f"; least: {ranked[-1].engine}, best {ranked[-1].best.error:.2e} {unit}." if len(ranked) > 1
+                      else "."))
+    for i, target in enumerate(ACCURACY_TARGETS):
+        reached = sorted((e for e in f.engines if e.reaches[i].point), key=lambda e: e.reaches[i].point.cost)
+        never = [e.engine for e in f.engines if e.best and not e.reaches[i].point]
+        if not reached:
+            out.append(f"No engine reaches {target:g} {unit}.")
+            continue
+        first = reached[0].reaches[i].point
+        text = f"Cheapest to {target:g} {unit}: {reached[0].engine} with {settings_text(first.run)} ({first.cost:.2g} s/s)"
+        if len(reached) > 1:
+            second = reached[1].reaches[i].point
+            text += f", {second.cost / first.cost:.2g}x cheaper than {reached[1].engine} ({second.cost:.2g} s/s)"
+        text += f"; never: {_list(never)}." if never else "."
+        out.append(text)
+    counts = {}
+    for h in f.hazards:
+        if h.kind != "unsupported":
+            counts[h.kind] = counts.get(h.kind, 0) + (len(h.runs) if h.kind != "disagreement" else 1)
+    words = {"diverged": "runs diverged", "failed": "runs stopped early",
+             "energy": f"runs change the energy by more than {100 * ENERGY_HAZARD:g} %",
+             "tolerance": "finished runs leave the tolerance", "disagreement": "settings where engines disagree"}
+    if counts.get("disagreement") == 1:
+        words["disagreement"] = "setting where engines disagree"
+    if counts:
+        out.append("Hazards: " + _list(f"{n} {words[k]}" for k, n in counts.items()) + " (listed below).")
+    else:
+        out.append("No run diverged, stopped early, drifted in energy beyond "
+                   f"{100 * ENERGY_HAZARD:g} % or left the tolerance.")
+    return out

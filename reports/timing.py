@@ -1,0 +1,50 @@
+"""Were a store's timings taken on a quiet machine? A warning from what the store recorded.
+
+The manifest holds the machine's cores, the pool size (``jobs``) and the
+1-minute load average at the matrix's start and end; each run's ``Cost`` the
+load average when it started and ended. A load above the core count means the
+stepping shared the cores with other work: its wall times are upper bounds,
+and costs compare only beyond the min–max spread of their repeats.
+"""
+
+from __future__ import annotations
+
+import math
+
+from dalembert.reports.findings import run_name
+
+__all__ = ["loaded_runs", "timing_note"]
+
+
+def _loads(r):
+    return [x for x in (r.cost.load_start, r.cost.load_end) if math.isfinite(x)]
+
+
+def loaded_runs(records, cores):
+    """The runs that started or ended with the 1-minute load average above ``cores``."""
+    return [r for r in records if any(x > cores for x in _loads(r))]
+
+
+def timing_note(manifest, records):
+    """A sentence warning that the machine was loaded while the runs were timed, or None."""
+    cores = (manifest.get("machine") or {}).get("cores")
+    if not cores:
+        return None
+    marks = [v[0] for v in ((manifest.get("load_average") or {}).get(k) for k in ("start", "end")) if v]
+    loaded = loaded_runs(records, cores)
+    peak = max(marks + [x for r in records for x in _loads(r)], default=0.0)
+    jobs = manifest.get("jobs") or 0
+    parts = []
+    if peak > cores:
+        parts.append(f"the 1-minute load average reached {peak:.3g} on {cores} cores")
+        if loaded:
+            timed = sum(1 for r in records if _loads(r))
+            names = ", ".join(f"{r.case} {run_name(r)}" for r in loaded[:3])
+            parts.append(f"{len(loaded)} of {timed} timed runs started or ended with the load above the cores "
+                         f"(e.g. {names})")
+    if jobs > cores:
+        parts.append(f"the matrix ran {jobs} runs at once on {cores} cores")
+    if not parts:
+        return None
+    return ("Timings shared the machine: " + "; ".join(parts) + ". Their costs are upper bounds: compare costs "
+            "only where the min–max spreads in the tables do not overlap.")

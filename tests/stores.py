@@ -1,0 +1,75 @@
+"""Small results stores for the report, findings, compare and export tests.
+
+``small_store`` runs a tiny real matrix (seconds). ``seed_store`` runs one real run and
+``add_run`` writes further records beside it, made from that run with some fields changed: a store
+that shows one hazard at a time, with the real case record, truth and trajectory behind it.
+"""
+
+import json
+import os
+from dataclasses import replace
+
+import numpy as np
+
+from dalembert.harness.execute import Timing
+from dalembert.harness.matrix import expand
+from dalembert.harness.pool import run_matrix
+from dalembert.record import RunRecord
+from dalembert.store import Store, trajectory_to_npz
+from dalembert.trajectory import BodyStates, Trajectory
+
+FAST = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
+
+
+def small_store(path, cases=("pivoted_rod", "free_top"), engines=("reference",), integrators=("rk4", "euler"),
+                dts=(1e-2, 5e-3), t_final=1.0, options=None):
+    specs, _ = expand(cases=list(cases), engines=list(engines), integrators=list(integrators), dts=list(dts),
+                      params={"t_final": t_final}, options=options)
+    store = Store(path).create({"harness_version": "test", "engines": {e: "test" for e in engines}, "specs": [],
+                                "machine": {"cores": 2, "cpu": "test", "host": "test", "os": "test",
+                                            "python": "test"}})
+    run_matrix(specs, store, jobs=2, timing=FAST)
+    return store
+
+
+def seed_store(path):
+    """One real run: the reference engine's rk4 at dt = 5e-3 on a 1 s free top."""
+    return small_store(path, cases=("free_top",), integrators=("rk4",), dts=(5e-3,))
+
+
+def base(store):
+    return store.records()[0]
+
+
+def add_run(store, key, nan_from=None, **changes):
+    """Write a record made from the store's first run with ``changes``; its trajectory is the first
+    run's, with NaN from ``nan_from`` (s) on when given (a divergence), none when ``status`` is not ok
+    and ``nan_from`` is None."""
+    first = base(store)
+    record = replace(first, key=key, trajectory="", **changes)
+    npz = None
+    if record.status == "ok" or nan_from is not None:
+        traj = store.trajectory(first.key)
+        if nan_from is not None:
+            bad = traj.t >= nan_from
+
+            def spoil(a):
+                a = a.copy()
+                a[bad] = np.nan
+                return a
+
+            traj = Trajectory(traj.t, {n: BodyStates(spoil(b.position), spoil(b.quaternion), spoil(b.velocity),
+                                                     spoil(b.angular_velocity)) for n, b in traj.bodies.items()})
+        npz = trajectory_to_npz(traj)
+    store.write_record(record, npz)
+    return record
+
+
+def tamper(store, change, index=0):
+    """Rewrite the ``index``-th stored run of ``store`` as ``change(record)`` returns it."""
+    key = sorted(store.done_keys())[index]
+    path = os.path.join(store.rows_dir, f"{key}.json")
+    with open(path) as fh:
+        record = RunRecord.from_row(json.load(fh))
+    with open(path, "w") as fh:
+        json.dump(change(record).to_row(), fh)

@@ -1,0 +1,166 @@
+"""The findings the report opens with: every hazard shown by a small store that has it, named in the
+report's text; the cheapest setting per accuracy; nothing constant in the summary; a loaded machine."""
+
+import math
+import os
+import shutil
+from dataclasses import replace
+
+import pytest
+
+from dalembert.reports.findings import ACCURACY_TARGETS, DISAGREEMENT_FACTOR, ENERGY_HAZARD, find
+from dalembert.reports.render import build_report
+from dalembert.reports.tables import escape_md
+from dalembert.store import Store
+from stores import add_run, base, seed_store, small_store, tamper
+
+
+@pytest.fixture(scope="module")
+def seed(tmp_path_factory):
+    return seed_store(tmp_path_factory.mktemp("seed"))
+
+
+@pytest.fixture
+def store(seed, tmp_path):
+    """A fresh copy of the one-run store for each test to add its runs to."""
+    shutil.copytree(seed.path, tmp_path / "s")
+    return Store.open(tmp_path / "s")
+
+
+def _hazards(store, kind):
+    (case,) = find(store)
+    return [h for h in case.hazards if h.kind == kind]
+
+
+def _reported(store, text):
+    """``text`` appears in the report built from ``store``: Markdown (escaped) and HTML."""
+    build_report(store)
+    md = open(os.path.join(store.path, "report.md")).read()
+    page = open(os.path.join(store.path, "report.html")).read()
+    return escape_md(text) in md and text.replace("&", "&amp;").replace("'", "&#x27;") in page
+
+
+def test_a_diverged_run_is_named_with_its_time(store):
+    add_run(store, "div", integrator="euler", dt=1e-2, status="diverged", t_diverged=0.4, verdict="diverged",
+            verdict_reason="non-finite state", message="non-finite state from t = 0.4 s", within_tolerance=None,
+            errors={q: (math.nan, math.nan) for q in base(store).errors}, nan_from=0.4)
+    (h,) = _hazards(store, "diverged")
+    assert h.engine == "reference" and "euler dt=0.01 at t = 0.4 s" in h.text
+    assert _reported(store, h.text)
+    assert 'id="fig-free_top-diverged"' in open(os.path.join(store.path, "report.html")).read()
+
+
+def test_a_run_that_stopped_early_is_named_with_its_message(store):
+    add_run(store, "failed", integrator="dop853", dt=None, rtol=1e-6, atol=1e-6, status="failed",
+            verdict="failed", message="RuntimeError: solver stopped at t = 0.3 s", within_tolerance=None)
+    (h,) = _hazards(store, "failed")
+    assert "dop853 rtol=1e-06 (failed: RuntimeError: solver stopped at t = 0.3 s)" in h.text
+    assert _reported(store, h.text)
+
+
+def test_energy_lost_beyond_one_percent_is_named(store):
+    first = base(store)
+    add_run(store, "lossy", integrator="euler", dt=1e-2, drifts={**first.drifts, "energy": 5 * ENERGY_HAZARD},
+            drift_rates={"energy": -0.05}, verdict="drifts")
+    add_run(store, "fine", integrator="euler", dt=5e-3, drifts={**first.drifts, "energy": ENERGY_HAZARD / 2},
+            drift_rates={"energy": -0.01}, verdict="drifts")
+    (h,) = _hazards(store, "energy")
+    assert [r.key for r in h.runs] == ["lossy"]
+    assert "euler dt=0.01 (up to 5 %, losing 5 %/s)" in h.text and "dt=0.005" not in h.text
+    assert _reported(store, h.text)
+
+
+def test_a_finite_run_beyond_the_tolerance_is_named_and_a_quiet_one_said_so(store):
+    first = base(store)
+    add_run(store, "off", integrator="rk4", dt=1e-2, errors={**first.errors, "orientation": (1e-4, 1e-4)},
+            within_tolerance=False, beyond=("orientation",), verdict="stable")
+    (h,) = _hazards(store, "tolerance")
+    assert "rk4 dt=0.01 (beyond orientation)" in h.text
+    assert "only the comparison with the truth shows it" in h.text  # its conserved quantities held
+    assert _reported(store, h.text)
+
+
+def test_engines_that_disagree_at_one_setting_are_named(store):
+    first = base(store)
+    tol = store.case(first.case, first.case_version).tolerances["orientation"].value
+    add_run(store, "alpha", engine="alpha", errors={**first.errors, "orientation": (tol / 100, tol / 100)})
+    far = tol * DISAGREEMENT_FACTOR * 10
+    add_run(store, "beta", engine="beta", errors={**first.errors, "orientation": (far, far)},
+            within_tolerance=False, beyond=("orientation",))
+    (h,) = _hazards(store, "disagreement")
+    assert h.engine == "" and {r.engine for r in h.runs} == {"alpha", "beta", "reference"}
+    assert "at rk4 dt=0.005" in h.text and f"beta {far:.2e}" in h.text and f"alpha {tol / 100:.2e}" in h.text
+    assert _reported(store, h.text)
+
+
+def test_one_engine_within_tolerance_and_another_diverged_disagree(store):
+    add_run(store, "gamma", engine="gamma", status="diverged", verdict="diverged", t_diverged=0.2,
+            errors={q: (math.nan, math.nan) for q in base(store).errors}, within_tolerance=None)
+    (h,) = _hazards(store, "disagreement")
+    assert "at rk4 dt=0.005, reference stays within the orientation tolerance while gamma diverged" in h.text
+
+
+def test_an_unsupported_integrator_is_listed_once_with_its_reason(store):
+    for key, rtol in (("u1", 1e-6), ("u2", 1e-9)):
+        add_run(store, key, integrator="dop853", dt=None, rtol=rtol, atol=rtol, status="unsupported",
+                verdict="unsupported", message="reference adapter cannot represent load:magic",
+                within_tolerance=None)
+    (h,) = _hazards(store, "unsupported")
+    assert h.text == "reference cannot run dop853: reference adapter cannot represent load:magic"
+    assert _reported(store, h.text)
+    md = open(os.path.join(store.path, "report.md")).read()
+    assert md.count("cannot represent load:magic") == 1  # not once per run, not in the stability figure
+
+
+def test_the_cheapest_run_reaching_each_accuracy_is_a_stored_run(store):
+    first = base(store)
+    add_run(store, "cheap", integrator="euler", dt=1e-2, errors={**first.errors, "orientation": (2e-4, 2e-4)},
+            cost=replace(first.cost, wall_s_median=first.cost.wall_s_median / 10))
+    (case,) = find(store)
+    (engine,) = case.engines
+    reach = {r.target: r.point for r in engine.reaches}
+    assert reach[ACCURACY_TARGETS[0]].run.key == "cheap"  # 2e-4 reaches 1e-3, and it is the cheapest
+    assert reach[ACCURACY_TARGETS[1]].run.key == first.key
+    assert reach[ACCURACY_TARGETS[1]].cost == first.cost.wall_s_median / first.t_final
+    if first.max_error("orientation") > ACCURACY_TARGETS[2]:
+        assert reach[ACCURACY_TARGETS[2]] is None and "never" in open(_summary_md(store)).read()
+
+
+def _summary_md(store):
+    build_report(store)
+    return os.path.join(store.path, "report.md")
+
+
+def test_nothing_in_the_summary_is_constant_across_its_rows(tmp_path):
+    """Two engines, no hazard of some kinds: those columns leave the table for one sentence."""
+    store = small_store(tmp_path / "s", cases=("free_top",), engines=("reference",), integrators=("rk4", "rkmk4"),
+                        dts=(1e-2, 5e-3))
+    add_run(store, "other", engine="other")
+    md = open(_summary_md(store)).read()
+    summary = md.split("## Findings")[1].split("## Hazards")[0]
+    header = next(line for line in summary.splitlines() if line.startswith("| engine"))
+    cells = [c.strip() for c in header.strip("|").split("|")]
+    assert "diverged" not in cells and "case" not in cells  # the same in both rows
+    assert "In every row: case free\\_top" in summary or "In every row: case free_top" in summary
+    rows = [line for line in summary.splitlines() if line.startswith("| ") and not line.startswith("| engine")]
+    for j in range(len(cells)):
+        assert len({r.strip("|").split("|")[j] for r in rows}) > 1, cells[j]
+
+
+def test_a_loaded_machine_is_warned_about(store):
+    quiet = replace(base(store).cost, load_start=0.5, load_end=0.5)  # whatever the machine had when it ran
+    tamper(store, lambda r: replace(r, cost=quiet))
+    add_run(store, "busy", integrator="euler", dt=1e-2, cost=replace(quiet, load_start=3.5))
+    md = open(_summary_md(store)).read()
+    assert "Timings shared the machine: the 1-minute load average reached 3.5 on 2 cores" in md
+    assert "free_top reference euler dt=0.01" in md.split("Timings shared the machine")[1].split("\n")[0]
+
+
+def test_stored_strings_are_escaped(store):
+    add_run(store, "evil", integrator="euler", dt=1e-2, status="failed", verdict="failed",
+            message="<script>alert(1)</script> | *boom*", within_tolerance=None)
+    build_report(store)
+    page = open(os.path.join(store.path, "report.html")).read()
+    md = open(os.path.join(store.path, "report.md")).read()
+    assert "<script>alert" not in page and "&lt;script&gt;alert(1)&lt;/script&gt;" in page
+    assert "\\<script\\>alert(1)\\</script\\> \\| \\*boom\\*" in md
