@@ -32,12 +32,12 @@ from __future__ import annotations
 
 import os
 
-from dalembert.harness.cli import _load_average, _new_store, _timestamped
+from dalembert.harness import session
 from dalembert.harness.execute import Timing
 from dalembert.harness.matrix import expand
 from dalembert.harness.pool import DEFAULT_TIMEOUT_S, run_matrix
 from dalembert.record import READABLE_SCHEMAS, SCHEMA_VERSION
-from dalembert.store import Store, harness_commit, machine_info, now
+from dalembert.store import Store
 
 __all__ = ["run", "load", "table", "findings", "report", "compare", "trajectories"]
 
@@ -68,27 +68,16 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     Raises ValueError (or KeyError with a "did you mean") on an unknown name or a bad setting,
     before anything runs; a run that fails, diverges or times out is a row, not an exception.
     """
-    import dalembert
-    from dalembert.adapters import get_adapter
-
     specs, _ = expand(cases, tags, engines, integrators, dts, rtols, params, options)
     timing = timing or Timing()
     given = {k: v for k, v in dict(cases=cases, tags=tags, engines=engines, integrators=integrators, dts=dts,
                                    rtols=rtols, params=params, options=options).items() if v}
-    manifest = {
-        "harness_version": dalembert.__version__, "harness_commit": harness_commit(), "machine": machine_info(),
-        "engines": {e: get_adapter(e).version() for e in sorted({s.engine for s in specs})},
-        "command": "dalembert.harness.api.run(" + ", ".join(f"{k}={v!r}" for k, v in given.items()) + ")",
-        "started": now(), "ended": None, "timeout_s": timeout, "timing": vars(timing),
-        "jobs": jobs or os.cpu_count(), "scheduler": None, "load_average": {"start": _load_average(), "end": None},
-        "specs": [s.to_json() for s in specs],
-    }
-    store = _new_store(out or _timestamped(), manifest)
-    run_matrix(specs, store, jobs, timeout, timing, progress)
-    manifest = store.manifest()
-    manifest["ended"] = now()
-    manifest["load_average"]["end"] = _load_average()
-    store.write_manifest(manifest)
+    command = "dalembert.harness.api.run(" + ", ".join(f"{k}={v!r}" for k, v in given.items()) + ")"
+    store, lock = session.start(out or session.default_out(), session.manifest(specs, command, timeout, timing,
+                                                                               jobs or os.cpu_count()))
+    with lock:
+        run_matrix(specs, store, jobs, timeout, timing, progress)
+        session.end(store)
     df = store.table()
     df.attrs["store"] = store.path
     return df

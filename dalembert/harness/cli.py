@@ -11,6 +11,7 @@ import math
 import os
 import sys
 
+from dalembert.harness import session
 from dalembert.record import BAD_STATUSES
 from dalembert.registry import UnknownNameError
 from dalembert.scene import SceneError
@@ -200,7 +201,8 @@ def cmd_validate(args):
     if args.jobs is not None and args.jobs < 1:
         raise ValueError(f"--jobs: must be at least 1, got {args.jobs}")
     validation_specs(args.case)  # unknown names and bad settings fail here, before anything runs
-    store, lock = _new_store(args.out or _timestamped("validation"), {"command": _command_line(), "specs": []})
+    store, lock = session.start(args.out or session.default_out("validation"),
+                                {"command": _command_line(), "specs": []})
     with lock:
         records = validate(store, args.case, args.jobs, _progress_printer())
         md = to_markdown(store)
@@ -259,40 +261,6 @@ def _command_line():
     import shlex
 
     return shlex.join(["dalembert"] + sys.argv[1:])
-
-
-def _timestamped(prefix=""):
-    from datetime import datetime
-
-    return os.path.join("results", prefix + ("-" if prefix else "") + datetime.now().strftime("%Y-%m-%dT%H-%M-%S"))
-
-
-def _load_average():
-    """The machine's 1, 5 and 15-minute load averages (None where the OS has none)."""
-    try:
-        return list(os.getloadavg())
-    except OSError:
-        return None
-
-
-def _new_store(out, manifest):
-    """A new store at ``out`` (created) and its one-writer lock, taken before the check that no
-    run is there yet (two runs into one ``--out`` cannot both pass it); ValueError naming ``--out``
-    when it cannot be."""
-    from dalembert.store import Store
-
-    try:
-        os.makedirs(out, exist_ok=True)
-    except OSError as err:
-        raise ValueError(f"--out: cannot create {out!r}: {err.strerror}") from None
-    if not os.access(out, os.W_OK):
-        raise ValueError(f"--out: cannot write to {out!r}")
-    store = Store(out)
-    lock = store.writer(manifest.get("command", ""))
-    if store.exists():
-        lock.release()
-        raise ValueError(f"--out: {out!r} already holds a run — use --resume {out} or another directory")
-    return store.create(manifest), lock
 
 
 def _resumable(path):
@@ -392,7 +360,7 @@ def cmd_run(args):
     from dalembert.harness.execute import Timing
     from dalembert.harness.pool import DEFAULT_TIMEOUT_S, run_matrix
     from dalembert.harness.selection import select
-    from dalembert.store import Store, harness_commit, machine_info, now
+    from dalembert.store import Store
 
     timing = Timing()
     if args.resume:
@@ -422,21 +390,11 @@ def cmd_run(args):
         for s in chosen.skipped:
             print(f"dalembert: skipping engine {s}", file=sys.stderr)
         client = _connect(args.scheduler, args.debug) if args.scheduler else None
-        from dalembert.adapters import get_adapter
-        import dalembert
-
-        manifest = {
-            "harness_version": dalembert.__version__, "harness_commit": harness_commit(),
-            "machine": machine_info(),
-            "engines": {e: get_adapter(e).version() for e in sorted({s.engine for s in specs})},
-            "command": _command_line(), "started": now(), "ended": None, "timeout_s": timeout,
-            "timing": vars(timing), "jobs": jobs, "scheduler": args.scheduler,
-            "load_average": {"start": _load_average(), "end": None}, "specs": [s.to_json() for s in specs],
-        }
+        manifest = session.manifest(specs, _command_line(), timeout, timing, jobs, args.scheduler)
         if chosen.search:
             manifest["search"] = {"parameter": "dt", "resolution": chosen.resolution,
                                   "first": [s.to_json() for s in specs]}
-        store, lock = _new_store(args.out or _timestamped(), manifest)
+        store, lock = session.start(args.out or session.default_out(), manifest)
     with lock:
         if lock.stale:
             print(f"dalembert: note: the last writer of {store.path} ended without releasing it ({lock.stale}); "
@@ -464,10 +422,7 @@ def cmd_run(args):
         finally:
             if client is not None:
                 client.close()
-        manifest = store.manifest()
-        manifest["ended"] = now()
-        manifest.setdefault("load_average", {})["end"] = _load_average()
-        store.write_manifest(manifest)
+        session.end(store)
         records = store.records()
     by_status = {}
     for r in records:
