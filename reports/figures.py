@@ -23,7 +23,7 @@ plt.rcParams.update({"svg.fonttype": "none", "font.size": 9, "axes.grid": True, 
                      "legend.fontsize": 7, "axes.titlesize": 10})
 
 __all__ = ["engine_colours", "pareto_summary", "work_precision", "stability", "time_grid", "diverged_runs",
-           "MAX_POINTS"]
+           "stability_map", "map_costs", "MAX_POINTS"]
 
 MAX_POINTS = 400  # per time-series line: figures stay small; the data stay in the store
 PANEL_W, PANEL_H = 3.3, 2.8  # inches per small-multiple panel: four fit across the page
@@ -310,4 +310,83 @@ def diverged_runs(panels, ylabel):
         ax.set_xlabel("t (s)")
         ax.set_ylabel(ylabel)
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    return _svg(fig)
+
+
+# ---------------------------------------------------------------------------------------------- stability maps
+def _bracket_point(ax, x, bracket, scale, colour, filled, offset):
+    """One boundary at ``x``: a marker at the largest passing step, a bar up to the smallest failing
+    one; a triangle where the boundary lies beyond the probes (up: passes at every probe)."""
+    face = colour if filled else "white"
+    if bracket.passed is not None and bracket.failed is not None:
+        ax.plot([x * offset] * 2, [bracket.passed * scale, bracket.failed * scale], color=colour, lw=1, alpha=0.6)
+        ax.plot(x * offset, bracket.passed * scale, "o", color=colour, mfc=face, ms=4.5)
+        return bracket.passed * scale
+    if bracket.passed is not None:
+        ax.plot(x * offset, bracket.passed * scale, "^", color=colour, mfc=face, ms=6)
+        return bracket.passed * scale
+    if bracket.failed is not None:
+        ax.plot(x * offset, bracket.failed * scale, "v", color=colour, mfc=face, ms=6)
+    return None
+
+
+def stability_map(panels, xlabel, ylabel, rate):
+    """A panel per engine: for each integrator (colour) the stable boundary (filled markers, solid
+    line) and the finite boundary (hollow markers, dashed) against the swept parameter, log-log.
+
+    Parameters
+    ----------
+    panels : list of dict — ``title`` and ``lines`` {integrator label: [(value, Boundary), ...]}
+    xlabel, ylabel : str
+    rate : bool — plot parameter x step (dimensionless) instead of the step
+    """
+    labels = sorted({label for p in panels for label in p["lines"]})
+    colour = {label: INTEGRATOR_PALETTE[i % len(INTEGRATOR_PALETTE)] for i, label in enumerate(labels)}
+    fig, axes = _grid(len(panels))
+    for ax, p in zip(axes, panels):
+        for label, points in sorted(p["lines"].items()):
+            for filled, side, ls, offset in ((True, "stable", "-", 0.97), (False, "finite", "--", 1.03)):
+                xs, ys = [], []
+                for value, b in points:
+                    y = _bracket_point(ax, value, getattr(b, side), value if rate else 1.0, colour[label], filled,
+                                       offset)
+                    if y is not None:
+                        xs.append(value * offset)
+                        ys.append(y)
+                if len(xs) > 1:
+                    ax.plot(xs, ys, ls, color=colour[label], lw=1.2)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(p["title"])
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+    handles = [Line2D([], [], color=colour[label], lw=2) for label in labels]
+    handles += [Line2D([], [], color="k", ls="-", marker="o", ms=4.5),
+                Line2D([], [], color="k", ls="--", marker="o", mfc="white", ms=4.5),
+                Line2D([], [], color="k", ls="", marker="^", ms=6), Line2D([], [], color="k", ls="", marker="v", ms=6)]
+    names = labels + ["stable up to", "finite up to", "beyond the largest step probed", "below the smallest"]
+    fig.legend(handles, names, loc="upper center", ncol=min(len(names), 6), bbox_to_anchor=(0.5, 1.0), frameon=False)
+    fig.tight_layout(rect=(0, 0, 1, 0.9 if len(names) > 6 else 0.93))
+    return _svg(fig)
+
+
+def map_costs(panels, xlabel, ylabel):
+    """A panel per engine: the cost of reaching the target accuracy against the swept parameter,
+    a line per integrator (values that never reach it are left out)."""
+    labels = sorted({label for p in panels for label in p["lines"]})
+    colour = {label: INTEGRATOR_PALETTE[i % len(INTEGRATOR_PALETTE)] for i, label in enumerate(labels)}
+    fig, axes = _grid(len(panels))
+    for ax, p in zip(axes, panels):
+        for label, points in sorted(p["lines"].items()):
+            reached = [(x, c) for x, c in points if c is not None]
+            if reached:
+                ax.plot(*zip(*reached), "o-", color=colour[label], ms=4, lw=1.2, label=label)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(p["title"])
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+    fig.legend([Line2D([], [], color=colour[label], lw=2) for label in labels], labels, loc="upper center",
+               ncol=min(len(labels), 6), bbox_to_anchor=(0.5, 1.0), frameon=False)
+    fig.tight_layout(rect=(0, 0, 1, 0.93))
     return _svg(fig)

@@ -23,6 +23,7 @@ import pandas as pd
 from dalembert.errors import QUANTITIES
 from dalembert.invariants import CONSERVED
 from dalembert.reports import figures, time_series
+from dalembert.reports.maps import COST_TARGET, stability_maps
 from dalembert.reports.findings import (ACCURACY_TARGETS, DISAGREEMENT_FACTOR, ENERGY_HAZARD, ENERGY_LIKE, HAZARDS,
                                          NAMED, find, run_name, settings_text)
 from dalembert.reports.tables import MISSING, SORT_SCRIPT, Cell, Table, escape_html, escape_md, num
@@ -404,6 +405,60 @@ def _engines_simulated(doc, f):
             doc.details(f"{e.engine}: generated model", r.model)
 
 
+# ---------------------------------------------------------------------------------------------- maps
+# A case swept over more versions than this shows its stability map and summary rows, not a full
+# section per version (a map of ten spins would otherwise be ten copies of every figure).
+DETAILED_VERSIONS = 4
+
+
+def _range(values, fmt="{:.3g}"):
+    lo, hi = min(values), max(values)
+    return fmt.format(lo) if lo == hi else f"{fmt.format(lo)}–{fmt.format(hi)}"
+
+
+def _maps(doc, store, records):
+    """A stability map per swept case: boundaries against the swept parameter, per engine."""
+    units = {}
+    for r in records:
+        units.setdefault(r.case, getattr(store.case(r.case, r.case_version), "units", {}) or {})
+    found = stability_maps(records, lambda name: units.get(name, {}))
+    if not found:
+        return
+    doc.heading("Stability maps", 2, anchor="maps")
+    for m in found:
+        what = f"{m.parameter} x dt" if m.rate else "dt (s)"
+        unit = f" ({m.unit})" if m.unit else ""
+        values = sorted({v for points in m.curves.values() for v, _ in points})
+        doc.heading(f"{m.case} against {m.parameter}", 3, anchor=f"map-{m.case}")
+        lines = []
+        for (engine, label), points in sorted(m.curves.items()):
+            stable = [b.stable.passed * (v if m.rate else 1.0) for v, b in points if b.stable.passed is not None]
+            finite = [b.finite.passed * (v if m.rate else 1.0) for v, b in points if b.finite.passed is not None]
+            never = [v for v, b in points if b.stable.passed is None]
+            lines.append(f"{engine} {label}: stable up to {what} = {_range(stable) if stable else 'none probed'}, "
+                         f"finite up to {_range(finite) if finite else 'none probed'}"
+                         + (f"; never stable at {m.parameter} = {', '.join(f'{v:g}' for v in never)}" if never else ""))
+        doc.para(f"{m.case} swept over {m.parameter}{unit} = {', '.join(f'{v:g}' for v in values)}. Per engine and "
+                 "integrator, the largest step probed that stays stable (every conserved quantity within the case's "
+                 f"bound) and that stays finite, as {what}"
+                 + (", the angle turned per step for a spin rate" if m.rate else "") + ":")
+        doc.items(lines)
+        panels = [dict(title=engine, lines={label: pts for (e, label), pts in m.curves.items() if e == engine})
+                  for engine in sorted({e for e, _ in m.curves})]
+        doc.figure(figures.stability_map(panels, f"{m.parameter}{unit}", what, m.rate),
+                   f"{m.case}: per engine, the largest stable step (filled, solid) and the largest finite one "
+                   f"(hollow, dashed) against {m.parameter}; a bar spans the bracket up to the smallest failing step "
+                   "probed.", f"{m.case}-map")
+        cost_panels = [dict(title=engine, lines={label: pts for (e, label), pts in m.costs.items() if e == engine})
+                       for engine in sorted({e for e, _ in m.costs})]
+        if any(c is not None for p in cost_panels for pts in p["lines"].values() for _, c in pts):
+            doc.figure(figures.map_costs(cost_panels, f"{m.parameter}{unit}",
+                                         f"cost of {COST_TARGET:g} {m.quantity} (s/s)"),
+                       f"{m.case}: stepping time per simulated second of the cheapest run reaching {COST_TARGET:g} "
+                       f"of the {m.quantity} error, against {m.parameter} (values never reaching it left out).",
+                       f"{m.case}-map-cost")
+
+
 # ---------------------------------------------------------------------------------------------- page
 CSS = """body{font-family:system-ui,sans-serif;margin:1.5em auto;max-width:1320px;padding:0 12px;color:#222;
 font-size:14px;line-height:1.4}h2{border-bottom:1px solid #ddd;padding-bottom:2px;margin-top:1.8em}
@@ -477,8 +532,15 @@ def build_report(store, out_dir=None):
                                       + [(_section_id(f), titles[f]) for f in found]) + "</nav>")
     summary_rows = _findings(doc, found, titles, colours)
     _hazards(doc, found, titles)
+    _maps(doc, store, records)
     for f in found:
         name = f"{f.case.name}-{f.case.version}" if names.count(f.case.name) > 1 else f.case.name
+        if names.count(f.case.name) > DETAILED_VERSIONS:
+            if f is next(g for g in found if g.case.name == f.case.name):
+                doc.heading(f.case.name, 2, anchor=_section_id(f))
+                doc.para(f"{names.count(f.case.name)} versions of {f.case.name} (a sweep): its stability map and its "
+                         "rows in the summary above stand for them; every run is in the store (dalembert export --all).")
+            continue
         _case_header(doc, f, titles[f])
         if f.quantity:
             _work_precision(doc, f, name)

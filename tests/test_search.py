@@ -57,3 +57,23 @@ def test_the_search_bisects_to_the_resolution(tmp_path):
     (b,) = boundaries(Store(out).records())
     assert b.stable.ratio <= 1.5 and b.finite.ratio <= 1.5 and b.stable.monotone and b.finite.monotone
     assert b.stable.passed <= b.finite.passed and b.probes == len(Store(out).records())
+
+
+def test_the_report_maps_the_stored_boundaries(tmp_path):
+    """A sweep over spin with a step search: the report's stability map states, per curve, the
+    largest stable and finite steps the store holds (read back from the records)."""
+    from dalembert.boundary import boundaries
+
+    out = tmp_path / "r"
+    assert main(["run", "--case", "free_top_fast_spin", "--param", "spin=50,500", "--param", "t_final=0.5",
+                 "--param", "sample_interval=0.1", "--engine", "reference", "--integrator", "rk4", "--search", "dt",
+                 "--dt", "1e-3,1e-1", "--resolution", "2", "--out", str(out)]) == 0
+    assert main(["report", str(out)]) == 0
+    md = (out / "report.md").read_text()
+    assert "## Stability maps" in md and "against spin" in md
+    found = boundaries(Store(out).records())
+    scale = (lambda b: b.params["spin"]) if "spin x dt" in md else (lambda b: 1.0)
+    stable = [b.stable.passed * scale(b) for b in found if b.stable.passed is not None]
+    assert stable  # the resolution-2 search at these spins brackets both
+    line = next(x for x in md.splitlines() if x.startswith("- reference rk4"))
+    assert f"{min(stable):.3g}" in line and f"{max(stable):.3g}" in line
