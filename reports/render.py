@@ -406,8 +406,9 @@ def _engines_simulated(doc, f):
 
 
 # ---------------------------------------------------------------------------------------------- maps
-# A case swept over more versions than this shows its stability map and summary rows, not a full
-# section per version (a map of ten spins would otherwise be ten copies of every figure).
+# A case swept over more versions than this shows its summary rows, not a full section per version
+# (ten spins would otherwise be ten copies of every figure); a case with a stability map shows the
+# map instead of its versions' sections, however few (their probes would fill the grids).
 DETAILED_VERSIONS = 4
 
 
@@ -423,7 +424,7 @@ def _maps(doc, store, records):
         units.setdefault(r.case, getattr(store.case(r.case, r.case_version), "units", {}) or {})
     found = stability_maps(records, lambda name: units.get(name, {}))
     if not found:
-        return
+        return set()
     doc.heading("Stability maps", 2, anchor="maps")
     for m in found:
         what = f"{m.parameter} x dt" if m.rate else "dt (s)"
@@ -457,6 +458,7 @@ def _maps(doc, store, records):
                        f"{m.case}: stepping time per simulated second of the cheapest run reaching {COST_TARGET:g} "
                        f"of the {m.quantity} error, against {m.parameter} (values never reaching it left out).",
                        f"{m.case}-map-cost")
+    return {m.case for m in found}
 
 
 # ---------------------------------------------------------------------------------------------- page
@@ -532,14 +534,15 @@ def build_report(store, out_dir=None):
                                       + [(_section_id(f), titles[f]) for f in found]) + "</nav>")
     summary_rows = _findings(doc, found, titles, colours)
     _hazards(doc, found, titles)
-    _maps(doc, store, records)
+    mapped = _maps(doc, store, records)
     for f in found:
         name = f"{f.case.name}-{f.case.version}" if names.count(f.case.name) > 1 else f.case.name
-        if names.count(f.case.name) > DETAILED_VERSIONS:
+        if f.case.name in mapped or names.count(f.case.name) > DETAILED_VERSIONS:
             if f is next(g for g in found if g.case.name == f.case.name):
                 doc.heading(f.case.name, 2, anchor=_section_id(f))
-                doc.para(f"{names.count(f.case.name)} versions of {f.case.name} (a sweep): its stability map and its "
-                         "rows in the summary above stand for them; every run is in the store (dalembert export --all).")
+                doc.para(f"{names.count(f.case.name)} version(s) of {f.case.name}: "
+                         + ("its stability map" if f.case.name in mapped else "a sweep: its rows in the summary")
+                         + " above stand(s) for them; every run is in the store (dalembert export --all).")
             continue
         _case_header(doc, f, titles[f])
         if f.quantity:
