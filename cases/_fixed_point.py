@@ -45,22 +45,32 @@ def pivoted_truth(body, c_B, gravity, t, R_WB, w_B):
                       {f"reaction_force:{body.name}": body.mass * (a_W - g)})
 
 
-def vertical_momentum(gravity, L0, tolerance):
+def swing_scales(body, c_B, gravity):
+    """The angular momentum (kg m^2/s) and rate (rad/s) a swing under gravity reaches: ``sqrt(I m g l)`` and
+    ``sqrt(m g l / I)``, with ``I`` the largest moment about the pivot and ``l = |c|``: the scales of the
+    invariants of a top that starts at rest."""
+    I = float(np.max(np.linalg.eigvalsh(inertia_about_pivot(body, c_B))))
+    mgl = body.mass * float(np.linalg.norm(gravity)) * float(np.linalg.norm(c_B))
+    return np.sqrt(I * mgl), np.sqrt(mgl / I)
+
+
+def vertical_momentum(gravity, L0, tolerance, floor):
     """The declared invariant: angular momentum about the pivot along the vertical (gravity's moment
-    about the pivot is horizontal), its drift relative to ``|L0|`` (kg m^2/s), the whole initial
-    angular momentum about the pivot."""
+    about the pivot is horizontal), its drift relative to the larger of ``|L0|`` (kg m^2/s), the whole
+    initial angular momentum about the pivot, and ``floor`` (``swing_scales``)."""
     up = -np.asarray(gravity, dtype=float) / np.linalg.norm(gravity)
     return Invariant("vertical_angular_momentum", "angular momentum about the pivot, component along the "
-                     "upward vertical (world)", "kg m^2/s", float(np.linalg.norm(L0)), tolerance,
+                     "upward vertical (world)", "kg m^2/s", max(float(np.linalg.norm(L0)), floor), tolerance,
                      lambda scene, traj: invariants.angular_momentum_about(scene, traj, PIVOT) @ up)
 
 
-def body_spin(body_name, axis_B, w0_B, tolerance, name="spin", what="symmetry axis"):
-    """The declared invariant: the angular velocity's component along the body axis ``axis_B`` (unit),
-    its drift relative to the initial angular speed (rad/s)."""
+def body_spin(body_name, axis_B, w0_B, tolerance, floor):
+    """The declared invariant ``spin``: the angular velocity's component along the body's symmetry axis
+    ``axis_B`` (unit, body axes), its drift relative to the larger of the initial angular speed and
+    ``floor`` (rad/s, ``swing_scales``)."""
     a = np.asarray(axis_B, dtype=float)
-    return Invariant(name, f"angular velocity about the body's {what} (body axes)", "rad/s",
-                     float(np.linalg.norm(w0_B)), tolerance,
+    return Invariant("spin", "angular velocity about the body's symmetry axis (body axes)", "rad/s",
+                     max(float(np.linalg.norm(w0_B)), floor), tolerance,
                      lambda scene, traj: traj.bodies[body_name].angular_velocity_body @ a)
 
 

@@ -6,7 +6,7 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.case import Case, Invariant, Tolerance, case
-from dalembert.cases._fixed_point import inertia_about_pivot, pivoted_scene, vertical_momentum
+from dalembert.cases._fixed_point import inertia_about_pivot, pivoted_scene, swing_scales, vertical_momentum
 from dalembert.cases._sampling import sample_times
 from dalembert.scene import Body, SceneError
 
@@ -74,7 +74,7 @@ def kovalevskaya_top(mass=1.0, moment=1.0, com_offset=0.5, gravity=9.81, tilt=0.
 
     k_scale = float(w0 @ w0 + eps) ** 2
     invariants = (
-        vertical_momentum(g, inertia_about_pivot(body, c_B) @ w0, STABILITY_INTEGRAL),
+        vertical_momentum(g, inertia_about_pivot(body, c_B) @ w0, STABILITY_INTEGRAL, swing_scales(body, c_B, g)[0]),
         Invariant("vertical_norm", "length of the upward vertical in the body frame, R^T e_z, from the attitude as "
                   "stored (1 while it stays a rotation)", "1", 1.0, STABILITY_INTEGRAL,
                   lambda scene, traj: np.linalg.norm(gamma(traj), axis=1)),
