@@ -38,9 +38,19 @@ from dalembert.registry import Registry, suggest
 from dalembert.scene import Scene, SceneError
 
 __all__ = ["Tolerance", "Invariant", "InvariantLabel", "Case", "CaseRecord", "CaseFactory", "case", "make_case",
-           "load_cases", "CASES", "parse_param"]
+           "load_cases", "CASES", "parse_param", "OUT_OF_DEFAULT", "in_default_matrix"]
 
 CASES = Registry("case")
+# Tags that keep a case out of the default matrix (``dalembert run`` with no selection, ``dalembert
+# validate``): ``hard`` (long, fast, chaotic: run them with ``--tag hard``) and ``variant`` (presets
+# and variants of a canonical case, e.g. a published benchmark's set-up: run them by name or with
+# ``--tag variant``).
+OUT_OF_DEFAULT = ("hard", "variant")
+
+
+def in_default_matrix(factory):
+    """Whether the case family ``factory`` (a ``CaseFactory``) runs in the default matrix."""
+    return not set(OUT_OF_DEFAULT) & set(factory.tags)
 
 
 @dataclass(frozen=True)

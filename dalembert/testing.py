@@ -96,7 +96,8 @@ def check_truth_starts_at_initial_state(case, truth):
                 _fail(case.name, f"the truth's {what} of {name!r} at t = 0 is {got}, the scene's initial state {want}")
         angle = spatial.rotation_angle(b.quaternion[0], spatial.matrix_to_quat(s["R"]))
         if angle > INITIAL_STATE_TOL:
-            _fail(case.name, f"the truth's attitude of {name!r} at t = 0 is {angle:.3g} rad off the scene's initial one")
+            _fail(case.name, f"the truth's attitude of {name!r} at t = 0 is {angle:.3g} rad off the scene's "
+                             "initial one")
     for j in case.scene.joints:
         if j.name in truth.joints and j.kind != "ball":  # (a ball's quaternion may come out as -q0)
             if not np.allclose(truth.joints[j.name].q[0], j.q0, rtol=0.0, atol=INITIAL_STATE_TOL):

@@ -72,4 +72,5 @@ if __name__ == "__main__":
                 start, end, miss = reaction(node, tilt, solver)
                 print(f"{solver.name:18s} tilt {tilt:4.2f} rad  {node.name:25s}  F_x(0) = {start[0]:.15g}  "
                       f"relative error {start[0] / EXACT - 1:+.3e}   (1 - sin(tilt)/tilt = "
-                      f"{1 - (np.sin(tilt) / tilt if tilt else 1):.3e});  |F|(0.01 s) = {end:.12g};  COM off by {miss:.1e} m")
+                      f"{1 - (np.sin(tilt) / tilt if tilt else 1):.3e});  |F|(0.01 s) = {end:.12g};  "
+                      f"COM off by {miss:.1e} m")

@@ -105,11 +105,7 @@ class PlanarChain:
         self.names = order
         axes, R0 = _axes_at_zero(scene, order)
         a = axes[0]
-        # plane basis: e1, e2 with e1 x e2 = a
-        helper = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        e1 = np.cross(helper, a)
-        e1 /= np.linalg.norm(e1)
-        self.a, self.E = a, np.column_stack([e1, np.cross(a, e1)])  # E: plane basis (3, 2)
+        self.a, self.E = a, spatial.frame_with_z(a)[:, :2]  # E: the plane's basis e1, e2 with e1 x e2 = a (3, 2)
         joints = [scene.joint(n) for n in order]
         bodies = [scene.body(n) for n in order]
         n = len(order)

@@ -113,3 +113,12 @@ def test_heavy_top_run_stores_and_judges_its_declared_invariants():
     row = record.to_row()
     assert "drift_spin" in row and "drift_vertical_angular_momentum" in row
     assert RunRecord.from_row(row).drifts["spin"] == record.drifts["spin"]
+
+
+def test_variants_and_hard_cases_stay_out_of_the_default_matrix():
+    from dalembert.case import CASES, in_default_matrix, load_cases
+
+    load_cases()
+    default = {n for n, f in CASES.items() if in_default_matrix(f)}
+    assert {"pendulum", "heavy_top", "chain"} <= default
+    assert not {"pendulum_a01", "heavy_top_nutating", "chain_chaotic", "kovalevskaya_top"} & default

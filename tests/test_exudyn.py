@@ -241,8 +241,9 @@ def test_rotation_vector_node_reaction_finding_still_holds():
 
     script = runpy.run_path(os.path.join(os.path.dirname(__file__), "..", "docs", "exudyn_rotvec_lg_reaction.py"))
     tilt = 0.7
-    lg, _, _ = script["reaction"](exudyn.NodeType.RotationRotationVector, tilt, exudyn.DynamicSolverType.TrapezoidalIndex2)
-    ep, _, _ = script["reaction"](exudyn.NodeType.RotationEulerParameters, tilt, exudyn.DynamicSolverType.TrapezoidalIndex2)
+    solver = exudyn.DynamicSolverType.TrapezoidalIndex2
+    lg, _, _ = script["reaction"](exudyn.NodeType.RotationRotationVector, tilt, solver)
+    ep, _, _ = script["reaction"](exudyn.NodeType.RotationEulerParameters, tilt, solver)
     exact = script["EXACT"]
     assert ep[0] == pytest.approx(exact, rel=1e-12)
     assert lg[0] / exact - 1 == pytest.approx(-(1 - np.sin(tilt) / tilt), rel=1e-6)

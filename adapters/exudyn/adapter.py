@@ -308,8 +308,11 @@ class ExudynAdapter(Adapter):
         if not any(j.kind != "free" for j in scene.joints):
             return "none (no joints)"
         if settings.options.get("joints", "minimal") == "redundant":
-            return "each joint's ForceLocal (ObjectJointGeneric), turned into world axes, negated: the force ON the child"
-        how = "Newton's law per link, m (a - g) - loads + children's reactions, with a from the tree's acceleration sensors"
+            return ("each joint's ForceLocal (ObjectJointGeneric), turned into world axes, negated: the force ON "
+                    "the child")
+        how = ("Newton's law per link, m (a - g) - loads + children's reactions, with a from the tree's "
+               "acceleration sensors")
         if settings.integrator in STALE_ACCELERATIONS:
-            return how + ", evaluated by Exudyn at each sampled state (its step-end accelerations are the half-step velocity's)"
+            return how + (", evaluated by Exudyn at each sampled state (its step-end accelerations are the "
+                          "half-step velocity's)")
         return how

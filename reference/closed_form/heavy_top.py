@@ -65,15 +65,6 @@ _NEAR_POLE = 0.5  # refine a root closer than this to -1 or +1 on the cubic expa
 _NEWTON_STEPS = 60
 
 
-def _frame_up(up):
-    """``R_WV``: a rotation whose third column is the unit vector ``up``."""
-    z = np.asarray(up, dtype=float) / np.linalg.norm(up)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = np.cross(helper, z)
-    x /= np.linalg.norm(x)
-    return np.column_stack([x, np.cross(z, x), z])
-
-
 def _cubic_about(one_minus_c2, minus_2c, alpha_minus_beta_c, beta, b_minus_a_c, a):
     """Coefficients ``k0..k3`` of ``f(c + y)`` from the data at the centre ``c``."""
     A0, A1, A2 = one_minus_c2, minus_2c, -1.0
@@ -143,7 +134,7 @@ class LagrangeTop:
     # ------------------------------------------------------------------ set-up
     def _solve(self):
         A, C, w = self.A, self.C, self.w0_T
-        R_WV = _frame_up(self.up)
+        R_WV = spatial.frame_with_z(self.up)
         R_VT = R_WV.T @ self.R0_WT
         e3 = R_VT[:, 2]  # the symmetry axis in V
         s0_sq = e3[0] ** 2 + e3[1] ** 2  # sin^2(theta0), without cancellation

@@ -71,7 +71,8 @@ class NormalModes:
         M, K = np.asarray(self.mass_matrix, float), np.asarray(self.stiffness, float)
         w2, U = eigh(K, M)  # U^T M U = 1
         if not np.all(w2 > 0.0):
-            raise ValueError(f"NormalModes: stiffness not positive definite on M (w^2 = {w2}) — not a stable equilibrium")
+            raise ValueError(f"NormalModes: stiffness not positive definite on M (w^2 = {w2}) — not a stable "
+                             "equilibrium")
         w = np.sqrt(w2)
         a = U.T @ M @ np.asarray(self.q0, float)
         b = U.T @ M @ np.asarray(self.v0, float) / w
