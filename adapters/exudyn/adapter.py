@@ -116,12 +116,13 @@ class ExudynAdapter(Adapter):
 
     def variants(self, scene):
         """Default matrix: each node type where the scene has rigid-body nodes, both joint formulations
-        where it has joints."""
+        where it has joints, the redundant one on rotation-vector (the default) and Euler-parameter nodes
+        (whose joint reactions are exact where the rotation-vector node's are not: ROTVEC_LG_REACTION)."""
         out = [{}]
         if any(j.kind == "free" for j in scene.joints):
             out += [{"node": n} for n in NODES if n != "rotvec-lg"]
         if any(j.kind != "free" for j in scene.joints):
-            out.append({"joints": "redundant"})
+            out += [{"joints": "redundant"}, {"joints": "redundant", "node": "ep"}]
         return out
 
     # ------------------------------------------------------------- build
