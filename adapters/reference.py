@@ -14,8 +14,9 @@ class ReferenceAdapter(Adapter):
     """dalembert's own Newton-Euler / Kane solver (``reference``).
 
     Options: ``formulation`` = ``newton-euler`` (free bodies; default there),
-    ``newton-euler-matrix`` (the seed's rotation-matrix state) or ``kane``
-    (any tree; default for jointed scenes).
+    ``newton-euler-matrix`` (the seed's rotation-matrix state), ``kane``
+    (any tree; default for jointed scenes) or ``planar`` (serial revolute chains
+    with parallel axes under gravity: Lagrange's equations in absolute angles).
     """
 
     name = "reference"
@@ -36,13 +37,18 @@ class ReferenceAdapter(Adapter):
         super().check(scene, times, settings)
         from dalembert.reference.solver import build
 
-        build(scene, settings, np.asarray(times))  # formulation and integrator checks
+        if self.unsupported(scene, settings) is None:  # (an unsupported formulation is a stored finding)
+            build(scene, settings, np.asarray(times))  # formulation and integrator checks
 
     def unsupported(self, scene, settings):
         reason = super().unsupported(scene, settings)
         if reason is None and settings.options.get("formulation", "").startswith("newton-euler"):
             if any(j.kind != "free" for j in scene.joints):
                 return "Newton-Euler formulations handle free bodies only (use formulation=kane)"
+        if reason is None and settings.options.get("formulation") == "planar":
+            from dalembert.reference.planar import why_not
+
+            return why_not(scene)
         return reason
 
     def describe(self, scene, settings):

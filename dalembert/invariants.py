@@ -2,7 +2,9 @@
 
 Series functions return one value per sample; ``drift(name, ...)`` turns a
 conserved quantity into one number: its largest change from the initial value,
-relative to a scale stated per quantity (``CONSERVED``).
+relative to a scale stated per quantity (``CONSERVED``). A case may also declare
+conserved quantities of its own (``dalembert.case.Invariant``: a named series
+with its unit and scale); ``summary`` computes their drifts beside the built-in ones.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ __all__ = [
     "linear_momentum",
     "angular_momentum",
     "angular_momentum_com",
+    "angular_momentum_about",
     "orthonormality_error",
     "quaternion_norm_error",
     "joint_residual",
@@ -121,7 +124,15 @@ def angular_momentum_com(scene, traj):
 
 def angular_momentum(scene, traj):
     """Angular momentum about the world origin (kg m^2/s), world, shape (n, 3)."""
-    orbital = sum(body.mass * np.cross(traj.bodies[body.name].position, traj.bodies[body.name].velocity)
+    return angular_momentum_about(scene, traj, (0.0, 0.0, 0.0))
+
+
+def angular_momentum_about(scene, traj, point_W):
+    """Angular momentum about the fixed world point ``point_W`` (m, shape (3,)) (kg m^2/s), world axes,
+    shape (n, 3): ``sum m (x - point) x v + R I R^T w`` (e.g. about a pivot, where gravity's moment is
+    horizontal, so its vertical component is conserved)."""
+    o = np.asarray(point_W, dtype=float)
+    orbital = sum(body.mass * np.cross(traj.bodies[body.name].position - o, traj.bodies[body.name].velocity)
                   for body in scene.bodies)
     return orbital + angular_momentum_com(scene, traj)
 
@@ -281,7 +292,7 @@ class Summary:
 
     Attributes
     ----------
-    drifts : dict name -> float — ``drift`` of each conserved quantity
+    drifts : dict name -> float — ``drift`` of each conserved quantity, built-in or declared
     drift_rates : dict name -> float — ``drift_rate`` (1/s) of the energy-like ones
     checks : dict name -> float — maxima of ``orthonormality``, ``quaternion_norm`` and, for
         jointed scenes, ``joint_residual`` (``dalembert.record.CHECKS``)
@@ -292,9 +303,11 @@ class Summary:
     checks: dict
 
 
-def summary(scene, traj, conserved=()):
-    """The ``Summary`` of ``traj``: drifts of the ``conserved`` quantities and the checks."""
+def summary(scene, traj, conserved=(), declared=()):
+    """The ``Summary`` of ``traj``: drifts of the ``conserved`` quantities (names in ``CONSERVED``) and
+    of the ``declared`` ones (``dalembert.case.Invariant``: each under its own name), and the checks."""
     drifts = {name: drift(name, scene, traj) for name in conserved}
+    drifts.update({inv.name: inv.drift(scene, traj) for inv in declared})
     rates = {name: drift_rate(name, scene, traj) for name in conserved if name in ("energy", "energy_balance")}
     checks = {"orthonormality": float(np.max(orthonormality_error(scene, traj))),
               "quaternion_norm": float(np.max(quaternion_norm_error(scene, traj)))}

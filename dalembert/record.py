@@ -23,7 +23,8 @@ cost            ``build_s``, ``wall_s_median``, ``wall_s_min``, ``wall_s_max`` (
                 ``stepping_total_s``, ``worker_s`` (all s), ``concurrent`` (runs in
                 flight), ``load_start``, ``load_end`` (1-minute load average)
 errors          ``err_<quantity>_max``, ``err_<quantity>_final`` (``dalembert.errors.QUANTITIES``)
-drifts          ``drift_<name>``, ``drift_rate_<name>`` (1/s) per conserved quantity
+drifts          ``drift_<name>``, ``drift_rate_<name>`` (1/s) per conserved quantity, built-in or
+                declared by the case (``dalembert.case.Invariant``: its label is in the store's case record)
 checks          ``orthonormality``, ``quaternion_norm``, ``joint_residual`` (maxima)
 judgement       ``within_tolerance``, ``beyond_tolerance`` (names, space-separated),
                 ``verdict``, ``verdict_reason``
@@ -117,7 +118,7 @@ class RunRecord:
     cost : Cost
     errors : dict quantity -> (max over the horizon, at the final time), units of
         ``dalembert.errors.QUANTITIES``; NaN max when the run is not finite
-    drifts : dict conserved name -> drift (``dalembert.invariants.CONSERVED``)
+    drifts : dict conserved name -> drift (``dalembert.invariants.CONSERVED``, or a name the case declares)
     drift_rates : dict conserved name -> slope of the relative change, 1/s (energy-like ones)
     checks : dict name -> float — ``CHECKS``
     beyond : tuple of str — the tolerances exceeded; verdict, verdict_reason : str

@@ -33,6 +33,7 @@ __all__ = [
     "quat_rotate",
     "quat_exp",
     "quat_from_axis_angle",
+    "frame_with_z",
     "quat_derivative",
     "so3_exp",
     "so3_dexpinv",
@@ -270,6 +271,17 @@ def quat_from_axis_angle(axis, angle):
     axis = np.asarray(axis, dtype=float)
     angle = np.asarray(angle, dtype=float)
     return quat_exp(axis / np.linalg.norm(axis) * angle[..., None])
+
+
+def frame_with_z(z):
+    """A rotation matrix (3, 3) whose third column is the unit vector along ``z`` (3,): a frame with a
+    given z axis (a joint axis, the vertical), its x axis normal to ``z`` and to whichever of the x or y
+    axes is farther from ``z``."""
+    z = np.asarray(z, dtype=float) / np.linalg.norm(z)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(z, x), z])
 
 
 def quat_derivative(q_WB, w_WB_B):

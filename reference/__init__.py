@@ -10,8 +10,8 @@ def truth(case):
     """The case's truth trajectory at its sample times.
 
     The closed form where the case has one (``case.exact``), else the reference
-    solver with ``truth_settings()``.
+    solver with ``truth_settings(case.scene)``.
     """
     if case.exact is not None:
         return case.exact(case.times)
-    return simulate(case.scene, case.times, truth_settings())[0]
+    return simulate(case.scene, case.times, truth_settings(case.scene))[0]

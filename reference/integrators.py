@@ -126,18 +126,13 @@ class MuntheKaasRK4(_FixedStep):
         return cfg.retract(b, q, theta), v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
 
 
-@integrator("dop853")
-class DOP853:
-    """scipy's adaptive Dormand-Prince 8(5,3) on the embedded coordinates, with
-    its dense output at the sample times. The truth where no closed form exists
-    (at ``TRUTH_RTOL``/``TRUTH_ATOL``)."""
+class _SolveIVP:
+    """An adaptive method of scipy's ``solve_ivp`` on the embedded coordinates, sampled by its
+    dense output at the sample times."""
 
     fixed_step = False
     options = ()
-    # Defaults when the settings give no tolerance; tight enough to serve as truth
-    # (errors ~1e-12 on the canonical cases), loose enough to finish in seconds.
-    TRUTH_RTOL = 1e-12
-    TRUTH_ATOL = 1e-12
+    method = ""
 
     def run(self, system, times, settings):
         nq = len(system.q0)
@@ -150,12 +145,41 @@ class DOP853:
         y0 = np.concatenate([system.q0, system.v0]).astype(float)
         Y = np.full((len(times), len(y0)), np.nan)
         try:
-            sol = solve_ivp(rhs, (times[0], times[-1]), y0, method="DOP853", t_eval=times,
-                            rtol=settings.rtol or self.TRUTH_RTOL, atol=settings.atol or self.TRUTH_ATOL)
+            sol = solve_ivp(rhs, (times[0], times[-1]), y0, method=self.method, t_eval=times,
+                            rtol=settings.rtol or DOP853.TRUTH_RTOL, atol=settings.atol or DOP853.TRUTH_ATOL)
         except Exception as e:  # a blown-up state: NaN (contract item 5)
             if not is_numerical_failure(e):
                 raise
             return Y[:, :nq], Y[:, nq:], Stats(0, 0)
         Y[: sol.y.shape[1]] = sol.y.T
-        n_steps = int(max(0, (sol.nfev - 1) // 12))  # DOP853: 12 evaluations per step
-        return Y[:, :nq], Y[:, nq:], Stats(n_steps, int(sol.nfev))
+        return Y[:, :nq], Y[:, nq:], Stats(self.steps(sol), int(sol.nfev))
+
+
+@integrator("dop853")
+class DOP853(_SolveIVP):
+    """scipy's adaptive Dormand-Prince 8(5,3) on the embedded coordinates, with
+    its dense output at the sample times. The truth where no closed form exists
+    (at ``TRUTH_RTOL``/``TRUTH_ATOL``)."""
+
+    method = "DOP853"
+    # Defaults when the settings give no tolerance; tight enough to serve as truth
+    # (errors ~1e-12 on the canonical cases), loose enough to finish in seconds.
+    TRUTH_RTOL = 1e-12
+    TRUTH_ATOL = 1e-12
+
+    @staticmethod
+    def steps(sol):
+        return int(max(0, (sol.nfev - 1) // 12))  # DOP853: 12 evaluations per step
+
+
+@integrator("lsoda")
+class LSODA(_SolveIVP):
+    """scipy's LSODA (ODEPACK: Adams multistep methods up to order 12, switching to BDF when the
+    problem turns stiff), with its dense output at the sample times: a second integrator of
+    another family than the truth's one-step DOP853, to check it (``dalembert.testing``)."""
+
+    method = "LSODA"
+
+    @staticmethod
+    def steps(sol):
+        return int(sol.nfev)  # multistep: about one evaluation per step (corrector iterations aside)

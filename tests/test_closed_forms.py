@@ -12,8 +12,8 @@ import pytest
 from dalembert import Settings, invariants, spatial
 from dalembert.scene import Body, mass_properties
 from dalembert.reference import simulate
-from dalembert.reference.closed_form import Ballistic, FollowerForceRod, TorqueFreeTop
-from taylor import integrate_top
+from dalembert.reference.closed_form import Ballistic, FollowerForceRod, LagrangeTop, RigidPendulum, TorqueFreeTop
+from taylor import integrate_body_on_pivot, integrate_pendulum, integrate_top
 
 # rad over 20 s against the 40-digit integration. A closed form exact up to roundoff is off by
 # some ulps of the ~100 rad it turns (measured at most 5.3e-14 rad, on the separatrix); and it
@@ -169,3 +169,119 @@ def test_body_solids():
     assert np.allclose(np.diag(rod.inertia_matrix), [0.01, 2 * (0.03 + 1) / 12, 2 * (0.03 + 1) / 12])
     box = Body.box("b", 12.0, (1.0, 2.0, 3.0))
     assert np.allclose(np.diag(box.inertia_matrix), [13.0, 10.0, 5.0])
+
+
+# ------------------------------------------------------------------ the physical pendulum
+# rad over 10 s against the 40-digit Taylor integration (issue bound). Exact up to roundoff, the closed
+# form is off by some ulps of the phase w0 t ~ 40 rad (measured at most 1.2e-13 rad, a hair from the
+# separatrix, where the motion amplifies the rounding of the initial data).
+PENDULUM_ANGLE_TOL = 1e-12
+PENDULUM_RATE_TOL = 1e-11  # rad/s at rates up to ~8 rad/s: as above, times the rate (measured at most 4.6e-13)
+# The uniform rod of the pendulum case: m = 1 kg, l = 1 m, r = 0.01 m (I_O = m l^2/3 + m r^2/4)
+ROD = dict(mass=1.0, com_distance=0.5, inertia_pivot=1.0 / 3.0 + 2.5e-5, gravity=9.81)
+PENDULUMS = {
+    "libration from rest at 1 rad (the pendulum case)": (1.0, 0.0),
+    "from the horizontal (IFToMM A01)": (np.pi / 2, 0.0),
+    "from rest at 3.1 rad": (3.1, 0.0),
+    "1e-6 rad below the top": (np.pi - 1e-6, 0.0),
+    "moving and displaced": (0.3, -2.0),
+    "over the top": (0.3, 8.0),
+    "over the top backwards": (1.0, -9.0),
+}
+
+
+@pytest.mark.parametrize("label", PENDULUMS)
+def test_pendulum_against_40_digit_taylor_integration(label):
+    theta0, rate0 = PENDULUMS[label]
+    p = RigidPendulum(**ROD, theta0=theta0, rate0=rate0)
+    t = np.linspace(0.0, 10.0, 11)
+    theta, rate = integrate_pendulum(p.natural_frequency, theta0, rate0, t)
+    assert p.regime == ("rotation" if abs(rate0) > 7 else "libration")
+    assert np.max(np.abs(p.angle(t) - theta)) < PENDULUM_ANGLE_TOL
+    assert np.max(np.abs(p.rate(t) - rate)) < PENDULUM_RATE_TOL
+
+
+def test_pendulum_separatrix_is_the_gudermannian():
+    """From the bottom at exactly the rate that reaches the top, 2 w0: theta = 4 atan(exp(w0 t)) - pi
+    (Whittaker, section 44), approaching pi forever; regime 'separatrix'."""
+    p = RigidPendulum(1.0, 1.0, 1.0, 4.0, 0.0, 4.0)  # w0 = 2 rad/s, rate0 = 2 w0
+    t = np.linspace(0.0, 5.0, 51)
+    assert p.regime == "separatrix"
+    assert np.max(np.abs(p.angle(t) - (4.0 * np.arctan(np.exp(2.0 * t)) - np.pi))) < 1e-14
+
+
+def test_pendulum_small_amplitude_period_and_bottom_reaction():
+    """Small swings have period 2 pi / w0 (to the amplitude squared, A&S 17.3.11: K = pi/2 (1 + k^2/4 +
+    ...)); a point mass released from the horizontal pulls on the pivot with 3 m g at the bottom
+    (energy: v^2 = 2 g L, so m v^2 / L + m g = 3 m g)."""
+    small = RigidPendulum(1.0, 1.0, 1.0, 9.81, 1e-4, 0.0)
+    assert small.period == pytest.approx(2 * np.pi / small.natural_frequency, rel=1e-8)
+    p = RigidPendulum(1.0, 1.0, 1.0, 9.81, np.pi / 2, 0.0)
+    bottom = np.array([p.period / 4])
+    assert abs(p.angle(bottom)[0]) < 1e-13
+    assert np.allclose(p.reaction_force(bottom)[0], [0.0, 0.0, 3 * 9.81], atol=1e-12)
+
+
+# ------------------------------------------------------------------ the heavy (Lagrange) top
+# rad against the 40-digit Taylor integration of the Euler-Poisson equations (issue bound); the closed
+# form is exact up to roundoff (measured at most 1.2e-14 rad, through the benchmark's passage within
+# 7e-7 rad of the downward vertical).
+HEAVY_TOP_ATTITUDE_TOL = 1e-11
+HEAVY_TOP_RATE_TOL = 1e-10  # rad/s at 150 rad/s: the attitude bound times the rate (measured at most 7.5e-14)
+# The benchmark top (Terze, Mueller, Zlatar 2016): 15 kg, COM 1 m along body y, inertia about the COM
+# diag(0.234375, 0.46875, 0.234375); in the closed form's top frame T (axis 3 = body y): R_BT.
+BENCHMARK = dict(mgl=15.0 * 9.81 * 1.0, A=0.234375 + 15.0, C=0.46875)
+R_BT = np.column_stack([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+HEAVY_TOPS = {
+    "the benchmark over its 0.2 s": (BENCHMARK, np.eye(3), (0.0, 150.0, -4.61538), 0.2, 5),
+    "the benchmark through its passage near the vertical (0.37 s)": (BENCHMARK, np.eye(3), (0.0, 150.0, -4.61538),
+                                                                     0.5, 6),
+    "slow and strongly nutating (the heavy_top_nutating case)": (BENCHMARK, spatial.so3_exp([0.5, 0.0, 0.0]),
+                                                                 (0.0, 20.0, 0.0), 3.0, 7),
+    "tilted, every rate non-zero": (dict(mgl=2.0, A=1.5, C=0.8), spatial.so3_exp([0.3, -0.2, 0.4]),
+                                    (1.0, 6.0, -2.0), 3.0, 7),
+    # A, C, w3 chosen so that a = C w3 / A = 2 is exact and b = -a: the axis goes exactly through the
+    # downward vertical (b + a = 0), where the Euler angles flip
+    "exactly through the downward vertical (at 1.06 s)": (dict(mgl=4.0, A=16.0, C=0.5), np.eye(3), (0.0, 64.0, -2.0),
+                                                          1.2, 7),
+}
+
+
+@pytest.mark.parametrize("label", HEAVY_TOPS)
+def test_heavy_top_against_40_digit_taylor_integration(label):
+    data, R0_WB, w0_B, t_final, samples = HEAVY_TOPS[label]
+    w0_T = R_BT.T @ np.array(w0_B)
+    top = LagrangeTop(data["mgl"], data["A"], data["C"], R0_WB @ R_BT, w0_T)
+    t = np.linspace(0.0, t_final, samples)
+    q_ref, w_ref, gamma = integrate_body_on_pivot(np.diag([data["A"], data["A"], data["C"]]), [0, 0, data["mgl"]],
+                                                  [0, 0, 1], w0_T, spatial.matrix_to_quat(R0_WB @ R_BT), t,
+                                                  1.2 * np.linalg.norm(w0_B))
+    assert np.max(spatial.rotation_angle(top.quaternion(t), q_ref)) < HEAVY_TOP_ATTITUDE_TOL
+    assert np.max(np.abs(top.angular_velocity_top(t) - w_ref)) < HEAVY_TOP_RATE_TOL
+    assert np.max(np.abs(top.cos_theta(t) - gamma[:, 2])) < HEAVY_TOP_ATTITUDE_TOL  # T3 . up
+
+
+def test_heavy_top_against_exudyns_converged_benchmark_values():
+    """Exudyn's test model of the benchmark (TestModels/explicitLieGroupIntegratorTest.py, J. Gerstmayr,
+    2020) quotes the world y angular velocity 149.8473939540758 rad/s at 0.01 s ("converged to 14
+    digits") and -106.16380414 rad/s at 2 s (its RK67 at dt 5e-5, 2e-5 and 1e-5 spread over 2.1e-9)."""
+    top = LagrangeTop(BENCHMARK["mgl"], BENCHMARK["A"], BENCHMARK["C"], R_BT, R_BT.T @ np.array([0.0, 150.0, -4.61538]))
+    w = top.angular_velocity_world(np.array([0.01, 2.0]))[:, 1]
+    assert abs(w[0] - 149.8473939540758) < 1e-11  # 14 digits of 150
+    assert abs(w[1] - (-106.16380414217615)) < 5e-9  # their spread at 2 s, doubled
+
+
+def test_heavy_top_steady_precession_is_uniform():
+    """Started at the precession rate that balances gravity (Goldstein 5.7: m g l = phi' (C w3 - A phi' cos)
+    at theta' = 0), the axis keeps its height and precesses uniformly."""
+    A, C, mgl, w3, theta = 1.5, 0.8, 2.0, 10.0, 1.0
+    u = np.cos(theta)
+    phi_rate = (C * w3 - np.sqrt((C * w3) ** 2 - 4 * A * u * mgl)) / (2 * A * u)  # the slow root
+    R0 = spatial.so3_exp([theta, 0.0, 0.0])  # T3 tilted by theta from up (z), nodal line along x
+    w0_T = R0.T @ np.array([0.0, 0.0, phi_rate]) + np.array([0.0, 0.0, w3 - phi_rate * u])
+    top = LagrangeTop(mgl, A, C, R0, w0_T)
+    t = np.linspace(0.0, 5.0, 51)
+    assert np.max(np.abs(top.cos_theta(t) - u)) < 1e-12
+    e3 = top.rotation(t)[:, :, 2]  # the symmetry axis in the world: azimuth phi with e3 = (s sin phi, -s cos phi, c)
+    azimuth = np.unwrap(np.arctan2(e3[:, 0], -e3[:, 1]))
+    assert np.max(np.abs(azimuth - azimuth[0] - phi_rate * t)) < 1e-11

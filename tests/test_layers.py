@@ -5,6 +5,9 @@ Layers (DESIGN.md): the core (``dalembert/*.py``) imports none of the others;
 reference; ``dalembert.adapters`` the core and the reference (the reference
 engine's adapter wraps the reference solver); ``dalembert.reports`` only the
 core (it reads stores, never runs anything); ``dalembert.harness`` joins them all.
+``dalembert.testing`` (the case contract for case authors, ``check_case``) is a top-level
+module but not core: it runs the reference solver, so it is its own layer, allowed the core
+and the reference (like the cases it checks), and the harness may use it.
 Every import counts, including those inside functions.
 """
 
@@ -21,7 +24,7 @@ import pytest
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 with open(os.path.join(ROOT, "pyproject.toml"), "rb") as _fh:
     SETUPTOOLS = tomllib.load(_fh)["tool"]["setuptools"]
-LAYERS = ("reference", "cases", "adapters", "reports", "harness")
+LAYERS = ("reference", "cases", "adapters", "reports", "harness", "testing")
 # layer -> the layers it may import ("core" is dalembert's own top-level modules)
 ALLOWED = {
     "core": {"core"},
@@ -29,6 +32,7 @@ ALLOWED = {
     "cases": {"core", "reference", "cases"},
     "adapters": {"core", "reference", "adapters"},
     "reports": {"core", "reports"},
+    "testing": {"core", "reference", "testing"},
     "harness": {"core", *LAYERS},
 }
 

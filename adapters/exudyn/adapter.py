@@ -37,6 +37,20 @@ OPTIONS = ("node", "joints", "spectral_radius", "newton_rtol", "newton_atol")
 # error of 9.4e-3 rad instead of 2.6e-6 on the intermediate-axis top at dt = 1e-4).
 NEWTON_RTOL = 1e-12
 NEWTON_ATOL = 1e-14
+# Explicit solvers whose accelerations at a step's end are not those of the state they report:
+# VelocityVerlet's are f(q_{n+1}, v_{n+1/2}), of the half-step velocity (measured on the double
+# pendulum, against the model evaluated at the run's own sampled states: reactions off by 1.4e-3,
+# 1.4e-4, 1.4e-5 relative at dt = 1e-2, 1e-3, 1e-4, every other explicit solver within 1e-15). For
+# them the link accelerations are evaluated again at every sample (``_link_accelerations``).
+STALE_ACCELERATIONS = ("velocity-verlet",)
+# What a run with redundant joints on rotation-vector nodes reports (docs/exudyn_rotvec_lg_reaction.py).
+ROTVEC_LG_REACTION = (
+    "Exudyn 1.13.6: the joint reaction (ForceLocal of ObjectJointGeneric) on a body with a "
+    "NodeRigidBodyRotVecLG node misses the fraction 1 - sin|phi|/|phi| of its velocity-dependent "
+    "(centripetal) part, phi the body's rotation vector, at every step size, while the motion is right "
+    "(measured: 3.8e-2 relative on the Kovalevskaya top tilted 0.7 rad at dt = 1e-3 and 1e-4; Newton's law on "
+    "the run's own states agrees with the truth to 2e-6). Reproduction for upstream: "
+    "docs/exudyn_rotvec_lg_reaction.py. Euler-parameter nodes (--option node=ep) report it exactly.")
 
 
 class ExudynAdapter(Adapter):
@@ -102,12 +116,13 @@ class ExudynAdapter(Adapter):
 
     def variants(self, scene):
         """Default matrix: each node type where the scene has rigid-body nodes, both joint formulations
-        where it has joints."""
+        where it has joints, the redundant one on rotation-vector (the default) and Euler-parameter nodes
+        (whose joint reactions are exact where the rotation-vector node's are not: ROTVEC_LG_REACTION)."""
         out = [{}]
         if any(j.kind == "free" for j in scene.joints):
             out += [{"node": n} for n in NODES if n != "rotvec-lg"]
         if any(j.kind != "free" for j in scene.joints):
-            out.append({"joints": "redundant"})
+            out += [{"joints": "redundant"}, {"joints": "redundant", "node": "ep"}]
         return out
 
     # ------------------------------------------------------------- build
@@ -171,7 +186,10 @@ class ExudynAdapter(Adapter):
 
         def read():
             if built["links"] and integrator in EXPLICIT:
-                self._initial_accelerations(p, solved["values"])
+                # explicit solvers keep no accelerations at sample 0, and some none of the sampled state
+                # at any sample (STALE_ACCELERATIONS): Exudyn evaluates them at the sampled states instead
+                self._link_accelerations(p, solved["values"],
+                                         range(len(times)) if integrator in STALE_ACCELERATIONS else [0])
             return self._read_back(p, built, solved["values"])
 
         rejected = int(it.rejectedAutomaticStepSizeSteps) if it is not None else 0
@@ -189,21 +207,34 @@ class ExudynAdapter(Adapter):
         return dict(sampling.solve(built["mbs"], built["sensors"], self._settings(p), p["times"],
                                    None if st.integrator in ADAPTIVE else st.dt, stored), built=built)
 
-    def _initial_accelerations(self, p, values):
-        """Exudyn's explicit solvers compute accelerations only at step ends, so the sample-0
-        accelerations (for the tree's reactions) come from one explicit Euler step of 1e-30 s on a fresh
-        system, which leaves every coordinate unchanged in double precision."""
+    def _link_accelerations(self, p, values, samples):
+        """The kinematic tree's link accelerations at the sampled joint states ``values[("__q", "q")]``,
+        ``values[("__v", "v")]`` for the sample indices ``samples``, written over ``values[(link, "a")]``:
+        on a fresh system, each state is set and its joint accelerations solved from Exudyn's own mass
+        matrix and ODE2 right-hand side (``M q'' = f(q, q')``), then the links' acceleration sensors read."""
         import exudyn as exu
 
         built = build(p["scene"], p["settings"])
-        s = exu.SimulationSettings()
-        s.solution.file.write = False
-        s.timeIntegration.verboseMode = 0
-        s.timeIntegration.endTime = 1e-30
-        s.timeIntegration.numberOfSteps = 1
-        built["mbs"].SolveDynamic(s, solverType=exu.DynamicSolverType.ExplicitEuler)
-        for name in built["links"]:
-            values[(name, "a")][0] = np.array(built["mbs"].GetSensorValues(built["sensors"][name]["a"]), dtype=float)
+        mbs, current = built["mbs"], exu.ConfigurationType.Current
+        console = exu.config.printToConsole
+        exu.config.printToConsole = False
+        try:
+            solver = exu.MainSolverExplicit()
+            solver.InitializeSolver(mbs, self._settings(p))
+            n = solver.GetODE2size()
+            for k in samples:
+                mbs.systemData.SetODE2Coordinates(list(values[("__q", "q")][k][:n]), configuration=current)
+                mbs.systemData.SetODE2Coordinates_t(list(values[("__v", "v")][k][:n]), configuration=current)
+                solver.ComputeMassMatrix(mbs)
+                solver.ComputeODE2RHS(mbs)
+                mass = np.asarray(solver.GetSystemMassMatrix(), dtype=float)[:n, :n]
+                rhs = np.asarray(solver.GetSystemResidual(), dtype=float)[:n]
+                mbs.systemData.SetODE2Coordinates_tt(list(np.linalg.solve(mass, rhs)), configuration=current)
+                for name in built["links"]:
+                    values[(name, "a")][k] = np.array(mbs.GetSensorValues(built["sensors"][name]["a"]), dtype=float)
+            solver.FinalizeSolver(mbs, self._settings(p))
+        finally:
+            exu.config.printToConsole = console
 
     def _read_back(self, p, built, values):
         from dalembert.trajectory import BodyStates, JointStates, Trajectory
@@ -264,4 +295,28 @@ class ExudynAdapter(Adapter):
             "newton_steps": outcome.info.get("newton_steps", 0),
             "rejected_steps": outcome.info.get("rejected_steps", 0),
             "exudyn_version": self.version(),
+            "reactions": self._reaction_method(scene, st),
+            **({"known_issue": ROTVEC_LG_REACTION} if self._rotvec_lg_reactions(scene, st) else {}),
         }
+
+    @staticmethod
+    def _rotvec_lg_reactions(scene, settings):
+        """Whether the run reports joint reactions from bodies on rotation-vector nodes."""
+        o = settings.options
+        return (o.get("joints", "minimal") == "redundant" and o.get("node", "rotvec-lg") == "rotvec-lg"
+                and any(j.kind != "free" for j in scene.joints))
+
+    @staticmethod
+    def _reaction_method(scene, settings):
+        """How the run's joint reactions are obtained (for the audit)."""
+        if not any(j.kind != "free" for j in scene.joints):
+            return "none (no joints)"
+        if settings.options.get("joints", "minimal") == "redundant":
+            return ("each joint's ForceLocal (ObjectJointGeneric), turned into world axes, negated: the force ON "
+                    "the child")
+        how = ("Newton's law per link, m (a - g) - loads + children's reactions, with a from the tree's "
+               "acceleration sensors")
+        if settings.integrator in STALE_ACCELERATIONS:
+            return how + (", evaluated by Exudyn at each sampled state (its step-end accelerations are the "
+                          "half-step velocity's)")
+        return how

@@ -57,11 +57,7 @@ def rigid_bodies(scene, redundant):
 
 def axis_frame(axis):
     """A rotation whose third column is the unit ``axis`` (link z = joint axis)."""
-    z = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = np.cross(helper, z)
-    x /= np.linalg.norm(x)
-    return np.column_stack([x, np.cross(z, x), z])
+    return spatial.frame_with_z(axis)
 
 
 def build(scene, settings, assemble=True):

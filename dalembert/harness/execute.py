@@ -121,7 +121,7 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
             totals.append(time.perf_counter() - t0)
             walls.append(out.wall_s)
         errors = trajectory_errors(traj, truth)
-        summary = invariants.summary(case.scene, traj, case.conserved)
+        summary = invariants.summary(case.scene, traj, case.conserved, case.invariants)
         npz = trajectory_to_npz(traj)
         cost = Cost(build_s=build_s, wall_s_median=float(np.median(walls)), wall_s_min=float(np.min(walls)),
                     wall_s_max=float(np.max(walls)), repeats=len(walls), n_steps=first.n_steps, n_rhs=first.n_rhs,

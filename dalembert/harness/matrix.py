@@ -93,7 +93,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
 
     Parameters
     ----------
-    cases, tags : names / tags of cases (default: every case not tagged ``hard``)
+    cases, tags : names / tags of cases (default: every case not tagged ``hard`` or ``variant``)
     engines : engine names (default: every registered engine whose engine imports)
     integrators : integrator names (default: every integrator of each engine)
     dts, rtols : step sizes (s) for fixed-step and tolerances for adaptive integrators
@@ -111,7 +111,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
     skipped : list of str — engines not installed (only when ``engines`` was not given)
     """
     from dalembert.adapters import adapter_names, get_adapter
-    from dalembert.case import load_cases
+    from dalembert.case import in_default_matrix, load_cases
 
     registry = load_cases()
     names = list(cases or [])
@@ -123,8 +123,8 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
             if t not in known_tags:
                 raise ValueError(f"--tag: unknown tag {t!r}{suggest(t, known_tags)}")
         names += [n for n, f in registry.items() if set(tags) & set(f.tags) and n not in names]
-    if not names:  # the default matrix: every case except the hard ones (select those with --tag hard)
-        names = [n for n, f in registry.items() if "hard" not in f.tags]
+    if not names:  # the default matrix: every case but the hard ones and the variants (select those with --tag)
+        names = [n for n, f in registry.items() if in_default_matrix(f)]
     skipped = []
     if engines:
         adapters = {e: get_adapter(e) for e in engines}

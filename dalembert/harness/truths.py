@@ -15,7 +15,7 @@ def truth_source(case):
     """Where the truth of ``case`` comes from, as stored with its record."""
     from dalembert.reference import truth_settings
 
-    return "closed form" if case.exact is not None else f"reference solver, {truth_settings().label()}"
+    return "closed form" if case.exact is not None else f"reference solver, {truth_settings(case.scene).label()}"
 
 
 def prepare_cases(specs, store):

@@ -42,11 +42,11 @@ def settings_for(case):
 
 
 def validation_specs(case_names=None):
-    """Specs of the validation matrix: the named cases (default: every case not tagged ``hard``)."""
-    from dalembert.case import load_cases
+    """Specs of the validation matrix: the named cases (default: every case in the default matrix)."""
+    from dalembert.case import in_default_matrix, load_cases
 
     registry = load_cases()
-    names = list(case_names or [n for n, f in registry.items() if "hard" not in f.tags])
+    names = list(case_names or [n for n, f in registry.items() if in_default_matrix(f)])
     factories = [registry[n] for n in names]  # unknown names fail here, before anything runs
     return [spec(case, "reference", s) for case in (f() for f in factories) for s in settings_for(case)]
 

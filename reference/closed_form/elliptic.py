@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import elliprf
 
-__all__ = ["ellipk", "ellipj", "inverse_amplitude"]
+__all__ = ["ellipk", "ellipj", "amplitude", "inverse_amplitude"]
 
 # The AGM stops when c_n/a_n falls below this; one ulp of 1.0.
 _AGM_TOL = np.finfo(float).eps
@@ -64,7 +64,39 @@ def ellipj(u, m1):
         return np.tanh(u), sech, sech
     K = ellipk(m1)
     # Reduce to |u| <= 2K (sn, cn have period 4K): keeps the amplitude small.
-    u = u - 4.0 * K * np.round(u / (4.0 * K))
+    phi = _agm_amplitude(u - 4.0 * K * np.round(u / (4.0 * K)), m1)
+    sn, cn = np.sin(phi), np.cos(phi)
+    dn = np.sqrt(cn * cn + m1 * sn * sn)
+    return sn, cn, dn
+
+
+def amplitude(u, m1):
+    """Jacobi amplitude ``am(u | m)``, ``m = 1 - m1``, continuous in ``u`` (unbounded: ``am(u + 2K) =
+    am(u) + pi``), so that ``sn = sin am`` and ``cn = cos am``.
+
+    Parameters
+    ----------
+    u : array_like, shape (n,) — argument (dimensionless)
+    m1 : float — complementary parameter, ``0 <= m1 <= 1``; ``m1 = 0`` gives the Gudermannian
+        ``atan(sinh u)`` (A&S 16.6.1)
+
+    Returns
+    -------
+    ndarray, shape (n,) — rad
+    """
+    u = np.asarray(u, dtype=float)
+    if not 0.0 <= m1 <= 1.0:
+        raise ValueError(f"m1 must lie in [0, 1], got {m1!r}")
+    if m1 == 0.0:
+        return np.arctan(np.sinh(u))
+    K = ellipk(m1)
+    turns = np.round(u / (2.0 * K))  # reduce to |u| <= K, where the amplitude lies in [-pi/2, pi/2]
+    return _agm_amplitude(u - 2.0 * K * turns, m1) + np.pi * turns
+
+
+def _agm_amplitude(u, m1):
+    """``am(u | 1 - m1)`` for ``|u| <= 2K`` by the descending Landen transformation (A&S 16.4),
+    from ``b0 = sqrt(m1)`` with ``c_{n+1} = c_n^2 / (4 a_{n+1})`` (no cancelling difference)."""
     a, b, c = 1.0, np.sqrt(m1), np.sqrt(1.0 - m1)
     ratios = []
     while c > _AGM_TOL * a:
@@ -78,9 +110,7 @@ def ellipj(u, m1):
     phi = (2.0 ** len(ratios)) * a * u
     for r in reversed(ratios):
         phi = 0.5 * (phi + np.arcsin(r * np.sin(phi)))
-    sn, cn = np.sin(phi), np.cos(phi)
-    dn = np.sqrt(cn * cn + m1 * sn * sn)
-    return sn, cn, dn
+    return phi
 
 
 def inverse_amplitude(sn, cn, m1):

@@ -51,11 +51,11 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.reference.closed_form.elliptic import ellipj, ellipk, inverse_amplitude
+from dalembert.reference.closed_form.quadrature import PeriodicIntegral, gauss_legendre
 
 __all__ = ["TorqueFreeTop"]
 
 _PANEL = 0.5  # max panel width in tau; see module docstring
-_NODES, _WEIGHTS = np.polynomial.legendre.leggauss(16)
 
 
 def _principal_frame(inertia):
@@ -140,7 +140,7 @@ class TorqueFreeTop:
         K = ellipk(m1)
         s["period_tau"] = 2.0 * K  # w^2 (hence phi') has period 2K in tau
         if np.isfinite(K):
-            s["phi_table"] = self._phi_table(s)
+            s["phi"] = PeriodicIntegral(lambda tau: self._phi_rate(s, tau), 2.0 * K, tau0, panel=_PANEL)
         return s
 
     def _omega_P(self, s, tau):
@@ -155,36 +155,13 @@ class TorqueFreeTop:
         den = (I[0] * w[..., 0]) ** 2 + (I[1] * w[..., 1]) ** 2
         return s["M"] * num / den / s["lam"]
 
-    def _quad(self, s, a, b):
-        """Integral of d phi/d tau from a to b (arrays), Gauss-Legendre panels."""
-        a, b = np.broadcast_arrays(np.asarray(a, float), np.asarray(b, float))
-        n_panels = np.maximum(1, np.ceil(np.abs(b - a) / _PANEL)).astype(int)
-        total = np.zeros(a.shape)
-        for k in range(int(n_panels.max(initial=1))):
-            active = k < n_panels
-            h = (b - a) / n_panels
-            lo = a + k * h
-            x = lo[..., None] + 0.5 * h[..., None] * (_NODES + 1.0)
-            total += np.where(active, 0.5 * h * (self._phi_rate(s, x) @ _WEIGHTS), 0.0)
-        return total
-
-    def _phi_table(self, s):
-        """Cumulative phi at panel edges over one period starting at tau0."""
-        P = s["period_tau"]
-        n = max(1, int(np.ceil(P / _PANEL)))
-        edges = s["tau0"] + P * np.arange(n + 1) / n
-        pieces = self._quad(s, edges[:-1], edges[1:])
-        return edges, np.concatenate([[0.0], np.cumsum(pieces)])
-
     def _phi(self, s, tau):
-        if "phi_table" not in s:  # separatrix: aperiodic, integrate directly
-            return self._quad(s, np.full_like(tau, s["tau0"]), tau)
-        edges, cum = s["phi_table"]
-        P = s["period_tau"]
-        n_periods = np.floor((tau - s["tau0"]) / P)
-        r = tau - n_periods * P
-        idx = np.clip(np.searchsorted(edges, r, side="right") - 1, 0, len(edges) - 2)
-        return n_periods * cum[-1] + cum[idx] + self._quad(s, edges[idx], r)
+        if "phi" in s:
+            return s["phi"](tau)
+        # the separatrix: aperiodic, integrate directly from tau0
+        a = np.full_like(tau, s["tau0"])
+        panels = np.maximum(1, np.ceil(np.abs(tau - a) / _PANEL)).astype(int)
+        return gauss_legendre(lambda x: self._phi_rate(s, x), a, tau, panels)
 
     # ---------------------------------------------------------------- results
     @property

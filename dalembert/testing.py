@@ -1,0 +1,212 @@
+"""The contract every case meets, for case authors: ``check_case(factory)``.
+
+dalembert's own contract tests (``tests/test_case_contract.py``) run these same checks on every
+registered case; a third party runs them on theirs::
+
+    from dalembert.testing import check_case
+    from my_package.my_cases import my_top
+
+    def test_my_top():
+        check_case(my_top)
+
+Each ``check_*`` function raises ``CaseCheckError`` (an ``AssertionError``, so pytest reports it
+as a failed test) naming the case and what is wrong; ``check_case`` runs them all and reports
+every failure at once. They build the case and run the reference solver, nothing else: no
+engine is needed. Conventions and a walk-through: ``docs/cases.md``.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+
+import numpy as np
+
+from dalembert import invariants, spatial
+from dalembert.case import CASES, CaseFactory, load_cases
+from dalembert.errors import QUANTITIES, trajectory_errors
+from dalembert.settings import Settings
+from dalembert.trajectory import read_csv, write_csv
+
+__all__ = ["CaseCheckError", "check_case", "factory_of", "second_solution", "INITIAL_STATE_TOL",
+           "HARD_HORIZON", "SECOND_RTOL", "check_builds", "check_truth_starts_at_initial_state",
+           "check_truth_conserves", "check_reference_agrees", "check_floor", "check_csv_round_trip"]
+
+# The truth at t = 0 is the scene's initial state, to roundoff (m, rad, m/s, rad/s).
+INITIAL_STATE_TOL = 1e-14
+# Cases tagged ``hard`` are checked over this horizon (s): their full horizons cost minutes in the
+# pure-Python reference.
+HARD_HORIZON = 2.0
+# Tolerance of the second solution (``second_solution``): the truth's own (DOP853 at 1e-12).
+SECOND_RTOL = 1e-12
+
+
+class CaseCheckError(AssertionError):
+    """A case that breaks the contract; the message names the case and the check."""
+
+
+def _fail(case_name, what):
+    raise CaseCheckError(f"case {case_name!r}: {what}")
+
+
+def factory_of(factory):
+    """The ``CaseFactory`` of ``factory``: a registered name, a ``CaseFactory``, or the function decorated
+    with ``@case`` (looked up in the registry; an unregistered function is wrapped as it is)."""
+    if isinstance(factory, CaseFactory):
+        return factory
+    load_cases()
+    if isinstance(factory, str):
+        return CASES[factory]
+    for _, registered in CASES.items():
+        if registered.func is factory:
+            return registered
+    return CaseFactory(factory.__name__, factory, (), {})
+
+
+def check_builds(factory, **params):
+    """The case builds from ``params`` (defaults for the rest), deterministically, carries its factory's tags,
+    states tolerances with reasons, and ``t_final`` reaches it (a longer horizon is another version)."""
+    factory = factory_of(factory)
+    case = factory(**params)
+    if case.version != factory(**case.params).version:
+        _fail(case.name, "two builds from the same parameters have different versions — the case depends on "
+                         "something besides its parameters (randomness, the clock, a file)")
+    if not (case.tags and set(factory.tags) <= set(case.tags)):
+        _fail(case.name, f"tags {case.tags} do not include the factory's {factory.tags}")
+    if not case.tolerances:
+        _fail(case.name, "states no tolerances — give each quantity it is judged on a Tolerance(value, reason)")
+    longer = factory(**{**case.params, "t_final": 2 * case.t_final})
+    if longer.t_final != 2 * case.t_final or longer.version == case.version:
+        _fail(case.name, "t_final=... does not set the horizon — pass the factory's t_final to Case")
+    return case
+
+
+def check_truth_starts_at_initial_state(case, truth):
+    """The truth is finite, sampled at the case's times, and starts at the scene's initial state."""
+    if not truth.is_finite():
+        _fail(case.name, f"the truth is not finite (from t = {truth.first_nonfinite_time()} s)")
+    if not np.array_equal(truth.t, case.times):
+        _fail(case.name, "the truth is not sampled at the case's sample times")
+    start = spatial.initial_body_states(case.scene)
+    for name, s in start.items():
+        b = truth.bodies[name]
+        for what, got, want in (("position", b.position[0], s["p"]), ("velocity", b.velocity[0], s["v"]),
+                                ("angular velocity", b.angular_velocity[0], s["w"])):
+            if not np.allclose(got, want, rtol=0.0, atol=INITIAL_STATE_TOL * max(1.0, np.abs(want).max())):
+                _fail(case.name, f"the truth's {what} of {name!r} at t = 0 is {got}, the scene's initial state {want}")
+        angle = spatial.rotation_angle(b.quaternion[0], spatial.matrix_to_quat(s["R"]))
+        if angle > INITIAL_STATE_TOL:
+            _fail(case.name, f"the truth's attitude of {name!r} at t = 0 is {angle:.3g} rad off the scene's "
+                             "initial one")
+    for j in case.scene.joints:
+        if j.name in truth.joints and j.kind != "ball":  # (a ball's quaternion may come out as -q0)
+            if not np.allclose(truth.joints[j.name].q[0], j.q0, rtol=0.0, atol=INITIAL_STATE_TOL):
+                _fail(case.name, f"the truth's joint {j.name!r} starts at {truth.joints[j.name].q[0]}, q0 is {j.q0}")
+
+
+def check_truth_conserves(case, truth):
+    """The truth keeps every conserved quantity, built-in or declared, within its tolerance."""
+    for name in case.conserved:
+        d = invariants.drift(name, case.scene, truth)
+        if not d <= case.tolerances[name].value:
+            _fail(case.name, f"the truth changes {name!r} by {d:.3g}, above its tolerance "
+                             f"{case.tolerances[name].value:g} — the truth or the bound is wrong")
+    for inv in case.invariants:
+        try:
+            d = inv.drift(case.scene, truth)
+        except Exception as e:  # a series that cannot be computed is the case's bug
+            _fail(case.name, f"invariant {inv.name!r}: its series fails on the truth: {type(e).__name__}: {e}")
+        if not d <= inv.tolerance.value:
+            _fail(case.name, f"the truth changes invariant {inv.name!r} by {d:.3g}, above its tolerance "
+                             f"{inv.tolerance.value:g} — the series, its scale or the bound is wrong")
+
+
+def second_solution(case):
+    """The reference by a second route than the truth's: ``(label, trajectory)``.
+
+    LSODA (scipy's Adams/BDF multistep methods, another family than the truth's one-step DOP853)
+    at ``SECOND_RTOL`` on Kane's equations, which for a planar chain are also another formulation
+    than the truth's (``reference.truth_settings``). Never the truth's own integrator and
+    formulation: that would compare the truth with itself.
+    """
+    from dalembert.reference import simulate
+
+    settings = Settings("lsoda", rtol=SECOND_RTOL, atol=SECOND_RTOL, options={"formulation": "kane"})
+    return settings.label(), simulate(case.scene, case.times, settings)[0]
+
+
+def check_reference_agrees(case, truth):
+    """An independent solution agrees with the truth within the case's tolerances (errors and drifts).
+
+    With a closed form: the reference solver (DOP853 at 1e-12) against it. Without: the truth (the
+    reference) against ``second_solution``, never against itself.
+    """
+    from dalembert.reference import simulate
+
+    if case.exact is not None:
+        label = "the reference (dop853 rtol=1e-12)"
+        other = simulate(case.scene, case.times, Settings("dop853", rtol=1e-12, atol=1e-12))[0]
+    else:
+        label, other = second_solution(case)
+    errors = trajectory_errors(other, truth)
+    drifts = invariants.summary(case.scene, other, case.conserved, case.invariants).drifts
+    for name, tol in case.tolerances.items():
+        value = errors[name][0] if name in QUANTITIES and name in errors else drifts.get(name)
+        if value is not None and not value <= tol.value:
+            _fail(case.name, f"{label} and the truth differ in {name!r} by {value:.3g}, above the tolerance "
+                             f"{tol.value:g} — the truth cannot judge engines at that bound")
+
+
+def check_floor(case):
+    """No tolerance asks for more accuracy than the case's floor (``Case.floor``)."""
+    for quantity, floor in case.floor().items():
+        if not floor > 0.0:
+            _fail(case.name, f"floor {quantity!r} is {floor!r}, not positive")
+        if quantity in case.tolerances and case.tolerances[quantity].value < floor:
+            _fail(case.name, f"tolerance {quantity!r} = {case.tolerances[quantity].value:g} is below the floor "
+                             f"{floor:.3g} that double precision allows")
+
+
+def check_csv_round_trip(case, truth, directory=None):
+    """The truth written as CSV (``dalembert truth``) reads back bit for bit."""
+    with tempfile.TemporaryDirectory(dir=directory) as tmp:
+        path = os.path.join(tmp, "truth.csv")
+        write_csv(truth, path)
+        back = read_csv(path)
+    for name, b in truth.bodies.items():
+        for field in ("position", "quaternion", "velocity", "angular_velocity"):
+            if not np.array_equal(getattr(back.bodies[name], field), getattr(b, field)):
+                _fail(case.name, f"the truth's {name}.{field} does not survive the CSV round trip")
+
+
+def check_case(factory, horizon=None, **params):
+    """Run every check of the case contract on ``factory`` (a function decorated ``@case``, its registered
+    name, or a ``CaseFactory``) built with ``params``; raise ``CaseCheckError`` listing every failure.
+
+    ``horizon`` (s) shortens the case (``t_final``); cases tagged ``hard`` default to ``HARD_HORIZON``.
+    Returns the case checked.
+    """
+    from dalembert.reference import truth as reference_truth
+
+    factory = factory_of(factory)
+    if horizon is None and "hard" in factory.tags and "t_final" not in params:
+        horizon = HARD_HORIZON
+    if horizon is not None:
+        params = {**params, "t_final": horizon}
+    case = check_builds(factory, **params)
+    truth = reference_truth(case)
+    failures = []
+    for check in (check_truth_starts_at_initial_state, check_truth_conserves, check_reference_agrees,
+                  check_csv_round_trip):
+        try:
+            check(case, truth)
+        except CaseCheckError as e:
+            failures.append(str(e))
+    try:
+        check_floor(case)
+    except CaseCheckError as e:
+        failures.append(str(e))
+    if failures:
+        raise CaseCheckError(f"case {case.name!r}: {len(failures)} check(s) failed\n"
+                             + "\n".join(f"  - {f}" for f in failures))
+    return case
