@@ -211,6 +211,7 @@ class Case:
     params : dict — the factory's keyword arguments that made this case
     floor_fn : callable or None — ``floor_fn() -> dict``, see ``floor``
     invariants : tuple of Invariant — conserved quantities the case declares for itself
+    units : dict — the unit of each parameter (from ``@case(units=...)``)
     """
 
     name: str
@@ -224,6 +225,7 @@ class Case:
     params: dict = field(default_factory=dict)
     floor_fn: Callable | None = None
     invariants: tuple = ()
+    units: dict = field(default_factory=dict)
 
     def floor(self):
         """The achievable-accuracy floor, dict quantity -> value (e.g. ``orientation`` in rad), or {}.
@@ -319,6 +321,7 @@ class CaseRecord:
     tags : tuple of str
     floor : dict quantity -> float — the achievable-accuracy floor (``Case.floor``), unit of the quantity
     truth : str — where the truth came from ("closed form", or the reference solver's settings)
+    units : dict — each parameter's unit ({} in stores written before they were recorded)
     invariants : tuple of InvariantLabel — the case's declared invariants (name, description,
         unit, scale), so a report can label their drifts (``RunRecord.drifts[name]``)
     """
@@ -335,6 +338,7 @@ class CaseRecord:
     floor: dict
     truth: str
     invariants: tuple = ()
+    units: dict = field(default_factory=dict)
 
     @property
     def times(self):
@@ -346,7 +350,7 @@ class CaseRecord:
         """Record ``case`` (computing its floor) whose truth came from ``truth``."""
         return cls(case.name, case.version, dict(case.params), case.scene, case.t_final, case.sample_times,
                    dict(case.tolerances), tuple(case.conserved), tuple(case.tags), dict(case.floor()), truth,
-                   tuple(i.label for i in case.invariants))
+                   tuple(i.label for i in case.invariants), dict(case.units))
 
     def to_json(self):
         return {"name": self.name, "version": self.version, "params": _canonical_json(self.params),
@@ -355,7 +359,7 @@ class CaseRecord:
                 "conserved": list(self.conserved), "tags": list(self.tags), "floor": dict(self.floor),
                 "truth": self.truth,
                 "invariants": [{"name": i.name, "description": i.description, "unit": i.unit, "scale": i.scale}
-                               for i in self.invariants]}
+                               for i in self.invariants], "units": dict(self.units)}
 
     @classmethod
     def from_json(cls, data):
@@ -365,7 +369,7 @@ class CaseRecord:
                    {k: Tolerance(t["value"], t["reason"]) for k, t in data["tolerances"].items()},
                    tuple(data["conserved"]), tuple(data["tags"]), dict(data["floor"]), data["truth"],
                    tuple(InvariantLabel(i["name"], i["description"], i["unit"], float(i["scale"]))
-                         for i in data.get("invariants", ())))
+                         for i in data.get("invariants", ())), dict(data.get("units", {})))
 
 
 def _canonical_json(params):
@@ -433,7 +437,7 @@ class CaseFactory:
                                                      "case after its factory (the registry finds it by that name)"])
         return Case(made.name, made.scene, made.t_final, made.sample_times, made.exact, made.conserved,
                     made.tolerances, tuple(sorted(set(made.tags) | set(self.tags))), merged, made.floor_fn,
-                    made.invariants)
+                    made.invariants, dict(self.units))
 
 
 def case(tags=(), units=None, positive=()):

@@ -421,7 +421,7 @@ def _maps(doc, store, records):
     """A stability map per swept case: boundaries against the swept parameter, per engine."""
     units = {}
     for r in records:
-        units.setdefault(r.case, getattr(store.case(r.case, r.case_version), "units", {}) or {})
+        units.setdefault(r.case, store.case(r.case, r.case_version).units)
     found = stability_maps(records, lambda name: units.get(name, {}))
     if not found:
         return set()
