@@ -2,9 +2,8 @@
 
     python -m benchmarks.scaling [--sizes 2,4,8,16,32,64] [--budget 1.0]
 
-A planar chain of N uniform rods (0.5 m, 1 kg each) hanging from the world by
-revolute joints about y, under gravity, started 0.1 rad from rest at every joint,
-is stepped by each installed engine's fourth-order fixed-step integrator at
+The ``chain`` case (N uniform rods in a revolute chain under gravity, released
+from rest at its default angles) is stepped by each installed engine's fourth-order fixed-step integrator at
 dt = 1e-3 (the reference solver: Kane's equations with RK4; MuJoCo RK4;
 Pinocchio's Lie-group RK4, compiled; Exudyn RK44 on its kinematic tree). For
 each N the horizon grows tenfold from 0.01 s until one run takes at least
@@ -30,31 +29,15 @@ import numpy as np
 
 from dalembert import Settings
 from dalembert.adapters import adapter_names, get_adapter
-from dalembert.case import Case, Tolerance
-from dalembert.scene import Body, Joint, Scene
+from dalembert.case import make_case
 
 SIZES = (2, 4, 8, 16, 32, 64)
 INTEGRATORS = {"reference": "rk4", "mujoco": "rk4", "pinocchio": "rk4", "exudyn": "rk44"}
 DT = 1e-3
-SAMPLE_INTERVAL = 0.01
 REPEATS = 3
 MAX_HORIZON_S = 10.0
-ROD_LENGTH, ROD_MASS, ROD_RADIUS = 0.5, 1.0, 0.01
 # Fits over the sizes where the per-step fixed costs (calls, Python) no longer dominate.
 ASYMPTOTIC_FROM = 8
-
-
-def chain(n, t_final):
-    """A case of ``n`` rods in a revolute chain (only its scene and times are used here)."""
-    half = 0.5 * ROD_LENGTH
-    bodies = [Body.cylinder(f"rod{i}", ROD_MASS, ROD_LENGTH, ROD_RADIUS, axis=0) for i in range(n)]
-    joints = [Joint("revolute", "world" if i == 0 else f"rod{i - 1}", f"rod{i}", q0=[0.1], v0=[0.0],
-                    axis=[0.0, 1.0, 0.0], parent_point=[0.0, 0.0, 0.0] if i == 0 else [half, 0.0, 0.0],
-                    child_point=[-half, 0.0, 0.0]) for i in range(n)]
-    scene = Scene(f"chain{n}", bodies, joints, gravity=[0.0, 0.0, -9.81])
-    steps = int(round(t_final / SAMPLE_INTERVAL))
-    return Case(f"chain{n}", scene, t_final, np.linspace(0.0, t_final, steps + 1),
-                tolerances={"joint": Tolerance(1.0, "unused: a benchmark, not a validation")})
 
 
 def cost(adapter, n, budget):
@@ -62,7 +45,7 @@ def cost(adapter, n, budget):
     settings = Settings(INTEGRATORS[adapter.name], dt=DT)
     horizon = 0.01
     while True:
-        case = chain(n, horizon)
+        case = make_case("chain", n=n, t_final=horizon, sample_interval=horizon)
         prepared = adapter.prepare(case.scene, case.times, settings)
         adapter.run(prepared)  # warm-up
         walls = [adapter.run(prepared).wall_s for _ in range(REPEATS)]
@@ -91,7 +74,7 @@ def main(argv=None):
             engines.append(name)
         except ImportError as e:
             print(f"{name}: not installed ({e})")
-    print(f"stepping seconds per simulated second, dt = {DT:g} s, chain of N rods")
+    print(f"stepping seconds per simulated second, dt = {DT:g} s, the chain case with N rods")
     print(f"{'engine':<11}" + "".join(f"{f'N={n}':>11}" for n in sizes) + f"{'p (all)':>10}{'p (N>=8)':>10}")
     for name in engines:
         adapter = get_adapter(name)
