@@ -9,6 +9,7 @@ from dalembert.case import Case, Tolerance, case
 from dalembert.scene import Body, Joint, Scene
 from dalembert.trajectory import BodyStates, Trajectory
 from dalembert.reference.closed_form import TorqueFreeTop
+from dalembert.maps import stability_map
 
 # Agreement with the closed form over the horizon.
 ORIENTATION_TOL = Tolerance(1e-7, "rad over 20 s; far above the double-precision floor of the stable spin "
@@ -163,3 +164,11 @@ def separatrix_omega(inertia, spin, gap):
 def free_top_separatrix(inertia=(1.0, 2.0, 3.0), spin=5.0, gap=1e-9, t_final=20.0, sample_interval=0.01):
     """Energy and momentum with ``2 E I2 / |L|^2 = 1 - gap``: a hair from the separatrix."""
     return _hard_top("free_top_separatrix", inertia, separatrix_omega(inertia, spin, gap), t_final, sample_interval)
+
+
+stability_map(
+    "fast_spin_map", case="free_top_fast_spin", parameter="spin", values="log:5,500,5", bracket=(1e-4, 1e-1),
+    params=dict(t_final=2.0, sample_interval=0.1),
+    reason="two decades of spin about the intermediate axis, each flip resolved at the finest step (500 rad/s "
+           "turns 0.05 rad per 1e-4 s) and none at the coarsest; 2 s holds the first flips of the faster spins "
+           "and ~20 probes per curve cost seconds; the 0.1-s samples let steps up to 0.1 s divide them")

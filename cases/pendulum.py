@@ -10,6 +10,7 @@ from dalembert.cases._sampling import sample_times
 from dalembert.reference.closed_form import RigidPendulum
 from dalembert.scene import Body, Joint, Scene
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
+from dalembert.maps import stability_map
 
 # Agreement with the closed form (Jacobi elliptic functions, within 1e-13 rad of a 40-digit Taylor
 # integration over 10 s: tests/test_closed_forms.py). Measured on the reference at the defaults (1 rad,
@@ -119,3 +120,10 @@ def pendulum_a01(length=1.0, mass=1.0, radius=A01_SPHERE_RADIUS, gravity=9.81, t
                       reaction_force=REACTION_TOL, energy=ENERGY_TOL)
     return _pendulum_case("pendulum_a01", sphere, length, (0.0, -1.0, 0.0), (0.0, 0.0, 1.0), gravity, theta0, rate0,
                           t_final, sample_interval, tolerances)
+
+
+stability_map(
+    "pendulum_map", case="pendulum", parameter="theta0", values="lin:0.5,3.0,6", bracket=(1e-4, 1e-1),
+    params=dict(t_final=5.0, sample_interval=0.1),
+    reason="amplitudes from a near-linear swing (0.5 rad) to 0.14 rad below the top, where the period grows "
+           "without bound; 5 s holds about three swings; the 0.1-s samples let steps up to 0.1 s divide them")

@@ -77,3 +77,25 @@ def test_the_report_maps_the_stored_boundaries(tmp_path):
     assert stable  # the resolution-2 search at these spins brackets both
     line = next(x for x in md.splitlines() if x.startswith("- reference rk4"))
     assert f"{min(stable):.3g}" in line and f"{max(stable):.3g}" in line
+
+
+def test_the_hard_suite_carries_its_stability_maps():
+    """--tag hard adds each map's first probes (every swept value at both ends of its bracket) as a
+    search of its own; --no-maps leaves them out; the maps are declared beside their cases."""
+    from dalembert.harness.cli import _parser
+    from dalembert.harness.selection import select
+    from dalembert.maps import MAPS
+
+    def chosen(*flags):
+        return select(_parser().parse_args(["run", "--tag", "hard", "--engine", "reference", "--integrator", "rk4",
+                                            "--dt", "1e-2", *flags]), 2)
+
+    with_maps, without = chosen(), chosen("--no-maps")
+    assert without.searches == ()
+    plans = [MAPS[name] for name in MAPS if "hard" in MAPS[name].tags]
+    assert len(with_maps.searches) == len(plans) >= 2
+    for (first, _), plan in zip(with_maps.searches, plans):
+        assert {s.case for s in first} == {plan.case}
+        assert {s.dt for s in first} == set(plan.bracket)
+        assert len({dict(s.params)[plan.parameter] for s in first}) == int(plan.values.rsplit(",", 1)[1])
+    assert set(without.specs) < set(with_maps.specs)

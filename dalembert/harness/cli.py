@@ -82,6 +82,8 @@ def _parser():
     r.add_argument("--resolution", type=float, default=None,
                    help="with --search: stop when the failing step is within this factor of the passing one "
                         "(default 1.2)")
+    r.add_argument("--no-maps", action="store_true",
+                   help="leave out the default stability maps of the selected tags (e.g. --tag hard runs them)")
     r.add_argument("--force", action="store_true",
                    help=f"allow runs of more than 1e8 steps (refused by default: usually a typo in --dt)")
     r.add_argument("--strict", action="store_true",
@@ -368,7 +370,8 @@ def cmd_run(args):
                                           ("--integrator", args.integrator), ("--dt", args.dt), ("--rtol", args.rtol),
                                           ("--param", args.param), ("--option", args.option), ("--out", args.out),
                                           ("--timeout", args.timeout), ("--force", args.force),
-                                          ("--search", args.search), ("--resolution", args.resolution)) if value]
+                                          ("--search", args.search), ("--resolution", args.resolution),
+                                          ("--no-maps", args.no_maps)) if value]
         if given:
             return _fail(f"--resume {args.resume}: {', '.join(given)} cannot change a matrix already made (its "
                          "manifest fixes it) — drop them, or start a new matrix with --out")
@@ -391,9 +394,9 @@ def cmd_run(args):
             print(f"dalembert: skipping engine {s}", file=sys.stderr)
         client = _connect(args.scheduler, args.debug) if args.scheduler else None
         manifest = session.manifest(specs, _command_line(), timeout, timing, jobs, args.scheduler)
-        if chosen.search:
-            manifest["search"] = {"parameter": "dt", "resolution": chosen.resolution,
-                                  "first": [s.to_json() for s in specs]}
+        if chosen.searches:
+            manifest["searches"] = [{"parameter": "dt", "resolution": resolution, "first": [s.to_json() for s in first]}
+                                    for first, resolution in chosen.searches]
         store, lock = session.start(args.out or session.default_out(), manifest)
     with lock:
         if lock.stale:
@@ -410,11 +413,11 @@ def cmd_run(args):
             return run_matrix(batch, store, jobs, timeout, timing, progress)
 
         try:
-            plan = store.manifest().get("search")
-            if plan:
-                lost = _search(store, plan, run)
-            else:
-                lost = run(specs)
+            plans = store.manifest().get("searches", [])
+            searched = {json.dumps(s, sort_keys=True) for plan in plans for s in plan["first"]}
+            lost = run([s for s in specs if json.dumps(s.to_json(), sort_keys=True) not in searched])
+            for plan in plans:
+                lost += _search(store, plan, run)
         except KeyboardInterrupt:  # every finished run is stored; the workers are gone
             print(f"\ndalembert: interrupted; {len(store.done_keys())} of {len(specs)} runs stored in {store.path} — "
                   f"finish with: dalembert run --resume {store.path}", file=sys.stderr)

@@ -35,8 +35,7 @@ class Selection:
     notes: list  # merged duplicates, capped jobs, options that apply to some engines only
     jobs: int
     timeout: float
-    search: str | None = None  # "dt": the specs are the first probes of a boundary search
-    resolution: float | None = None
+    searches: tuple = ()  # (first probes, resolution) of each boundary search: --search dt, or a map
 
 
 def numbers(flag, groups, notes, lower=0.0):
@@ -153,7 +152,7 @@ def select(args, cores):
         engines = sorted({s.engine for s in specs if key in dict(s.options)})
         if engines != sorted({s.engine for s in specs}):
             notes.append(f"--option {key}: applies to {', '.join(engines)} only; the other engines run their defaults")
-    resolution = None
+    searches = []
     if args.search:
         from dalembert.harness.search import RESOLUTION
 
@@ -168,6 +167,32 @@ def select(args, cores):
         specs = [s for s in specs if s.dt is not None]
         if not specs:
             raise ValueError("--search dt: no selected integrator takes a fixed step")
+        searches.append((tuple(specs), resolution))
     elif args.resolution is not None:
         raise ValueError("--resolution: only with --search")
-    return Selection(specs, skipped, notes, jobs, timeout, args.search, resolution)
+    if tags and not args.no_maps and not args.search:
+        for plan, first in _maps(args, tags, registry, options):
+            notes.append(f"stability map {plan.name}: {plan.case} over {plan.parameter} = {plan.values}, each "
+                         f"fixed-step integrator's boundary searched in [{plan.bracket[0]:g}, {plan.bracket[1]:g}] s "
+                         "(--no-maps leaves it out)")
+            specs = specs + [s for s in first if s not in specs]
+            searches.append((tuple(first), plan.resolution))
+    return Selection(specs, skipped, notes, jobs, timeout, tuple(searches))
+
+
+def _maps(args, tags, registry, options):
+    """The default stability maps the selected tags carry: ``[(MapPlan, first probes)]``."""
+    from dalembert.harness.matrix import expand
+    from dalembert.maps import MAPS
+
+    out = []
+    for _, plan in MAPS.items():
+        if not tags & set(plan.tags):
+            continue
+        values = sweep(registry[plan.case], plan.parameter, plan.values)
+        first, _ = expand([plan.case], None, args.engine, args.integrator, list(plan.bracket), None,
+                          {**plan.params, plan.parameter: values}, options, force=args.force)
+        first = [s for s in first if s.dt is not None]
+        if first:
+            out.append((plan, first))
+    return out
