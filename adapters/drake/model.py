@@ -154,7 +154,7 @@ class DrakeModel:
                 else f"discrete, time_step = {self.time_step!r} s ({plant.get_discrete_contact_solver().name} "
                      f"solver, {plant.get_discrete_contact_approximation().name} approximation)")
         lines = [f"MultibodyPlant: {mode}; nq = {plant.num_positions()}, nv = {plant.num_velocities()}, "
-                 f"gravity = {list(plant.gravity_field().gravity_vector())} m/s^2; "
+                 f"gravity = {plant.gravity_field().gravity_vector().tolist()} m/s^2; "
                  f"{plant.num_collision_geometries()} collision geometries, {plant.num_actuators()} actuators"]
         for name, body in self.bodies.items():
             M = body.default_spatial_inertia()

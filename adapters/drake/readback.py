@@ -38,7 +38,8 @@ def read_back(p, X):
         if j.kind == "free":  # the engine's own quaternion as integrated (its norm is data)
             b = bodies[j.child]
             b["q"], b["p"], b["w"], b["v"] = qj[:, :4], qj[:, 4:], vj[:, :3], vj[:, 3:]
-            R_WB = spatial.quat_to_matrix(spatial.quat_normalize(np.nan_to_num(qj[:, :4], nan=1.0)))
+            with np.errstate(over="ignore", invalid="ignore"):  # the last samples of a blow-up
+                R_WB = spatial.quat_to_matrix(spatial.quat_normalize(np.nan_to_num(qj[:, :4], nan=1.0)))
             w_B = np.einsum("nji,nj->ni", R_WB, vj[:, :3])  # the scene's free joint: w in body axes
             joints[j.child] = JointStates(np.concatenate([qj[:, 4:], qj[:, :4]], axis=1),
                                           np.concatenate([vj[:, 3:], w_B], axis=1))

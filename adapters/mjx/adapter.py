@@ -61,6 +61,23 @@ class MjxAdapter(MujocoAdapter):
         option_choice(settings, "precision", PRECISIONS)
         option_choice(settings, "welds", WELDS)
 
+    def unsupported(self, scene, settings):
+        """The base check, then MJX's own: where ``mjx.put_model`` refuses the compiled model
+        (NotImplementedError, e.g. a feature MJX lacks), the reason is MJX's."""
+        reason = super().unsupported(scene, settings)
+        if reason:
+            return reason
+        import mujoco
+
+        from dalembert.adapters.mujoco.mjcf import mjcf
+
+        model = mujoco.MjModel.from_xml_string(mjcf(scene, settings))
+        try:
+            mjx().put_model(model)  # host to device only: nothing is compiled
+        except NotImplementedError as e:
+            return f"MJX cannot put this model on the device (mjx.put_model: NotImplementedError: {e})"
+        return None
+
     def variants(self, scene):
         """Default matrix: both precisions (and, where the scene has welds, MuJoCo's weld variants)."""
         return [{**v, **p} for v in super().variants(scene) for p in ({}, {"precision": "float64"})]
