@@ -3,6 +3,7 @@
     python -m benchmarks.mjx            # both parts
     python -m benchmarks.mjx parity     # part 1 only
     python -m benchmarks.mjx cost       # part 2 only
+    python -m benchmarks.mjx --all      # every MJX integrator, not only RK4
 
 1. Parity (``dalembert.adapters.mjx.parity``), per canonical case, integrator and precision at
    dt = 1e-3: one step's largest ``qpos``/``qvel`` difference from MuJoCo C, the largest attitude
@@ -27,6 +28,9 @@ from dalembert.case import load_cases
 
 REPEATS = 3
 DT = 1e-3
+# Every (case, integrator, precision) costs MJX a JIT compilation or two (5-25 s each on 2 busy
+# cores): RK4 by default, every integrator with `--all`.
+INTEGRATORS = ("rk4",)
 
 
 def canonical():
@@ -40,7 +44,7 @@ def parity():
     print(f"{'case':<24}{'integrator':<14}{'precision':<10}{'1-step qpos':>12}{'1-step qvel':>12}"
           f"{'attitude':>10}{'position':>10}{'floor':>9}{'f32 floor':>10}")
     for case in canonical():
-        for integ in ("euler", "rk4", "implicitfast"):
+        for integ in INTEGRATORS:
             for prec in ("float32", "float64"):
                 s = Settings(integ, dt=DT, options={"precision": prec})
                 one = one_step(case, s)
@@ -75,7 +79,7 @@ def cost():
     print(f"{'case':<24}{'integrator':<14}{'precision':<10}{'compile':>9}{'adapter':>10}{'bare scan':>10}"
           f"{'ratio':>7}{'MuJoCo C':>10}")
     for case in canonical():
-        for integ in ("euler", "rk4", "implicitfast"):
+        for integ in INTEGRATORS:
             c = mj.prepare(case.scene, case.times, Settings(integ, dt=DT))
             mj.run(c)
             c_wall = np.median([mj.run(c).wall_s for _ in range(REPEATS)])
@@ -90,6 +94,10 @@ def cost():
 
 
 def main(argv):
+    global INTEGRATORS
+    if "--all" in argv:
+        INTEGRATORS = tuple(get_adapter("mjx").integrators)
+        argv = [a for a in argv if a != "--all"]
     parts = argv or ["parity", "cost"]
     if "parity" in parts:
         parity()
