@@ -23,7 +23,10 @@ F64 = {"precision": "float64"}
 # MJX's RK4 is second order on a rotating free body (float64; measured on the top over 2 s:
 # 4.18e-6, 1.04e-6, 2.61e-7 rad at dt 1e-2, 5e-3, 2.5e-3 — MuJoCo C's RK4 on the same model,
 # 4.9e-9, 3.1e-10, 1.9e-11: fourth order). One step shows why: qvel agrees with MuJoCo C to
-# roundoff, qpos differs by O(dt^3) (2.1e-7 and 2.1e-10 after two steps at dt 1e-2 and 1e-3).
+# roundoff, qpos differs by O(dt^3) (2.1e-7 and 2.1e-10 after two steps at dt 1e-2 and 1e-3): the
+# stages advance the quaternion by the stage velocities without the dexp^-1 correction (Pinocchio's
+# rk4-naive). MuJoCo C 3.14.0's RK4 measured the same way is second order too (log2 ratio 1.999 on
+# this top against itself at dt 1e-4): MJX 3.17 keeps MuJoCo's RK4 from before 4.0.
 MJX_RK4_ORDER = 2
 # The attitude bound for MJX's RK4 at dt = 1e-3 in float64: measured 5.9e-8 rad on the top over 20 s
 # and 5.3e-7 on the box (its spin is slower but longer-lasting); both C dt^2 t, 5x the larger.

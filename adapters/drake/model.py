@@ -116,9 +116,8 @@ class DrakeModel:
             a, b = joint.position_start(), joint.velocity_start()
             if j.kind == "free":
                 quat = np.asarray(j.q0[3:], dtype=float)
-                R_WB = spatial.quat_to_matrix(quat)
-                q[a:a + 7] = np.concatenate([quat, j.q0[:3]])
-                v[b:b + 6] = np.concatenate([R_WB @ np.asarray(j.v0[3:], dtype=float), j.v0[:3]])
+                q[a:a + 7] = np.concatenate([quat, j.q0[:3]])  # Drake: w in world axes, the scene's in body axes
+                v[b:b + 6] = np.concatenate([spatial.body_to_world(quat, j.v0[3:]), j.v0[:3]])
             elif j.kind == "revolute":
                 q[a], v[b] = j.q0[0], j.v0[0]
             elif j.kind == "ball":  # rpy of R_FM; w in F = R_FM w in M (the child joint frame)

@@ -39,8 +39,7 @@ def read_back(p, X):
             b = bodies[j.child]
             b["q"], b["p"], b["w"], b["v"] = qj[:, :4], qj[:, 4:], vj[:, :3], vj[:, 3:]
             with np.errstate(over="ignore", invalid="ignore"):  # the last samples of a blow-up
-                R_WB = spatial.quat_to_matrix(spatial.quat_normalize(np.nan_to_num(qj[:, :4], nan=1.0)))
-            w_B = np.einsum("nji,nj->ni", R_WB, vj[:, :3])  # the scene's free joint: w in body axes
+                w_B = spatial.world_to_body(spatial.quat_normalize(qj[:, :4]), vj[:, :3])  # the scene's: body axes
             joints[j.child] = JointStates(np.concatenate([qj[:, 4:], qj[:, :4]], axis=1),
                                           np.concatenate([vj[:, 3:], w_B], axis=1))
             continue
