@@ -44,9 +44,15 @@ class MjxAdapter(MujocoAdapter):
     }
 
     def version(self):
+        """MJX's version; ImportError when MJX or JAX is missing. Neither is imported here: the
+        harness asks before forking its workers, and a process that has started JAX's threads
+        must not fork (JAX warns of deadlocks) — each worker imports JAX itself."""
         from importlib.metadata import PackageNotFoundError, version
+        from importlib.util import find_spec
 
-        mjx()  # ImportError when MJX (or JAX) is missing
+        for module in ("jax", "mujoco.mjx"):
+            if find_spec(module) is None:
+                raise ImportError(f"No module named {module!r} (install dalembert[mjx])")
         try:
             return version("mujoco-mjx")
         except PackageNotFoundError:  # MJX inside a MuJoCo that ships it
