@@ -18,6 +18,8 @@ BUILTIN = {
     "mujoco": "dalembert.adapters.mujoco:MujocoAdapter",
     "pinocchio": "dalembert.adapters.pinocchio:PinocchioAdapter",
     "exudyn": "dalembert.adapters.exudyn:ExudynAdapter",
+    "drake": "dalembert.adapters.drake:DrakeAdapter",
+    "mjx": "dalembert.adapters.mjx:MjxAdapter",
 }
 
 _REGISTRY = Registry("engine")

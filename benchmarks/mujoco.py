@@ -17,8 +17,8 @@ import time
 
 import numpy as np
 
+from benchmarks.bare import adapter_against_bare
 from dalembert.adapters import get_adapter
-from dalembert import Settings
 from dalembert.case import load_cases
 
 REPEATS = 5
@@ -44,20 +44,8 @@ def bare_rollout(prepared):
 def main():
     adapter = get_adapter("mujoco")
     print(f"MuJoCo {adapter.version()}, dt = 1e-3; stepping time per simulated second (ms)")
-    print(f"{'case':<24}{'integrator':<14}{'adapter':>10}{'rollout':>10}{'ratio':>8}")
-    ratios = []
-    for name, factory in load_cases().items():
-        case = factory()
-        for integ in adapter.integrators:
-            prepared = adapter.prepare(case.scene, case.times, Settings(integ, dt=1e-3))
-            adapter.run(prepared)
-            bare_rollout(prepared)
-            ours = np.median([adapter.run(prepared).wall_s for _ in range(REPEATS)])
-            bare = np.median([bare_rollout(prepared) for _ in range(REPEATS)])
-            ratios.append(ours / bare)
-            print(f"{name:<24}{integ:<14}{1e3 * ours / case.t_final:>10.2f}{1e3 * bare / case.t_final:>10.2f}"
-                  f"{ours / bare:>8.2f}")
-    print(f"overhead ratio: median {np.median(ratios):.2f}, max {np.max(ratios):.2f} (goal <= 1.2)")
+    adapter_against_bare(adapter, [f() for _, f in load_cases().items()], adapter.integrators, bare_rollout,
+                         repeats=REPEATS, bare_label="rollout")
 
 
 if __name__ == "__main__":

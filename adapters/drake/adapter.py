@@ -1,0 +1,135 @@
+"""``DrakeAdapter``: the contract (``dalembert.adapters``) for Drake's ``MultibodyPlant``.
+
+``prepare`` builds the plant and its diagram (``model``) in continuous mode, or
+in discrete mode for the integrator ``discrete`` (``time_step = dt``); ``run``
+steps a ``Simulator`` through the sample times (``stepping``) and reads the
+states back in body terms (``readback``); ``audit`` reads the plant back.
+
+Integrators: Drake's, by its scheme names (``stepping.SCHEMES``), each in
+fixed-step mode (``dt``) and, where Drake estimates its error, error-controlled
+(``<name>-adaptive``: ``rtol`` is Drake's target accuracy, ``atol`` unused).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
+from dalembert.adapters.drake.stepping import SCHEMES, simulate
+from dalembert.scene import EFFECTS
+
+__all__ = ["DrakeAdapter"]
+
+FIXED = {
+    "explicit-euler": "explicit (forward) Euler, first order",
+    "semi-explicit-euler": "semi-explicit (symplectic) Euler, first order",
+    "rk2": "Runge-Kutta 2 (explicit trapezoid)",
+    "rk3": "Runge-Kutta 3",
+    "rk5": "Runge-Kutta 5 (Dormand-Prince)",
+    "bs3": "Bogacki-Shampine 3",
+    "implicit-euler": "implicit Euler (Newton, finite-difference Jacobian)",
+    "velocity-implicit-euler": "implicit Euler in the velocities (the configuration follows them)",
+    "radau1": "one-stage Radau IIA (implicit Euler)",
+    "radau3": "two-stage Radau IIA, third order",
+}
+# Offered error-controlled too: the schemes Drake estimates the error of, but for the two first-order
+# implicit Eulers, whose error control at the matrix's tolerances takes millions of steps per simulated
+# second (measured at rtol 1e-8: 13-25 s of stepping for 0.5 s of a fast top or the violent rod):
+# they are offered fixed-step only.
+ADAPTIVE = ("rk3", "rk5", "bs3", "radau3")
+ADAPTIVE_SUFFIX = "-adaptive"
+# A ball joint is a BallRpyJoint: its rates are singular where cos(pitch) = 0. Drake refuses
+# configurations closer than this to the singularity (|cos(pitch)| below it), and so do we at the
+# start: the scene's initial attitude cannot be held in these coordinates.
+RPY_SINGULAR_COS = 1e-3
+
+
+def _integrators():
+    out = {k: IntegratorSpec(True, (), f"Drake {v}") for k, v in FIXED.items()}
+    out.update({k + ADAPTIVE_SUFFIX: IntegratorSpec(False, (), f"Drake {FIXED[k]}, error-controlled")
+                for k in ADAPTIVE})
+    out["discrete"] = IntegratorSpec(True, (), "the plant in discrete mode (time_step = dt; SAP, semi-implicit)")
+    return out
+
+
+class DrakeAdapter(Adapter):
+    """Drake (``pydrake``): the scene as a ``MultibodyPlant``, Drake's integrators or its discrete mode."""
+
+    name = "drake"
+    effects = EFFECTS
+    integrators = _integrators()
+
+    def version(self):
+        import pydrake
+
+        return pydrake.__version__ if hasattr(pydrake, "__version__") else _distribution_version()
+
+    def unsupported(self, scene, settings):
+        reason = super().unsupported(scene, settings)
+        if reason:
+            return reason
+        from dalembert import spatial
+
+        for j in scene.joints:
+            if j.kind == "ball":
+                R = spatial.quat_to_matrix(np.asarray(j.q0, dtype=float))
+                cos_pitch = float(np.hypot(R[0, 0], R[1, 0]))  # R = Rz Ry Rx: R[2, 0] = -sin(pitch)
+                if cos_pitch < RPY_SINGULAR_COS:
+                    return (f"joint:ball {j.child!r} starts at pitch {np.degrees(np.arcsin(-R[2, 0])):.3f} deg: Drake's "
+                            "ball joint (BallRpyJoint, roll-pitch-yaw) is singular at +-90 deg pitch")
+        return None
+
+    def describe(self, scene, settings):
+        """The plant's summary, for reports and ``dalembert show-model``."""
+        from dalembert.adapters.drake.model import DrakeModel
+
+        return DrakeModel(scene, settings.dt if settings.integrator == "discrete" else 0.0).summary
+
+    # ------------------------------------------------------------- build
+    def prepare(self, scene, times, settings):
+        from dalembert.adapters.drake.model import DrakeModel
+
+        discrete = settings.integrator == "discrete"
+        model = DrakeModel(scene, settings.dt if discrete else 0.0)
+        q0, v0 = model.initial_state()
+        scheme = None if discrete else SCHEMES[settings.integrator.removesuffix(ADAPTIVE_SUFFIX)]
+        return dict(scene=scene, times=np.asarray(times, dtype=float), settings=settings, model=model, q0=q0, v0=v0,
+                    scheme=scheme)
+
+    # ------------------------------------------------------------- run
+    def run(self, prepared):
+        from dalembert.adapters.drake.readback import read_back
+
+        p = prepared
+        X, wall, n_steps, n_rhs, message = simulate(p)
+        loads = p["model"].loads
+        info = {"message": message, "load_evaluations": loads.evaluations if loads is not None else 0}
+        return Outcome(lambda: read_back(p, X), wall, n_steps, n_rhs, info)
+
+    # ------------------------------------------------------------- audit
+    def audit(self, prepared, outcome):
+        p = prepared
+        s = p["settings"]
+        loads = p["model"].loads
+        follower = any(ld.frame == "body" for ld in p["scene"].loads)
+        return {
+            **p["model"].audit(),
+            "mode": "discrete" if p["scheme"] is None else "continuous",
+            "integrator": p["scheme"] or "discrete update (MultibodyPlant)",
+            "fixed_step": s.dt is not None,
+            "target_accuracy": s.rtol, "atol_used": False,
+            "loads": ([f"{ld.effect} on {ld.body}" for ld in p["scene"].loads]),
+            "load_path": ("" if loads is None else
+                          "SceneLoads system -> applied_spatial_force; follower forces turned into world axes from "
+                          "the body_poses port at every evaluation of the dynamics" if follower else
+                          "SceneLoads system -> applied_spatial_force (world-frame loads)"),
+            "load_evaluations": outcome.info.get("load_evaluations", 0),
+            "stopped": outcome.info.get("message", ""),
+            "drake_version": self.version(),
+        }
+
+
+def _distribution_version():
+    from importlib.metadata import version
+
+    return version("drake")

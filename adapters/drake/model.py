@@ -1,0 +1,170 @@
+"""A scene as a Drake ``MultibodyPlant`` in a diagram, exactly the scene's physics: ``DrakeModel``.
+
+* Every body is a rigid body whose Drake body frame is the scene's body frame B
+  (origin at the COM), with an explicit spatial inertia about it
+  (``SpatialInertia.MakeFromCentralInertia``, the full tensor): ``X_EB`` is the
+  identity for every body (``dalembert.adapters.base``).
+* Joints between frames fixed in parent and child (``FixedOffsetFrame`` at the
+  scene's joint frames): a free body gets a ``QuaternionFloatingJoint`` to the
+  world, a revolute joint a ``RevoluteJoint`` about the normalized axis, a ball
+  joint a ``BallRpyJoint`` (Drake has no quaternion ball joint: roll-pitch-yaw
+  coordinates, singular at pitch = +-pi/2), a weld a ``WeldJoint``; every damping
+  zero, no limits.
+* Gravity set from the scene (Drake's default is -9.81 in z), zero when the
+  scene has none. No SceneGraph, no collision geometry, no actuators.
+* Loads through ``loads.SceneLoads``, connected to the plant's
+  ``applied_spatial_force`` input: a follower force is turned into world axes
+  from the pose the plant reports on its ``body_poses`` port, at every
+  evaluation of the dynamics.
+* Continuous mode (``time_step = 0``: Drake's integrators) or discrete mode
+  (``time_step = dt``: the plant's own discrete update).
+
+Drake's coordinates (converted only through ``dalembert.spatial``): quaternion
+floating joint ``q = (qw, qx, qy, qz, x, y, z)``, ``v = (w_WB_W, v_WB_W)`` — the
+angular velocity in WORLD axes, unlike MuJoCo's and Pinocchio's body axes;
+ball joint ``q = (roll, pitch, yaw)`` of ``R_FM`` (``R = Rz(yaw) Ry(pitch) Rx(roll)``),
+``v = w_FM_F``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dalembert import spatial
+from dalembert.scene import WORLD
+
+__all__ = ["DrakeModel"]
+
+
+def _transform(quat, point):
+    from pydrake.math import RigidTransform, RotationMatrix
+
+    return RigidTransform(RotationMatrix(spatial.quat_to_matrix(quat)), np.asarray(point, dtype=float))
+
+
+class DrakeModel:
+    """A scene as a finalized ``MultibodyPlant`` inside a ``Diagram`` (with the loads system).
+
+    Attributes
+    ----------
+    plant, diagram, loads : the plant, its diagram, the ``SceneLoads`` system (or None)
+    bodies : dict body name -> Drake ``RigidBody``
+    joints : dict child name -> Drake joint (welds included)
+    time_step : float — 0 for continuous mode, else the discrete step (s)
+    summary : str — the plant as text (``dalembert show-model``)
+    """
+
+    def __init__(self, scene, time_step=0.0):
+        from pydrake.multibody.plant import MultibodyPlant
+        from pydrake.multibody.tree import (BallRpyJoint, FixedOffsetFrame, QuaternionFloatingJoint, RevoluteJoint,
+                                            RotationalInertia, SpatialInertia, WeldJoint)
+        from pydrake.systems.framework import DiagramBuilder
+
+        from dalembert.adapters.drake.loads import SceneLoads
+
+        self.scene, self.time_step = scene, float(time_step)
+        builder = DiagramBuilder()
+        plant = builder.AddSystem(MultibodyPlant(time_step=self.time_step))
+        plant.set_name("plant")
+        self.bodies, self.joints = {}, {}
+        for body in scene.bodies:
+            I = body.inertia_matrix
+            G = RotationalInertia(I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])
+            self.bodies[body.name] = plant.AddRigidBody(
+                body.name, SpatialInertia.MakeFromCentralInertia(body.mass, np.zeros(3), G))
+        for j in scene.joints:
+            parent = plant.world_body() if j.parent == WORLD else self.bodies[j.parent]
+            child = self.bodies[j.child]
+            if j.kind == "free":  # the body frame itself, from the world frame
+                joint = QuaternionFloatingJoint(j.child, plant.world_frame(), child.body_frame(), 0.0, 0.0)
+            else:
+                F = plant.AddFrame(FixedOffsetFrame(f"{j.child}_Jp", parent.body_frame(),
+                                                    _transform(j.parent_quat, j.parent_point)))
+                M = plant.AddFrame(FixedOffsetFrame(f"{j.child}_Jc", child.body_frame(),
+                                                    _transform(j.child_quat, j.child_point)))
+                if j.kind == "revolute":
+                    axis = np.asarray(j.axis, dtype=float)
+                    joint = RevoluteJoint(j.child, F, M, axis / np.linalg.norm(axis), 0.0)
+                elif j.kind == "ball":
+                    joint = BallRpyJoint(j.child, F, M, 0.0)
+                else:
+                    from pydrake.math import RigidTransform
+
+                    joint = WeldJoint(j.child, F, M, RigidTransform())
+            self.joints[j.child] = plant.AddJoint(joint)
+        plant.mutable_gravity_field().set_gravity_vector(np.asarray(scene.gravity, dtype=float))
+        if self.time_step > 0.0:  # output ports from the state they are evaluated at, not from the last step
+            plant.SetUseSampledOutputPorts(False)
+        plant.Finalize()
+        self.loads = None
+        if scene.loads:
+            self.loads = builder.AddSystem(SceneLoads(scene.loads, {n: b.index() for n, b in self.bodies.items()}))
+            builder.Connect(plant.get_body_poses_output_port(), self.loads.get_input_port(0))
+            builder.Connect(self.loads.get_output_port(0), plant.get_applied_spatial_force_input_port())
+        self.plant, self.diagram = plant, builder.Build()
+        self.summary = self._summary()
+
+    # ------------------------------------------------------------ conversions
+    def initial_state(self):
+        """The plant's ``(q (nq,), v (nv,))`` at the scene's ``q0``, ``v0`` (Drake's coordinates above)."""
+        from pydrake.math import RollPitchYaw, RotationMatrix
+
+        plant = self.plant
+        q, v = np.zeros(plant.num_positions()), np.zeros(plant.num_velocities())
+        for j in self.scene.joints:
+            joint = self.joints[j.child]
+            a, b = joint.position_start(), joint.velocity_start()
+            if j.kind == "free":
+                quat = np.asarray(j.q0[3:], dtype=float)
+                q[a:a + 7] = np.concatenate([quat, j.q0[:3]])  # Drake: w in world axes, the scene's in body axes
+                v[b:b + 6] = np.concatenate([spatial.body_to_world(quat, j.v0[3:]), j.v0[:3]])
+            elif j.kind == "revolute":
+                q[a], v[b] = j.q0[0], j.v0[0]
+            elif j.kind == "ball":  # rpy of R_FM; w in F = R_FM w in M (the child joint frame)
+                R_FM = spatial.quat_to_matrix(np.asarray(j.q0, dtype=float))
+                q[a:a + 3] = RollPitchYaw(RotationMatrix(R_FM)).vector()
+                v[b:b + 3] = R_FM @ np.asarray(j.v0, dtype=float)
+        return q, v
+
+    # ------------------------------------------------------------ audit
+    def audit(self):
+        """What the plant holds, read back from it: gravity, joints, damping, limits, geometry, forces."""
+        plant = self.plant
+        joints = [plant.get_joint(i) for i in plant.GetJointIndices()]
+        damping = [float(np.max(np.abs(jt.default_damping_vector()), initial=0.0)) for jt in joints]
+        lower = np.concatenate([plant.GetPositionLowerLimits(), plant.GetVelocityLowerLimits()])
+        upper = np.concatenate([plant.GetPositionUpperLimits(), plant.GetVelocityUpperLimits()])
+        return {
+            "gravity": tuple(float(g) for g in plant.gravity_field().gravity_vector()),
+            "joints": {jt.name(): jt.type_name() for jt in joints if jt.name() in self.joints},
+            "max_joint_damping": max(damping, default=0.0),
+            "finite_limits": int(np.sum(np.isfinite(lower)) + np.sum(np.isfinite(upper))),
+            "collision_geometries": int(plant.num_collision_geometries()),
+            "actuators": int(plant.num_actuators()),
+            "constraints": int(plant.num_constraints()),
+            "force_elements": int(plant.num_force_elements()),  # 1: the uniform gravity field, always present
+            "time_step": float(plant.time_step()),
+            "nq": int(plant.num_positions()), "nv": int(plant.num_velocities()),
+        }
+
+    def _summary(self):
+        plant = self.plant
+        mode = ("continuous (Drake's integrators)" if self.time_step == 0.0
+                else f"discrete, time_step = {self.time_step!r} s ({plant.get_discrete_contact_solver().name} "
+                     f"solver, {plant.get_discrete_contact_approximation().name} approximation)")
+        lines = [f"MultibodyPlant: {mode}; nq = {plant.num_positions()}, nv = {plant.num_velocities()}, "
+                 f"gravity = {plant.gravity_field().gravity_vector().tolist()} m/s^2; "
+                 f"{plant.num_collision_geometries()} collision geometries, {plant.num_actuators()} actuators"]
+        for name, body in self.bodies.items():
+            M = body.default_spatial_inertia()
+            lines.append(f"body {name}: mass {body.default_mass():g} kg, COM at the body origin "
+                         f"{M.get_com().tolist()}, I_Bcm = {M.CalcRotationalInertia().CopyToFullMatrix3().tolist()}")
+        for child, joint in self.joints.items():
+            X_PF = joint.frame_on_parent().GetFixedPoseInBodyFrame()
+            X_CM = joint.frame_on_child().GetFixedPoseInBodyFrame()
+            lines.append(f"joint {child}: {joint.type_name()} {joint.parent_body().name()} -> {joint.child_body().name()}"
+                         f", X_PF p = {X_PF.translation().tolist()}, X_CM p = {X_CM.translation().tolist()}, "
+                         f"damping {joint.default_damping_vector().tolist()}")
+        for ld in self.scene.loads:
+            lines.append(f"load {ld.effect} on {ld.body}: {list(ld.vector)} at {list(ld.point)} (SceneLoads system)")
+        return "\n".join(lines) + "\n"

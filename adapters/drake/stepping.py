@@ -1,0 +1,105 @@
+"""Drake's stepping: a ``Simulator`` on the diagram, advanced from sample to sample.
+
+Continuous mode: the integrator is chosen by Drake's own scheme name
+(``ResetIntegratorFromFlags``), either in fixed-step mode (steps of exactly
+``dt``; Drake lands on each sample time with one extra roundoff-sized step where
+the accumulated time falls short of it — counted in its statistics, harmless to
+the accuracy) or error-controlled (``set_target_accuracy(rtol)``: Drake has one
+accuracy knob, its weighted error norm has no separate absolute tolerance; the
+largest step is the sample interval). Discrete mode: the plant's periodic update
+of period ``dt``.
+
+The state is copied out after every ``AdvanceTo(t_k)``. A blow-up is data: the
+first non-finite state, or a Drake exception raised on a non-finite state or
+mentioning NaN, ends the run with NaN from that sample on and Drake's message
+kept; any other Drake exception (e.g. an implicit integrator that fails to
+converge at a fixed step) is raised with the time reached, and the run is
+stored as failed.
+
+``p`` is the dict ``DrakeAdapter.prepare`` returns.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+__all__ = ["simulate", "SCHEMES"]
+
+# dalembert name -> Drake's scheme name (GetIntegrationSchemes()).
+SCHEMES = {
+    "explicit-euler": "explicit_euler", "semi-explicit-euler": "semi_explicit_euler",
+    "rk2": "runge_kutta2", "rk3": "runge_kutta3", "rk5": "runge_kutta5", "bs3": "bogacki_shampine3",
+    "implicit-euler": "implicit_euler", "velocity-implicit-euler": "velocity_implicit_euler",
+    "radau1": "radau1", "radau3": "radau3",
+}
+
+
+def _state(p, context):
+    """The plant's state ``x = (q, v)`` (continuous or discrete) in ``context`` (the diagram's)."""
+    plant = p["model"].plant
+    return plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(context))
+
+
+def reset(p):
+    """A fresh simulator at the initial state, with its integrator set up; ``(simulator, integrator or None)``."""
+    from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
+
+    model, s = p["model"], p["settings"]
+    simulator = Simulator(model.diagram)
+    context = simulator.get_mutable_context()
+    context.SetTime(float(p["times"][0]))
+    plant_context = model.plant.GetMyMutableContextFromRoot(context)
+    model.plant.SetPositionsAndVelocities(plant_context, np.concatenate([p["q0"], p["v0"]]))
+    integrator = None
+    if model.time_step == 0.0:
+        name = p["scheme"]
+        if s.dt is not None:
+            integrator = ResetIntegratorFromFlags(simulator, name, float(s.dt))
+            integrator.set_fixed_step_mode(True)
+        else:
+            interval = float(np.min(np.diff(p["times"])))
+            integrator = ResetIntegratorFromFlags(simulator, name, interval)
+            integrator.set_fixed_step_mode(False)
+            integrator.set_target_accuracy(float(s.rtol))
+    simulator.Initialize()
+    return simulator, integrator
+
+
+def simulate(p):
+    """Step through ``p["times"]``: ``(X (n, nq + nv), wall s, steps, RHS evaluations, message)``.
+
+    ``X`` rows are the plant's ``(q, v)`` at each sample, NaN from the first sample not reached.
+    """
+    simulator, integrator = reset(p)
+    times = p["times"]
+    context = simulator.get_context()
+    x0 = _state(p, context)
+    X = np.full((len(times), len(x0)), np.nan)
+    X[0] = x0
+    message = ""
+    loads = p["model"].loads
+    if loads is not None:
+        loads.evaluations = 0
+    start = time.perf_counter()
+    for k in range(1, len(times)):
+        try:
+            simulator.AdvanceTo(float(times[k]))
+        except RuntimeError as e:
+            x = _state(p, context)
+            if np.all(np.isfinite(x)) and "nan" not in str(e).lower():
+                raise RuntimeError(f"Drake stopped at t = {context.get_time():g} s of {times[-1]:g} s: {e}") from None
+            message = f"Drake at t = {context.get_time():g} s: {e}"
+            break
+        x = _state(p, context)
+        if not np.all(np.isfinite(x)):
+            message = f"non-finite state at t = {times[k]:g} s"
+            break
+        X[k] = x
+    wall = time.perf_counter() - start
+    if integrator is not None:
+        n_steps, n_rhs = integrator.get_num_steps_taken(), integrator.get_num_derivative_evaluations()
+    else:  # discrete: one update, one evaluation of the dynamics per step
+        n_steps = n_rhs = int(round((context.get_time() - times[0]) / p["settings"].dt))
+    return X, wall, int(n_steps), int(n_rhs), message

@@ -1,0 +1,144 @@
+"""``MjxAdapter``: the contract (``dalembert.adapters``) for MuJoCo XLA (``mujoco.mjx``) on JAX's CPU backend.
+
+The model is the MuJoCo adapter's: the same generated MJCF (``mujoco.mjcf``),
+compiled by MuJoCo C and checked against the scene (``MujocoAdapter.prepare``),
+then put on the device with ``mjx.put_model``; the initial ``MjData`` likewise
+with ``mjx.put_data``. ``prepare`` also compiles the rollout (``stepping``):
+JIT compilation is build, not stepping. ``run`` times the compiled rollout
+alone. The read-back is the MuJoCo adapter's (``mujoco.readback``): MJX's
+sampled ``qpos``/``qvel``, widened to double exactly, are set into a MuJoCo C
+``MjData``, so poses and velocities are MJX's states and the joint reactions
+are MuJoCo C's ``mj_rnePostConstraint`` evaluated on them (the audit says so).
+
+Options: ``precision`` = ``float32`` (MJX's default) | ``float64``
+(``jax_enable_x64``); ``welds`` as for MuJoCo. Loads go through MuJoCo's site
+actuators only (MJX applies them inside every integrator stage); MuJoCo's
+``loads=xfrc_applied`` path, a Python call per step, is not offered.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dalembert.adapters.base import IntegratorSpec, Outcome, option_choice
+from dalembert.adapters.mujoco import MujocoAdapter
+from dalembert.adapters.mujoco.mjcf import WELDS
+from dalembert.adapters.mujoco.readback import read_back
+from dalembert.adapters.mjx.stepping import PRECISIONS, compile_rollout, mjx, precision, run_rollout, to_host
+
+__all__ = ["MjxAdapter"]
+
+OPTIONS = ("precision", "welds")
+STAGES = {"euler": 1, "rk4": 4, "implicitfast": 1}  # evaluations of the dynamics per step
+
+
+class MjxAdapter(MujocoAdapter):
+    """MJX (``mujoco-mjx``) on JAX's CPU backend. Options: ``precision`` = ``float32`` | ``float64``;
+    ``welds`` = ``tree`` | ``equality``."""
+
+    name = "mjx"
+    integrators = {
+        "euler": IntegratorSpec(True, OPTIONS, "MJX semi-implicit Euler"),
+        "rk4": IntegratorSpec(True, OPTIONS, "MJX classical RK4"),
+        "implicitfast": IntegratorSpec(True, OPTIONS, "MJX implicit in velocity, no Coriolis derivatives"),
+    }
+
+    def version(self):
+        """MJX's version; ImportError when MJX or JAX is missing. Neither is imported here: the
+        harness asks before forking its workers, and a process that has started JAX's threads
+        must not fork (JAX warns of deadlocks) — each worker imports JAX itself."""
+        from importlib.metadata import PackageNotFoundError, version
+        from importlib.util import find_spec
+
+        for module in ("jax", "mujoco.mjx"):
+            if find_spec(module) is None:
+                raise ImportError(f"No module named {module!r} (install dalembert[mjx])")
+        try:
+            return version("mujoco-mjx")
+        except PackageNotFoundError:  # MJX inside a MuJoCo that ships it
+            import mujoco
+
+            return f"mujoco {mujoco.__version__}"
+
+    def check(self, scene, times, settings):
+        from dalembert.adapters.base import Adapter
+
+        Adapter.check(self, scene, times, settings)
+        option_choice(settings, "precision", PRECISIONS)
+        option_choice(settings, "welds", WELDS)
+
+    def unsupported(self, scene, settings):
+        """The base check, then MJX's own: where ``mjx.put_model`` refuses the compiled model
+        (NotImplementedError, e.g. a feature MJX lacks), the reason is MJX's."""
+        reason = super().unsupported(scene, settings)
+        if reason:
+            return reason
+        import mujoco
+
+        from dalembert.adapters.mujoco.mjcf import mjcf
+
+        model = mujoco.MjModel.from_xml_string(mjcf(scene, settings))
+        try:
+            mjx().put_model(model)  # host to device only: nothing is compiled
+        except NotImplementedError as e:
+            return f"MJX cannot put this model on the device (mjx.put_model: NotImplementedError: {e})"
+        return None
+
+    def variants(self, scene):
+        """Default matrix: both precisions (and, where the scene has welds, MuJoCo's weld variants)."""
+        return [{**v, **p} for v in super().variants(scene) for p in ({}, {"precision": "float64"})]
+
+    # ------------------------------------------------------------- build
+    def prepare(self, scene, times, settings):
+        import jax
+        import jax.numpy as jnp
+        import mujoco
+
+        p = super().prepare(scene, times, settings)  # compiled MJCF, checked; the initial state
+        p["precision"] = settings.options.get("precision", PRECISIONS[0])
+        data = mujoco.MjData(p["model"])
+        data.qpos[:], data.qvel[:] = p["qpos0"], p["qvel0"]
+        if p["load_path"] == "actuator":
+            data.ctrl[:] = 1.0
+        with precision(p["precision"]):
+            p["mx"] = mjx().put_model(p["model"])
+            p["dx0"] = mjx().put_data(p["model"], data)
+            p["steps_device"] = jnp.asarray(p["steps"], dtype=jnp.int32)
+            p["compile_s"] = compile_rollout(p["mx"], p["dx0"], p["steps_device"])
+        p["backend"] = jax.default_backend()
+        return p
+
+    # ------------------------------------------------------------- run
+    def run(self, prepared):
+        p = prepared
+        with precision(p["precision"]):
+            Q, V, wall = run_rollout(p["mx"], p["dx0"], p["steps_device"])
+        n_steps = int(p["steps"].sum())
+        info = {"message": ""}
+
+        def read():
+            Qh, Vh = to_host(Q, V, p["qpos0"], p["qvel0"])
+            traj, info["audit"] = read_back(p, Qh, Vh)
+            return traj
+
+        return Outcome(read, wall, n_steps, n_steps * STAGES[p["settings"].integrator], info)
+
+    # ------------------------------------------------------------- audit
+    def audit(self, prepared, outcome):
+        import jax
+
+        p, mx = prepared, prepared["mx"]
+        out = super().audit(prepared, outcome)  # MuJoCo C's compiled model: flags, gravity, actuators
+        out.update({
+            # the gravity put on the device, in its precision (float32 rounds -9.81 to -9.8100004)
+            "gravity_device": tuple(float(g) for g in np.asarray(mx.opt.gravity)),
+            "integrator": f"MJX {mx.opt.integrator.name}",
+            "timestep": float(np.asarray(mx.opt.timestep)),
+            "precision": str(np.asarray(mx.opt.timestep).dtype),
+            "dtype_qpos": str(p["dx0"].qpos.dtype),
+            "backend": p["backend"], "jax_version": jax.__version__,
+            "jit_compile_s": p["compile_s"],
+            "mjx_version": self.version(),
+            "reactions": "MuJoCo C mj_rnePostConstraint on MJX's sampled states (double)",
+        })
+        return out

@@ -1,0 +1,84 @@
+"""MJX against MuJoCo C at the same settings: one step, and over the horizon.
+
+``one_step`` steps both engines once (or a few times) from the same initial
+state of the same compiled model and returns the largest differences in
+``qpos`` and ``qvel``. ``horizon`` runs both adapters on a case and returns the
+largest differences between the two trajectories (orientation as the geodesic
+angle, rad; COM position, m), set against the case's double-precision floor
+(``Case.floor``) and, for the torque-free top, the float32 floor from the same
+roundoff machinery (``dalembert.reference.roundoff.top_roundoff`` with float32
+as the working and double as the extended precision).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["one_step", "horizon"]
+
+
+def one_step(case, settings, n_steps=1):
+    """Largest ``|qpos_MJX - qpos_C|`` and ``|qvel_MJX - qvel_C|`` after ``n_steps`` steps from the case's
+    initial state: ``dict(qpos=..., qvel=...)`` (the engine's units: m, rad, quaternion components, m/s, rad/s)."""
+    import jax
+    import mujoco
+
+    from dalembert.adapters import get_adapter
+    from dalembert.adapters.mjx.stepping import mjx, precision
+
+    mj = get_adapter("mujoco")
+    p = mj.prepare(case.scene, case.times, settings)
+    model, data = p["model"], mujoco.MjData(p["model"])
+    data.qpos[:], data.qvel[:] = p["qpos0"], p["qvel0"]
+    if p["load_path"] == "actuator":
+        data.ctrl[:] = 1.0
+    with precision(settings.options.get("precision", "float32")):
+        dx = mjx().put_data(model, data)
+        mx = mjx().put_model(model)
+        step = jax.jit(mjx().step)
+        for _ in range(n_steps):
+            dx = step(mx, dx)
+        qpos, qvel = np.asarray(dx.qpos, dtype=float), np.asarray(dx.qvel, dtype=float)
+    mujoco.mj_step(model, data, nstep=n_steps)
+    return dict(qpos=float(np.max(np.abs(qpos - data.qpos))), qvel=float(np.max(np.abs(qvel - data.qvel))))
+
+
+def horizon(case, settings):
+    """MJX and MuJoCo C on ``case`` at ``settings`` (MuJoCo C ignores ``precision``): the largest differences
+    over the horizon and the floors they are set against.
+
+    Returns
+    -------
+    dict with ``orientation`` (rad, max over bodies and samples), ``position`` (m), ``floor`` (the case's
+    double-precision orientation floor, rad, NaN where the case has none) and ``float32_floor`` (rad; NaN
+    but for the torque-free top)
+    """
+    from dalembert import spatial
+    from dalembert.adapters import get_adapter
+    from dalembert.settings import Settings
+
+    mjx_adapter, mj = get_adapter("mjx"), get_adapter("mujoco")
+    a = mjx_adapter.run(mjx_adapter.prepare(case.scene, case.times, settings)).trajectory
+    c_settings = Settings(settings.integrator, dt=settings.dt,
+                          options={k: v for k, v in settings.options.items() if k != "precision"})
+    b = mj.run(mj.prepare(case.scene, case.times, c_settings)).trajectory
+    orientation = max(float(np.max(spatial.rotation_angle(a.bodies[n].quaternion, b.bodies[n].quaternion)))
+                      for n in a.bodies)
+    position = max(float(np.max(np.abs(a.bodies[n].position - b.bodies[n].position))) for n in a.bodies)
+    return dict(orientation=orientation, position=position,
+                floor=float(case.floor().get("orientation", np.nan)),
+                float32_floor=float32_floor(case, settings.dt))
+
+
+def float32_floor(case, dt):
+    """The float32 attitude floor (rad) of a torque-free top case at step ``dt``: RK4 in float32 against
+    the same RK4 in double; NaN for any other case."""
+    from dalembert.reference.roundoff import top_roundoff
+
+    joints = case.scene.joints
+    if len(joints) != 1 or joints[0].kind != "free" or case.scene.loads or any(case.scene.gravity):
+        return float("nan")
+    inertia = np.diag(case.scene.bodies[0].inertia_matrix)
+    if np.any(np.abs(case.scene.bodies[0].inertia_matrix - np.diag(inertia)) > 0.0) or joints[0].q0[3:] != (1, 0, 0, 0):
+        return float("nan")  # top_roundoff: principal axes, starting at the identity
+    return top_roundoff(tuple(inertia), tuple(joints[0].v0[3:]), case.times, dt, working=np.float32, extended=float)

@@ -1,0 +1,102 @@
+"""MJX's stepping: one compiled rollout per model structure, ``jax.lax.scan`` over the samples.
+
+``rollout(m, d, steps)`` scans over the sample intervals; within interval k a
+``fori_loop`` takes ``steps[k]`` MJX steps (a traced count: one compiled
+function serves every dt). The jitted function is built once per process and
+JAX caches its compilations by the model's structure (array shapes and dtypes,
+MJX's static fields such as the joint types and the integrator), so a
+prepared model of a structure already seen in this process compiles nothing.
+``compile_rollout`` compiles it by calling it once with zero steps (nothing is
+stepped); ``run_rollout`` times a call through ``block_until_ready``.
+
+Precision: float32 (JAX's default, MJX's) or float64 (``jax_enable_x64``),
+switched per call with ``jax.enable_x64`` so runs of both precisions can share a
+worker process; each precision compiles its own rollout. JAX 0.10's caches do
+not keep the two apart everywhere (measured: after a float32 RK4 rollout, the
+float64 one fails to lower — an inner ``jit(tril)`` reused with float32
+operands), so JAX's caches are cleared whenever a process switches precision.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import io
+import time
+
+import numpy as np
+
+__all__ = ["mjx", "precision", "compile_rollout", "run_rollout", "to_host", "PRECISIONS"]
+
+PRECISIONS = ("float32", "float64")
+
+
+def mjx():
+    """``mujoco.mjx``, imported without the lines it prints when MuJoCo Warp is absent (the adapter prints nothing)."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        from mujoco import mjx as module
+    return module
+
+
+_LAST_PRECISION = []  # the precision this process compiled for last
+
+
+def precision(name):
+    """Context manager: JAX's 64-bit mode on for ``"float64"``, off for ``"float32"`` (JAX's caches
+    cleared first when the last compilation in this process was for the other one)."""
+    import jax
+
+    if _LAST_PRECISION and _LAST_PRECISION[-1] != name:
+        jax.clear_caches()
+    _LAST_PRECISION[:] = [name]
+    return jax.enable_x64(name == "float64")
+
+
+@functools.cache
+def _rollout():
+    import jax
+
+    step = mjx().step
+
+    def rollout(m, d, steps):
+        def interval(d, n):
+            d = jax.lax.fori_loop(0, n, lambda i, d: step(m, d), d)
+            return d, (d.qpos, d.qvel)
+
+        _, (Q, V) = jax.lax.scan(interval, d, steps)
+        return Q, V
+
+    return jax.jit(rollout)
+
+
+def compile_rollout(m, d, steps):
+    """Compile the rollout for ``m``, ``d`` and a steps array shaped like ``steps`` (JAX's cache keeps it):
+    one call with zero steps per interval, so nothing is stepped. Returns the compile wall time, s."""
+    import jax.numpy as jnp
+
+    start = time.perf_counter()
+    Q, V = _rollout()(m, d, jnp.zeros_like(steps))
+    Q.block_until_ready()
+    return time.perf_counter() - start
+
+
+def run_rollout(m, d, steps):
+    """Step from ``d`` through the intervals: ``(Q (n - 1, nq), V (n - 1, nv) device arrays, wall s)``,
+    the wall time of the compiled call alone (``block_until_ready``)."""
+    start = time.perf_counter()
+    Q, V = _rollout()(m, d, steps)
+    Q.block_until_ready()
+    V.block_until_ready()
+    return Q, V, time.perf_counter() - start
+
+
+def to_host(Q, V, q0, v0):
+    """The samples as float64 host arrays ``(n, nq)``, ``(n, nv)`` with the initial state first; NaN from the
+    first non-finite sample on (MJX does not stop: a blow-up runs on as inf and NaN)."""
+    Q = np.vstack([q0, np.asarray(Q, dtype=float)])
+    V = np.vstack([v0, np.asarray(V, dtype=float)])
+    bad = ~(np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1))
+    if bad.any():
+        first = int(np.argmax(bad))
+        Q[first:], V[first:] = np.nan, np.nan
+    return Q, V
