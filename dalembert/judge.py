@@ -11,8 +11,8 @@ A run is
 * ``drifts`` when it stays finite but some conserved quantity leaves its bound;
 * ``diverged`` when the state became NaN/inf or blew up (the engine's own
   detection included: its status is ``diverged``), or when a conserved
-  quantity changed by more than ``BLOWUP`` times its scale (a blow-up that is
-  still finite);
+  quantity changed by more than ``BLOWUP`` times its scale on the true motion
+  (``dalembert.invariants.growth``: a blow-up that is still finite);
 * otherwise the run's own status (``failed``, ``timeout``, ``unsupported``).
 
 Within tolerance means every named tolerance of the case holds: errors against
@@ -55,7 +55,7 @@ class Judgement:
     within_tolerance: bool | None
 
 
-def judge(status, message, errors, drifts, tolerances):
+def judge(status, message, errors, drifts, tolerances, growths=None):
     """Judge one run.
 
     Parameters
@@ -66,6 +66,9 @@ def judge(status, message, errors, drifts, tolerances):
     drifts : dict name -> float — drift of each conserved quantity, scaled as in
         ``dalembert.invariants.CONSERVED``
     tolerances : dict name -> Tolerance — the case's bounds
+    growths : dict name -> float or None — change of each conserved quantity in units of its scale
+        on the true motion (``dalembert.invariants.growth``; a drift, scaled by the run's own
+        largest value, cannot show a blow-up)
 
     Returns
     -------
@@ -78,6 +81,10 @@ def judge(status, message, errors, drifts, tolerances):
         return Judgement((), status, message, None)
     beyond = tuple(name for name, tol in tolerances.items()
                    if not (errors if name in QUANTITIES else drifts).get(name, 0.0) <= tol.value)
+    for name, value in (growths or {}).items():
+        if value > BLOWUP:  # NaN (no true scale) compares False
+            return Judgement(beyond, "diverged", f"{name} changed by {value:.3g} times its scale in the true motion "
+                                                 "(a blow-up, though finite)", False)
     drifted = []
     for name, tol in tolerances.items():
         value = drifts.get(name)

@@ -23,7 +23,8 @@ cost            ``build_s``, ``wall_s_median``, ``wall_s_min``, ``wall_s_max`` (
                 ``stepping_total_s``, ``worker_s`` (all s), ``concurrent`` (runs in
                 flight), ``load_start``, ``load_end`` (1-minute load average)
 errors          ``err_<quantity>_max``, ``err_<quantity>_final`` (``dalembert.errors.QUANTITIES``)
-drifts          ``drift_<name>``, ``drift_rate_<name>`` (1/s) per conserved quantity, built-in or
+drifts          ``drift_<name>``, ``drift_rate_<name>`` (1/s) per conserved quantity,
+                ``growth_<name>`` (its change in units of its scale on the true motion), built-in or
                 declared by the case (``dalembert.case.Invariant``: its label is in the store's case record)
 checks          ``orthonormality``, ``quaternion_norm``, ``joint_residual`` (maxima)
 judgement       ``within_tolerance``, ``beyond_tolerance`` (names, space-separated),
@@ -120,6 +121,7 @@ class RunRecord:
         ``dalembert.errors.QUANTITIES``; NaN max when the run is not finite
     drifts : dict conserved name -> drift (``dalembert.invariants.CONSERVED``, or a name the case declares)
     drift_rates : dict conserved name -> slope of the relative change, 1/s (energy-like ones)
+    growths : dict conserved name -> change in units of its scale on the truth (blow-ups show here)
     checks : dict name -> float — ``CHECKS``
     beyond : tuple of str — the tolerances exceeded; verdict, verdict_reason : str
         (``dalembert.judge``); within_tolerance : bool or None
@@ -149,6 +151,7 @@ class RunRecord:
     errors: dict = field(default_factory=dict)
     drifts: dict = field(default_factory=dict)
     drift_rates: dict = field(default_factory=dict)
+    growths: dict = field(default_factory=dict)
     checks: dict = field(default_factory=dict)
     beyond: tuple = ()
     verdict: str = ""
@@ -211,6 +214,7 @@ class RunRecord:
             row[f"err_{q}_max"], row[f"err_{q}_final"] = mx, final
         row.update({f"drift_{n}": v for n, v in self.drifts.items()})
         row.update({f"drift_rate_{n}": v for n, v in self.drift_rates.items()})
+        row.update({f"growth_{n}": v for n, v in self.growths.items()})
         row.update(self.checks)
         row.update(within_tolerance=self.within_tolerance, beyond_tolerance=" ".join(self.beyond),
                    verdict=self.verdict, verdict_reason=self.verdict_reason,
@@ -225,11 +229,13 @@ class RunRecord:
         if schema not in READABLE_SCHEMAS:
             raise SchemaError(f"row {row.get('key', '?')!r}: schema {schema!r}, this dalembert reads "
                               f"{list(READABLE_SCHEMAS)} — read it with the dalembert version that wrote it")
-        errors, drifts, rates = {}, {}, {}
+        errors, drifts, rates, growths = {}, {}, {}, {}
         for col, value in row.items():
             if col.startswith("err_") and col.endswith("_max"):
                 q = col[len("err_"):-len("_max")]
                 errors[q] = (_num(value), _num(row.get(f"err_{q}_final")))
+            elif col.startswith("growth_"):
+                growths[col[len("growth_"):]] = _num(value)
             elif col.startswith("drift_rate_"):
                 rates[col[len("drift_rate_"):]] = _num(value)
             elif col.startswith("drift_"):
@@ -244,7 +250,7 @@ class RunRecord:
             t_final=_num(row.get("t_final")), t_diverged=_opt(row.get("t_diverged")),
             cost=Cost(**{f.name: int(row[f.name] or 0) if f.name in _COUNTS else _num(row[f.name])
                          for f in fields(Cost) if f.name in row}),
-            errors=errors, drifts=drifts, drift_rates=rates,
+            errors=errors, drifts=drifts, drift_rates=rates, growths=growths,
             checks={c: _num(row[c]) for c in CHECKS if row.get(c) is not None},
             beyond=tuple((row.get("beyond_tolerance") or "").split()), verdict=row.get("verdict") or "",
             verdict_reason=row.get("verdict_reason") or "",

@@ -1,6 +1,7 @@
 """Invariants computed from scene + trajectory, checked on exact trajectories."""
 
 import numpy as np
+import pytest
 
 from dalembert import invariants, make_case
 from dalembert.trajectory import BodyStates, Trajectory
@@ -51,3 +52,25 @@ def test_joint_residual_sees_a_dislocated_rod():
     moved = Trajectory(tr.t, {"rod": BodyStates(b.position + [0, 0, 1e-3], b.quaternion, b.velocity,
                                                 b.angular_velocity)})
     assert np.allclose(invariants.joint_residual(case.scene, moved), 1e-3, rtol=1e-9)
+
+
+def test_a_finite_blow_up_is_judged_diverged_not_drifting():
+    """A top whose spin grows a thousandfold while the true one spins steadily: its energy drift,
+    scaled by the run's own largest energy, stays below 1 (it cannot show a blow-up); its growth
+    against the true motion's scale is ~1e6, and the judge calls the run diverged."""
+    from dalembert import make_case
+    from dalembert.judge import BLOWUP, judge
+    from dalembert.trajectory import BodyStates, Trajectory
+
+    case = make_case("free_top", t_final=1.0)
+    truth = case.exact(case.times)
+    b = truth.bodies["top"]
+    boost = np.linspace(1.0, 1000.0, len(case.times))[:, None]
+    run = Trajectory(truth.t, {"top": BodyStates(b.position, b.quaternion, b.velocity, b.angular_velocity * boost)})
+    drift = invariants.drift("energy", case.scene, run)
+    grew = invariants.growth("energy", case.scene, run, truth)
+    assert drift < 1.0 and grew == pytest.approx(1000.0**2 - 1.0, rel=1e-9)
+    assert invariants.growth("energy", case.scene, truth, truth) < 1e-12  # the truth itself does not grow
+    summary = invariants.summary(case.scene, run, case.conserved, truth=truth)
+    verdict = judge("ok", "", {}, summary.drifts, case.tolerances, summary.growths)
+    assert summary.growths["energy"] > BLOWUP and verdict.verdict == "diverged" and "blow-up" in verdict.reason

@@ -42,7 +42,8 @@ class Timing:
 def _record(spec, status, message="", errors=None, drifts=None, tolerances=None, **fields):
     """The record of ``spec`` ending in ``status``, judged."""
     errors, drifts = errors or {}, drifts or {}
-    verdict = judge(status, message, {q: mx for q, (mx, _) in errors.items()}, drifts, tolerances or {})
+    verdict = judge(status, message, {q: mx for q, (mx, _) in errors.items()}, drifts, tolerances or {},
+                    fields.get("growths"))
     return RunRecord(key=spec.key, case=spec.case, case_version=spec.case_version, engine=spec.engine,
                      integrator=spec.integrator, dt=spec.dt, rtol=spec.rtol, atol=spec.atol,
                      options=dict(spec.options), params=dict(spec.params), status=status, message=message,
@@ -121,7 +122,7 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
             totals.append(time.perf_counter() - t0)
             walls.append(out.wall_s)
         errors = trajectory_errors(traj, truth)
-        summary = invariants.summary(case.scene, traj, case.conserved, case.invariants)
+        summary = invariants.summary(case.scene, traj, case.conserved, case.invariants, truth)
         npz = trajectory_to_npz(traj)
         cost = Cost(build_s=build_s, wall_s_median=float(np.median(walls)), wall_s_min=float(np.min(walls)),
                     wall_s_max=float(np.max(walls)), repeats=len(walls), n_steps=first.n_steps, n_rhs=first.n_rhs,
@@ -129,6 +130,7 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
                     stepping_total_s=float(first.wall_s + sum(walls)), worker_s=time.perf_counter() - started,
                     concurrent=concurrent, load_start=load_start, load_end=_load())
         return _record(spec, "ok", "", errors, summary.drifts, case.tolerances, drift_rates=summary.drift_rates,
+                       growths=summary.growths,
                        checks=summary.checks, cost=cost, **found), npz
     except Exception as e:  # a failure is data
         return _record(spec, "failed", f"{type(e).__name__}: {e}", traceback=traceback.format_exc(), **found), None
