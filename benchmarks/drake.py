@@ -45,7 +45,7 @@ TUMBLE_DTS = (1e-2, 1e-3, 1e-4)
 def bare(prepared):
     from dalembert.adapters.drake.stepping import reset
 
-    simulator, _ = reset(prepared)
+    simulator, _, _ = reset(prepared)
     t0 = time.perf_counter()
     simulator.AdvanceTo(float(prepared["times"][-1]))
     return time.perf_counter() - t0

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
+from dalembert.adapters.drake.charts import RECHART_PITCH
 from dalembert.adapters.drake.stepping import SCHEMES, simulate
 from dalembert.scene import EFFECTS
 
@@ -38,10 +39,6 @@ FIXED = {
 # they are offered fixed-step only.
 ADAPTIVE = ("rk3", "rk5", "bs3", "radau3")
 ADAPTIVE_SUFFIX = "-adaptive"
-# A ball joint is a BallRpyJoint: its rates are singular where cos(pitch) = 0. Drake refuses
-# configurations closer than this to the singularity (|cos(pitch)| below it), and so do we at the
-# start: the scene's initial attitude cannot be held in these coordinates.
-RPY_SINGULAR_COS = 1e-3
 
 
 def _integrators():
@@ -63,21 +60,6 @@ class DrakeAdapter(Adapter):
         import pydrake
 
         return pydrake.__version__ if hasattr(pydrake, "__version__") else _distribution_version()
-
-    def unsupported(self, scene, settings):
-        reason = super().unsupported(scene, settings)
-        if reason:
-            return reason
-        from dalembert import spatial
-
-        for j in scene.joints:
-            if j.kind == "ball":
-                R = spatial.quat_to_matrix(np.asarray(j.q0, dtype=float))
-                cos_pitch = float(np.hypot(R[0, 0], R[1, 0]))  # R = Rz Ry Rx: R[2, 0] = -sin(pitch)
-                if cos_pitch < RPY_SINGULAR_COS:
-                    return (f"joint:ball {j.child!r} starts at pitch {np.degrees(np.arcsin(-R[2, 0])):.3f} deg: Drake's "
-                            "ball joint (BallRpyJoint, roll-pitch-yaw) is singular at +-90 deg pitch")
-        return None
 
     def describe(self, scene, settings):
         """The plant's summary, for reports and ``dalembert show-model``."""
@@ -101,9 +83,10 @@ class DrakeAdapter(Adapter):
         from dalembert.adapters.drake.readback import read_back
 
         p = prepared
-        X, wall, n_steps, n_rhs, message = simulate(p)
+        X, wall, n_steps, n_rhs, message, recharts = simulate(p)
         loads = p["model"].loads
-        info = {"message": message, "load_evaluations": loads.evaluations if loads is not None else 0}
+        info = {"message": message, "load_evaluations": loads.evaluations if loads is not None else 0,
+                "ball_recharts": recharts}
         return Outcome(lambda: read_back(p, X), wall, n_steps, n_rhs, info)
 
     # ------------------------------------------------------------- audit
@@ -125,6 +108,10 @@ class DrakeAdapter(Adapter):
                           "SceneLoads system -> applied_spatial_force (world-frame loads)"),
             "load_evaluations": outcome.info.get("load_evaluations", 0),
             "stopped": outcome.info.get("message", ""),
+            "ball_joint_charts": ("" if not any(j.kind == "ball" for j in p["scene"].joints) else
+                                  f"BallRpyJoint frames re-set {outcome.info.get('ball_recharts', 0)} times (rpy = 0, "
+                                  f"x along w; at t = 0 and when |pitch| > {RECHART_PITCH} rad) to stay clear of "
+                                  "pitch = +-pi/2 (dalembert.adapters.drake.charts)"),
             "drake_version": self.version(),
         }
 

@@ -8,7 +8,7 @@
   scene's joint frames): a free body gets a ``QuaternionFloatingJoint`` to the
   world, a revolute joint a ``RevoluteJoint`` about the normalized axis, a ball
   joint a ``BallRpyJoint`` (Drake has no quaternion ball joint: roll-pitch-yaw
-  coordinates, singular at pitch = +-pi/2), a weld a ``WeldJoint``; every damping
+  coordinates, singular at pitch = +-pi/2, kept clear of it by ``charts``), a weld a ``WeldJoint``; every damping
   zero, no limits.
 * Gravity set from the scene (Drake's default is -9.81 in z), zero when the
   scene has none. No SceneGraph, no collision geometry, no actuators.

@@ -9,7 +9,9 @@ accuracy knob, its weighted error norm has no separate absolute tolerance; the
 largest step is the sample interval). Discrete mode: the plant's periodic update
 of period ``dt``.
 
-The state is copied out after every ``AdvanceTo(t_k)``. A blow-up is data: the
+The state is copied out after every ``AdvanceTo(t_k)``, ball joints in the
+scene's chart (``charts``: their roll-pitch-yaw chart is moved at t = 0 and
+whenever a sample nears its singularity). A blow-up is data: the
 first non-finite state, or a Drake exception raised on a non-finite state or
 mentioning NaN, ends the run with NaN from that sample on and Drake's message
 kept; any other Drake exception (e.g. an implicit integrator that fails to
@@ -24,6 +26,8 @@ from __future__ import annotations
 import time
 
 import numpy as np
+
+from dalembert.adapters.drake.charts import BallCharts
 
 __all__ = ["simulate", "SCHEMES"]
 
@@ -43,7 +47,8 @@ def _state(p, context):
 
 
 def reset(p):
-    """A fresh simulator at the initial state, with its integrator set up; ``(simulator, integrator or None)``."""
+    """A fresh simulator at the initial state, with its integrator set up and its ball joints charted;
+    ``(simulator, integrator or None, BallCharts)``."""
     from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
 
     model, s = p["model"], p["settings"]
@@ -52,6 +57,9 @@ def reset(p):
     context.SetTime(float(p["times"][0]))
     plant_context = model.plant.GetMyMutableContextFromRoot(context)
     model.plant.SetPositionsAndVelocities(plant_context, np.concatenate([p["q0"], p["v0"]]))
+    charts = BallCharts(model, plant_context)
+    if charts:
+        charts.update(force=True)
     integrator = None
     if model.time_step == 0.0:
         name = p["scheme"]
@@ -64,18 +72,18 @@ def reset(p):
             integrator.set_fixed_step_mode(False)
             integrator.set_target_accuracy(float(s.rtol))
     simulator.Initialize()
-    return simulator, integrator
+    return simulator, integrator, charts
 
 
 def simulate(p):
-    """Step through ``p["times"]``: ``(X (n, nq + nv), wall s, steps, RHS evaluations, message)``.
+    """Step through ``p["times"]``: ``(X (n, nq + nv), wall s, steps, RHS evaluations, message, re-charts)``.
 
     ``X`` rows are the plant's ``(q, v)`` at each sample, NaN from the first sample not reached.
     """
-    simulator, integrator = reset(p)
+    simulator, integrator, charts = reset(p)
     times = p["times"]
-    context = simulator.get_context()
-    x0 = _state(p, context)
+    context = simulator.get_mutable_context()
+    x0 = charts.to_scene_chart(_state(p, context))
     X = np.full((len(times), len(x0)), np.nan)
     X[0] = x0
     message = ""
@@ -86,7 +94,7 @@ def simulate(p):
     for k in range(1, len(times)):
         try:
             simulator.AdvanceTo(float(times[k]))
-        except RuntimeError as e:
+        except (RuntimeError, SystemExit) as e:  # pydrake raises SystemExit for a failed internal assertion
             x = _state(p, context)
             if np.all(np.isfinite(x)) and "nan" not in str(e).lower():
                 raise RuntimeError(f"Drake stopped at t = {context.get_time():g} s of {times[-1]:g} s: {e}") from None
@@ -96,10 +104,11 @@ def simulate(p):
         if not np.all(np.isfinite(x)):
             message = f"non-finite state at t = {times[k]:g} s"
             break
-        X[k] = x
+        X[k] = charts.to_scene_chart(x)
+        charts.update()
     wall = time.perf_counter() - start
     if integrator is not None:
         n_steps, n_rhs = integrator.get_num_steps_taken(), integrator.get_num_derivative_evaluations()
     else:  # discrete: one update, one evaluation of the dynamics per step
         n_steps = n_rhs = int(round((context.get_time() - times[0]) / p["settings"].dt))
-    return X, wall, int(n_steps), int(n_rhs), message
+    return X, wall, int(n_steps), int(n_rhs), message, charts.recharts
