@@ -23,7 +23,7 @@ plt.rcParams.update({"svg.fonttype": "none", "font.size": 9, "axes.grid": True, 
                      "legend.fontsize": 7, "axes.titlesize": 10})
 
 __all__ = ["engine_colours", "pareto_summary", "work_precision", "stability", "time_grid", "diverged_runs",
-           "stability_map", "map_costs", "MAX_POINTS"]
+           "stability_map", "map_costs", "scaling", "MAX_POINTS"]
 
 MAX_POINTS = 400  # per time-series line: figures stay small; the data stay in the store
 PANEL_W, PANEL_H = 3.3, 2.8  # inches per small-multiple panel: four fit across the page
@@ -389,4 +389,25 @@ def map_costs(panels, xlabel, ylabel):
     fig.legend([Line2D([], [], color=colour[label], lw=2) for label in labels], labels, loc="upper center",
                ncol=min(len(labels), 6), bbox_to_anchor=(0.5, 1.0), frameon=False)
     fig.tight_layout(rect=(0, 0, 1, 0.93))
+    return _svg(fig)
+
+
+def scaling(lines, colours, sizes):
+    """One log-log panel: cost against the number of bodies, a line per (engine, label) coloured by engine
+    (``colours``), a line style per label within an engine; ``lines`` maps (engine, label) to
+    [(N, cost s/s)], the label carrying its fitted exponent. ``sizes`` (the N run) are the x ticks."""
+    fig, ax = plt.subplots(figsize=(2 * PANEL_W, 1.3 * PANEL_H))
+    styles = {}
+    for (engine, label), points in sorted(lines.items()):
+        style = OPTION_STYLES[styles.setdefault(engine, 0) % len(OPTION_STYLES)]
+        styles[engine] += 1
+        ax.plot(*zip(*points), marker="o", ls=style, color=colours[engine], ms=4, lw=1.4, label=f"{engine} {label}")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xticks(list(sizes))
+    ax.set_xticklabels([str(n) for n in sizes])
+    ax.minorticks_off()
+    ax.set_xlabel("bodies N")
+    ax.set_ylabel("stepping time per simulated second (s/s)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
     return _svg(fig)

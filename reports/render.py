@@ -24,6 +24,7 @@ from dalembert.errors import QUANTITIES
 from dalembert.invariants import CONSERVED
 from dalembert.reports import figures, time_series
 from dalembert.reports.maps import COST_TARGET, stability_maps
+from dalembert.reports.scaling import size_sweeps
 from dalembert.reports.findings import (ACCURACY_TARGETS, DISAGREEMENT_FACTOR, ENERGY_HAZARD, ENERGY_LIKE, HAZARDS,
                                          NAMED, find, run_name, settings_text)
 from dalembert.reports.tables import MISSING, SORT_SCRIPT, Cell, Table, escape_html, escape_md, num
@@ -461,6 +462,34 @@ def _maps(doc, store, records):
     return {m.case for m in found}
 
 
+def _scaling(doc, store, records, colours):
+    """Per case swept over its size: stepping cost per simulated second against the body count, per engine."""
+    counts = {}
+
+    def bodies_of(name, version):
+        if (name, version) not in counts:
+            counts[name, version] = len(store.case(name, version).scene.bodies)
+        return counts[name, version]
+
+    found = size_sweeps(records, bodies_of)
+    if not found:
+        return
+    doc.heading("Scaling with the number of bodies", 2, anchor="scaling")
+    for sw in found:
+        doc.heading(f"{sw.case}: cost against size", 3, anchor=f"scaling-{sw.case}")
+        doc.para(f"{sw.case} run with {', '.join(str(n) for n in sw.sizes)} bodies. Per engine, integrator and step, "
+                 "the fitted exponent p of stepping time per simulated second ~ N^p (least squares on the logs):")
+        doc.items([f"{engine} {label}: p = {p:.2f} (N = {pts[0][0]}..{pts[-1][0]}, "
+                   f"{pts[0][1]:.3g} to {pts[-1][1]:.3g} s/s)"
+                   for (engine, label), pts in sorted(sw.lines.items())
+                   for p in [sw.exponents[engine, label]]])
+        lines = {(engine, f"{label} (p = {sw.exponents[engine, label]:.2f})"): pts
+                 for (engine, label), pts in sw.lines.items()}
+        doc.figure(figures.scaling(lines, colours, sw.sizes),
+                   f"{sw.case}: stepping wall time per simulated second against the number of bodies; a colour per "
+                   "engine, a line per integrator and step, its fitted exponent p in the legend.", f"{sw.case}-scaling")
+
+
 # ---------------------------------------------------------------------------------------------- page
 CSS = """body{font-family:system-ui,sans-serif;margin:1.5em auto;max-width:1320px;padding:0 12px;color:#222;
 font-size:14px;line-height:1.4}h2{border-bottom:1px solid #ddd;padding-bottom:2px;margin-top:1.8em}
@@ -535,6 +564,7 @@ def build_report(store, out_dir=None):
     summary_rows = _findings(doc, found, titles, colours)
     _hazards(doc, found, titles)
     mapped = _maps(doc, store, records)
+    _scaling(doc, store, records, colours)
     for f in found:
         name = f"{f.case.name}-{f.case.version}" if names.count(f.case.name) > 1 else f.case.name
         if f.case.name in mapped or names.count(f.case.name) > DETAILED_VERSIONS:
