@@ -141,4 +141,9 @@ class MjxAdapter(MujocoAdapter):
             "mjx_version": self.version(),
             "reactions": "MuJoCo C mj_rnePostConstraint on MJX's sampled states (double)",
         })
+        if p["precision"] == "float32" and p["settings"].dt is not None:
+            # the attitude floor of the number type (rad; torque-free tops only, else NaN), for the report's parity
+            from dalembert.adapters.mjx.parity import float32_floor
+
+            out["float32_floor"] = float32_floor(p["scene"], p["times"], p["settings"].dt)
         return out

@@ -67,18 +67,19 @@ def horizon(case, settings):
     position = max(float(np.max(np.abs(a.bodies[n].position - b.bodies[n].position))) for n in a.bodies)
     return dict(orientation=orientation, position=position,
                 floor=float(case.floor().get("orientation", np.nan)),
-                float32_floor=float32_floor(case, settings.dt))
+                float32_floor=float32_floor(case.scene, case.times, settings.dt))
 
 
-def float32_floor(case, dt):
-    """The float32 attitude floor (rad) of a torque-free top case at step ``dt``: RK4 in float32 against
-    the same RK4 in double; NaN for any other case."""
+def float32_floor(scene, times, dt):
+    """The float32 attitude floor (rad) of a torque-free top ``scene`` sampled at ``times`` (s) at step ``dt``:
+    RK4 in float32 against the same RK4 in double; NaN for any other scene."""
     from dalembert.reference.roundoff import top_roundoff
 
-    joints = case.scene.joints
-    if len(joints) != 1 or joints[0].kind != "free" or case.scene.loads or any(case.scene.gravity):
+    joints = scene.joints
+    if len(joints) != 1 or joints[0].kind != "free" or scene.loads or any(scene.gravity):
         return float("nan")
-    inertia = np.diag(case.scene.bodies[0].inertia_matrix)
-    if np.any(np.abs(case.scene.bodies[0].inertia_matrix - np.diag(inertia)) > 0.0) or joints[0].q0[3:] != (1, 0, 0, 0):
+    inertia = np.diag(scene.bodies[0].inertia_matrix)
+    if np.any(np.abs(scene.bodies[0].inertia_matrix - np.diag(inertia)) > 0.0) or joints[0].q0[3:] != (1, 0, 0, 0):
         return float("nan")  # top_roundoff: principal axes, starting at the identity
-    return top_roundoff(tuple(inertia), tuple(joints[0].v0[3:]), case.times, dt, working=np.float32, extended=float)
+    return top_roundoff(tuple(inertia), tuple(joints[0].v0[3:]), np.asarray(times), dt, working=np.float32,
+                        extended=float)
