@@ -99,7 +99,8 @@ def steps_per_interval(times, dt):
     if np.any(bad) or np.any(n < 1):
         k = int(np.argmax(bad | (n < 1)))
         raise ValueError(f"dt: {dt!r} does not divide the sample interval "
-                         f"{times[k + 1] - times[k]!r} s — choose dt = interval / integer")
+                         f"{float(times[k + 1] - times[k])!r} s — choose dt = interval / integer (or a "
+                         "sample_interval that dt divides)")
     return n.astype(int)
 
 
