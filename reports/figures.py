@@ -33,6 +33,7 @@ ENGINE_PALETTE = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E
 # Integrators within one panel: matplotlib's tab10 plus two darks, so Exudyn's twelve stay distinct.
 INTEGRATOR_PALETTE = tuple(plt.get_cmap("tab10").colors) + ("#000000", "#8c6d31")
 OPTION_STYLES = ("-", "--", ":", "-.")
+LEGEND_W = 2.2  # inches beside a panel for its own legend (stability maps)
 FLOOR_STYLE = dict(color="k", ls=":", lw=1.2)
 TOLERANCE_STYLE = dict(color="#c0392b", ls="--", lw=1.0)
 
@@ -333,6 +334,8 @@ def _bracket_point(ax, x, bracket, scale, colour, filled, offset):
 def stability_map(panels, xlabel, ylabel, rate):
     """A panel per engine: for each integrator (colour) the stable boundary (filled markers, solid
     line) and the finite boundary (hollow markers, dashed) against the swept parameter, log-log.
+    Two panels a row, each with its own legend at its right: an engine's integrators get distinct
+    colours within its panel (a legend shared by five engines' 40 integrators repeats colours).
 
     Parameters
     ----------
@@ -340,12 +343,19 @@ def stability_map(panels, xlabel, ylabel, rate):
     xlabel, ylabel : str
     rate : bool — plot parameter x step (dimensionless) instead of the step
     """
-    labels = sorted({label for p in panels for label in p["lines"]})
-    colour = {label: INTEGRATOR_PALETTE[i % len(INTEGRATOR_PALETTE)] for i, label in enumerate(labels)}
-    fig, axes = _grid(len(panels))
+    most = max((len(p["lines"]) for p in panels), default=1)
+    nrows = max(1, math.ceil(len(panels) / 2))
+    fig, grid = plt.subplots(nrows, 2, figsize=(2 * (PANEL_W + LEGEND_W), max(PANEL_H, 0.75 + 0.14 * most) * nrows),
+                             sharex=True, sharey=True, squeeze=False)
+    axes = grid.ravel()
+    for ax in axes[len(panels):]:
+        ax.set_visible(False)
     for ax, p in zip(axes, panels):
+        colour = {label: INTEGRATOR_PALETTE[i % len(INTEGRATOR_PALETTE)] for i, label in enumerate(sorted(p["lines"]))}
+        style = {label: OPTION_STYLES[0] if i < len(INTEGRATOR_PALETTE) else OPTION_STYLES[2]
+                 for i, label in enumerate(sorted(p["lines"]))}
         for label, points in sorted(p["lines"].items()):
-            for filled, side, ls, offset in ((True, "stable", "-", 0.97), (False, "finite", "--", 1.03)):
+            for filled, side, ls, offset in ((True, "stable", style[label], 0.97), (False, "finite", "--", 1.03)):
                 xs, ys = [], []
                 for value, b in points:
                     y = _bracket_point(ax, value, getattr(b, side), value if rate else 1.0, colour[label], filled,
@@ -360,13 +370,17 @@ def stability_map(panels, xlabel, ylabel, rate):
         ax.set_title(p["title"])
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
-    handles = [Line2D([], [], color=colour[label], lw=2) for label in labels]
-    handles += [Line2D([], [], color="k", ls="-", marker="o", ms=4.5),
-                Line2D([], [], color="k", ls="--", marker="o", mfc="white", ms=4.5),
-                Line2D([], [], color="k", ls="", marker="^", ms=6), Line2D([], [], color="k", ls="", marker="v", ms=6)]
-    names = labels + ["stable up to", "finite up to", "beyond the largest step probed", "below the smallest"]
-    fig.legend(handles, names, loc="upper center", ncol=min(len(names), 6), bbox_to_anchor=(0.5, 1.0), frameon=False)
-    fig.tight_layout(rect=(0, 0, 1, 0.9 if len(names) > 6 else 0.93))
+        ax.legend([Line2D([], [], color=colour[label], ls=style[label], lw=2) for label in sorted(p["lines"])],
+                  sorted(p["lines"]), loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False, fontsize=6.5)
+    handles = [Line2D([], [], color="k", ls="-", marker="o", ms=4.5),
+               Line2D([], [], color="k", ls="--", marker="o", mfc="white", ms=4.5),
+               Line2D([], [], color="k", ls="", marker="^", ms=6), Line2D([], [], color="k", ls="", marker="v", ms=6)]
+    names = ["stable up to", "finite up to", "beyond the largest step probed", "below the smallest"]
+    fig.legend(handles, names, loc="upper center", ncol=4, bbox_to_anchor=(0.5, 1.0), frameon=False)
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
+    fig.subplots_adjust(wspace=LEGEND_W / PANEL_W + 0.25)
+    for ax in axes[:len(panels)]:
+        ax.xaxis.set_tick_params(labelbottom=True)
     return _svg(fig)
 
 
