@@ -94,7 +94,10 @@ class Adapter:
         """The reason this engine cannot represent ``scene``, or None."""
         missing = sorted(scene.effects - self.effects)
         if missing:
-            return f"{self.name} adapter cannot represent {', '.join(missing)}"
+            reason = f"{self.name} adapter cannot represent {', '.join(missing)}"
+            if any(m.startswith("loop:") for m in missing):
+                reason += " (closed kinematic loops: not yet built for this engine; its tree runs, the closure does not)"
+            return reason
         return None
 
     def variants(self, scene):

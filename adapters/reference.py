@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
-from dalembert.scene import EFFECTS
+from dalembert.scene import EFFECTS, LOOP_EFFECTS
 
 __all__ = ["ReferenceAdapter"]
 
@@ -20,7 +20,7 @@ class ReferenceAdapter(Adapter):
     """
 
     name = "reference"
-    effects = EFFECTS
+    effects = EFFECTS | LOOP_EFFECTS  # loops: Kane's tree plus multipliers (reference.loops)
     integrators = {
         "dop853": IntegratorSpec(False, ("formulation",), "scipy DOP853, adaptive 8th order"),
         "rk4": IntegratorSpec(True, ("formulation",), "classical RK4 on embedded coordinates"),
@@ -45,6 +45,8 @@ class ReferenceAdapter(Adapter):
         if reason is None and settings.options.get("formulation", "").startswith("newton-euler"):
             if any(j.kind != "free" for j in scene.joints):
                 return "Newton-Euler formulations handle free bodies only (use formulation=kane)"
+            if scene.loops:
+                return "Newton-Euler formulations handle no loop closures (use formulation=kane)"
         if reason is None and settings.options.get("formulation") == "planar":
             from dalembert.reference.planar import why_not
 
@@ -79,6 +81,8 @@ class ReferenceAdapter(Adapter):
         return Outcome(lambda: p["system"].trajectory(p["times"], Q, V), wall, stats.n_steps, stats.n_rhs)
 
     def audit(self, prepared, outcome):
+        from dalembert import closure
+
         scene = prepared["scene"]
         system = prepared["system"]
         return {
@@ -87,7 +91,8 @@ class ReferenceAdapter(Adapter):
             "formulation": type(system).__name__,
             "joints": {j.child: j.kind for j in scene.joints},
             "loads": [f"{ld.effect} on {ld.body}" for ld in scene.loads],
-            "constraint_rows": 0,
+            "constraint_rows": sum(len(r.phi) for r in closure.initial_rows(scene)),
+            "loops": str(scene.loop_summary()) if scene.loops else "none",
             "contacts": 0,
             "integrator": prepared["settings"].integrator,
         }

@@ -32,6 +32,7 @@ __all__ = [
     "orthonormality_error",
     "quaternion_norm_error",
     "joint_residual",
+    "loop_residual",
     "pairwise_distance_change",
     "drift",
     "drift_series",
@@ -153,6 +154,32 @@ def quaternion_norm_error(scene, traj):
     """``max_bodies ||q| - 1|``, shape (n,)."""
     return np.max([np.abs(np.linalg.norm(traj.bodies[b.name].quaternion, axis=1) - 1.0) for b in scene.bodies],
                   axis=0)
+
+
+def loop_residual(scene, traj, level="position"):
+    """Largest violation of any loop closure (``Scene.loops``, rows in ``dalembert.closure``), shape (n,).
+
+    ``level="position"``: the rows ``phi`` (m for points, the sine of the tilt for axes);
+    ``"velocity"``: their rates (m/s, rad/s), from the bodies' states in the trajectory (never from
+    the engine). Zero for a scene without loops; NaN where a state is not finite.
+    """
+    from dalembert import closure
+
+    if level not in ("position", "velocity"):
+        raise ValueError(f"level: {level!r} — use 'position' or 'velocity'")
+    n = len(traj.t)
+    err = np.zeros(n)
+    for i in range(n):
+        states = {"world": closure.world_state()}
+        for loop in scene.loops:
+            for name in (loop.body_a, loop.body_b):
+                if name not in states:
+                    b = traj.bodies[name]
+                    states[name] = dict(R=spatial.quat_to_matrix(spatial.quat_normalize(b.quaternion[i])),
+                                        p=b.position[i], v=b.velocity[i], w=b.angular_velocity[i])
+            r = closure.rows(loop, states[loop.body_a], states[loop.body_b])
+            err[i] = max(err[i], float(np.max(np.abs(r.phi if level == "position" else r.velocity))))
+    return err
 
 
 def joint_residual(scene, traj):

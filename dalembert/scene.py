@@ -1,4 +1,4 @@
-"""Engine-neutral description of a multibody system: bodies, joints, loads, gravity.
+"""Engine-neutral description of a multibody system: bodies, joints, loop closures, loads, gravity.
 
 Specs are frozen dataclasses holding plain tuples (arrays live only in
 ``Trajectory``). A ``Scene`` validates itself on construction: every problem is
@@ -10,6 +10,11 @@ Frames: the body frame B of every body has its origin at the centre of mass;
 frame fixed in the parent (``parent_point``, ``parent_quat``, in parent body
 coordinates, or world coordinates when the parent is ``"world"``) to a frame
 fixed in the child (``child_point``, ``child_quat``, in child body coordinates).
+
+The joints form a tree (the spanning tree every engine builds); closed kinematic loops are
+a separate, explicit list of ``Loop`` closures between any two bodies (or a body and the
+world), each adding constraint rows to the tree (``dalembert.closure``). An engine that
+builds trees only declares loops unsupported through their effect tags (``loop:<kind>``).
 """
 
 from __future__ import annotations
@@ -21,7 +26,8 @@ import numpy as np
 
 from dalembert.registry import suggest
 
-__all__ = ["WORLD", "JOINT_KINDS", "EFFECTS", "Body", "Joint", "Load", "Scene", "SceneError", "mass_properties"]
+__all__ = ["WORLD", "JOINT_KINDS", "LOOP_KINDS", "EFFECTS", "LOOP_EFFECTS", "Body", "Joint", "Loop", "Load", "Scene",
+           "SceneError", "mass_properties", "LOOP_CLOSURE_TOL"]
 
 WORLD = "world"
 
@@ -36,9 +42,18 @@ WORLD = "world"
 JOINT_KINDS = {"free": (7, 6), "revolute": (1, 1), "ball": (4, 3), "weld": (0, 0)}
 LOAD_KINDS = ("force", "torque")
 LOAD_FRAMES = ("world", "body")
-# Every effect tag a scene can call for (``Scene.effects`` draws from these).
+# Loop closures (``Loop``), per kind: the constraint rows in ``dalembert.closure.ROWS``.
+#   ball      the two joint points coincide;
+#   revolute  a ball whose frames also share the axis ``axis`` (given in the joint frames);
+#   distance  the two points stay ``length`` apart (a massless rod with ball ends).
+LOOP_KINDS = ("ball", "revolute", "distance")
+# Every effect tag a tree scene can call for (``Scene.effects`` draws from these): what an
+# adapter declares with ``effects = EFFECTS``.
 EFFECTS = frozenset({"gravity"} | {f"joint:{k}" for k in JOINT_KINDS}
                     | {f"load:{w}_{k}" for w in ("follower", "world") for k in LOAD_KINDS})
+# The tags of loop closures, apart: an adapter that closes loops declares them explicitly
+# (``EFFECTS | LOOP_EFFECTS``), so one that builds trees only declares them unsupported.
+LOOP_EFFECTS = frozenset(f"loop:{k}" for k in LOOP_KINDS)
 
 # |q| may differ from 1 by this much (roundoff in user-typed decimals is ~1e-16;
 # anything larger is a real mistake, not roundoff).
@@ -50,6 +65,11 @@ INERTIA_REL_TOL = 1e-12
 # treated as singular: the rotation about that axis is then undetermined
 # (seed 002, "degenerate case": all particles on one line).
 SINGULAR_INERTIA_RATIO = 1e-14
+# An initial state whose loop closures are violated by more than this (m for points, the sine of
+# the tilt for axes; m/s and rad/s for their rates) is refused: initial coordinates solved in
+# double precision close a loop to ~1e-15, and anything beyond 1e-9 is a state the solver would
+# have to move (the case's initial state would not be the one simulated).
+LOOP_CLOSURE_TOL = 1e-9
 
 
 class SceneError(ValueError):
@@ -193,6 +213,51 @@ class Joint:
 
 
 @dataclass(frozen=True)
+class Loop:
+    """A loop closure between ``body_a`` and ``body_b`` (body names, or ``"world"`` for one of them).
+
+    It constrains a frame Ja fixed in body a (``point_a``, ``quat_a``: in a's body frame, or the
+    world's when a is the world) against a frame Jb fixed in body b (``point_b``, ``quat_b``),
+    like a joint's parent and child frames, but adds no coordinates: the tree's joints keep
+    theirs, and the loop adds constraint rows (``dalembert.closure``). Kinds (``LOOP_KINDS``):
+
+    * ``ball``: the points coincide;
+    * ``revolute``: the points coincide and the ``axis`` (in the joint frames; any length) of Ja
+      and of Jb stay on one line (the rotation about it is free, so the frames need not coincide);
+    * ``distance``: the points stay ``length`` (m, positive) apart.
+
+    ``name`` (default ``loop_<body_a>_<body_b>``) keys the loop's reaction force in a trajectory,
+    ``reaction_force:<name>``: the force (N, world) the closure exerts ON body b at its point.
+    """
+
+    kind: str
+    body_a: str
+    body_b: str
+    point_a: tuple = (0.0, 0.0, 0.0)
+    point_b: tuple = (0.0, 0.0, 0.0)
+    quat_a: tuple = (1.0, 0.0, 0.0, 0.0)
+    quat_b: tuple = (1.0, 0.0, 0.0, 0.0)
+    axis: tuple | None = None
+    length: float | None = None
+    name: str = ""
+
+    def __post_init__(self):
+        for name in ("point_a", "point_b", "quat_a", "quat_b"):
+            object.__setattr__(self, name, _vec(getattr(self, name)))
+        if self.axis is not None:
+            object.__setattr__(self, "axis", _vec(self.axis))
+        if self.length is not None:
+            object.__setattr__(self, "length", float(self.length))
+        if not self.name:
+            object.__setattr__(self, "name", f"loop_{self.body_a}_{self.body_b}")
+
+    @property
+    def effect(self):
+        """Effect tag, e.g. ``loop:revolute``."""
+        return f"loop:{self.kind}"
+
+
+@dataclass(frozen=True)
 class Load:
     """A constant force or torque on ``body``.
 
@@ -229,24 +294,33 @@ class Scene:
     joints: tuple
     gravity: tuple
     loads: tuple = field(default=())
+    loops: tuple = field(default=())
 
     def __post_init__(self):
         object.__setattr__(self, "bodies", tuple(self.bodies))
         object.__setattr__(self, "joints", tuple(self.joints))
         object.__setattr__(self, "loads", tuple(self.loads))
+        object.__setattr__(self, "loops", tuple(self.loops))
         object.__setattr__(self, "gravity", _vec(self.gravity))
         self.validate()
 
     # -------------------------------------------------------------- data
     def to_json(self):
-        """The scene as plain JSON data; ``from_json`` rebuilds it exactly (floats round-trip)."""
-        return asdict(self)
+        """The scene as plain JSON data; ``from_json`` rebuilds it exactly (floats round-trip).
+
+        ``loops`` appears only when there are some: a tree scene's data (and so its case's
+        version, a hash of it) is what it was before loops existed."""
+        data = asdict(self)
+        if not self.loops:
+            del data["loops"]
+        return data
 
     @classmethod
     def from_json(cls, data):
         """Inverse of ``to_json`` (validated like any scene)."""
         return cls(data["name"], [Body(**b) for b in data["bodies"]], [Joint(**j) for j in data["joints"]],
-                   data["gravity"], [Load(**ld) for ld in data["loads"]])
+                   data["gravity"], [Load(**ld) for ld in data["loads"]],
+                   [Loop(**lp) for lp in data.get("loops", ())])
 
     # -------------------------------------------------------------- queries
     def body(self, name):
@@ -268,9 +342,11 @@ class Scene:
         """The physics this scene calls for, as a frozenset of tags.
 
         ``gravity`` when gravity is non-zero; ``joint:<kind>`` per joint kind
-        present; ``load:{follower,world}_{force,torque}`` per load kind present.
+        present; ``load:{follower,world}_{force,torque}`` per load kind present;
+        ``loop:<kind>`` per loop closure kind present (``LOOP_EFFECTS``).
         """
         tags = {f"joint:{j.kind}" for j in self.joints}
+        tags |= {lp.effect for lp in self.loops}
         tags |= {ld.effect for ld in self.loads}
         if any(g != 0.0 for g in self.gravity):
             tags.add("gravity")
@@ -287,6 +363,15 @@ class Scene:
             seen |= set(ready)
             pending = [n for n in pending if n not in seen]
         return [self.body(n) for n in order]
+
+    def loop_summary(self):
+        """Loop count, constraint rows, the rank of their Jacobian in the tree's joint speeds and the
+        residuals at the initial state (``dalembert.closure.ClosureSummary``; ``str()`` says it in a
+        line). Redundant rows (rank below rows) are reported here, not refused: a mechanism moves
+        despite them (the reference takes least-squares multipliers)."""
+        from dalembert import closure
+
+        return closure.summary(self)
 
     # -------------------------------------------------------------- checks
     def validate(self):
@@ -309,6 +394,15 @@ class Scene:
         problems += self._joint_problems(set(names))
         for i, ld in enumerate(self.loads):
             problems += _load_problems(i, ld, set(names))
+        for i, lp in enumerate(self.loops):
+            problems += _loop_problems(i, lp, set(names))
+        loop_names = [lp.name for lp in self.loops]
+        for dup in sorted({n for n in loop_names if loop_names.count(n) > 1}):
+            add(f"loops: name {dup!r} used twice — give each loop a unique name=")
+        for clash in sorted(set(loop_names) & set(names)):
+            add(f"loops: name {clash!r} is a body's (its joint's reactions are keyed by it) — rename the loop")
+        if self.loops and not problems:  # the closure needs valid names, joints and numbers
+            problems += self._closure_problems()
         if problems:
             raise SceneError(f"scene {self.name!r}", problems)
         return self
@@ -382,6 +476,61 @@ class Scene:
                 add(f"joints: cycle through {sorted(seen)!r} — joints must form a tree rooted at {WORLD!r}")
                 break
         return problems
+
+
+    def _closure_problems(self):
+        from dalembert import closure
+
+        problems = []
+        add = problems.append
+        for i, (lp, r) in enumerate(zip(self.loops, closure.initial_rows(self))):
+            where = f"loops[{i}] ({lp.kind} {lp.body_a!r} -> {lp.body_b!r})"
+            for level, res, unit in (("position", r.phi, "m or the sine of a tilt"),
+                                     ("velocity", r.velocity, "m/s or rad/s")):
+                worst = float(np.max(np.abs(res))) if np.all(np.isfinite(res)) else float("nan")
+                if not worst <= LOOP_CLOSURE_TOL:
+                    add(f"{where}: the initial state violates the closure at {level} level by {worst:.3g} "
+                        f"({unit}; row residuals {np.round(res, 12).tolist()}), above LOOP_CLOSURE_TOL = "
+                        f"{LOOP_CLOSURE_TOL:g} — choose the tree joints' {'q0' if level == 'position' else 'v0'} "
+                        "so that the loop closes")
+        return problems
+
+
+def _loop_problems(i, lp, names):
+    where = f"loops[{i}] ({lp.kind} {lp.body_a!r} -> {lp.body_b!r})"
+    problems = []
+    add = problems.append
+    if lp.kind not in LOOP_KINDS:
+        add(f"{where}.kind: unknown {lp.kind!r} — use one of {list(LOOP_KINDS)}")
+    for field_name in ("body_a", "body_b"):
+        b = getattr(lp, field_name)
+        if b != WORLD and b not in names:
+            add(f"{where}.{field_name}: no body named {b!r}{_did_you_mean(b, names | {WORLD})}")
+    if lp.body_a == lp.body_b:
+        add(f"{where}: closes a body on itself — a loop joins two different bodies (or a body and {WORLD!r})")
+    for field_name, n in (("point_a", 3), ("point_b", 3), ("quat_a", 4), ("quat_b", 4)):
+        v = getattr(lp, field_name)
+        if len(v) != n:
+            add(f"{where}.{field_name}: needs {n} numbers, got {len(v)}")
+        elif not _finite(v):
+            add(f"{where}.{field_name}: contains NaN or inf")
+        elif n == 4 and abs(math.sqrt(sum(x * x for x in v)) - 1.0) > QUAT_NORM_TOL:
+            add(f"{where}.{field_name}: quaternion norm is {math.sqrt(sum(x * x for x in v)):.12g}, not 1 — "
+                "normalize it (scalar first: w, x, y, z)")
+    if lp.kind == "revolute":
+        if lp.axis is None or len(lp.axis) != 3:
+            add(f"{where}.axis: a revolute loop needs a 3-vector axis (in the joint frames)")
+        elif not _finite(lp.axis) or math.sqrt(sum(v * v for v in lp.axis)) == 0.0:
+            add(f"{where}.axis: must be finite and non-zero — give the rotation axis direction")
+    elif lp.axis is not None:
+        add(f"{where}.axis: only revolute loops take an axis")
+    if lp.kind == "distance":
+        if lp.length is None or not (math.isfinite(lp.length) and lp.length > 0.0):
+            add(f"{where}.length: a distance loop needs a positive finite length (m), got {lp.length!r} — "
+                "for coincident points use a ball loop")
+    elif lp.length is not None:
+        add(f"{where}.length: only distance loops take a length")
+    return problems
 
 
 def _finite(x):

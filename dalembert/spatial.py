@@ -423,11 +423,14 @@ def joint_coordinates(joint, R_WP, R_WC, w_WP_W, w_WC_W):
     return angle[:, None], rate[:, None]
 
 
-def initial_body_states(scene):
+def initial_body_states(scene, velocities=None):
     """World pose and velocity of every body at the joints' ``q0``, ``v0`` (forward kinematics).
 
     For engines that take body states rather than joint coordinates (redundant
     coordinates). Joint conventions as in ``dalembert.scene.JOINT_KINDS``.
+    ``velocities`` (dict joint name -> (nv,) array), when given, replaces the joints'
+    ``v0`` (missing joints at rest): body velocities are linear in them, so unit
+    velocities give the columns of the tree's Jacobian (``dalembert.closure``).
 
     Returns
     -------
@@ -439,6 +442,8 @@ def initial_body_states(scene):
     for body in scene.topological_order():
         j = scene.joint(body.name)
         q0, v0 = np.asarray(j.q0, dtype=float), np.asarray(j.v0, dtype=float)
+        if velocities is not None:
+            v0 = np.asarray(velocities.get(j.name, np.zeros(len(v0))), dtype=float)
         if j.kind == "free":
             R = quat_to_matrix(q0[3:] / np.linalg.norm(q0[3:]))
             out[body.name] = dict(R=R, p=q0[:3].copy(), v=v0[:3].copy(), w=R @ v0[3:])

@@ -133,6 +133,13 @@ class Kane:
 
     # -------------------------------------------------------------- dynamics
     def _solve(self, t, q, u):
+        M, f, kin = self.mass_and_forces(t, q, u)
+        udot = np.linalg.solve(M, f) if self.nv else np.zeros(0)
+        return udot, kin
+
+    def mass_and_forces(self, t, q, u):
+        """Kane's ``M u' = f``: ``M`` (nv, nv), ``f`` (nv,) and the ``kinematics`` (each body's
+        entry gains ``F``, the resultant of its loads and gravity, N, world)."""
         kin = self.kinematics(q, u)
         M = np.zeros((self.nv, self.nv))
         f = np.zeros(self.nv)
@@ -145,8 +152,7 @@ class Kane:
             M += m * k["Jv"].T @ k["Jv"] + k["Jw"].T @ I_W @ k["Jw"]
             f += k["Jv"].T @ (F - m * k["a_bias"])  # generalized active + inertia forces
             f += k["Jw"].T @ (T - I_W @ k["alpha_bias"] - spatial.cross(k["w"], I_W @ k["w"]))
-        udot = np.linalg.solve(M, f) if self.nv else np.zeros(0)
-        return udot, kin
+        return M, f, kin
 
     def acceleration(self, t, q, v):
         """Generalized accelerations ``u'`` (nv,) from ``Q + Q* = 0``."""

@@ -68,7 +68,12 @@ class _FixedStep:
 
     def run(self, system, times, settings):
         counts = steps_per_interval(np.asarray(times, dtype=float), settings.dt)
-        Q, V, steps = march(lambda t, q, v, h: self.step(system, t, q, v, h), system.q0, system.v0, times, counts)
+        project = getattr(system, "project", None)  # a constrained system: back onto its manifolds after each step
+        if project is None:
+            step = lambda t, q, v, h: self.step(system, t, q, v, h)  # noqa: E731
+        else:
+            step = lambda t, q, v, h: project(*self.step(system, t, q, v, h))  # noqa: E731
+        Q, V, steps = march(step, system.q0, system.v0, times, counts)
         return Q, V, Stats(steps, steps * self.stages)
 
 
@@ -144,15 +149,42 @@ class _SolveIVP:
 
         y0 = np.concatenate([system.q0, system.v0]).astype(float)
         Y = np.full((len(times), len(y0)), np.nan)
+        tols = dict(rtol=settings.rtol or DOP853.TRUTH_RTOL, atol=settings.atol or DOP853.TRUTH_ATOL)
+        project = getattr(system, "project", None)
+        if project is not None:  # a constrained system: integrate sample to sample, projecting at each
+            return self._run_projected(rhs, project, nq, times, y0, Y, tols)
         try:
-            sol = solve_ivp(rhs, (times[0], times[-1]), y0, method=self.method, t_eval=times,
-                            rtol=settings.rtol or DOP853.TRUTH_RTOL, atol=settings.atol or DOP853.TRUTH_ATOL)
+            sol = solve_ivp(rhs, (times[0], times[-1]), y0, method=self.method, t_eval=times, **tols)
         except Exception as e:  # a blown-up state: NaN (contract item 5)
             if not is_numerical_failure(e):
                 raise
             return Y[:, :nq], Y[:, nq:], Stats(0, 0)
         Y[: sol.y.shape[1]] = sol.y.T
         return Y[:, :nq], Y[:, nq:], Stats(self.steps(sol), int(sol.nfev))
+
+    def _run_projected(self, rhs, project, nq, times, y0, Y, tols):
+        """One ``solve_ivp`` per sample interval, each started from the previous sample projected onto
+        the constraint manifolds (``system.project``): the drift of an index-1 system stays that of
+        one interval. The first sample is the initial state itself."""
+        Y[0] = y = y0
+        steps = nfev = 0
+        for k in range(len(times) - 1):
+            try:
+                with np.errstate(over="ignore", invalid="ignore"):
+                    sol = solve_ivp(rhs, (times[k], times[k + 1]), y, method=self.method, **tols)
+                    if not sol.success:
+                        break
+                    q, v = project(sol.y[:nq, -1], sol.y[nq:, -1])
+            except Exception as e:  # a blown-up state: NaN from here on (contract item 5)
+                if not is_numerical_failure(e):
+                    raise
+                break
+            steps, nfev = steps + self.steps(sol), nfev + int(sol.nfev)
+            y = np.concatenate([q, v])
+            if not np.all(np.isfinite(y)):
+                break
+            Y[k + 1] = y
+        return Y[:, :nq], Y[:, nq:], Stats(steps, nfev)
 
 
 @integrator("dop853")

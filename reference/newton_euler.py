@@ -42,6 +42,8 @@ class NewtonEuler:
         not_free = [j.child for j in scene.joints if j.kind != "free"]
         if not_free:
             raise ValueError(f"Newton-Euler handles free bodies only; {not_free} are jointed — use 'kane'")
+        if scene.loops:
+            raise ValueError("Newton-Euler handles free bodies without loop closures — use 'kane'")
         self.scene, self.attitude = scene, attitude
         na = 4 if attitude == "quaternion" else 9
         self.bodies = [scene.body(j.child) for j in scene.joints]

@@ -36,6 +36,8 @@ PARALLEL_TOL = 1e-12
 
 def _links(scene):
     """The chain's bodies from the root, or a reason why the scene is not a planar chain."""
+    if scene.loops:
+        return None, "the planar formulation takes serial chains only, no loop closures"
     if scene.loads:
         return None, "the planar formulation takes gravity only, no loads"
     if any(j.kind != "revolute" for j in scene.joints):

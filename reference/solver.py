@@ -9,6 +9,7 @@ import numpy as np
 
 from dalembert.reference.generalized import Kane
 from dalembert.reference.integrators import INTEGRATORS, DOP853, check_settings
+from dalembert.reference.loops import ClosedLoops
 from dalembert.reference.newton_euler import NewtonEuler
 from dalembert.reference.planar import PlanarChain, why_not
 
@@ -18,14 +19,14 @@ __all__ = ["FORMULATIONS", "simulate", "build", "truth_settings"]
 FORMULATIONS = {
     "newton-euler": lambda scene: NewtonEuler(scene, "quaternion"),
     "newton-euler-matrix": lambda scene: NewtonEuler(scene, "matrix"),
-    "kane": Kane,
+    "kane": lambda scene: ClosedLoops(scene) if scene.loops else Kane(scene),  # loops: Kane + multipliers
     "planar": PlanarChain,  # serial revolute chains with parallel axes under gravity (planar.why_not)
 }
 
 
 def default_formulation(scene):
     """Newton-Euler for scenes of free bodies only, Kane otherwise."""
-    return "newton-euler" if all(j.kind == "free" for j in scene.joints) else "kane"
+    return "newton-euler" if all(j.kind == "free" for j in scene.joints) and not scene.loops else "kane"
 
 
 def build(scene, settings, times):

@@ -1,0 +1,166 @@
+"""Closed kinematic loops: Kane's equations of the spanning tree plus loop-closure constraints with
+Lagrange multipliers (the reference's ``kane`` formulation on a scene with ``loops``).
+
+Equations. The tree's coordinates ``q`` and speeds ``u`` are Kane's (``generalized.Kane``); each
+loop adds constraint rows ``phi(q) = 0`` (``dalembert.closure``) whose Jacobian in the speeds is
+``J`` (m, nv), so that ``d(phi)/dt = J u`` and ``d2(phi)/dt2 = J u' + b``. With Kane's
+``M u' = f`` of the tree and the loops' generalized reaction ``J^T lambda``::
+
+    M u' = f + J^T lambda,        J u' + b = 0                                  (index 1)
+
+Solved in the metric of the mass matrix: with ``M = L L^T`` (Cholesky), ``g = L^-1 f`` and
+``Jt = J L^-T = U S V^T`` (SVD, singular values below ``closure.RANK_RTOL`` times the largest cut),
+
+    L^T u' = g - V_r (V_r^T g + S_r^-1 U_r^T b),     lambda = -U_r S_r^-1 (V_r^T g + S_r^-1 U_r^T b)
+
+which is the minimum-norm (least-squares) solution of the KKT system: redundant rows (a planar
+loop closed by a 3-D revolute has three) get no multiplier and change nothing, and near a singular
+position (the parallelogram four-bar flat: a row's singular value goes to zero and back) only
+``S^-1`` appears, never the ``S^-2`` of the normal equations ``J M^-1 J^T lambda = ...``.
+
+Why index 1 with projection rather than coordinate partitioning: partitioning picks independent
+coordinates from a non-singular minor of ``J``, and at a singular position every choice of the
+minor's columns may go singular (the four-bar flat), forcing a re-partition exactly where the
+motion is hardest; the least-squares solve has no choice to make and passes through it. The drift
+of the index-1 form (``phi`` grows like the integration error, twice integrated) is removed by
+projecting after every step of a fixed-step integrator and at every sample of an adaptive one
+(``integrators``): the configuration onto ``phi = 0`` by Gauss-Newton steps
+``dq = -M^-1 J^T (J M^-1 J^T)^+ phi`` (the nearest point in the kinetic-energy metric, on the
+group for quaternion blocks), then the velocity onto ``J u = 0`` by the same projector (the
+kinetic-energy-nearest velocity: no Baumgarte terms, no parameters to tune). On an exact solution
+both projections are the identity, so they change nothing but the drift.
+
+Singular positions. Where the Jacobian loses rank (the parallelogram four-bar flat, where it and
+the anti-parallelogram branch cross), the index-1 equations are ill-posed off the manifold: a
+residual ``eps`` in the degenerate row puts the state on a neighbouring level set that turns from
+one branch into the other within ``sqrt(eps)``, and the accelerations there grow like
+``eps / sigma``. Measured on the four-bar before the fix: RK4 at dt = 1e-3 lost 1e-2 J passing it,
+and DOP853 at 1e-12 shrank its steps without end. So the accelerations (and reactions) are
+evaluated at the state projected onto both manifolds first: the right-hand side is then that of
+the exact constrained motion at every stage, whose degenerate row is consistent, and the motion
+passes the singular position on the branch it came on (``tests/test_loops.py``).
+
+Reactions: a loop's multipliers act on body a as the wrench ``G_a^T lambda`` and on body b as
+``G_b^T lambda`` (``closure.Rows``: force and moment about the COM, world); the force ON body b
+is the trajectory's ``reaction_force:<loop name>``, and the tree joints' reactions include the
+loops' forces on their bodies.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dalembert import closure
+from dalembert.reference import configuration as cfg
+from dalembert.reference.generalized import Kane
+from dalembert.scene import WORLD
+from dalembert.trajectory import Trajectory
+
+__all__ = ["ClosedLoops", "PROJECTION_TOL", "PROJECTION_ITERATIONS"]
+
+# Gauss-Newton stops when every position row is below this (m, or the sine of a tilt): bodies of a
+# metre carry roundoff of ~2e-16 m per coordinate, and a closure sums a few of them.
+PROJECTION_TOL = 1e-14
+# ... or after this many steps (from a step's drift, ~1e-10 on the truth, one step reaches roundoff;
+# near a singular position the degenerate row cannot be reduced, and the steps stop making progress).
+PROJECTION_ITERATIONS = 4
+
+
+def _inverse_cholesky(M):
+    """``L^-1`` (nv, nv) of ``M = L L^T``: the inverse is formed once per call because the systems
+    are small (a few speeds), where one product beats repeated triangular solves' call overhead."""
+    return np.linalg.inv(np.linalg.cholesky(M))
+
+
+class ClosedLoops(Kane):
+    """A ``System`` (``integrators``) for a tree scene with loop closures (``Scene.loops``).
+
+    The coordinates, speeds and read-back are Kane's (``generalized.Kane``); ``acceleration``
+    solves the index-1 system above and ``project(q, v)`` returns the state moved onto the
+    position and velocity manifolds (the integrators call it after each step).
+    """
+
+    def __init__(self, scene):
+        super().__init__(scene)
+        self.loops = scene.loops
+
+    # ------------------------------------------------------------ constraints
+    def constraints(self, kin):
+        """Loop rows at the state of ``kin`` (``kinematics``): ``phi`` (m,), ``J`` (m, nv), ``b`` (m,)
+        and each loop's ``closure.Rows``."""
+        phi, J, b, found = [], [], [], []
+        for loop in self.loops:
+            A, B = kin[loop.body_a], kin[loop.body_b]
+            r = closure.rows(loop, A, B)
+            J.append(r.G_a[:, :3] @ A["Jv"] + r.G_a[:, 3:] @ A["Jw"] + r.G_b[:, :3] @ B["Jv"] + r.G_b[:, 3:] @ B["Jw"])
+            b.append(r.G_a @ np.concatenate([A["a_bias"], A["alpha_bias"]])
+                     + r.G_b @ np.concatenate([B["a_bias"], B["alpha_bias"]]) + r.gamma)
+            phi.append(r.phi)
+            found.append(r)
+        return np.concatenate(phi), np.vstack(J), np.concatenate(b), found
+
+    @staticmethod
+    def _range(Jt):
+        """``U_r, S_r, V_r`` of ``Jt``'s SVD, singular values above ``closure.RANK_RTOL`` times the largest."""
+        U, S, Vt = np.linalg.svd(Jt, full_matrices=False)
+        r = int(np.sum(S > closure.RANK_RTOL * S[0])) if len(S) and S[0] > 0.0 else 0
+        return U[:, :r], S[:r], Vt[:r].T
+
+    def _solve(self, t, q, u):
+        q, u = self.project(q, u)  # every evaluation on the manifolds (module docstring: singular positions)
+        M, f, kin = self.mass_and_forces(t, q, u)
+        _, J, b, found = self.constraints(kin)
+        Li = _inverse_cholesky(M)
+        g = Li @ f
+        U, S, V = self._range(J @ Li.T)
+        c = V.T @ g + (U.T @ b) / S
+        udot = Li.T @ (g - V @ c)
+        lam = -U @ (c / S)
+        forces, i = {}, 0
+        for loop, r in zip(self.loops, found):
+            m = len(r.phi)
+            wa, wb = r.G_a.T @ lam[i:i + m], r.G_b.T @ lam[i:i + m]
+            for body, wrench in ((loop.body_a, wa), (loop.body_b, wb)):
+                if body != WORLD:
+                    kin[body]["F"] = kin[body]["F"] + wrench[:3]  # the tree reactions see the loop forces
+            forces[loop.name] = wb[:3]
+            i += m
+        kin[("loops",)] = forces  # (a tuple key: never a body name)
+        return udot, kin
+
+    def multiplier_forces(self, t, q, v):
+        """Force each loop exerts ON its body b (N, world), dict loop name -> (3,)."""
+        return self._solve(t, q, v)[1][("loops",)]
+
+    # ------------------------------------------------------------ projection
+    def project(self, q, v):
+        """``(q, v)`` moved onto ``phi(q) = 0`` and ``J(q) v = 0`` in the kinetic-energy metric
+        (see the module docstring); ``q`` (nq,), ``v`` (nv,)."""
+        zero = np.zeros_like(v)
+        Li = _inverse_cholesky(self.mass_and_forces(0.0, q, zero)[0])  # the metric (loads do not enter it)
+        last = np.inf
+        for _ in range(PROJECTION_ITERATIONS):
+            phi, J, _, _ = self.constraints(self.kinematics(q, zero))
+            worst = float(np.max(np.abs(phi)))
+            if worst <= PROJECTION_TOL or not worst < 0.5 * last:
+                break
+            last = worst
+            U, S, V = self._range(J @ Li.T)
+            q = cfg.retract(self.blocks, q, Li.T @ (-V @ ((U.T @ phi) / S)))
+        _, J, _, _ = self.constraints(self.kinematics(q, zero))
+        U, S, V = self._range(J @ Li.T)
+        w = np.linalg.solve(Li.T, v)  # L^T v
+        return q, Li.T @ (w - V @ (V.T @ w))
+
+    # ------------------------------------------------------------ read-back
+    def trajectory(self, t, Q, V):
+        """Kane's read-back (bodies, joints, tree reactions with the loop forces included) plus each
+        loop's ``reaction_force:<loop name>`` (force ON body b, N, world)."""
+        traj = super().trajectory(t, Q, V)
+        forces = {loop.name: np.full((len(t), 3), np.nan) for loop in self.loops}
+        for i in range(len(t)):
+            if np.all(np.isfinite(Q[i])) and np.all(np.isfinite(V[i])):
+                for name, f in self.multiplier_forces(t[i], Q[i], V[i]).items():
+                    forces[name][i] = f
+        return Trajectory(traj.t, traj.bodies, traj.joints,
+                          {**traj.extras, **{f"reaction_force:{name}": f for name, f in forces.items()}})
