@@ -82,7 +82,7 @@ def simulate(p):
     """
     simulator, integrator, charts = reset(p)
     times = p["times"]
-    context = simulator.get_mutable_context()
+    context = simulator.get_context()
     x0 = charts.to_scene_chart(_state(p, context))
     X = np.full((len(times), len(x0)), np.nan)
     X[0] = x0

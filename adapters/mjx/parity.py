@@ -12,6 +12,8 @@ as the working and double as the extended precision).
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 __all__ = ["one_step", "horizon"]
@@ -73,13 +75,20 @@ def horizon(case, settings):
 def float32_floor(scene, times, dt):
     """The float32 attitude floor (rad) of a torque-free top ``scene`` sampled at ``times`` (s) at step ``dt``:
     RK4 in float32 against the same RK4 in double; NaN for any other scene."""
-    from dalembert.reference.roundoff import top_roundoff
-
     joints = scene.joints
     if len(joints) != 1 or joints[0].kind != "free" or scene.loads or any(scene.gravity):
         return float("nan")
     inertia = np.diag(scene.bodies[0].inertia_matrix)
     if np.any(np.abs(scene.bodies[0].inertia_matrix - np.diag(inertia)) > 0.0) or joints[0].q0[3:] != (1, 0, 0, 0):
         return float("nan")  # top_roundoff: principal axes, starting at the identity
-    return top_roundoff(tuple(inertia), tuple(joints[0].v0[3:]), np.asarray(times), dt, working=np.float32,
-                        extended=float)
+    return _top_float32_floor(tuple(float(x) for x in inertia), tuple(float(w) for w in joints[0].v0[3:]),
+                              tuple(float(t) for t in np.asarray(times)), float(dt))
+
+
+@functools.lru_cache(maxsize=32)
+def _top_float32_floor(inertia, w0, times, dt):
+    """``top_roundoff`` in float32, once per top, sampling and step in a process: a worker audits each
+    integrator's float32 run of a case version, and they share the floor (~1 s at dt 1e-3 over 20 s)."""
+    from dalembert.reference.roundoff import top_roundoff
+
+    return top_roundoff(inertia, w0, np.asarray(times), dt, working=np.float32, extended=float)
