@@ -28,7 +28,7 @@ import numpy as np
 from dalembert import spatial
 from dalembert.scene import WORLD
 
-__all__ = ["PinocchioModel", "WELDS"]
+__all__ = ["PinocchioModel", "WELDS", "depth_first_order"]
 
 # Welds: merged into the parent's joint (``tree``, exact), or 6D constraints between free
 # flyers solved by ``pin.constraintDynamics`` (``constraint``).
@@ -39,6 +39,25 @@ def _se3(R, p):
     import pinocchio as pin
 
     return pin.SE3(np.asarray(R, dtype=float), np.asarray(p, dtype=float))
+
+
+def depth_first_order(scene):
+    """The scene's bodies, each subtree after its root and contiguous (siblings in ``scene.joints`` order).
+
+    Pinocchio's ``crba``, its Cholesky and ``constraintDynamics`` take a subtree's velocity indices to be
+    contiguous (``model.nvSubtree``); a parents-first order that is not depth-first (the four-bar's
+    crank, rocker, coupler) gives a wrong mass matrix there (the crank-coupler coupling lands on the
+    rocker: measured, ``crba`` and ``constraintDynamics`` against the reference's), while ``aba`` does
+    not notice."""
+    children = {}
+    for j in scene.joints:
+        children.setdefault(j.parent, []).append(j.child)
+    order, stack = [], list(reversed(children.get(WORLD, [])))
+    while stack:
+        name = stack.pop()
+        order.append(scene.body(name))
+        stack.extend(reversed(children.get(name, [])))
+    return order
 
 
 class PinocchioModel:
@@ -62,7 +81,7 @@ class PinocchioModel:
         model.gravity = pin.Motion(np.array(scene.gravity, dtype=float), np.zeros(3))
         self.carrier, self.X_EB, self.joint_ids = {}, {}, {}
         lines = []
-        for body in scene.topological_order():
+        for body in depth_first_order(scene):
             j = scene.joint(body.name)
             if j.parent == WORLD:
                 parent_id, X_EpP = 0, _se3(np.eye(3), np.zeros(3))
