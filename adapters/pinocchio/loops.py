@@ -31,9 +31,9 @@ critically damped at ``BAUMGARTE_RATE``. Chosen over projection because it is th
 mechanism (projection would be the reference's Gauss-Newton on Pinocchio's Jacobians: the
 reference's method measured on the engine), it acts inside every evaluation of every integrator,
 fixed-step and adaptive, at no extra pass, and it changes nothing on an exact solution (``e = 0``).
-Measured on the parallelogram four-bar with rk4 over 1 s (both singular positions): without it the
-angle error at dt = 1e-4 was 3.5e-8 rad (the gap's roundoff, divided by the vanishing singular
-value at the flat position, kicks the motion); with it 1.0e-12 rad.
+Measured on the parallelogram four-bar with rk4 over 1 s (both singular positions) at dt = 1e-4:
+without it the angle error was 2.0e-10 rad (the gap's roundoff, divided by the singular value that
+vanishes at the flat position, kicks the motion); with it 3.5e-13 rad (``BAUMGARTE_RATE``).
 
 Sign and frame of the multipliers (``LOCAL``, read in ``constraintDynamics``'s source and checked
 against the reference's reactions): a ``CONTACT_3D``'s ``lambda`` (3,) is the force ON joint1's
@@ -60,14 +60,16 @@ DISTANCE_REASON = ("loop:distance: Pinocchio's RigidConstraintModel holds 3 (CON
                    "points is one scalar row it cannot express (a massless rod with ball ends would make the mass "
                    "matrix singular)")
 # mu, relative to the largest eigenvalue of the Delassus operator J M^-1 J^T at the initial state (so
-# it scales with the mechanism's units): mu > 0 makes the regularised KKT matrix factorisable with
-# redundant rows; 1e-8 shrinks the error of every direction with eigenvalue above 1e-4 of the
-# largest by 1e-4 or more per iteration, and keeps the roundoff it amplifies in the redundant
-# multipliers (~eps / mu) at ~1e-8 of the largest force, where it moves nothing. Measured on the
-# four-bar: 1e-6 at 3 iterations lost 5e-7 rad near the flat position, 1e-4 3e-8 rad.
-PROXIMAL_MU_REL = 1e-8
-# Three iterations reach roundoff for eigenvalues above 1e-3 of the largest ((1e-8/1e-3)^3 = 1e-15);
-# directions whose eigenvalue vanishes (a singular position) stay damped, as the reference cuts them.
+# it scales with the mechanism's units). mu > 0 makes the regularised KKT matrix factorisable with
+# redundant rows; the smaller it is, the faster the iterations converge (by mu / s per iteration in a
+# direction of eigenvalue s), and the more they amplify roundoff in the redundant multipliers (~eps / mu,
+# ~1e-6 of the largest force here: it moves nothing, and the read-back removes it). Measured on the
+# four-bar, rk4 over 1 s (both singular positions), angle error at dt = 1e-3 / 1e-4: mu 1e-4: 1.1e-6 /
+# 1.2e-6 rad; 1e-6: 2.0e-8 / 1.5e-9; 1e-8: 4.6e-12 / 1.1e-12; 1e-10, 1e-12 and 1e-14 alike: 4.3e-12 /
+# 3.5e-13. 1e-10 is the largest on that plateau.
+PROXIMAL_MU_REL = 1e-10
+# Measured as above at mu 1e-10: one iteration 2.1e-7 / 6.9e-4 rad (it has not converged at the singular
+# position), two and three both 4.3e-12 / 3.5e-13; three for margin (each is one more triangular solve).
 PROXIMAL_ITERATIONS = 3
 # Stop earlier when the multipliers change less than this (N; Pinocchio's relative criterion): with
 # redundant rows the change settles at roundoff / mu instead, and the iterations run to the cap.
@@ -75,7 +77,9 @@ PROXIMAL_ACCURACY = 1e-14
 # Baumgarte gains Kp = w^2, Kd = 2 w (critically damped gap dynamics) with w in rad/s: faster than the
 # mechanisms' motions (the four-bar turns at up to 9 rad/s), so drift is pulled back within a fraction
 # of a turn, and w * dt <= 0.3 at the largest step the matrix runs (1e-2 s): well inside the stability
-# regions of the explicit integrators (euler, rk4) so the corrector never drives the step.
+# regions of the explicit integrators (euler, rk4), so the corrector never drives the step. Measured
+# on the four-bar as above (mu 1e-10; w = 10 and 100 at mu 1e-8): w = 0: 4.4e-12 / 2.0e-10 rad;
+# w = 10: 2.4e-11 / 2.2e-9; w = 30: 4.3e-12 / 3.5e-13; w = 100: 4.4e-12 / 8.5e-13.
 BAUMGARTE_RATE = 30.0
 
 
