@@ -137,10 +137,9 @@ class PinocchioAdapter(Adapter):
         reacting = [j for j in scene.joints if j.kind in ("revolute", "ball")]
         reactions = {j.child: np.full((n, 3), np.nan) for j in reacting}
         loop_forces = {lc.loop.name: np.full((n, 3), np.nan) for lc in pm.loop_contacts}
-        for k in range(n):
+        finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)  # once, not per sample
+        for k in np.flatnonzero(finite):
             q, v = Q[k], V[k]
-            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-                continue
             local = {}
             if reacting or loop_forces:  # rnea with the external forces: data.f[joint] is the force through the joint
                 a = pm.acceleration(q, v)
