@@ -5,7 +5,10 @@ integrators owned here (``integrators``), so their quality is part of what is
 measured. The fixed-step loops run compiled (``native``: the same integrators
 and loads in ``stepper.cpp`` against the installed Pinocchio, no Python call per
 step), or in Python with ``--option loop=python`` and wherever the compiled loop
-cannot be built (the audit says which ran).
+cannot be built (the audit says which ran). Welds as constraints and loop
+closures (``loops``: ball and revolute; distance is unsupported) run
+``pin.constraintDynamics``, which the compiled loop does not have: their
+fixed-step runs take the Python loop.
 """
 
 from __future__ import annotations
