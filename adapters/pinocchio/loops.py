@@ -23,7 +23,10 @@ with eigenvalue ``s`` the error shrinks by ``mu / (s + mu)`` per iteration (``PR
 ``PROXIMAL_ITERATIONS``). Redundant directions get no force that moves anything (they are the null
 space of ``J^T``), so accelerations are unique; how a redundant load is split between rows (e.g.
 between the revolute's two points) is the statically indeterminate part, and only the total force
-is read back.
+is read back, from the minimum-norm multipliers (``PinocchioModel.constraint_multipliers``: the
+iterations leave roundoff amplified by ``1/mu`` in the null space, which moves nothing). Near a
+singular position the vanishing direction converges slowest: the few iterations damp it, as the
+reference cuts it (``closure.RANK_RTOL``).
 
 Drift: Baumgarte stabilisation, Pinocchio's own corrector (``setBaumgarteCorrectorParameters``):
 the constraint acceleration is set to ``-Kp e - Kd e'`` (``e`` the points' gap) instead of zero,
@@ -51,7 +54,7 @@ from dalembert import spatial
 from dalembert.scene import WORLD
 
 __all__ = ["LOOP_KINDS", "DISTANCE_REASON", "PROXIMAL_MU_REL", "PROXIMAL_ITERATIONS", "PROXIMAL_ACCURACY",
-           "BAUMGARTE_RATE", "LoopContacts", "loop_contacts", "proximal_settings", "baumgarte"]
+           "BAUMGARTE_RATE", "LoopContacts", "loop_contacts", "proximal_settings", "baumgarte", "force_on_b"]
 
 # The loop kinds built here (the adapter declares ``loop:<kind>`` for these only).
 LOOP_KINDS = ("ball", "revolute")
