@@ -1,0 +1,124 @@
+"""Drake closes loops (``dalembert.adapters.drake.loops``): SAP constraints in the discrete plant,
+against the parallelogram four-bar's closed form and the reference solver; its continuous
+integrators declare loops unsupported."""
+
+import numpy as np
+import pytest
+
+from dalembert import invariants
+from dalembert.adapters import get_adapter
+from dalembert.cases._four_bar import four_bar, parallelogram_pendulum  # the one import of the four-bar module
+from dalembert.reference import simulate
+from dalembert.reference.closed_form import RigidPendulum
+from dalembert.scene import Joint, Loop, Scene
+from dalembert.settings import Settings
+
+pytest.importorskip("pydrake")
+
+ADAPTER = get_adapter("drake")
+
+# The four-bar over its default 0.5 s (the flat singular position at t = 0.23 s), discrete SAP,
+# crank angle against the closed form, measured: 3.36e-4 rad at dt = 1e-2, 3.07e-6 at 1e-3,
+# 2.08e-7 at 1e-4. The plant's update is semi-implicit Euler, whose positions are those of
+# leapfrog with the first velocity off by half a step of the initial acceleration, zero here (the
+# crank starts vertical, no gravity torque): second order at first (the 1e-2 -> 1e-3 factor of 110);
+# below 1e-3 a floor of SAP's own (its stopping test is relative to the whole momentum, 1e-6 in
+# Drake's SapSolverParameters, not exposed in pydrake) takes over: factor 15.
+# A decade of dt must buy at least a decade of accuracy (first order at worst):
+DECADE_GAIN = 10.0
+# and the finest step must reach this (3x the 2.08e-7 measured: the floor is the solver's, not ours).
+FINE_ANGLE_TOL = 6e-7
+# The loop's gap is relaxed over one step (SAP's near-rigid regime): it falls as dt^2. Measured (m,
+# the largest over the samples): the four-bar's revolute 0.13 dt^2 at dt = 1e-2, 0.021 dt^2 at 1e-3
+# and 1e-4; the ball to the world 0.39 / 0.060 dt^2 and the distance 0.045 / 0.024 dt^2 at 1e-2 /
+# 1e-3. 1 dt^2 (m/s^2) leaves room and fails for a soft or lost constraint (a gap that does not
+# fall as dt^2: at 1e-3 the bound is 1e-6 m).
+GAP_PER_DT2 = 1.0
+# A ball loop (and a distance loop) to the world over 0.3 s (past the flat position at 0.23 s)
+# against the reference (RK4 at 1e-3: within 7.8e-13 rad of the closed form on the ball chain, a
+# parallelogram too): measured 4.8e-4 / 6.4e-6 rad (ball) and 2.8e-4 / 2.8e-6 (distance) at
+# dt = 1e-2 / 1e-3, the largest joint-angle error; 3x for the machine.
+REFERENCE_ANGLE_TOL = {1e-2: 1.5e-3, 1e-3: 2e-5}
+
+
+def _crank_errors(case, dts):
+    m, d, I, g, theta0, rate0 = parallelogram_pendulum()
+    exact = RigidPendulum(m, d, I, g, theta0, rate0).angle(case.times) - np.pi / 2
+    out = []
+    for dt in dts:
+        traj = ADAPTER.run(ADAPTER.prepare(case.scene, case.times, Settings("discrete", dt=dt))).trajectory
+        crank, rocker = traj.joints["crank"].q[:, 0], traj.joints["rocker"].q[:, 0]
+        out.append((np.abs(crank - exact).max(), np.abs(rocker - exact).max(),
+                    invariants.loop_residual(case.scene, traj, "position").max()))
+    return out
+
+
+def test_discrete_four_bar_converges_to_the_closed_form_and_keeps_its_loop_closed():
+    case = four_bar()
+    dts = (1e-2, 1e-3, 1e-4)
+    errs = _crank_errors(case, dts)
+    crank = [e[0] for e in errs]
+    assert crank[0] / crank[1] > DECADE_GAIN and crank[1] / crank[2] > DECADE_GAIN, crank
+    assert crank[2] < FINE_ANGLE_TOL
+    for dt, (c, r, gap) in zip(dts, errs):
+        assert abs(r - c) < 0.1 * c  # the rocker turns with the crank: the parallelogram branch
+        assert gap < GAP_PER_DT2 * dt**2, (dt, gap)
+
+
+def _world_loop_scene(kind):
+    """The four-bar closed at the ground pivot D by a loop to the world: ``ball`` (a chain
+    world-crank-coupler-rocker, the rocker's end held at D) or ``distance`` (no rocker: a massless
+    rod D-C, the loop's length)."""
+    base = four_bar().scene
+    crank, coupler, _ = base.joints
+    if kind == "ball":
+        rocker = Joint("revolute", "coupler", "rocker", q0=crank.q0, v0=crank.v0, axis=[0, 0, 1],
+                       parent_point=[0.5, 0, 0], child_point=[0.5, 0, 0])
+        return Scene("four_bar_ball_chain", base.bodies, [crank, coupler, rocker], base.gravity,
+                     loops=[Loop("ball", "world", "rocker", point_a=[1.0, 0, 0], point_b=[-0.5, 0, 0], name="D")])
+    return Scene("four_bar_distance", base.bodies[:2], [crank, coupler], base.gravity,
+                 loops=[Loop("distance", "world", "coupler", point_a=[1.0, 0, 0], point_b=[0.5, 0, 0], length=1.0,
+                             name="DC")])
+
+
+@pytest.mark.parametrize("kind", ["ball", "distance"])
+def test_a_loop_to_the_world_matches_the_reference(kind):
+    """Loops to the world go through the anchor body welded to it (Drake 1.51 crashes on the world
+    body in a constraint); the truth is the reference's Kane-plus-multipliers solver."""
+    scene = _world_loop_scene(kind)
+    times = np.linspace(0.0, 0.3, 31)
+    ref = simulate(scene, times, Settings("rk4", dt=1e-3))[0]
+    for dt, tol in REFERENCE_ANGLE_TOL.items():
+        prepared = ADAPTER.prepare(scene, times, Settings("discrete", dt=dt))
+        outcome = ADAPTER.run(prepared)
+        traj = outcome.trajectory
+        err = max(np.abs(traj.joints[j.child].q - ref.joints[j.child].q).max() for j in scene.joints)
+        assert err < tol, (dt, err)
+        assert invariants.loop_residual(scene, traj, "position").max() < GAP_PER_DT2 * dt**2
+    audit = ADAPTER.audit(prepared, outcome)
+    assert "welded to the world" in audit["loop_world_anchor"]
+    assert audit["loop_constraints"] == 1 and kind in audit["loops"][scene.loops[0].name]
+
+
+def test_continuous_integrators_declare_loops_unsupported_and_discrete_runs_them():
+    scene = four_bar().scene
+    assert {"loop:ball", "loop:revolute", "loop:distance"} <= ADAPTER.effects
+    for name in ADAPTER.integrators:
+        s = Settings(name, dt=1e-3) if ADAPTER.integrators[name].fixed_step else Settings(name, rtol=1e-6)
+        reason = ADAPTER.unsupported(scene, s)
+        if name == "discrete":
+            assert reason is None
+        else:
+            assert "loop:revolute" in reason and "Continuous time does not support constraints" in reason, name
+
+
+def test_audit_says_how_the_revolute_loop_is_closed_and_what_is_not_read_back():
+    case = four_bar(t_final=0.1)
+    prepared = ADAPTER.prepare(case.scene, case.times, Settings("discrete", dt=1e-3))
+    outcome = ADAPTER.run(prepared)
+    audit = ADAPTER.audit(prepared, outcome)
+    assert audit["loop_constraints"] == 2  # two ball constraints along the axis
+    assert "0.5 m along the axis" in audit["loops"]["C"]  # the lever: the loop point's distance from the COMs
+    assert "near-rigid" in audit["loop_stiffness"] and "beta = 0.1" in audit["loop_stiffness"]
+    assert "reaction_force:C" not in outcome.trajectory.extras  # not read back (loop_reactions says why)
+    assert "no constraint forces" in audit["loop_reactions"]
