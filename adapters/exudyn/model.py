@@ -39,6 +39,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
+from dalembert.adapters.exudyn.loops import joint_frame, loop_axes
 from dalembert.scene import WORLD
 
 __all__ = ["build", "rigid_bodies", "axis_frame", "NODES", "JOINTS", "CONSTRAINED_AXES"]
@@ -70,7 +71,7 @@ def build(scene, settings, assemble=True):
     joint frame in the parent's axes, ``R_PJ R_A``) and ``summary`` (text, for reports).
     """
     import exudyn as exu
-    from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid,
+    from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid, ObjectConnectorDistance,
                                       MarkerKinematicTreeRigid, NodeGenericODE2, ObjectGround,
                                       ObjectJointGeneric, ObjectKinematicTree, SensorBody, SensorKinematicTree,
                                       SensorNode, SensorObject)
@@ -96,7 +97,8 @@ def build(scene, settings, assemble=True):
             kwargs["gravity"] = list(g)
         obj = mbs.CreateRigidBody(**kwargs)["bodyNumber"]
         bodies[name] = obj
-        markers[name] = lambda p, obj=obj: mbs.AddMarker(MarkerBodyRigid(bodyNumber=obj, localPosition=list(p)))
+        markers[name] = lambda p, R=np.eye(3), obj=obj: mbs.AddMarker(MarkerBodyRigid(
+            bodyNumber=obj, localHT=exu.HT(rotation=R, translation=list(p))))
         sensors[name] = {k: mbs.AddSensor(SensorBody(bodyNumber=obj, outputVariableType=v))
                          for k, v in (("p", OV.Position), ("R", OV.RotationMatrix), ("v", OV.Velocity),
                                       ("w", OV.AngularVelocity))}
@@ -163,8 +165,9 @@ def build(scene, settings, assemble=True):
                    ("a", OV.Acceleration))
         for b in links:
             i, (p_EB, R_EB) = index[b.name], X_EB[b.name]
-            markers[b.name] = lambda p, i=i, p_EB=p_EB, R_EB=R_EB: mbs.AddMarker(MarkerKinematicTreeRigid(
-                objectNumber=tree, linkNumber=i, localPosition=list(p_EB + R_EB @ np.array(p))))
+            markers[b.name] = lambda p, R=np.eye(3), i=i, p_EB=p_EB, R_EB=R_EB: mbs.AddMarker(
+                MarkerKinematicTreeRigid(objectNumber=tree, linkNumber=i,
+                                         localHT=exu.HT(rotation=R_EB @ R, translation=list(p_EB + R_EB @ np.array(p)))))
             sensors[b.name] = {k: mbs.AddSensor(SensorKinematicTree(
                 objectNumber=tree, linkNumber=i, localPosition=list(p_EB), outputVariableType=v))
                 for k, v in outputs}
@@ -172,6 +175,29 @@ def build(scene, settings, assemble=True):
         sensors["__v"] = {"v": mbs.AddSensor(SensorNode(nodeNumber=node, outputVariableType=OV.Coordinates_t))}
         summary.append(f"ObjectKinematicTree: {n} RevoluteZ link(s) {[b.name for b in links]} "
                        f"(minimal coordinates), gravity {g.tolist()}")
+    # --- loop closures: one constraint object from a marker on body a (marker 0) to one on body b,
+    # its rows those independent at the initial state (``loops.loop_axes``)
+    loops, rows = {}, {}
+    if scene.loops:
+        ground = mbs.AddObject(ObjectGround())
+        markers[WORLD] = lambda p, R=np.eye(3): mbs.AddMarker(MarkerBodyRigid(
+            bodyNumber=ground, localHT=exu.HT(rotation=R, translation=list(p))))
+        rows = loop_axes(scene)
+        for lp in scene.loops:
+            R_BJa, R_BJb = joint_frame(lp)
+            m0, m1 = markers[lp.body_a](lp.point_a, R_BJa), markers[lp.body_b](lp.point_b, R_BJb)
+            dropped = f"; redundant at t = 0, left out: {', '.join(rows[lp.name].dropped)}" if rows[lp.name].dropped else ""
+            if lp.kind == "distance":
+                obj = mbs.AddObject(ObjectConnectorDistance(markerNumbers=[m0, m1], distance=lp.length))
+                summary.append(f"ObjectConnectorDistance {lp.body_a} -> {lp.body_b} (loop {lp.name!r}), "
+                               f"distance {lp.length:g} m")
+            else:
+                obj = mbs.AddObject(ObjectJointGeneric(markerNumbers=[m0, m1], constrainedAxes=list(rows[lp.name].axes)))
+                summary.append(f"ObjectJointGeneric {lp.body_a} -> {lp.body_b} (loop {lp.name!r}, {lp.kind}), "
+                               f"constrainedAxes {list(rows[lp.name].axes)}{dropped}")
+            sensors[f"__loop:{lp.name}"] = {"f": mbs.AddSensor(SensorObject(
+                objectNumber=obj, outputVariableType=OV.Force if lp.kind == "distance" else OV.ForceLocal))}
+            loops[lp.name] = R_BJa
     # --- loads
     for ld in scene.loads:
         R_EB = X_EB.get(ld.body, (None, np.eye(3)))[1]  # a rigid body's E is B
@@ -184,4 +210,4 @@ def build(scene, settings, assemble=True):
     if assemble:
         mbs.Assemble()
     return dict(SC=SC, mbs=mbs, sensors=sensors, X_EB=X_EB, links=[b.name for b in links],
-                redundant_joints=redundant_joints, summary="\n".join(summary) + "\n")
+                redundant_joints=redundant_joints, loops=loops, loop_rows=rows, summary="\n".join(summary) + "\n")
