@@ -9,7 +9,9 @@ Solvers by name: ``generalized-alpha`` (options ``spectral_radius``,
 accuracy), ``trapezoidal-index2``, ``explicit-euler``, ``explicit-midpoint``,
 ``rk33``, ``rk44``, ``rk67``, ``velocity-verlet`` (fixed step) and ``dopri5``,
 ``ode23`` (adaptive: ``rtol``/``atol``, driven sample by sample). ``DVERK6`` is
-listed by Exudyn 1.13 but not implemented, so it is not offered. A solver that
+listed by Exudyn 1.13 but not implemented, so it is not offered. Loop closures
+(``Scene.loops``, built by ``model``) run with the two implicit solvers only; each
+loop's force ON its body b is read back as ``reaction_force:<loop name>``. A solver that
 stops before the end raises, and the run is stored as ``failed`` with the time
 reached.
 """
@@ -373,8 +375,9 @@ class ExudynAdapter(Adapter):
         if settings.options.get("joints", "minimal") == "redundant":
             return ("each joint's ForceLocal (ObjectJointGeneric), turned into world axes, negated: the force ON "
                     "the child")
-        how = ("Newton's law per link, m (a - g) - loads + children's reactions, with a from the tree's "
-               "acceleration sensors")
+        how = ("Newton's law per link, m (a - g) - loads + children's reactions"
+               + (" - the loops' forces on the link" if scene.loops else "")
+               + ", with a from the tree's acceleration sensors")
         if settings.integrator in STALE_ACCELERATIONS:
             return how + (", evaluated by Exudyn at each sampled state (its step-end accelerations are the "
                           "half-step velocity's)")

@@ -28,6 +28,14 @@ Free bodies on rigid-body nodes, jointed trees in minimal coordinates
     (parent) side in the marker-0 frame, so the force ON the child in world axes is
     ``-R_WP R_PJ ForceLocal``. Initial body states come from the
     scene's joint coordinates by forward kinematics.
+* Loop closures (``Scene.loops``), in either formulation: one constraint object per loop from a
+  marker on body a (marker 0; ``MarkerKinematicTreeRigid`` on a tree link, ``MarkerBodyRigid`` on a
+  rigid body or the ground) to one on body b, each marker frame = the loop's joint frame (z along a
+  revolute loop's axis): ``ObjectJointGeneric`` for ball and revolute loops, constraining only the
+  rows independent at the initial state (``loops.loop_axes``: Exudyn's Newton solver stops on
+  redundant rows), ``ObjectConnectorDistance`` for distance loops. Constraints make any scene an
+  index-3 (or, with trapezoidal-index2, index-2) DAE: implicit solvers only. The loop's force is read
+  from its ``ForceLocal`` (ball, revolute) or ``Force`` (distance: the scalar tension).
 * Loads: ``LoadForceVector``/``LoadTorqueVector`` on a rigid marker at the
   body point, ``bodyFixed=True`` for follower loads (with ``bodyFixed=False``
   the force stays world-fixed: phi(2 s) = 2.44 rad instead of 12 on the rod).
@@ -66,9 +74,11 @@ def build(scene, settings, assemble=True):
     unless ``assemble`` is False (for the summary alone).
 
     Returns a dict: ``SC``, ``mbs`` (the system container and system), ``sensors`` (body or
-    ``__q``/``__v``/``__joint:<child>`` -> quantity -> sensor number), ``X_EB`` (per link),
-    ``links`` (the kinematic tree's bodies, in link order), ``redundant_joints`` (child ->
-    joint frame in the parent's axes, ``R_PJ R_A``) and ``summary`` (text, for reports).
+    ``__q``/``__v``/``__joint:<child>``/``__loop:<loop name>`` -> quantity -> sensor number), ``X_EB``
+    (per link), ``links`` (the kinematic tree's bodies, in link order), ``redundant_joints`` (child ->
+    joint frame in the parent's axes, ``R_PJ R_A``), ``loops`` (loop name -> its joint frame Ja in body
+    a's scene frame, ``R_BJa``), ``loop_rows`` (loop name -> ``loops.LoopRows``) and ``summary`` (text,
+    for reports).
     """
     import exudyn as exu
     from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid, ObjectConnectorDistance,
@@ -165,9 +175,11 @@ def build(scene, settings, assemble=True):
                    ("a", OV.Acceleration))
         for b in links:
             i, (p_EB, R_EB) = index[b.name], X_EB[b.name]
-            markers[b.name] = lambda p, R=np.eye(3), i=i, p_EB=p_EB, R_EB=R_EB: mbs.AddMarker(
-                MarkerKinematicTreeRigid(objectNumber=tree, linkNumber=i,
-                                         localHT=exu.HT(rotation=R_EB @ R, translation=list(p_EB + R_EB @ np.array(p)))))
+            # a marker at scene point p of the body, its frame R in the body's scene frame B (loops), or
+            # the link frame E's axes (loads, whose vectors are turned into E)
+            markers[b.name] = lambda p, R=None, i=i, p_EB=p_EB, R_EB=R_EB: mbs.AddMarker(
+                MarkerKinematicTreeRigid(objectNumber=tree, linkNumber=i, localHT=exu.HT(
+                    rotation=np.eye(3) if R is None else R_EB @ R, translation=list(p_EB + R_EB @ np.array(p)))))
             sensors[b.name] = {k: mbs.AddSensor(SensorKinematicTree(
                 objectNumber=tree, linkNumber=i, localPosition=list(p_EB), outputVariableType=v))
                 for k, v in outputs}
