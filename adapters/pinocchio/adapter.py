@@ -133,10 +133,9 @@ class PinocchioAdapter(Adapter):
         R_WB = {b.name: np.full((n, 3, 3), np.nan) for b in scene.bodies}  # to quaternions once, below
         reacting = [j for j in scene.joints if j.kind in ("revolute", "ball")]
         reactions = {j.child: np.full((n, 3), np.nan) for j in reacting}
-        for k in range(n):
+        finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)  # once, not per sample
+        for k in np.flatnonzero(finite):
             q, v = Q[k], V[k]
-            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-                continue
             local = {}
             if reacting:  # rnea with the external forces: data.f[joint] is the force through the joint
                 a = pm.acceleration(q, v)
