@@ -355,9 +355,9 @@ class ExudynAdapter(Adapter):
             "redundant_rows": ("only the rows independent at the initial state are given to Exudyn (its default "
                                "EXUdense solver stops on the singular Jacobian of redundant rows; Eigen's FullPivLU, "
                                "ignoreSingularJacobian=True, stalls Newton at a singular position): see exudyn.loops"),
-            "reaction": ("ForceLocal of the ObjectJointGeneric (on body a, in its marker frame), turned into world "
-                         "axes and negated; ObjectConnectorDistance's Force (on body a, world), negated: the force "
-                         "ON body b"),
+            "reaction": ("the force ON body b: the ObjectJointGeneric's ForceLocal (on body a, in its marker "
+                         "frame) turned into world axes and negated; the ObjectConnectorDistance's Force (a scalar, "
+                         "the tension) along the line from b's point to a's"),
         }
 
     @staticmethod
