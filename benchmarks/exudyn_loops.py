@@ -24,7 +24,7 @@ import numpy as np
 
 from dalembert import invariants
 from dalembert.adapters import get_adapter
-from dalembert.cases._four_bar import four_bar, parallelogram_pendulum
+from dalembert.cases.four_bar import four_bar, parallelogram_pendulum
 from dalembert.reference import simulate
 from dalembert.reference.closed_form import RigidPendulum
 from dalembert.settings import Settings

@@ -12,7 +12,7 @@ import pytest
 from dalembert import closure, invariants, spatial
 from dalembert.adapters import get_adapter
 from dalembert.adapters.exudyn.loops import LoopRows, loop_axes
-from dalembert.cases._four_bar import four_bar, parallelogram_pendulum  # the one line naming the module (it may be renamed)
+from dalembert.cases.four_bar import four_bar, parallelogram_pendulum  # the one line naming the module (it may be renamed)
 from dalembert.reference import simulate
 from dalembert.reference.closed_form import RigidPendulum
 from dalembert.scene import Body, Joint, Loop, Scene

@@ -105,7 +105,9 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
             cost = Cost(build_s=build_s, wall_s_median=first.wall_s, wall_s_min=first.wall_s,
                         wall_s_max=first.wall_s, repeats=1, n_steps=first.n_steps, n_rhs=first.n_rhs,
                         concurrent=concurrent, load_start=load_start, load_end=_load())
-            return _record(spec, "diverged", f"non-finite state from t = {t_bad} s", t_diverged=t_bad, cost=cost,
+            why = first.info.get("message", "")  # the engine's own account, where it gives one
+            return _record(spec, "diverged", f"non-finite state from t = {t_bad} s" + (f" ({why})" if why else ""),
+                           t_diverged=t_bad, cost=cost,
                            **found), trajectory_to_npz(traj)
         truth = truth if truth is not None else _truth(case)
         if first.n_steps == 0:  # e.g. a step too small to count: never a result that looks right
