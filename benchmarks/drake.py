@@ -22,7 +22,7 @@ the intermediate-axis top side by side with the engines that carry it in body ax
    equations, ``q' = q (0, w_B) / 2``) and once in world axes as Drake carries it
    (``w_W' = I_W^-1 (-w_W x I_W w_W)``, ``I_W = R I_B R^T``, ``q' = (0, w_W) q / 2``): the attitude
    error at each dt, so the representation's share is seen apart from the method's order.
-4. The parallelogram four-bar (``dalembert.cases._four_bar``, 0.5 s, its loop closed by two SAP
+4. The parallelogram four-bar (``dalembert.cases.four_bar``, 0.5 s, its loop closed by two SAP
    ball constraints) with the ``discrete`` integrator: per dt, the crank's and the rocker's
    largest angle error against the closed form (rad), the worst loop residual at position (m)
    and velocity (m/s) level (``invariants.loop_residual``), the steps and the stepping time
@@ -146,7 +146,7 @@ LOOP_DTS = (1e-2, 1e-3, 1e-4, 1e-5)
 
 def loops():
     from dalembert import invariants
-    from dalembert.cases._four_bar import four_bar, parallelogram_pendulum
+    from dalembert.cases.four_bar import four_bar, parallelogram_pendulum
     from dalembert.reference.closed_form import RigidPendulum
 
     adapter = get_adapter("drake")

@@ -7,7 +7,7 @@ import pytest
 
 from dalembert import invariants
 from dalembert.adapters import get_adapter
-from dalembert.cases._four_bar import four_bar, parallelogram_pendulum  # the one import of the four-bar module
+from dalembert.cases.four_bar import four_bar, parallelogram_pendulum  # the one import of the four-bar module
 from dalembert.reference import simulate
 from dalembert.reference.closed_form import RigidPendulum
 from dalembert.scene import Joint, Loop, Scene

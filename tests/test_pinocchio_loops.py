@@ -11,8 +11,8 @@ pytest.importorskip("pinocchio")
 
 from dalembert import invariants, spatial  # noqa: E402
 from dalembert.adapters.registry import get_adapter  # noqa: E402
-# The four-bar's one import (the module may become dalembert.cases.four_bar).
-from dalembert.cases._four_bar import four_bar, parallelogram_pendulum  # noqa: E402
+# The four-bar's one import.
+from dalembert.cases.four_bar import four_bar, parallelogram_pendulum  # noqa: E402
 from dalembert.reference import simulate  # noqa: E402
 from dalembert.reference.closed_form import RigidPendulum  # noqa: E402
 from dalembert.scene import Body, Joint, Load, Loop, Scene  # noqa: E402
