@@ -39,17 +39,35 @@ GAP_PER_DT2 = 1.0
 # parallelogram too): measured 4.8e-4 / 6.4e-6 rad (ball) and 2.8e-4 / 2.8e-6 (distance) at
 # dt = 1e-2 / 1e-3, the largest joint-angle error; 3x for the machine.
 REFERENCE_ANGLE_TOL = {1e-2: 1.5e-3, 1e-3: 2e-5}
+# Loop reactions (``loops.loop_forces``: the constraints' generalized force in Drake's step, resolved on the
+# loop's rows), relative to the largest true reaction. They follow the step at first order, but for the
+# samples near the flat singular position (t = 0.2376 s), where the loop's Jacobian nearly loses the
+# bars' direction and SAP's near-rigid force in it is not the rigid one (measured 0.25 at dt = 1e-3 on
+# the sample at 0.24 s, 4.4e-4 at 1e-4). Measured on the four-bar against its closed form: 4.8e-4 at
+# dt = 1e-3 beyond FLAT_WINDOW of the flat instant, 4.4e-4 at 1e-4 everywhere; to the world against the
+# reference at 1e-3 beyond the window: ball 1.4e-3, distance 3.4e-4. ~3x the largest, for the machine:
+REACTION_TOL = 4e-3
+FLAT_TIME = 0.23758016402411217  # s: the closed form's crank angle reaches pi (brentq on RigidPendulum.angle)
+FLAT_WINDOW = 0.02  # s: the two samples on either side of it
+
+
+def _reaction_errors(traj, truth, name):
+    """Per sample, the error of ``reaction_force:<name>`` relative to the truth's largest reaction."""
+    scale = max(np.abs(f).max() for k, f in truth.extras.items() if k.startswith("reaction_force:"))
+    key = f"reaction_force:{name}"
+    return np.linalg.norm(traj.extras[key] - truth.extras[key], axis=1) / scale
 
 
 def _crank_errors(case, dts):
     m, d, I, g, theta0, rate0 = parallelogram_pendulum()
     exact = RigidPendulum(m, d, I, g, theta0, rate0).angle(case.times) - np.pi / 2
+    truth = case.exact(case.times)
     out = []
     for dt in dts:
         traj = ADAPTER.run(ADAPTER.prepare(case.scene, case.times, Settings("discrete", dt=dt))).trajectory
         crank, rocker = traj.joints["crank"].q[:, 0], traj.joints["rocker"].q[:, 0]
         out.append((np.abs(crank - exact).max(), np.abs(rocker - exact).max(),
-                    invariants.loop_residual(case.scene, traj, "position").max()))
+                    invariants.loop_residual(case.scene, traj, "position").max(), _reaction_errors(traj, truth, "C")))
     return out
 
 
@@ -60,9 +78,11 @@ def test_discrete_four_bar_converges_to_the_closed_form_and_keeps_its_loop_close
     crank = [e[0] for e in errs]
     assert crank[0] / crank[1] > DECADE_GAIN and crank[1] / crank[2] > DECADE_GAIN, crank
     assert crank[2] < FINE_ANGLE_TOL
-    for dt, (c, r, gap) in zip(dts, errs):
+    for dt, (c, r, gap, _) in zip(dts, errs):
         assert abs(r - c) < 0.1 * c  # the rocker turns with the crank: the parallelogram branch
         assert gap < GAP_PER_DT2 * dt**2, (dt, gap)
+    far = np.abs(case.times - FLAT_TIME) > FLAT_WINDOW
+    assert errs[1][3][far].max() < REACTION_TOL and errs[2][3].max() < REACTION_TOL
 
 
 def _world_loop_scene(kind):
@@ -95,6 +115,8 @@ def test_a_loop_to_the_world_matches_the_reference(kind):
         err = max(np.abs(traj.joints[j.child].q - ref.joints[j.child].q).max() for j in scene.joints)
         assert err < tol, (dt, err)
         assert invariants.loop_residual(scene, traj, "position").max() < GAP_PER_DT2 * dt**2
+    far = np.abs(times - FLAT_TIME) > FLAT_WINDOW  # the chains move as the parallelogram does
+    assert _reaction_errors(traj, ref, scene.loops[0].name)[far].max() < REACTION_TOL  # at dt = 1e-3
     audit = ADAPTER.audit(prepared, outcome)
     assert "welded to the world" in audit["loop_world_anchor"]
     assert audit["loop_constraints"] == 1 and kind in audit["loops"][scene.loops[0].name]
@@ -112,7 +134,7 @@ def test_continuous_integrators_declare_loops_unsupported_and_discrete_runs_them
             assert "loop:revolute" in reason and "Continuous time does not support constraints" in reason, name
 
 
-def test_audit_says_how_the_revolute_loop_is_closed_and_what_is_not_read_back():
+def test_audit_says_how_the_revolute_loop_is_closed():
     case = four_bar(t_final=0.1)
     prepared = ADAPTER.prepare(case.scene, case.times, Settings("discrete", dt=1e-3))
     outcome = ADAPTER.run(prepared)
@@ -120,5 +142,4 @@ def test_audit_says_how_the_revolute_loop_is_closed_and_what_is_not_read_back():
     assert audit["loop_constraints"] == 2  # two ball constraints along the axis
     assert "0.5 m along the axis" in audit["loops"]["C"]  # the lever: the loop point's distance from the COMs
     assert "near-rigid" in audit["loop_stiffness"] and "beta = 0.1" in audit["loop_stiffness"]
-    assert "reaction_force:C" not in outcome.trajectory.extras  # not read back (loop_reactions says why)
-    assert "no constraint forces" in audit["loop_reactions"]
+    assert "minimum-norm" in audit["loop_reactions"]

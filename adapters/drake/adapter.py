@@ -11,8 +11,8 @@ fixed-step mode (``dt``) and, where Drake estimates its error, error-controlled
 
 Loop closures (``loops``): SAP constraints of the discrete plant, so only the integrator
 ``discrete`` runs a scene with loops; every continuous integrator declares them unsupported
-(``loops.CONTINUOUS_REASON``). Their reactions are not read back (Drake reports no constraint
-forces).
+(``loops.CONTINUOUS_REASON``). Their reactions are recovered from the step's generalized
+constraint force (Drake reports no constraint forces: ``loops.loop_forces``).
 """
 
 from __future__ import annotations
@@ -147,7 +147,9 @@ class DrakeAdapter(Adapter):
                                "the stiffest Drake offers, soft by an amount that shrinks with dt"),
             "loop_world_anchor": (f"{ANCHOR} welded to the world (Drake 1.51 crashes on constraints to the world body)"
                                   if any("world" in (lc.loop.body_a, lc.loop.body_b) for lc in model.loops) else ""),
-            "loop_reactions": "not read back: Drake reports no constraint forces",
+            "loop_reactions": ("reaction_force:<loop> from the constraints' generalized force in the step "
+                               "(M a + C v - tau_g - tau_loads; Drake reports no constraint forces) resolved on the "
+                               "loop's rows, minimum-norm (loops.loop_forces)"),
         }
 
 
