@@ -29,6 +29,7 @@ from functools import cached_property
 from typing import Callable
 
 from dalembert.registry import suggest
+from dalembert.scene import SPRING_EFFECT
 
 __all__ = ["Adapter", "IntegratorSpec", "Outcome", "option_choice"]
 
@@ -97,6 +98,9 @@ class Adapter:
             reason = f"{self.name} adapter cannot represent {', '.join(missing)}"
             if any(m.startswith("loop:") for m in missing):
                 reason += " (closed kinematic loops: not yet built for this engine; its tree runs, the closure does not)"
+            if SPRING_EFFECT in missing:
+                reason += (" (linear spring-dampers between two points: not yet built for this engine; its bodies "
+                           "and joints run, the spring's force does not)")
             return reason
         return None
 
