@@ -7,7 +7,7 @@ from dalembert.adapters.registry import get_adapter
 __all__ = ["check_adapter"]
 
 
-def check_adapter(name, cases=None, settings=None):
+def check_adapter(name, cases=None, settings=None, integrators=None):
     """Run the contract on every registered case ``name`` supports; returns a list of problems.
 
     Parameters
@@ -16,6 +16,7 @@ def check_adapter(name, cases=None, settings=None):
     cases : iterable of Case, optional — default: every registered case (defaults)
     settings : callable(integrator name, IntegratorSpec) -> Settings, optional —
         default: dt = the sample interval for fixed-step, rtol = atol = 1e-8 otherwise
+    integrators : iterable of str, optional — default: every integrator of the engine
     """
     import numpy as np
 
@@ -24,12 +25,17 @@ def check_adapter(name, cases=None, settings=None):
     from dalembert.trajectory import Trajectory
 
     adapter = get_adapter(name)
+    unknown = sorted(set(integrators or ()) - set(adapter.integrators))
+    if unknown:
+        raise ValueError(f"integrators: {name} has no {', '.join(unknown)} — known: {', '.join(adapter.integrators)}")
     problems = []
     adapter.version()
     if cases is None:
         cases = [factory() for _, factory in load_cases().items()]
     for case in cases:
         for integ, spec in adapter.integrators.items():
+            if integrators is not None and integ not in integrators:
+                continue
             if settings is not None:
                 s = settings(integ, spec)
             elif spec.fixed_step:

@@ -79,7 +79,8 @@ class ReferenceAdapter(Adapter):
         start = time.perf_counter()
         Q, V, stats = INTEGRATORS[p["settings"].integrator]().run(p["system"], p["times"], p["settings"])
         wall = time.perf_counter() - start
-        return Outcome(lambda: p["system"].trajectory(p["times"], Q, V), wall, stats.n_steps, stats.n_rhs)
+        return Outcome(lambda: p["system"].trajectory(p["times"], Q, V), wall, stats.n_steps, stats.n_rhs,
+                       {"message": stats.message})  # why an adaptive run stopped early, if it did
 
     def audit(self, prepared, outcome):
         from dalembert import closure

@@ -23,6 +23,7 @@ import pandas as pd
 from dalembert.errors import QUANTITIES
 from dalembert.invariants import CONSERVED
 from dalembert.reports import figures, time_series
+from dalembert.reports.loops import LOOP_TARGET, RESIDUALS, loop_lines
 from dalembert.reports.maps import COST_TARGET, stability_maps
 from dalembert.reports.parity import parities
 from dalembert.reports.scaling import size_sweeps
@@ -30,7 +31,7 @@ from dalembert.reports.findings import (ACCURACY_TARGETS, DISAGREEMENT_FACTOR, E
                                          NAMED, find, run_name, settings_text)
 from dalembert.reports.tables import MISSING, SORT_SCRIPT, Cell, Table, escape_html, escape_md, num
 from dalembert.reports.timing import timing_note
-from dalembert.reports.work_precision import cheapest_reaching, cost_per_sim_s, series, sweep_key
+from dalembert.reports.work_precision import cheapest_reaching, cost_per_sim_s, headline_quantity, series, sweep_key
 from dalembert.store import atomic_write
 
 __all__ = ["build_report"]
@@ -340,6 +341,17 @@ def _against_time(doc, store, f, name):
                                                                 *time_series.drift_series(store, r, f.case, cname)))
             if row["series"]:
                 rows.append(row)
+        for level, rname in (RESIDUALS.items() if f.case.scene.loops else ()):
+            tol = f.case.tolerances.get(rname)
+            row = dict(ylabel=f"loop closure, {level} ({'m' if level == 'position' else 'm/s'})", log=True,
+                       series={}, bound=tol.value if tol else None)
+            for e, rs in reps.items():
+                for r in rs:
+                    if r.drifts.get(rname, 0.0) > 0.0:
+                        row["series"].setdefault(e, []).append(
+                            (r.sweep_label, r.sweep_label, *time_series.loop_residual_series(store, r, f.case, level)))
+            if row["series"]:
+                rows.append(row)
         for row in rows:  # a log axis where the values span decades, a linear one where they do not
             values = [v for runs in row["series"].values() for *_, y in runs for v in y[np.isfinite(y) & (y > 0)]]
             row["log"] = bool(values) and max(values) > DECADES * min(values)
@@ -526,6 +538,42 @@ def _scaling(doc, store, records, colours):
                    "engine, a line per integrator and step, its fitted exponent p in the legend.", f"{sw.case}-scaling")
 
 
+def _loops(doc, store, records):
+    """Per case that closes kinematic loops: each engine line's accuracy, closure and the cost of LOOP_TARGET."""
+    cases = {}
+    for r in records:
+        if (r.case, r.case_version) not in cases:
+            cases[r.case, r.case_version] = store.case(r.case, r.case_version)
+    looped = [(key, c) for key, c in sorted(cases.items()) if c.scene.loops]
+    if not looped:
+        return
+    doc.heading("Closed loops", 2, anchor="loops")
+    doc.para("Per engine and integrator over its finished runs: the best error it reached, the worst loop-closure "
+             "residual at position level (m; for an axis, the sine of its tilt) and at velocity level (m/s), the worst "
+             "error of the loop and joint reactions (relative to the largest true reaction), and the stepping time "
+             f"per simulated second of its cheapest run reaching {LOOP_TARGET:g} in the headline error.")
+    for (name, version), c in looped:
+        runs = [r for r in records if r.case == name and r.case_version == version]
+        quantity = headline_quantity(runs)
+        lines = loop_lines(runs, quantity) if quantity else []
+        title = f"{name} ({version})" if sum(k[0] == name for k, _ in looped) > 1 else name
+        doc.heading(title, 3, anchor=f"loops-{name}-{version}")
+        doc.para(f"{c.scene.loop_summary()}. Headline error: {quantity or 'none measured'}.", cls="note")
+        if not lines:
+            continue
+        unsupported = sorted({r.engine for r in runs if r.status == "unsupported"} - {ln.engine for ln in lines})
+        rows = [[Cell(ln.engine), Cell(ln.line, wrap=True), num(ln.runs, "{:d}"), num(ln.best_error),
+                 num(ln.worst_position_residual), num(ln.worst_velocity_residual), num(ln.worst_reaction_error),
+                 num(ln.target_cost, "{:.3g}"), Cell(ln.target_settings or "not reached", wrap=True)]
+                for ln in lines]
+        doc.table(Table(["engine", "line", "runs", f"best {quantity} error", "worst closure, position",
+                         "worst closure, velocity", "worst reaction error", f"s/s to reach {LOOP_TARGET:g}",
+                         "cheapest run reaching it"], rows))
+        if unsupported:
+            doc.para("Not run (unsupported; the reason is in each run's row): " + ", ".join(unsupported) + ".",
+                     cls="note")
+
+
 # ---------------------------------------------------------------------------------------------- page
 CSS = """body{font-family:system-ui,sans-serif;margin:1.5em auto;max-width:1320px;padding:0 12px;color:#222;
 font-size:14px;line-height:1.4}h2{border-bottom:1px solid #ddd;padding-bottom:2px;margin-top:1.8em}
@@ -600,6 +648,7 @@ def build_report(store, out_dir=None):
     summary_rows = _findings(doc, found, titles, colours)
     _hazards(doc, found, titles)
     mapped = _maps(doc, store, records)
+    _loops(doc, store, records)
     _scaling(doc, store, records, colours)
     _parity(doc, store, records)
     for f in found:

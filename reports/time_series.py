@@ -3,9 +3,10 @@
 Which runs: for each engine, its most accurate run at each step size or
 tolerance of the matrix (what the engine does at that setting at best), and
 every run that diverged (drawn until it stopped being finite, its divergence
-time marked). What: the headline error against the stored truth and the drift
-of each conserved quantity the case declares, computed by the core's
-``error_series`` and ``drift_series`` from stored samples only.
+time marked). What: the headline error against the stored truth, the drift
+of each conserved quantity the case declares and, where the scene closes loops,
+the loop-closure residuals, computed by the core's ``error_series``,
+``drift_series`` and ``loop_residual`` from stored samples only.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from dalembert import invariants
 from dalembert.errors import error_series
 from dalembert.reports.work_precision import sweep_key
 
-__all__ = ["representatives", "diverged", "headline_series", "drift_series"]
+__all__ = ["representatives", "diverged", "headline_series", "drift_series", "loop_residual_series"]
 
 
 def representatives(runs, quantity):
@@ -62,3 +63,11 @@ def drift_series(store, run, case, name):
     traj = store.trajectory(run.key)
     with np.errstate(invalid="ignore", over="ignore"):
         return traj.t, invariants.drift_series(name, case.scene, traj)
+
+
+def loop_residual_series(store, run, case, level):
+    """``(t, residual)``: the largest loop-closure residual of ``run`` at each sample, at ``level``
+    ("position": m, or the sine of an axis' tilt; "velocity": their rates), from its stored states."""
+    traj = store.trajectory(run.key)
+    with np.errstate(invalid="ignore", over="ignore"):
+        return traj.t, invariants.loop_residual(case.scene, traj, level)

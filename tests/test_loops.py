@@ -9,8 +9,9 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from dalembert import invariants
-from dalembert.cases._four_bar import four_bar, parallelogram_pendulum
-from dalembert.reference import simulate
+from dalembert.cases.four_bar import four_bar, parallelogram_pendulum
+from dalembert.errors import error_series
+from dalembert.reference import integrators, simulate
 from dalembert.reference.closed_form import RigidPendulum
 from dalembert.scene import Joint, Loop, Scene, SceneError
 from dalembert.settings import Settings
@@ -21,6 +22,20 @@ from dalembert.settings import Settings
 ANGLE_TOL = 1e-10
 # The loop closes to roundoff after each projected step (measured ~1e-14).
 CLOSURE_TOL = 1e-12
+# The closed form's reactions against the reference's multipliers (RK4 over 1 s): 3.9e-10 of the largest
+# reaction (98 N) at dt = 1e-3, and 7.5e-9 at dt = 1e-4 at t = 0.24 s, the sample nearest the singular
+# position phi = pi, where the multipliers are ill-conditioned (the Jacobian's small singular value
+# ~ sin phi ~ 0.02 there); a wrong sign or a lost term in the closed form shows at 1e-2.
+REACTION_REL_TOL = 1e-8
+# Its velocities against the reference's: 3.4e-11 m/s and 1.0e-11 rad/s (measured, RK4 at dt = 1e-3).
+VELOCITY_TOL = 1e-9
+
+
+@pytest.fixture(scope="module")
+def one_second():
+    """The four-bar over 1 s (both singular positions) and the reference's RK4 run of it at dt = 1e-3."""
+    c = four_bar(t_final=1.0)
+    return c, simulate(c.scene, c.times, Settings("rk4", dt=1e-3))[0]
 
 
 def _scene(**kw):
@@ -69,12 +84,11 @@ def test_scene_json_round_trips_loops_and_a_tree_scene_has_none():
     assert "loops" not in tree.to_json()  # tree cases keep their versions
 
 
-def test_reference_passes_the_singular_positions_on_the_parallelogram_closed_form():
+def test_reference_passes_the_singular_positions_on_the_parallelogram_closed_form(one_second):
     """Over 1 s the crank turns over twice-singular ground: all bars flat at phi = pi (t = 0.23 s) and the
     coupler on the rocker at phi = 2 pi (t ~ 0.6 s). Truth: the parallelogram's pendulum in closed form
     (Jacobi elliptic functions) and, independently, its ODE integrated by scipy."""
-    c = four_bar(t_final=1.0)
-    traj = simulate(c.scene, c.times, Settings("rk4", dt=1e-3))[0]
+    c, traj = one_second
     m, d, I, g, theta0, rate0 = parallelogram_pendulum()
     exact = RigidPendulum(m, d, I, g, theta0, rate0).angle(c.times) - np.pi / 2
     ode = solve_ivp(lambda t, y: [y[1], -m * g * d * np.cos(y[0]) / I], (0, 1.0), [np.pi / 2, 6.0],
@@ -107,7 +121,7 @@ def test_loop_reaction_is_the_rockers_share_of_newtons_law():
     assert np.abs(total - 1.0 * a_com).max() < 1e-7 * np.abs(a_com).max() + 1e-8
 
 
-@pytest.mark.parametrize("engine", ["mujoco", "pinocchio", "exudyn", "drake", "mjx"])
+@pytest.mark.parametrize("engine", ["drake"])  # exudyn, pinocchio: tests/test_{exudyn,pinocchio}_loops.py; mujoco, mjx below
 def test_engines_without_loops_declare_them_unsupported(engine):
     from dalembert.adapters.registry import get_adapter
 
@@ -119,9 +133,63 @@ def test_engines_without_loops_declare_them_unsupported(engine):
     assert reason and "loop:revolute" in reason and "not yet" in reason
 
 
+@pytest.mark.parametrize("engine", ["mujoco", "mjx"])
+def test_mujoco_and_mjx_close_ball_and_revolute_loops(engine):
+    """Equality constraints (tests/test_mujoco_loops.py); distance loops stay unsupported, with the reason."""
+    from dalembert.adapters.registry import get_adapter
+
+    try:
+        adapter = get_adapter(engine)
+    except Exception as e:  # an optional engine not installed
+        pytest.skip(f"{engine}: {e}")
+    assert {"loop:ball", "loop:revolute"} <= adapter.effects and "loop:distance" not in adapter.effects
+
+
 def test_reference_declares_loops_and_refuses_formulations_without_them():
     from dalembert.adapters.registry import get_adapter
 
     ref = get_adapter("reference")
     assert ref.unsupported(_scene(), Settings("rk4", dt=0.01)) is None
     assert "loop closures" in ref.unsupported(_scene(), Settings("rk4", dt=0.01, options={"formulation": "planar"}))
+
+
+def test_the_cases_closed_form_truth_is_the_reference_through_both_singular_positions(one_second):
+    """The case's truth (``ParallelogramFourBar``: poses, joints, every reaction from Newton's law on each bar)
+    against the reference's constrained formulation (RK4 at dt = 1e-3, multipliers for the reactions) over
+    1 s, both singular positions included."""
+    c, ref = one_second
+    truth = c.exact(c.times)
+    assert set(truth.extras) == {"reaction_force:crank", "reaction_force:coupler", "reaction_force:rocker",
+                                 "reaction_force:C"}
+    e = {q: s.max() for q, s in error_series(ref, truth).items()}
+    assert e["position"] < ANGLE_TOL and e["orientation"] < ANGLE_TOL and e["joint"] < ANGLE_TOL
+    assert e["velocity"] < VELOCITY_TOL and e["angular_velocity"] < VELOCITY_TOL
+    assert e["reaction_force"] < REACTION_REL_TOL
+    # nothing acts out of the plane, and the coupler's pin forces are equal and opposite vertically
+    assert not any(f[:, 1].any() for f in truth.extras.values())
+    assert np.array_equal(truth.extras["reaction_force:coupler"][:, 2], -truth.extras["reaction_force:C"][:, 2])
+
+
+def test_an_adaptive_run_that_stalls_at_a_singular_position_ends_as_data(monkeypatch):
+    """DOP853 at rtol = 1e-12 passes phi = pi but its steps shrink without end ~2e-7 s before phi = 0
+    (coupler on the rocker; measured from the default start at phi = 2 pi, t = 0.6028 s). Started 0.05 rad
+    before it, the run stops within the step cap (lowered here from 200 to keep the test short: DOP853
+    takes 1-2 steps per finishing interval), NaN from that sample on, with a message that says where and
+    why; through the harness it is a divergence carrying that message."""
+    from dalembert.harness.execute import Timing, execute
+    from dalembert.harness.matrix import expand
+
+    cap = 10
+    monkeypatch.setattr(integrators, "MAX_STEPS_PER_INTERVAL", cap)
+    c = four_bar(phi0=-0.05, rate0=7.7, t_final=0.02)
+    traj, stats, _ = simulate(c.scene, c.times, Settings("dop853", rtol=1e-12, atol=1e-12))
+    assert np.isnan(traj.joints["crank"].q[1:, 0]).all() and traj.joints["crank"].q[0, 0] == -0.05
+    assert stats.n_steps == cap
+    t_stop = float(stats.message.split("stopped at t = ")[1].split()[0])
+    phi = c.exact(np.array([t_stop])).joints["crank"].q[0, 0]
+    assert -1e-3 < phi < 0.0  # just short of the singular position (7e-5 rad with 10 steps, measured)
+    assert f"MAX_STEPS_PER_INTERVAL = {cap}" in stats.message and "singular position" in stats.message
+    (spec,), _ = expand(cases=["four_bar"], engines=["reference"], integrators=["dop853"], rtols=[1e-12],
+                        params={"phi0": -0.05, "rate0": 7.7, "t_final": 0.02})
+    record, _ = execute(spec, Timing(min_repeats=1, min_total_s=0.0, max_repeats=1))
+    assert record.status == "diverged" and "non-finite state from t = 0.01 s (dop853 stopped at t = " in record.message

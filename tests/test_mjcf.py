@@ -96,9 +96,11 @@ def test_option_gravity_step_and_integrator_are_the_scenes(models, name, welds):
 def test_every_stage_the_scene_does_not_call_for_is_disabled(models, name, welds):
     scene, root = SCENES[name], models[f"{name}|{welds}"]
     (flag,) = root.iter("flag")
-    constrained = welds == "equality" and any(j.kind == "weld" for j in scene.joints)
+    constrained = (welds == "equality" and any(j.kind == "weld" for j in scene.joints)) or bool(scene.loops)
     disabled = {k for k, v in flag.attrib.items() if v == "disable"}
     expected = set(ALWAYS_DISABLED) | (set() if constrained else set(CONSTRAINT_STAGES))
+    if scene.loops:  # RK4 runs loop constraints at one step, below refsafe's two (mjcf.LOOP_SOLREF_STEPS)
+        expected.add("refsafe")
     assert disabled == expected | ({"gravity"} if not any(scene.gravity) else set())
     (compiler,) = root.iter("compiler")
     # no mass or inertia bound, no realigned free bodies: the inertial is the scene's as given
@@ -170,3 +172,40 @@ def test_loads_are_site_actuators_with_the_scenes_vectors(models, name, welds):
         (site,) = [s for s in body_element(root, ld.body).findall("site") if s.get("name") == f"load{k}"]
         com = floats(body_element(root, ld.body).find("inertial"), "pos")
         assert np.isclose(np.linalg.norm(floats(site, "pos") - com), np.linalg.norm(ld.point), rtol=1e-15, atol=1e-15)
+
+
+@pytest.mark.parametrize("name", [n for n in SCENES if SCENES[n].loops])
+def test_loops_are_equality_constraints_between_sites_at_the_loops_points(models, name):
+    """A ball loop is one connect, a revolute two (the second AXIS_LEVER along the axis), between sites on the
+    loop's bodies; at the scene's initial state each connect's two sites coincide, i.e. they sit at the loop's
+    points (and along its axis) in the right bodies; the softness is the generated solref/solimp."""
+    from dalembert import spatial
+    from dalembert.adapters.mujoco.mjcf import AXIS_LEVER, LOOP_SOLIMP, engine_frames
+
+    scene, root = SCENES[name], models[f"{name}|tree"]
+    connects = list(root.iter("connect"))
+    assert len(connects) == sum({"ball": 1, "revolute": 2}[lp.kind] for lp in scene.loops)
+    sites = {}
+    for body in root.iter("body"):
+        for site in body.findall("site"):
+            sites[site.get("name")] = (body.get("name"), floats(site, "pos"))
+    for site in root.find("worldbody").findall("site"):
+        sites[site.get("name")] = ("world", floats(site, "pos"))
+    state = spatial.initial_body_states(scene)
+    state["world"] = dict(R=np.eye(3), p=np.zeros(3))
+    X_EB = {**engine_frames(scene), "world": (np.zeros(3), np.eye(3))}
+
+    def world(body, p_E):  # a site's position in the world at the initial state
+        p_EB, R_EB = X_EB[body]
+        return state[body]["p"] + state[body]["R"] @ (R_EB.T @ (p_E - p_EB))
+
+    for i, lp in enumerate(scene.loops):
+        mine = [c for c in connects if c.get("name") in (lp.name, f"{lp.name}:axis")]
+        for k, c in enumerate(mine):
+            (a, pa), (b, pb) = sites[c.get("site1")], sites[c.get("site2")]
+            assert (a, b) == (lp.body_a, lp.body_b)
+            assert np.allclose(world(a, pa), world(b, pb), rtol=0, atol=1e-12)
+            assert floats(c, "solimp").tolist() == list(LOOP_SOLIMP) and float(c.get("solref").split()[0]) == DT
+        if lp.kind == "revolute":
+            (a, p0), (_, p1) = sites[mine[0].get("site1")], sites[mine[1].get("site1")]
+            assert np.isclose(np.linalg.norm(p1 - p0), AXIS_LEVER, rtol=1e-15)

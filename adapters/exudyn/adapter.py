@@ -9,7 +9,9 @@ Solvers by name: ``generalized-alpha`` (options ``spectral_radius``,
 accuracy), ``trapezoidal-index2``, ``explicit-euler``, ``explicit-midpoint``,
 ``rk33``, ``rk44``, ``rk67``, ``velocity-verlet`` (fixed step) and ``dopri5``,
 ``ode23`` (adaptive: ``rtol``/``atol``, driven sample by sample). ``DVERK6`` is
-listed by Exudyn 1.13 but not implemented, so it is not offered. A solver that
+listed by Exudyn 1.13 but not implemented, so it is not offered. Loop closures
+(``Scene.loops``, built by ``model``) run with the two implicit solvers only; each
+loop's force ON its body b is read back as ``reaction_force:<loop name>``. A solver that
 stops before the end raises, and the run is stored as ``failed`` with the time
 reached.
 """
@@ -21,8 +23,9 @@ import numpy as np
 from dalembert import spatial
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert.adapters.exudyn import sampling
+from dalembert.adapters.exudyn.loops import loop_axes
 from dalembert.adapters.exudyn.model import CONSTRAINED_AXES, JOINTS, NODES, build, rigid_bodies
-from dalembert.scene import EFFECTS, WORLD
+from dalembert.scene import EFFECTS, LOOP_EFFECTS, WORLD
 
 __all__ = ["ExudynAdapter"]
 
@@ -57,7 +60,8 @@ class ExudynAdapter(Adapter):
     """Exudyn (``exudyn``), its own solvers."""
 
     name = "exudyn"
-    effects = EFFECTS  # ball joints and welds only with joints=redundant (see ``unsupported``)
+    # ball joints and welds only with joints=redundant, loops only with implicit solvers (see ``unsupported``)
+    effects = EFFECTS | LOOP_EFFECTS
     integrators = {
         **{k: IntegratorSpec(True, OPTIONS, f"Exudyn {v}") for k, v in IMPLICIT.items()},
         **{k: IntegratorSpec(k not in ADAPTIVE, OPTIONS, f"Exudyn {v}") for k, v in EXPLICIT.items()},
@@ -95,6 +99,13 @@ class ExudynAdapter(Adapter):
         node = settings.options.get("node", "rotvec-lg")
         redundant = settings.options.get("joints", "minimal") == "redundant"
         explicit = settings.integrator in EXPLICIT
+        if scene.loops and explicit:
+            return ("loop closures with an explicit integrator: Exudyn's explicit solvers solve no algebraic "
+                    "constraints (a closure is an index-3 DAE: use generalized-alpha or trapezoidal-index2)")
+        for name, rows in loop_axes(scene).items() if scene.loops else ():
+            if rows.axes == (0,):
+                return (f"loop {name!r}: a distance loop whose one row is redundant at the initial state — Exudyn's "
+                        "Newton solver needs independent constraint rows (exudyn.loops)")
         if node == "ep" and explicit and rigid_bodies(scene, redundant):
             return ("Exudyn: explicit integrator detected node which contains algebraic variables — "
                     "Euler-parameter nodes need an implicit solver")
@@ -195,7 +206,10 @@ class ExudynAdapter(Adapter):
         rejected = int(it.rejectedAutomaticStepSizeSteps) if it is not None else 0
         info = {"newton_steps": int(it.newtonStepsCount) if it is not None else 0, "rejected_steps": rejected,
                 "summary": built["summary"], "sampling": solved["sampling"],
-                "constraints": sum(sum(CONSTRAINED_AXES[p["scene"].joint(c).kind]) for c in built["redundant_joints"])}
+                "constraints": sum(sum(CONSTRAINED_AXES[p["scene"].joint(c).kind]) for c in built["redundant_joints"])
+                + sum(sum(r.axes) for r in built["loop_rows"].values()),
+                "loop_rows": {name: dict(constrained=sum(r.axes), dropped=list(r.dropped))
+                              for name, r in built["loop_rows"].items()}}
         n_rhs = (solved["steps"] + rejected) * STAGES.get(integrator, 1)
         return Outcome(read, solved["wall"], solved["steps"], n_rhs, info)
 
@@ -257,6 +271,7 @@ class ExudynAdapter(Adapter):
             bodies[b.name] = BodyStates(series(b.name, "p", 3), quat, series(b.name, "v", 3),
                                         series(b.name, "w", 3), rotation=R_WB[b.name])
         joints, reactions = {}, {}
+        loop_forces = self._loop_forces(scene, built, bodies, R_WB, series)
         if built["links"]:  # minimal coordinates: the tree's own; reactions by Newton's law per link
             q, v = series("__q", "q", len(built["links"])), series("__v", "v", len(built["links"]))
             for i, name in enumerate(built["links"]):
@@ -270,6 +285,9 @@ class ExudynAdapter(Adapter):
                 for child in built["links"]:
                     if scene.joint(child).parent == name:
                         f += reactions[child]
+                for lp in scene.loops:  # the loop forces on this link (equal and opposite on a and b)
+                    if name in (lp.body_a, lp.body_b):
+                        f -= loop_forces[lp.name] if lp.body_b == name else -loop_forces[lp.name]
                 reactions[name] = f
         for child, R0 in built["redundant_joints"].items():  # redundant coordinates: from the bodies
             j = scene.joint(child)
@@ -279,8 +297,31 @@ class ExudynAdapter(Adapter):
             f_local = series(f"__joint:{child}", "f", 3)
             reactions[child] = -np.einsum("...ij,...j->...i", R_WP @ R0, f_local)  # ON the child, world axes
         joints = {k: v if isinstance(v, JointStates) else JointStates(*v) for k, v in joints.items()}
-        extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
+        extras = {f"reaction_force:{c}": f for c, f in {**reactions, **loop_forces}.items()}
         return Trajectory(times, bodies, joints, extras)
+
+    @staticmethod
+    def _loop_forces(scene, built, bodies, R_WB, series):
+        """Each loop's force ON its body b (N, world), (n, 3) per loop name, from its constraint object's
+        sensor: an ObjectJointGeneric's ForceLocal is the force on marker 0's side (body a) in marker 0's
+        frame Ja (as a tree joint's, ``model``), so ON b it is ``-R_WB_a R_BJa ForceLocal``; an
+        ObjectConnectorDistance's Force is a scalar, the tension, pulling b towards a along the line
+        between the points (both checked against the reference's multipliers, tests/test_exudyn_loops.py)."""
+        def point(body, p):  # the loop point in world, (n, 3)
+            if body == WORLD:
+                return np.broadcast_to(np.asarray(p, dtype=float), bodies[next(iter(bodies))].position.shape)
+            return bodies[body].position + R_WB[body] @ np.asarray(p, dtype=float)
+
+        out = {}
+        for lp in scene.loops:
+            f = series(f"__loop:{lp.name}", "f", 1 if lp.kind == "distance" else 3)
+            if lp.kind == "distance":
+                d_ba = point(lp.body_a, lp.point_a) - point(lp.body_b, lp.point_b)
+                out[lp.name] = f * d_ba / np.linalg.norm(d_ba, axis=-1, keepdims=True)
+            else:
+                R_WJa = (np.eye(3) if lp.body_a == WORLD else R_WB[lp.body_a]) @ built["loops"][lp.name]
+                out[lp.name] = -np.einsum("...ij,...j->...i", R_WJa, f)
+        return out
 
     # ------------------------------------------------------------- audit
     def audit(self, prepared, outcome):
@@ -296,7 +337,27 @@ class ExudynAdapter(Adapter):
             "rejected_steps": outcome.info.get("rejected_steps", 0),
             "exudyn_version": self.version(),
             "reactions": self._reaction_method(scene, st),
+            **({"loops": self._loop_audit(scene, outcome)} if scene.loops else {}),
             **({"known_issue": ROTVEC_LG_REACTION} if self._rotvec_lg_reactions(scene, st) else {}),
+        }
+
+    @staticmethod
+    def _loop_audit(scene, outcome):
+        """What the run made of the scene's loop closures (``exudyn.loops``)."""
+        rows = outcome.info.get("loop_rows", {})
+        return {
+            "closures": {lp.name: (f"{'ObjectConnectorDistance' if lp.kind == 'distance' else 'ObjectJointGeneric'} "
+                                   f"({lp.kind}), {rows[lp.name]['constrained']} row(s)"
+                                   + (f"; left out as redundant at t = 0: {', '.join(rows[lp.name]['dropped'])}"
+                                      if rows.get(lp.name, {}).get("dropped") else ""))
+                         for lp in scene.loops if lp.name in rows},
+            "scene": str(scene.loop_summary()),
+            "redundant_rows": ("only the rows independent at the initial state are given to Exudyn (its default "
+                               "EXUdense solver stops on the singular Jacobian of redundant rows; Eigen's FullPivLU, "
+                               "ignoreSingularJacobian=True, stalls Newton at a singular position): see exudyn.loops"),
+            "reaction": ("the force ON body b: the ObjectJointGeneric's ForceLocal (on body a, in its marker "
+                         "frame) turned into world axes and negated; the ObjectConnectorDistance's Force (a scalar, "
+                         "the tension) along the line from b's point to a's"),
         }
 
     @staticmethod
@@ -314,8 +375,9 @@ class ExudynAdapter(Adapter):
         if settings.options.get("joints", "minimal") == "redundant":
             return ("each joint's ForceLocal (ObjectJointGeneric), turned into world axes, negated: the force ON "
                     "the child")
-        how = ("Newton's law per link, m (a - g) - loads + children's reactions, with a from the tree's "
-               "acceleration sensors")
+        how = ("Newton's law per link, m (a - g) - loads + children's reactions"
+               + (" - the loops' forces on the link" if scene.loops else "")
+               + ", with a from the tree's acceleration sensors")
         if settings.integrator in STALE_ACCELERATIONS:
             return how + (", evaluated by Exudyn at each sampled state (its step-end accelerations are the "
                           "half-step velocity's)")

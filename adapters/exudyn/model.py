@@ -28,6 +28,14 @@ Free bodies on rigid-body nodes, jointed trees in minimal coordinates
     (parent) side in the marker-0 frame, so the force ON the child in world axes is
     ``-R_WP R_PJ ForceLocal``. Initial body states come from the
     scene's joint coordinates by forward kinematics.
+* Loop closures (``Scene.loops``), in either formulation: one constraint object per loop from a
+  marker on body a (marker 0; ``MarkerKinematicTreeRigid`` on a tree link, ``MarkerBodyRigid`` on a
+  rigid body or the ground) to one on body b, each marker frame = the loop's joint frame (z along a
+  revolute loop's axis): ``ObjectJointGeneric`` for ball and revolute loops, constraining only the
+  rows independent at the initial state (``loops.loop_axes``: Exudyn's Newton solver stops on
+  redundant rows), ``ObjectConnectorDistance`` for distance loops. Constraints make any scene an
+  index-3 (or, with trapezoidal-index2, index-2) DAE: implicit solvers only. The loop's force is read
+  from its ``ForceLocal`` (ball, revolute) or ``Force`` (distance: the scalar tension).
 * Loads: ``LoadForceVector``/``LoadTorqueVector`` on a rigid marker at the
   body point, ``bodyFixed=True`` for follower loads (with ``bodyFixed=False``
   the force stays world-fixed: phi(2 s) = 2.44 rad instead of 12 on the rod).
@@ -39,6 +47,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
+from dalembert.adapters.exudyn.loops import joint_frame, loop_axes
 from dalembert.scene import WORLD
 
 __all__ = ["build", "rigid_bodies", "axis_frame", "NODES", "JOINTS", "CONSTRAINED_AXES"]
@@ -65,12 +74,14 @@ def build(scene, settings, assemble=True):
     unless ``assemble`` is False (for the summary alone).
 
     Returns a dict: ``SC``, ``mbs`` (the system container and system), ``sensors`` (body or
-    ``__q``/``__v``/``__joint:<child>`` -> quantity -> sensor number), ``X_EB`` (per link),
-    ``links`` (the kinematic tree's bodies, in link order), ``redundant_joints`` (child ->
-    joint frame in the parent's axes, ``R_PJ R_A``) and ``summary`` (text, for reports).
+    ``__q``/``__v``/``__joint:<child>``/``__loop:<loop name>`` -> quantity -> sensor number), ``X_EB``
+    (per link), ``links`` (the kinematic tree's bodies, in link order), ``redundant_joints`` (child ->
+    joint frame in the parent's axes, ``R_PJ R_A``), ``loops`` (loop name -> its joint frame Ja in body
+    a's scene frame, ``R_BJa``), ``loop_rows`` (loop name -> ``loops.LoopRows``) and ``summary`` (text,
+    for reports).
     """
     import exudyn as exu
-    from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid,
+    from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid, ObjectConnectorDistance,
                                       MarkerKinematicTreeRigid, NodeGenericODE2, ObjectGround,
                                       ObjectJointGeneric, ObjectKinematicTree, SensorBody, SensorKinematicTree,
                                       SensorNode, SensorObject)
@@ -96,7 +107,8 @@ def build(scene, settings, assemble=True):
             kwargs["gravity"] = list(g)
         obj = mbs.CreateRigidBody(**kwargs)["bodyNumber"]
         bodies[name] = obj
-        markers[name] = lambda p, obj=obj: mbs.AddMarker(MarkerBodyRigid(bodyNumber=obj, localPosition=list(p)))
+        markers[name] = lambda p, R=np.eye(3), obj=obj: mbs.AddMarker(MarkerBodyRigid(
+            bodyNumber=obj, localHT=exu.HT(rotation=R, translation=list(p))))
         sensors[name] = {k: mbs.AddSensor(SensorBody(bodyNumber=obj, outputVariableType=v))
                          for k, v in (("p", OV.Position), ("R", OV.RotationMatrix), ("v", OV.Velocity),
                                       ("w", OV.AngularVelocity))}
@@ -163,8 +175,11 @@ def build(scene, settings, assemble=True):
                    ("a", OV.Acceleration))
         for b in links:
             i, (p_EB, R_EB) = index[b.name], X_EB[b.name]
-            markers[b.name] = lambda p, i=i, p_EB=p_EB, R_EB=R_EB: mbs.AddMarker(MarkerKinematicTreeRigid(
-                objectNumber=tree, linkNumber=i, localPosition=list(p_EB + R_EB @ np.array(p))))
+            # a marker at scene point p of the body, its frame R in the body's scene frame B (loops), or
+            # the link frame E's axes (loads, whose vectors are turned into E)
+            markers[b.name] = lambda p, R=None, i=i, p_EB=p_EB, R_EB=R_EB: mbs.AddMarker(
+                MarkerKinematicTreeRigid(objectNumber=tree, linkNumber=i, localHT=exu.HT(
+                    rotation=np.eye(3) if R is None else R_EB @ R, translation=list(p_EB + R_EB @ np.array(p)))))
             sensors[b.name] = {k: mbs.AddSensor(SensorKinematicTree(
                 objectNumber=tree, linkNumber=i, localPosition=list(p_EB), outputVariableType=v))
                 for k, v in outputs}
@@ -172,6 +187,29 @@ def build(scene, settings, assemble=True):
         sensors["__v"] = {"v": mbs.AddSensor(SensorNode(nodeNumber=node, outputVariableType=OV.Coordinates_t))}
         summary.append(f"ObjectKinematicTree: {n} RevoluteZ link(s) {[b.name for b in links]} "
                        f"(minimal coordinates), gravity {g.tolist()}")
+    # --- loop closures: one constraint object from a marker on body a (marker 0) to one on body b,
+    # its rows those independent at the initial state (``loops.loop_axes``)
+    loops, rows = {}, {}
+    if scene.loops:
+        ground = mbs.AddObject(ObjectGround())
+        markers[WORLD] = lambda p, R=np.eye(3): mbs.AddMarker(MarkerBodyRigid(
+            bodyNumber=ground, localHT=exu.HT(rotation=R, translation=list(p))))
+        rows = loop_axes(scene)
+        for lp in scene.loops:
+            R_BJa, R_BJb = joint_frame(lp)
+            m0, m1 = markers[lp.body_a](lp.point_a, R_BJa), markers[lp.body_b](lp.point_b, R_BJb)
+            dropped = f"; redundant at t = 0, left out: {', '.join(rows[lp.name].dropped)}" if rows[lp.name].dropped else ""
+            if lp.kind == "distance":
+                obj = mbs.AddObject(ObjectConnectorDistance(markerNumbers=[m0, m1], distance=lp.length))
+                summary.append(f"ObjectConnectorDistance {lp.body_a} -> {lp.body_b} (loop {lp.name!r}), "
+                               f"distance {lp.length:g} m")
+            else:
+                obj = mbs.AddObject(ObjectJointGeneric(markerNumbers=[m0, m1], constrainedAxes=list(rows[lp.name].axes)))
+                summary.append(f"ObjectJointGeneric {lp.body_a} -> {lp.body_b} (loop {lp.name!r}, {lp.kind}), "
+                               f"constrainedAxes {list(rows[lp.name].axes)}{dropped}")
+            sensors[f"__loop:{lp.name}"] = {"f": mbs.AddSensor(SensorObject(
+                objectNumber=obj, outputVariableType=OV.Force if lp.kind == "distance" else OV.ForceLocal))}
+            loops[lp.name] = R_BJa
     # --- loads
     for ld in scene.loads:
         R_EB = X_EB.get(ld.body, (None, np.eye(3)))[1]  # a rigid body's E is B
@@ -184,4 +222,4 @@ def build(scene, settings, assemble=True):
     if assemble:
         mbs.Assemble()
     return dict(SC=SC, mbs=mbs, sensors=sensors, X_EB=X_EB, links=[b.name for b in links],
-                redundant_joints=redundant_joints, summary="\n".join(summary) + "\n")
+                redundant_joints=redundant_joints, loops=loops, loop_rows=rows, summary="\n".join(summary) + "\n")

@@ -15,6 +15,14 @@ worker process; each precision compiles its own rollout. JAX 0.10's caches do
 not keep the two apart everywhere (measured: after a float32 RK4 rollout, the
 float64 one fails to lower — an inner ``jit(tril)`` reused with float32
 operands), so JAX's caches are cleared whenever a process switches precision.
+
+Compilations persist across processes in JAX's compilation cache, under
+``dalembert.cache.cache_dir("jax")`` unless JAX is given its own
+(``JAX_COMPILATION_CACHE_DIR``): the workers of a matrix, and later matrices,
+load a model's rollout instead of compiling it again (measured: ``prepare`` of
+``free_top`` in float64, 9-11 s compiling, 3.6 s from the cache). JAX keys an
+entry by the lowered computation, the compile options and the JAX and XLA
+versions, so what is loaded is the executable a compilation would make.
 """
 
 from __future__ import annotations
@@ -56,6 +64,10 @@ def precision(name):
 def _rollout():
     import jax
 
+    from dalembert.cache import cache_dir
+
+    if not jax.config.jax_compilation_cache_dir:
+        jax.config.update("jax_compilation_cache_dir", cache_dir("jax"))
     step = mjx().step
 
     def rollout(m, d, steps):

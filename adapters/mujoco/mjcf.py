@@ -15,6 +15,14 @@ MuJoCo: nothing here calls it.
 * Gravity from the scene, and the gravity stage disabled when it is zero
   (MuJoCo's default is -9.81). Contact, constraint, equality, limit,
   frictionloss, spring, damper, control clamping and auto-reset are disabled.
+* Loop closures (``Scene.loops``) as equality constraints between sites at the loop's points
+  (``loop_sites``): ``ball`` a ``<connect>``; ``revolute`` two connects, at the points and at
+  ``AXIS_LEVER`` along the axis from them (MuJoCo has no revolute equality; its documentation:
+  "two connect constraints for the same pair of bodies can be used to model a hinge joint");
+  ``distance`` a spatial tendon between the two sites held at the loop's length by a ``<tendon>``
+  equality (whose offset is the length minus the tendon's length at MuJoCo's reference
+  configuration ``qpos0``, computed here from the MJCF's own body placements). All as stiff as
+  MuJoCo allows (``LOOP_SOLREF_STEPS``, ``LOOP_SOLIMP``).
 * Loads through site actuators with a constant control of 1 and
   ``gear = (force, torque)``: a follower load in a site whose axes are the body
   axes, a world-frame load with a ``refsite`` at the world origin. MuJoCo then
@@ -31,7 +39,8 @@ import numpy as np
 from dalembert import spatial
 from dalembert.scene import WORLD
 
-__all__ = ["mjcf", "engine_frames", "floating", "INTEGRATORS", "LOAD_PATHS", "WELDS"]
+__all__ = ["mjcf", "engine_frames", "floating", "loop_sites", "loop_softness", "INTEGRATORS", "LOAD_PATHS", "WELDS",
+           "AXIS_LEVER", "LOOP_SOLREF_STEPS", "LOOP_SOLREF_STEPS_DEFAULT", "LOOP_SOLIMP"]
 
 # Engine name -> MJCF integrator attribute.
 INTEGRATORS = {"euler": "Euler", "rk4": "RK4", "implicit": "implicit", "implicitfast": "implicitfast",
@@ -48,6 +57,16 @@ WELDS = ("tree", "equality")
 # joint reactions at dt = 1e-3 and 1e-4).
 WELD_SOLREF_STEPS = 2.0
 WELD_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+# Loop closures, as stiff as MuJoCo runs them (measured on the four-bar, dt = 1e-2 to 1e-4): the time
+# constant in steps per integrator. RK4 runs 1 step (refsafe disabled: MuJoCo would clamp it to 2), which
+# cuts its angle error 17-fold at dt = 1e-3 against 2 steps; at 0.5 steps its errors grow again. Euler,
+# implicit, implicitfast (and discrete) diverge at 1 step at every dt: they keep refsafe's minimum, 2.
+LOOP_SOLREF_STEPS = {"rk4": 1.0}
+LOOP_SOLREF_STEPS_DEFAULT = 2.0
+LOOP_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+# A revolute loop's second connect sits this far (m) along the axis from the loop's points: its rows
+# then measure the axes' tilt in metres, on the scale of the point rows (bars of ~1 m).
+AXIS_LEVER = 1.0
 DISABLED = ("contact", "constraint", "equality", "limit", "frictionloss", "spring", "damper", "clampctrl",
             "autoreset")
 
@@ -74,6 +93,67 @@ def engine_frames(scene, welds="tree"):
     return out
 
 
+def loop_softness(settings):
+    """``(solref, solimp)`` of every loop constraint for ``settings`` (integrator and step): the time
+    constant at ``LOOP_SOLREF_STEPS`` steps of the integrator (the shortest it runs), critically damped,
+    and the impedance at ``LOOP_SOLIMP`` (MuJoCo's largest, 0.9999)."""
+    return (_loop_steps(settings) * settings.dt, 1.0), LOOP_SOLIMP
+
+
+def _loop_steps(settings):
+    return LOOP_SOLREF_STEPS.get(settings.integrator, LOOP_SOLREF_STEPS_DEFAULT)
+
+
+def loop_sites(scene, welds="tree"):
+    """The sites every loop constraint joins, per loop (``scene.loops`` order): a list of pairs
+    ``((body_a, p_Ea), (body_b, p_Eb))``, each point in its body's MuJoCo frame E (the world's for
+    ``"world"``), m. One pair for ``ball`` and ``distance`` (the loop's points); two for ``revolute``:
+    the points, then the points moved ``AXIS_LEVER`` along the axis as each side carries it."""
+    X_EB = engine_frames(scene, welds)
+    X_EB["world"] = (np.zeros(3), np.eye(3))
+    out = []
+    for lp in scene.loops:
+        ends = []
+        for body, point, quat in ((lp.body_a, lp.point_a, lp.quat_a), (lp.body_b, lp.point_b, lp.quat_b)):
+            p_EB, R_EB = X_EB[body]
+            p = p_EB + R_EB @ np.array(point)
+            ends.append((body, p, R_EB @ spatial.quat_to_matrix(quat)))  # R_EJ: the joint frame in E
+        pairs = [((a, pa), (b, pb)) for (a, pa, _), (b, pb, _) in [ends]]
+        if lp.kind == "revolute":
+            axis = np.array(lp.axis) / np.linalg.norm(lp.axis)
+            (a, pa, Ra), (b, pb, Rb) = ends
+            pairs.append(((a, pa + AXIS_LEVER * Ra @ axis), (b, pb + AXIS_LEVER * Rb @ axis)))
+        out.append(pairs)
+    return out
+
+
+def _placement(scene, j, X_EB, welds, state0):
+    """Where the MJCF places the child of ``j`` in its parent's MuJoCo frame (the world's for a
+    floating body): ``(pos (3,), quat (4,))``, MuJoCo's reference configuration ``qpos0``."""
+    if j.kind == "free":
+        return np.array(j.q0[:3]), np.array(j.q0[3:])  # placed by qpos anyway
+    if floating(j, welds):  # a weld held by a constraint, at its initial pose: the weld's reference
+        return state0[j.child]["p"], spatial.matrix_to_quat(state0[j.child]["R"])
+    # E (= Jc) coincides with the parent joint frame Jp at q = 0, placed in the parent's
+    # MuJoCo frame Ep, where the parent's scene frame P sits at X_EpP (its X_EB).
+    p_EpP, R_EpP = (np.zeros(3), np.eye(3)) if j.parent == WORLD else X_EB[j.parent]
+    R_PJ = spatial.quat_to_matrix(j.parent_quat)
+    return p_EpP + R_EpP @ np.array(j.parent_point), spatial.matrix_to_quat(R_EpP @ R_PJ)
+
+
+def _reference_poses(scene, X_EB, welds, state0):
+    """Each body's MuJoCo frame in the world at ``qpos0`` (hinges at 0, balls at identity, free bodies
+    where the MJCF places them): dict body -> ``(p_WE, R_WE)``, the world's included."""
+    poses = {WORLD: (np.zeros(3), np.eye(3))}
+    for body in scene.topological_order():
+        j = scene.joint(body.name)
+        pos, quat = _placement(scene, j, X_EB, welds, state0)
+        parent = WORLD if floating(j, welds) else j.parent
+        p, R = poses[parent]
+        poses[body.name] = (p + R @ pos, R @ spatial.quat_to_matrix(quat))
+    return poses
+
+
 def mjcf(scene, settings):
     """MJCF text of ``scene`` for ``settings`` (dt, integrator, options)."""
     welds = settings.options.get("welds", "tree")
@@ -81,11 +161,20 @@ def mjcf(scene, settings):
     load_path = settings.options.get("loads", "actuator")
     weld_constraints = [j for j in scene.joints if j.kind == "weld" and welds == "equality"]
     state0 = spatial.initial_body_states(scene) if weld_constraints else {}  # the welded bodies' poses
+    sites = loop_sites(scene, welds)
+    site_lines = {}  # body -> its loop sites' MJCF lines
+    for i, pairs in enumerate(sites):
+        for k, ((a, pa), (b, pb)) in enumerate(pairs):
+            for end, body, pos in (("a", a, pa), ("b", b, pb)):
+                site_lines.setdefault(body, []).append(f'<site name="loop{i}_{end}{k}" pos="{_f(pos)}"/>')
     children = {}
     for j in scene.joints:  # a welded body held by a constraint hangs from the world, free
         children.setdefault(WORLD if j in weld_constraints else j.parent, []).append(j)
     gravity = np.array(scene.gravity)
-    disabled = [f for f in DISABLED if not (weld_constraints and f in ("constraint", "equality"))]
+    constrained = bool(weld_constraints or scene.loops)
+    disabled = [f for f in DISABLED if not (constrained and f in ("constraint", "equality"))]
+    if scene.loops and _loop_steps(settings) < 2.0:
+        disabled.append("refsafe")  # MuJoCo would clamp the time constant to 2 steps
     flags = " ".join(f'{f}="disable"' for f in disabled)
     if not np.any(gravity):
         flags += ' gravity="disable"'
@@ -96,21 +185,12 @@ def mjcf(scene, settings):
              f"    <flag {flags}/>", "  </option>", "  <worldbody>"]
     if load_path == "actuator" and any(ld.frame == "world" for ld in scene.loads):
         lines.append('    <site name="world_origin" pos="0 0 0"/>')
+    lines += ["    " + line for line in site_lines.get(WORLD, [])]
 
     def body_xml(j, indent):
         p_EB, R_EB = X_EB[j.child]
         body = scene.body(j.child)
-        if j.kind == "free":
-            pos, quat = np.array(j.q0[:3]), np.array(j.q0[3:])  # placed by qpos anyway
-        elif floating(j, welds):  # a weld held by a constraint, at its initial pose: the weld's reference
-            pos, quat = state0[j.child]["p"], spatial.matrix_to_quat(state0[j.child]["R"])
-        else:
-            # E (= Jc) coincides with the parent joint frame Jp at q = 0, placed in the parent's
-            # MuJoCo frame Ep, where the parent's scene frame P sits at X_EpP (its X_EB).
-            p_EpP, R_EpP = (np.zeros(3), np.eye(3)) if j.parent == WORLD else X_EB[j.parent]
-            R_PJ = spatial.quat_to_matrix(j.parent_quat)
-            pos = p_EpP + R_EpP @ np.array(j.parent_point)
-            quat = spatial.matrix_to_quat(R_EpP @ R_PJ)
+        pos, quat = _placement(scene, j, X_EB, welds, state0)
         I_E = R_EB @ body.inertia_matrix @ R_EB.T
         fi = [I_E[0, 0], I_E[1, 1], I_E[2, 2], I_E[0, 1], I_E[0, 2], I_E[1, 2]]
         out = [f'{indent}<body name="{body.name}" pos="{_f(pos)}" quat="{_f(quat)}">',
@@ -129,6 +209,7 @@ def mjcf(scene, settings):
                     site_pos = p_EB + R_EB @ np.array(ld.point)
                     out.append(f'{indent}  <site name="load{k}" pos="{_f(site_pos)}" '
                                f'quat="{_f(spatial.matrix_to_quat(R_EB))}"/>')
+        out += [f"{indent}  {line}" for line in site_lines.get(body.name, [])]
         for c in children.get(body.name, []):
             out += body_xml(c, indent + "  ")
         out.append(f"{indent}</body>")
@@ -137,9 +218,33 @@ def mjcf(scene, settings):
     for j in children.get(WORLD, []):
         lines += body_xml(j, "    ")
     lines.append("  </worldbody>")
+    distance = [(i, lp) for i, lp in enumerate(scene.loops) if lp.kind == "distance"]
+    if distance:
+        lines.append("  <tendon>")
+        for i, lp in distance:
+            lines += [f'    <spatial name="{lp.name}" limited="false" stiffness="0" damping="0" frictionloss="0">',
+                      f'      <site site="loop{i}_a0"/>', f'      <site site="loop{i}_b0"/>', "    </spatial>"]
+        lines.append("  </tendon>")
+    if weld_constraints or scene.loops:
+        lines.append("  <equality>")
+    if scene.loops:
+        (tc, zeta), solimp = loop_softness(settings)
+        soft = f'solref="{tc!r} {zeta!r}" solimp="{_f(solimp)}"'
+        poses = _reference_poses(scene, X_EB, welds, state0) if distance else {}
+        for i, (lp, pairs) in enumerate(zip(scene.loops, sites)):
+            if lp.kind == "distance":
+                (a, pa), (b, pb) = pairs[0]
+                x = [poses[body][0] + poses[body][1] @ p for body, p in ((a, pa), (b, pb))]
+                length0 = float(np.linalg.norm(x[0] - x[1]))  # the tendon's length at qpos0 (MuJoCo's L0)
+                # MuJoCo holds L - L0 = polycoef[0]: the offset that makes L the loop's length
+                lines.append(f'    <tendon name="{lp.name}" tendon1="{lp.name}" '
+                             f'polycoef="{lp.length - length0!r} 0 0 0 0" {soft}/>')
+                continue
+            for k in range(len(pairs)):
+                name = lp.name if k == 0 else f"{lp.name}:axis"
+                lines.append(f'    <connect name="{name}" site1="loop{i}_a{k}" site2="loop{i}_b{k}" {soft}/>')
     if weld_constraints:
         solref = f"{WELD_SOLREF_STEPS * settings.dt!r} 1"
-        lines.append("  <equality>")
         for j in weld_constraints:
             # relpose: the child's MuJoCo frame in the parent's, as the scene's weld holds them
             X_WE = {}
@@ -152,6 +257,7 @@ def mjcf(scene, settings):
             body1 = "" if j.parent == WORLD else f' body1="{j.parent}"'
             lines.append(f'    <weld name="{j.child}"{body1} body2="{j.child}" relpose="{_f(relpose)}" '
                          f'solref="{solref}" solimp="{_f(WELD_SOLIMP)}"/>')
+    if weld_constraints or scene.loops:
         lines.append("  </equality>")
     if load_path == "actuator" and scene.loads:
         lines.append("  <actuator>")

@@ -40,13 +40,18 @@ def read_back(p, Q, V):
     # a weld held by an equality constraint has no joint force to read (cfrc_int is zero)
     children = [j.child for j in scene.joints if not floating(j, p["welds"])]
     child_ids = np.array([p["ids"][c] for c in children], dtype=int)
-    xpos, xmat = np.full((n, nb, 3), np.nan), np.full((n, nb, 9), np.nan)
     roots = model.body_rootid[ids]
-    cvel = np.full((n, nb, 6), np.nan)  # MuJoCo's (w, v) of each body at its tree's centre of mass, world axes
-    com = np.full((n, nb, 3), np.nan)  # that centre of mass (subtree_com of the body's root)
-    cfrc = np.full((n, len(children), 3), np.nan)
-    max_ncon = max_nefc = 0
+    # every MuJoCo body's figures per sample, whole arrays copied (a fancy-indexed copy costs ~7x a
+    # slice copy, and this loop runs once per sample); the scene's bodies are picked out after it
+    nbody = model.nbody
+    xpos_all, xmat_all = np.full((n, nbody, 3), np.nan), np.full((n, nbody, 9), np.nan)
+    cvel_all = np.full((n, nbody, 6), np.nan)  # MuJoCo's (w, v) of each body at its tree's centre of mass, world axes
+    com_all = np.full((n, nbody, 3), np.nan)  # each body's subtree centre of mass
+    cfrc_all = np.full((n, nbody, 6), np.nan)
+    ncon, nefc = np.zeros(n, dtype=int), np.zeros(n, dtype=int)
     passive = np.zeros((n, model.nv))
+    loops = _loop_rows(model, scene)
+    loop_force = {name: np.full((n, 3), np.nan) for name in loops}
     if p["load_path"] == "actuator":
         d.ctrl[:] = 1.0
     finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)
@@ -60,10 +65,15 @@ def read_back(p, Q, V):
         mujoco.mj_forward(model, d)
         if children:
             mujoco.mj_rnePostConstraint(model, d)
-            cfrc[k] = d_cfrc[child_ids, 3:]
-        max_ncon, max_nefc = max(max_ncon, d.ncon), max(max_nefc, d.nefc)
+            cfrc_all[k] = d_cfrc
+        ncon[k], nefc[k] = d.ncon, d.nefc
+        for name, (kind, eq_ids, sites) in loops.items():
+            loop_force[name][k] = _loop_force(d, kind, eq_ids, sites)
         passive[k] = d_passive
-        xpos[k], xmat[k], cvel[k], com[k] = d_xpos[ids], d_xmat[ids], d_cvel[ids], d_com[roots]
+        xpos_all[k], xmat_all[k], cvel_all[k], com_all[k] = d_xpos, d_xmat, d_cvel, d_com
+    xpos, xmat, cvel, com = xpos_all[:, ids], xmat_all[:, ids], cvel_all[:, ids], com_all[:, roots]  # (n, nb, .)
+    cfrc = cfrc_all[:, child_ids, 3:]  # (n, children, 3)
+    max_ncon, max_nefc = ncon.max(initial=0), nefc.max(initial=0)
     R_WE = xmat.reshape(n, nb, 3, 3)
     p_EB = np.array([p["frames"][b.name][0] for b in scene.bodies])  # (nb, 3)
     R_EB = np.array([p["frames"][b.name][1] for b in scene.bodies])  # (nb, 3, 3)
@@ -98,6 +108,7 @@ def read_back(p, Q, V):
         a, v = model.jnt_qposadr[jid], model.jnt_dofadr[jid]
         joints[j.child] = JointStates(Q[:, a:a + len(j.q0)], V[:, v:v + len(j.v0)])
     extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
+    extras.update({f"reaction_force:{name}": f for name, f in loop_force.items()})
     audit = {"max_contacts": int(max_ncon), "max_constraint_rows": int(max_nefc),
              "max_abs_passive_force": float(np.abs(passive).max(initial=0.0))}
     return Trajectory(p["times"], bodies, joints, extras), audit
@@ -113,3 +124,32 @@ def _subtree(scene, name, welds="tree"):
                 out.add(j.child)
                 frontier.append(j.child)
     return out
+
+
+def _loop_rows(model, scene):
+    """Per loop name: ``(kind, equality ids, (site a, site b) ids)`` of its constraints (``mjcf``)."""
+    import mujoco
+
+    out = {}
+    for i, lp in enumerate(scene.loops):
+        names = [lp.name] + ([f"{lp.name}:axis"] if lp.kind == "revolute" else [])
+        ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_EQUALITY, n) for n in names]
+        sites = tuple(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, f"loop{i}_{end}0") for end in "ab")
+        out[lp.name] = (lp.kind, ids, sites)
+    return out
+
+
+def _loop_force(d, kind, ids, sites):
+    """The force (3,) ON body b (N, world) of one loop's equality rows at the state ``d`` holds."""
+    import mujoco
+
+    equality = d.efc_type == mujoco.mjtConstraint.mjCNSTR_EQUALITY
+    total = np.zeros(3)
+    for eq in ids:
+        f = d.efc_force[equality & (d.efc_id == eq)]
+        if kind == "distance":
+            e = d.site_xpos[sites[1]] - d.site_xpos[sites[0]]
+            total += f[0] * e / np.linalg.norm(e)
+        else:
+            total -= f
+    return total

@@ -1,7 +1,9 @@
 """Pinocchio adapter: the scene through Pinocchio's dynamics, with the integrators owned here.
 
 Modules by job: ``model`` (``PinocchioModel``: the scene as a ``pin.Model``,
-its loads, accelerations and ``dexp^-1``), ``integrators`` (the fixed-step and
+its loads, accelerations and ``dexp^-1``), ``loops`` (loop closures as rigid
+constraints for ``pin.constraintDynamics``: placement, regularisation, drift
+correction, reactions), ``integrators`` (the fixed-step and
 adaptive loops in Python), ``native`` (the fixed-step loop compiled from
 ``stepper.cpp``; ``python -m dalembert.adapters.pinocchio.native`` builds it),
 ``adapter`` (``PinocchioAdapter``).

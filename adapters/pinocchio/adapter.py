@@ -5,7 +5,10 @@ integrators owned here (``integrators``), so their quality is part of what is
 measured. The fixed-step loops run compiled (``native``: the same integrators
 and loads in ``stepper.cpp`` against the installed Pinocchio, no Python call per
 step), or in Python with ``--option loop=python`` and wherever the compiled loop
-cannot be built (the audit says which ran).
+cannot be built (the audit says which ran). Welds as constraints and loop
+closures (``loops``: ball and revolute; distance is unsupported) run
+``pin.constraintDynamics``, which the compiled loop does not have: their
+fixed-step runs take the Python loop.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
+from dalembert.adapters.pinocchio import loops
 from dalembert.adapters.pinocchio.integrators import STAGES, adaptive, fixed_step
 from dalembert.adapters.pinocchio.model import WELDS, PinocchioModel
 from dalembert.scene import EFFECTS
@@ -32,7 +36,7 @@ class PinocchioAdapter(Adapter):
     """Pinocchio (``pin``), integrators owned by the adapter."""
 
     name = "pinocchio"
-    effects = EFFECTS
+    effects = EFFECTS | frozenset(f"loop:{k}" for k in loops.LOOP_KINDS)  # loop:distance: loops.DISTANCE_REASON
     integrators = {
         "euler": IntegratorSpec(True, ("loop", "welds"), "semi-implicit Euler on the group"),
         "rk4": IntegratorSpec(True, ("loop", "welds"), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
@@ -52,6 +56,8 @@ class PinocchioAdapter(Adapter):
         option_choice(settings, "welds", WELDS)
 
     def unsupported(self, scene, settings):
+        if any(lp.kind == "distance" for lp in scene.loops):
+            return loops.DISTANCE_REASON
         reason = super().unsupported(scene, settings)
         if reason or settings.options.get("welds", "tree") != "constraint":
             return reason
@@ -82,7 +88,7 @@ class PinocchioAdapter(Adapter):
         steps = steps_per_interval(times, settings.dt) if settings.dt else None
         p = dict(scene=scene, pm=pm, q0=q0, v0=v0, times=times, settings=settings, steps=steps, native=None)
         # the compiled loop is loaded (or built) here, with the model, never inside a timed run
-        if steps is not None and settings.options.get("loop", "native") == "native" and not pm.constraints:
+        if steps is not None and settings.options.get("loop", "native") == "native" and not pm.constrained:
             try:
                 p["native"] = native.NativeModel(pm)
             except RuntimeError as e:  # not built here: the Python loop runs, saying why
@@ -111,7 +117,7 @@ class PinocchioAdapter(Adapter):
         args = (pm, method, p["q0"], p["v0"], p["times"], p["steps"])
         if p["settings"].options.get("loop", "native") == "python":
             return (*fixed_step(*args), "Python (options.loop = python)")
-        if pm.constraints:
+        if pm.constrained:
             return (*fixed_step(*args), "Python (constraint dynamics: the compiled loop has aba only)")
         if p["native"] is None:
             return (*fixed_step(*args), f"Python (the compiled loop is unavailable: {p['native_error']})")
@@ -133,17 +139,26 @@ class PinocchioAdapter(Adapter):
         R_WB = {b.name: np.full((n, 3, 3), np.nan) for b in scene.bodies}  # to quaternions once, below
         reacting = [j for j in scene.joints if j.kind in ("revolute", "ball")]
         reactions = {j.child: np.full((n, 3), np.nan) for j in reacting}
-        for k in range(n):
+        loop_forces = {lc.loop.name: np.full((n, 3), np.nan) for lc in pm.loop_contacts}
+        finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)  # once, not per sample
+        for k in np.flatnonzero(finite):
             q, v = Q[k], V[k]
-            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-                continue
             local = {}
-            if reacting:  # rnea with the external forces: data.f[joint] is the force through the joint
+            if reacting or loop_forces:  # rnea with the external forces: data.f[joint] is the force through the joint
                 a = pm.acceleration(q, v)
-                if pm.has_loads:
-                    pin.rnea(model, data, q, v, a, pm.external_forces(q))
-                else:
+                forces = None
+                if pm.constrained:  # the constraints' forces on the joints, so the reactions include them
+                    lams = pm.constraint_multipliers(q)  # from this constraintDynamics, before rnea overwrites data
+                    for lc in pm.loop_contacts:
+                        loop_forces[lc.loop.name][k] = loops.force_on_b(pm.cdatas, lc, lams)
+                    forces = pm.constraint_forces(lams)
+                fext = pm.external_forces(q) if pm.has_loads else None
+                if forces is not None:
+                    fext = forces if fext is None else [f + c for f, c in zip(fext, forces)]
+                if fext is None:
                     pin.rnea(model, data, q, v, a)
+                else:
+                    pin.rnea(model, data, q, v, a, _force_vector(fext))
                 local = {j.child: data.f[pm.joint_ids[j.child]].linear.copy() for j in reacting}
             # rnea does not refresh data.oMi: rotate with this sample's forward kinematics
             pin.forwardKinematics(model, data, q, v)
@@ -177,6 +192,7 @@ class PinocchioAdapter(Adapter):
                 joints[j.child] = JointStates(qj, vj)
         traj_bodies = {name: BodyStates(*arrs) for name, arrs in bodies.items()}
         extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
+        extras.update({f"reaction_force:{name}": f for name, f in loop_forces.items()})
         return Trajectory(p["times"], traj_bodies, joints, extras)
 
     # ------------------------------------------------------------ audit
@@ -190,5 +206,31 @@ class PinocchioAdapter(Adapter):
             "integrator": prepared["settings"].integrator,
             "loop": outcome.info.get("loop", ""),
             "pinocchio_version": self.version(),
-            "contacts": 0, "constraint_rows": 0,
+            "contacts": 0,
+            "constraint_rows": int(sum(cm.residualSize() for cm in pm.cmodels)) if pm.constrained else 0,
+            **(self._loop_audit(pm) if pm.loop_contacts else {}),
         }
+
+    @staticmethod
+    def _loop_audit(pm):
+        """How the loops were closed and solved (``loops``): constraints, regularisation, drift correction."""
+        Kp, Kd = loops.baumgarte()
+        return {
+            "loops": {lc.loop.name: f"{lc.loop.kind}: {len(lc.indices)} CONTACT_3D (LOCAL)"
+                      + (f", the second {lc.lever:g} m along the axis" if lc.loop.kind == "revolute" else "")
+                      for lc in pm.loop_contacts},
+            "loop_summary": str(pm.scene.loop_summary()),
+            "proximal": {"mu": pm.mu, "mu_relative_to_delassus": loops.PROXIMAL_MU_REL,
+                         "max_iter": loops.PROXIMAL_ITERATIONS, "accuracy": loops.PROXIMAL_ACCURACY},
+            "drift_correction": {"method": "Baumgarte (RigidConstraintModel corrector)", "Kp": Kp, "Kd": Kd},
+        }
+
+
+def _force_vector(forces):
+    """A list of ``pin.Force`` as the ``pin.StdVec_Force`` ``rnea`` takes."""
+    import pinocchio as pin
+
+    out = pin.StdVec_Force()
+    for f in forces:
+        out.append(f)
+    return out

@@ -8,6 +8,8 @@
   body's inertia is ``pin.Inertia(mass, lever, I_com)`` in its joint frame
   (Pinocchio applies the parallel-axis shift), and an operational frame marks
   the scene body frame.
+* Loop closures: 3D ``RigidConstraintModel``s between the joints that carry the two bodies
+  (``loops``), solved with the welds' by ``pin.constraintDynamics``.
 * ``model.gravity`` is set from the scene — Pinocchio defaults to -9.81 in z,
   so a scene without gravity gets zero explicitly.
 
@@ -25,10 +27,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from dalembert import spatial
+from dalembert import closure, spatial
 from dalembert.scene import WORLD
 
-__all__ = ["PinocchioModel", "WELDS"]
+__all__ = ["PinocchioModel", "WELDS", "depth_first_order"]
 
 # Welds: merged into the parent's joint (``tree``, exact), or 6D constraints between free
 # flyers solved by ``pin.constraintDynamics`` (``constraint``).
@@ -41,6 +43,25 @@ def _se3(R, p):
     return pin.SE3(np.asarray(R, dtype=float), np.asarray(p, dtype=float))
 
 
+def depth_first_order(scene):
+    """The scene's bodies, each subtree after its root and contiguous (siblings in ``scene.joints`` order).
+
+    Pinocchio's ``crba``, its Cholesky and ``constraintDynamics`` take a subtree's velocity indices to be
+    contiguous (``model.nvSubtree``); a parents-first order that is not depth-first (the four-bar's
+    crank, rocker, coupler) gives a wrong mass matrix there (the crank-coupler coupling lands on the
+    rocker: measured, ``crba`` and ``constraintDynamics`` against the reference's), while ``aba`` does
+    not notice."""
+    children = {}
+    for j in scene.joints:
+        children.setdefault(j.parent, []).append(j.child)
+    order, stack = [], list(reversed(children.get(WORLD, [])))
+    while stack:
+        name = stack.pop()
+        order.append(scene.body(name))
+        stack.extend(reversed(children.get(name, [])))
+    return order
+
+
 class PinocchioModel:
     """A scene as a ``pin.Model`` plus the maps the adapter needs: per body, ``carrier`` (the
     joint that carries it), ``X_EB`` (its scene frame B in that joint's frame E, ``pin.SE3``;
@@ -51,6 +72,11 @@ class PinocchioModel:
     ``RigidConstraintModel``, and the dynamics is ``pin.constraintDynamics`` (no Baumgarte
     correction: the constraints are met at the acceleration level, so what drift the
     integrator leaves shows in the pairwise distances).
+
+    Loop closures (``scene.loops``) add 3D ``RigidConstraintModel``s (``loops``: their placement,
+    regularisation and Baumgarte correction), and the dynamics is ``pin.constraintDynamics``
+    with the loads as joint torques (``load_torques``). ``cmodels``/``cdatas`` hold every
+    constraint, welds first; ``loop_contacts`` says which are each loop's.
     """
 
     def __init__(self, scene, welds="tree"):
@@ -62,7 +88,7 @@ class PinocchioModel:
         model.gravity = pin.Motion(np.array(scene.gravity, dtype=float), np.zeros(3))
         self.carrier, self.X_EB, self.joint_ids = {}, {}, {}
         lines = []
-        for body in scene.topological_order():
+        for body in depth_first_order(scene):
             j = scene.joint(body.name)
             if j.parent == WORLD:
                 parent_id, X_EpP = 0, _se3(np.eye(3), np.zeros(3))
@@ -94,20 +120,114 @@ class PinocchioModel:
                          f"({model.joints[jid].shortname() if jid else 'universe'}), mass {body.mass:g} kg")
         self.model = model
         self.data = model.createData()
-        if self.constraints:
-            self.cmodels = pin.StdVec_RigidConstraintModel()
-            for j1, X1, j2, X2 in self.constraints:
-                self.cmodels.append(pin.RigidConstraintModel(pin.ContactType.CONTACT_6D, model, j1, X1, j2, X2,
-                                                             pin.ReferenceFrame.LOCAL))
-            self.cdatas = pin.StdVec_RigidConstraintData()
-            for cm in self.cmodels:
-                self.cdatas.append(cm.createData())
-            pin.initConstraintDynamics(model, self.data, self.cmodels, self.cdatas)
-            lines.append(f"{len(self.constraints)} weld(s) as 6D RigidConstraintModels (pin.constraintDynamics)")
+        self.cmodels = self.cdatas = self.prox = None
+        self.loop_contacts = []  # per loop: its contacts' indices in cmodels (loops.LoopContacts)
+        self.mu = 0.0
+        if self.constraints or scene.loops:
+            self._build_constraints(lines)
         self.frame_ids = {b.name: model.getFrameId(b.name) for b in scene.bodies}
         self.summary = "\n".join([f"pin.Model: nq = {model.nq}, nv = {model.nv}, gravity = "
                                   f"{model.gravity.linear.tolist()}"] + lines)
         self._prepare_loads()
+
+    def _build_constraints(self, lines):
+        """The welds' 6D and the loops' 3D ``RigidConstraintModel``s, their data, and the proximal
+        settings (``loops``): Pinocchio's defaults (``mu = 0``, one iteration: the exact Cholesky) for
+        welds alone, which are never redundant; the loops' regularisation when there are loops."""
+        import pinocchio as pin
+
+        from dalembert.adapters.pinocchio import loops
+
+        model = self.model
+        self.cmodels = pin.StdVec_RigidConstraintModel()
+        for j1, X1, j2, X2 in self.constraints:
+            self.cmodels.append(pin.RigidConstraintModel(pin.ContactType.CONTACT_6D, model, j1, X1, j2, X2,
+                                                         pin.ReferenceFrame.LOCAL))
+        found, self.loop_contacts = loops.loop_contacts(self, len(self.cmodels))
+        for cm in found:
+            self.cmodels.append(cm)
+        self.cdatas = pin.StdVec_RigidConstraintData()
+        for cm in self.cmodels:
+            self.cdatas.append(cm.createData())
+        pin.initConstraintDynamics(model, self.data, self.cmodels, self.cdatas)
+        if self.constraints:
+            lines.append(f"{len(self.constraints)} weld(s) as 6D RigidConstraintModels (pin.constraintDynamics)")
+        if self.loop_contacts:
+            self.mu = loops.PROXIMAL_MU_REL * self.delassus_scale(*self.initial_state())
+            self.prox = loops.proximal_settings(self.mu)
+            Kp, Kd = loops.baumgarte()
+            for lc in self.loop_contacts:
+                lp = lc.loop
+                lines.append(f"loop {lp.name!r} ({lp.kind} {lp.body_a} -> {lp.body_b}): {len(lc.indices)} CONTACT_3D"
+                             + (f" (at the point and {lc.lever:g} m along the axis)" if lp.kind == "revolute" else ""))
+            lines.append(f"constraintDynamics: proximal mu = {self.mu:.3g}, {loops.PROXIMAL_ITERATIONS} iterations; "
+                         f"Baumgarte Kp = {Kp:g} 1/s^2, Kd = {Kd:g} 1/s on the loops")
+        else:
+            self.prox = pin.ProximalSettings()
+
+    def delassus_scale(self, q, v):
+        """The largest eigenvalue of the Delassus operator ``J M^-1 J^T`` of every constraint at ``q``
+        (1/kg for point rows): the scale the loops' regularisation is relative to."""
+        import pinocchio as pin
+
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, q)
+        M = pin.crba(model, data, q)
+        M = np.triu(M) + np.triu(M, 1).T  # crba fills the upper triangle
+        for cm, cd in zip(self.cmodels, self.cdatas):
+            cm.calc(model, data, cd)
+        J = pin.getConstraintsJacobian(model, data, self.cmodels, self.cdatas)
+        return float(np.linalg.eigvalsh(J @ np.linalg.solve(M, J.T)).max())
+
+    @property
+    def constrained(self):
+        """True when the dynamics is ``pin.constraintDynamics`` (welds as constraints, or loops)."""
+        return self.cmodels is not None
+
+    def constraint_multipliers(self, q):
+        """Each constraint's force after the last ``constraintDynamics`` at ``q``: a list over ``cmodels`` of
+        arrays, (3,) N for a 3D contact, (6,) force and moment for a 6D one, in the frame c1 of joint1's
+        placement, acting on joint1 (``loops``).
+
+        With loops, the minimum-norm multipliers with the same generalized force ``J^T lambda``: the part
+        in the null space of ``J^T`` moves nothing, and the proximal iterations grow roundoff there by
+        ``1/mu`` per iteration (measured: 4e-6 N out of the four-bar's plane, where the truth has 1e-14);
+        the reference reads back the same minimum-norm multipliers (``reference.loops``)."""
+        import pinocchio as pin
+
+        lams = [np.array(cd.contact_force.linear if cm.type == pin.ContactType.CONTACT_3D
+                         else cd.contact_force.vector) for cm, cd in zip(self.cmodels, self.cdatas)]
+        if not self.loop_contacts:
+            return lams
+        pin.computeJointJacobians(self.model, self.data, q)
+        J = pin.getConstraintsJacobian(self.model, self.data, self.cmodels, self.cdatas)
+        U, S, _ = np.linalg.svd(J, full_matrices=False)
+        U = U[:, S > closure.RANK_RTOL * S[0]] if len(S) and S[0] > 0.0 else U[:, :0]
+        lam = np.concatenate(lams)
+        lam = U @ (U.T @ lam)
+        return np.split(lam, np.cumsum([len(x) for x in lams])[:-1])
+
+    def constraint_forces(self, lams):
+        """Per joint (list over ``model.njoints`` of ``pin.Force``, each joint's LOCAL frame about its
+        origin) the forces of the constraints, multipliers ``lams`` (``constraint_multipliers``): what
+        ``rnea`` takes as external forces so that the tree joints' reactions include them. A
+        constraint's force acts on joint1 in its frame c1 and, reversed, on joint2 (``loops``)."""
+        import pinocchio as pin
+
+        data = self.data
+        out = [pin.Force.Zero() for _ in range(self.model.njoints)]
+        for cm, cd, lam in zip(self.cmodels, self.cdatas, lams):
+            if cm.type == pin.ContactType.CONTACT_6D:
+                F1 = cd.oMc1.act(pin.Force(lam))  # spatial, world, about the origin
+                F2 = -F1
+            else:
+                f_W = cd.oMc1.rotation @ lam
+                F1 = pin.Force(f_W, np.cross(cd.oMc1.translation, f_W))
+                F2 = pin.Force(-f_W, np.cross(cd.oMc2.translation, -f_W))
+            for jid, F in ((cm.joint1_id, F1), (cm.joint2_id, F2)):
+                if jid > 0:
+                    out[jid] = out[jid] + data.oMi[jid].actInv(F)
+        return out
 
     # ---------------------------------------------------------------- loads
     def _prepare_loads(self):
@@ -151,11 +271,21 @@ class PinocchioModel:
                 self.fext[jid] = self.fext[jid] + pin.Force(np.zeros(3), R_WE.T @ t_W)
         return self.fext
 
+    def load_torques(self, q, v):
+        """The loads' generalized forces ``sum J_i^T f_i`` (nv,) at ``(q, v)``: ``constraintDynamics`` takes
+        no external forces, only ``tau``; ``rnea`` with them subtracts exactly this from ``nle``."""
+        import pinocchio as pin
+
+        fext = self.external_forces(q)
+        return (pin.nonLinearEffects(self.model, self.data, q, v)
+                - pin.rnea(self.model, self.data, q, v, np.zeros(self.model.nv), fext))
+
     def acceleration(self, q, v):
         import pinocchio as pin
 
-        if self.constraints:  # no external forces here: such scenes are unsupported (see the adapter)
-            return pin.constraintDynamics(self.model, self.data, q, v, self.tau, self.cmodels, self.cdatas)
+        if self.constrained:
+            tau = self.load_torques(q, v) if self.has_loads else self.tau
+            return pin.constraintDynamics(self.model, self.data, q, v, tau, self.cmodels, self.cdatas, self.prox)
         if self.has_loads:
             return pin.aba(self.model, self.data, q, v, self.tau, self.external_forces(q))
         return pin.aba(self.model, self.data, q, v, self.tau)
@@ -166,7 +296,7 @@ class PinocchioModel:
         import pinocchio as pin
 
         aba, model, data, tau = pin.aba, self.model, self.data, self.tau
-        if self.constraints:
+        if self.constrained:
             return self.acceleration
         if not self.has_loads:
             return lambda q, v: aba(model, data, q, v, tau)

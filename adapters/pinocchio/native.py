@@ -27,6 +27,8 @@ import sys
 
 import numpy as np
 
+from dalembert.cache import cache_dir
+
 __all__ = ["library", "NativeModel", "METHODS"]
 
 SOURCE = os.path.join(os.path.dirname(__file__), "stepper.cpp")
@@ -53,13 +55,6 @@ def _paths():
     return prefix, pinocchio.__version__
 
 
-def _cache_dir():
-    root = os.environ.get("DALEMBERT_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "dalembert")
-    os.makedirs(root, exist_ok=True)
-    return root
-
-
 def _command(prefix, out):
     cxx = os.environ.get("CXX") or shutil.which("c++") or shutil.which("g++") or shutil.which("clang++")
     if cxx is None:
@@ -83,7 +78,7 @@ def library():
             raise RuntimeError(f"no Eigen headers under {prefix}/include/eigen3 — pip install cmeel-eigen")
         with open(SOURCE, "rb") as f:
             key = hashlib.sha256(f.read() + repr((FLAGS, DEFINES, version, prefix)).encode()).hexdigest()[:16]
-        cache = _cache_dir()
+        cache = cache_dir()
         path = os.path.join(cache, f"pinocchio_stepper-{key}.so")
         # one lock per build: worker processes wait for one build of this library instead of racing,
         # and never for another venv's build of another one
