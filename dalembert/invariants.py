@@ -325,8 +325,8 @@ def _measured(name, scene, traj):
     if name in ("energy", "energy_balance"):
         ke = kinetic_energy(scene, traj)
         x = ke + potential_energy(scene, traj)
-        if name == "energy_balance":
-            x = x - load_work(scene, traj)
+        if name == "energy_balance":  # (energy_balance's terms, the kinetic energy computed once)
+            x = x - load_work(scene, traj) + dissipated_energy(scene, traj)
         peak = float(np.max(ke))
         return x, (max(abs(x[0]), peak) if name == "energy" else peak)
     if name == "pairwise_distance":
