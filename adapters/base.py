@@ -29,6 +29,7 @@ from functools import cached_property
 from typing import Callable
 
 from dalembert.registry import suggest
+from dalembert.scene import SPRING_EFFECT
 
 __all__ = ["Adapter", "IntegratorSpec", "Outcome", "option_choice"]
 
@@ -95,9 +96,13 @@ class Adapter:
         missing = sorted(scene.effects - self.effects)
         if missing:
             reason = f"{self.name} adapter cannot represent {', '.join(missing)}"
+            notes = []
             if any(m.startswith("loop:") for m in missing):
-                reason += " (closed kinematic loops: not yet built for this engine; its tree runs, the closure does not)"
-            return reason
+                notes.append("closed kinematic loops: not yet built for this engine; its tree runs, the closure does not")
+            if SPRING_EFFECT in missing:
+                notes.append("linear spring-dampers between two points: not yet built for this engine; its bodies and "
+                             "joints run, the spring's force does not")
+            return reason + (f" ({'; '.join(notes)})" if notes else "")
         return None
 
     def variants(self, scene):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
-from dalembert.scene import EFFECTS, LOOP_EFFECTS
+from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
 
 __all__ = ["ReferenceAdapter"]
 
@@ -20,7 +20,7 @@ class ReferenceAdapter(Adapter):
     """
 
     name = "reference"
-    effects = EFFECTS | LOOP_EFFECTS  # loops: Kane's tree plus multipliers (reference.loops)
+    effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS  # loops: Kane's tree plus multipliers (reference.loops)
     integrators = {
         "dop853": IntegratorSpec(False, ("formulation",), "scipy DOP853, adaptive 8th order"),
         "rk4": IntegratorSpec(True, ("formulation",), "classical RK4 on embedded coordinates"),
@@ -60,7 +60,8 @@ class ReferenceAdapter(Adapter):
         system = FORMULATIONS[formulation](scene)
         return (f"reference {formulation} ({type(system).__name__}): nq = {len(system.q0)}, nv = {len(system.v0)}; "
                 f"blocks {[b.kind for b in system.blocks]}; gravity {list(scene.gravity)}; "
-                f"loads {[ld.effect + ' on ' + ld.body for ld in scene.loads]}\n")
+                f"loads {[ld.effect + ' on ' + ld.body for ld in scene.loads]}; "
+                f"springs {[sp.name for sp in scene.springs]}\n")
 
     def prepare(self, scene, times, settings):
         from dalembert.reference.solver import build
@@ -92,6 +93,8 @@ class ReferenceAdapter(Adapter):
             "formulation": type(system).__name__,
             "joints": {j.child: j.kind for j in scene.joints},
             "loads": [f"{ld.effect} on {ld.body}" for ld in scene.loads],
+            "springs": [f"{sp.name}: {sp.body_a} -> {sp.body_b}, k = {sp.stiffness:g} N/m, c = {sp.damping:g} N s/m, "
+                        f"l0 = {sp.rest_length:g} m" for sp in scene.springs],
             "constraint_rows": sum(len(r.phi) for r in closure.initial_rows(scene)),
             "loops": str(scene.loop_summary()) if scene.loops else "none",
             "contacts": 0,

@@ -162,6 +162,17 @@ def _invariant_problems(invariants):
     return problems
 
 
+def _dissipation_problems(conserved, springs):
+    """``energy`` listed as conserved while a damper takes energy out of the motion."""
+    damped = [sp for sp in springs if sp.damping > 0.0]
+    if "energy" not in conserved or not damped:
+        return []
+    names = ", ".join(f"{sp.name!r} (damping {sp.damping:g} N s/m)" for sp in damped)
+    return [f"conserved[{list(conserved).index('energy')}]: 'energy' is not conserved: the springs {names} dissipate "
+            "it — list 'energy_balance' instead (kinetic + potential energy - the loads' work + the dampers' "
+            "dissipation, which is)"]
+
+
 def _tolerance_problems(tolerances, conserved, declared):
     """Unknown names, missing reasons, and conserved quantities nothing bounds."""
     problems = []
@@ -265,6 +276,7 @@ class Case:
                 problems.append(f"conserved[{i}]: unknown {name!r}{suggest(name, CONSERVED)} — or declare a quantity "
                                 "of your own in invariants=(Invariant(...),)")
         problems += _invariant_problems(self.invariants)
+        problems += _dissipation_problems(self.conserved, getattr(self.scene, "springs", ()))
         tolerances = dict(self.tolerances)
         for inv in self.invariants:
             if isinstance(inv, Invariant) and isinstance(inv.tolerance, Tolerance):
@@ -287,9 +299,12 @@ class Case:
         """Content hash (12 hex digits) of everything that defines the problem and judges a run:
         scene, horizon, sample times, parameters, tolerance values, conserved quantities, declared
         invariants (name, unit, scale; the code of their series is not covered)."""
+        scene = _canonical(self.scene)
+        if isinstance(scene, dict) and not scene.get("springs", True):
+            del scene["springs"]  # (absent when none, so cases without springs keep their versions)
         payload = {
             "name": self.name,
-            "scene": _canonical(self.scene),
+            "scene": scene,
             "t_final": self.t_final,
             "sample_times": self.sample_times,
             "params": _canonical(self.params),

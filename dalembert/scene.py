@@ -1,4 +1,4 @@
-"""Engine-neutral description of a multibody system: bodies, joints, loop closures, loads, gravity.
+"""Engine-neutral description of a multibody system: bodies, joints, loop closures, loads, springs, gravity.
 
 Specs are frozen dataclasses holding plain tuples (arrays live only in
 ``Trajectory``). A ``Scene`` validates itself on construction: every problem is
@@ -15,6 +15,10 @@ The joints form a tree (the spanning tree every engine builds); closed kinematic
 a separate, explicit list of ``Loop`` closures between any two bodies (or a body and the
 world), each adding constraint rows to the tree (``dalembert.closure``). An engine that
 builds trees only declares loops unsupported through their effect tags (``loop:<kind>``).
+
+Linear spring-dampers between two points (``Spring``) are a separate list too, with their own effect
+tag (``spring_damper``), kept out of ``EFFECTS`` for the same reason: an engine declares them only once
+its adapter builds them.
 """
 
 from __future__ import annotations
@@ -24,10 +28,11 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from dalembert import spatial
 from dalembert.registry import suggest
 
-__all__ = ["WORLD", "JOINT_KINDS", "LOOP_KINDS", "EFFECTS", "LOOP_EFFECTS", "Body", "Joint", "Loop", "Load", "Scene",
-           "SceneError", "mass_properties", "LOOP_CLOSURE_TOL"]
+__all__ = ["WORLD", "JOINT_KINDS", "LOOP_KINDS", "EFFECTS", "LOOP_EFFECTS", "SPRING_EFFECTS", "Body", "Joint", "Loop",
+           "Load", "Spring", "Scene", "SceneError", "mass_properties", "LOOP_CLOSURE_TOL"]
 
 WORLD = "world"
 
@@ -54,6 +59,10 @@ EFFECTS = frozenset({"gravity"} | {f"joint:{k}" for k in JOINT_KINDS}
 # The tags of loop closures, apart: an adapter that closes loops declares them explicitly
 # (``EFFECTS | LOOP_EFFECTS``), so one that builds trees only declares them unsupported.
 LOOP_EFFECTS = frozenset(f"loop:{k}" for k in LOOP_KINDS)
+# The tag of linear spring-dampers (``Spring``), apart for the same reason: an adapter that builds them
+# declares ``EFFECTS | SPRING_EFFECTS``; every other one declares them unsupported.
+SPRING_EFFECT = "spring_damper"
+SPRING_EFFECTS = frozenset({SPRING_EFFECT})
 
 # |q| may differ from 1 by this much (roundoff in user-typed decimals is ~1e-16;
 # anything larger is a real mistake, not roundoff).
@@ -283,6 +292,51 @@ class Load:
 
 
 @dataclass(frozen=True)
+class Spring:
+    """A linear spring-damper between a point of ``body_a`` and a point of ``body_b`` (body names, or
+    ``"world"`` for one of them).
+
+    ``point_a`` and ``point_b`` are the attachment points (m) in each body's frame (the world's for the
+    world). With ``l`` the distance between them and ``l'`` its rate, the spring pulls the two points
+    together with the tension ``stiffness (l - rest_length) + damping l'`` (N) along the line joining
+    them: a force on each point, equal and opposite, which stores ``1/2 stiffness (l - rest_length)^2``
+    (J) and dissipates ``damping l'^2`` (W) (``dalembert.springs``). The points must be apart at the
+    initial state (where they coincide the line, and so the force's direction, is undefined).
+
+    Attributes
+    ----------
+    body_a, body_b : str
+    point_a, point_b : tuple of 3 floats — m, body frame (world frame for the world)
+    stiffness : float — N/m, >= 0
+    damping : float — N s/m, >= 0 (a spring with both zero is refused: it does nothing)
+    rest_length : float — m, >= 0
+    name : str — default ``spring_<body_a>_<body_b>``
+    """
+
+    body_a: str
+    body_b: str
+    point_a: tuple = (0.0, 0.0, 0.0)
+    point_b: tuple = (0.0, 0.0, 0.0)
+    stiffness: float = 0.0
+    damping: float = 0.0
+    rest_length: float = 0.0
+    name: str = ""
+
+    def __post_init__(self):
+        for name in ("point_a", "point_b"):
+            object.__setattr__(self, name, _vec(getattr(self, name)))
+        for name in ("stiffness", "damping", "rest_length"):
+            object.__setattr__(self, name, float(getattr(self, name)))
+        if not self.name:
+            object.__setattr__(self, "name", f"spring_{self.body_a}_{self.body_b}")
+
+    @property
+    def effect(self):
+        """Effect tag: ``spring_damper`` (``SPRING_EFFECTS``)."""
+        return SPRING_EFFECT
+
+
+@dataclass(frozen=True)
 class Scene:
     """A multibody system. ``gravity`` (m/s^2, world) is required, never defaulted.
 
@@ -295,12 +349,14 @@ class Scene:
     gravity: tuple
     loads: tuple = field(default=())
     loops: tuple = field(default=())
+    springs: tuple = field(default=())
 
     def __post_init__(self):
         object.__setattr__(self, "bodies", tuple(self.bodies))
         object.__setattr__(self, "joints", tuple(self.joints))
         object.__setattr__(self, "loads", tuple(self.loads))
         object.__setattr__(self, "loops", tuple(self.loops))
+        object.__setattr__(self, "springs", tuple(self.springs))
         object.__setattr__(self, "gravity", _vec(self.gravity))
         self.validate()
 
@@ -308,11 +364,12 @@ class Scene:
     def to_json(self):
         """The scene as plain JSON data; ``from_json`` rebuilds it exactly (floats round-trip).
 
-        ``loops`` appears only when there are some: a tree scene's data (and so its case's
-        version, a hash of it) is what it was before loops existed."""
+        ``loops`` and ``springs`` appear only when there are some: a scene without them has the data
+        it had before they existed."""
         data = asdict(self)
-        if not self.loops:
-            del data["loops"]
+        for name in ("loops", "springs"):
+            if not data[name]:
+                del data[name]
         return data
 
     @classmethod
@@ -320,7 +377,7 @@ class Scene:
         """Inverse of ``to_json`` (validated like any scene)."""
         return cls(data["name"], [Body(**b) for b in data["bodies"]], [Joint(**j) for j in data["joints"]],
                    data["gravity"], [Load(**ld) for ld in data["loads"]],
-                   [Loop(**lp) for lp in data.get("loops", ())])
+                   [Loop(**lp) for lp in data.get("loops", ())], [Spring(**sp) for sp in data.get("springs", ())])
 
     # -------------------------------------------------------------- queries
     def body(self, name):
@@ -343,10 +400,12 @@ class Scene:
 
         ``gravity`` when gravity is non-zero; ``joint:<kind>`` per joint kind
         present; ``load:{follower,world}_{force,torque}`` per load kind present;
-        ``loop:<kind>`` per loop closure kind present (``LOOP_EFFECTS``).
+        ``loop:<kind>`` per loop closure kind present (``LOOP_EFFECTS``); ``spring_damper`` when there
+        are springs (``SPRING_EFFECTS``).
         """
         tags = {f"joint:{j.kind}" for j in self.joints}
         tags |= {lp.effect for lp in self.loops}
+        tags |= {sp.effect for sp in self.springs}
         tags |= {ld.effect for ld in self.loads}
         if any(g != 0.0 for g in self.gravity):
             tags.add("gravity")
@@ -401,8 +460,15 @@ class Scene:
             add(f"loops: name {dup!r} used twice — give each loop a unique name=")
         for clash in sorted(set(loop_names) & set(names)):
             add(f"loops: name {clash!r} is a body's (its joint's reactions are keyed by it) — rename the loop")
+        for i, sp in enumerate(self.springs):
+            problems += _spring_problems(i, sp, set(names))
+        spring_names = [sp.name for sp in self.springs]
+        for dup in sorted({n for n in spring_names if spring_names.count(n) > 1}):
+            add(f"springs: name {dup!r} used twice — give each spring a unique name=")
         if self.loops and not problems:  # the closure needs valid names, joints and numbers
             problems += self._closure_problems()
+        if self.springs and not problems:  # the initial lengths need valid names, joints and numbers
+            problems += self._spring_length_problems()
         if problems:
             raise SceneError(f"scene {self.name!r}", problems)
         return self
@@ -494,6 +560,48 @@ class Scene:
                         f"{LOOP_CLOSURE_TOL:g} — choose the tree joints' {'q0' if level == 'position' else 'v0'} "
                         "so that the loop closes")
         return problems
+
+    def _spring_length_problems(self):
+        from dalembert import closure, springs
+
+        states = {**spatial.initial_body_states(self), WORLD: closure.world_state()}
+        problems = []
+        for i, sp in enumerate(self.springs):
+            length = springs.state(sp, states[sp.body_a], states[sp.body_b]).length
+            if not length > springs.MIN_LENGTH:
+                problems.append(f"{_spring_where(i, sp)}: its points are {length:.3g} m apart at the initial state, "
+                                f"below MIN_LENGTH = {springs.MIN_LENGTH:g} m (the force's direction, along the line "
+                                "between them, is undefined) — move point_a or point_b, or the bodies")
+        return problems
+
+
+def _spring_where(i, sp):
+    return f"springs[{i}] ({sp.name!r}: {sp.body_a!r} -> {sp.body_b!r})"
+
+
+def _spring_problems(i, sp, names):
+    where = _spring_where(i, sp)
+    problems = []
+    add = problems.append
+    for field_name in ("body_a", "body_b"):
+        b = getattr(sp, field_name)
+        if b != WORLD and b not in names:
+            add(f"{where}.{field_name}: no body named {b!r}{_did_you_mean(b, names | {WORLD})}")
+    if sp.body_a == sp.body_b:
+        add(f"{where}: joins a body to itself — a spring joins two different bodies (or a body and {WORLD!r})")
+    for field_name in ("point_a", "point_b"):
+        v = getattr(sp, field_name)
+        if len(v) != 3:
+            add(f"{where}.{field_name}: needs 3 numbers (m, in the body's frame), got {len(v)}")
+        elif not _finite(v):
+            add(f"{where}.{field_name}: contains NaN or inf")
+    for field_name, unit in (("stiffness", "N/m"), ("damping", "N s/m"), ("rest_length", "m")):
+        v = getattr(sp, field_name)
+        if not (math.isfinite(v) and v >= 0.0):
+            add(f"{where}.{field_name}: must be finite and >= 0 ({unit}), got {v!r}")
+    if sp.stiffness == 0.0 and sp.damping == 0.0:
+        add(f"{where}: stiffness and damping are both zero, so it exerts no force — give one of them, or drop the spring")
+    return problems
 
 
 def _loop_problems(i, lp, names):

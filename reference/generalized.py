@@ -18,7 +18,8 @@ system ``M u' = f`` with
     M = sum_i m_i J_v^T J_v + J_w^T I_i J_w
     f = sum_i J_v^T (F_i - m_i a_bias) + J_w^T (T_i - I_i alpha_bias - w_i x I_i w_i)
 
-all in world axes. Jacobians and bias accelerations come from one recursive
+all in world axes (``F_i``, ``T_i``: the loads, gravity and spring-dampers on body i, force and
+moment about its COM). Jacobians and bias accelerations come from one recursive
 pass from the root to the leaves. Joint reaction forces follow from Newton's
 law per body, from the leaves back to the root.
 """
@@ -27,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dalembert import spatial
+from dalembert import spatial, springs
 from dalembert.scene import JOINT_KINDS, WORLD
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
 from dalembert.reference.configuration import Block
@@ -137,19 +138,32 @@ class Kane:
         udot = np.linalg.solve(M, f) if self.nv else np.zeros(0)
         return udot, kin
 
-    def mass_and_forces(self, t, q, u):
-        """Kane's ``M u' = f``: ``M`` (nv, nv), ``f`` (nv,) and the ``kinematics`` (each body's
-        entry gains ``F``, the resultant of its loads and gravity, N, world)."""
-        kin = self.kinematics(q, u)
+    def mass_matrix(self, kin):
+        """Kane's mass matrix ``M`` (nv, nv) at the configuration of ``kin`` (``kinematics``; each body's
+        entry gains ``I_W``, its inertia about the COM in world axes, kg m^2)."""
         M = np.zeros((self.nv, self.nv))
-        f = np.zeros(self.nv)
         for jd in self.joints:
             k = kin[jd["joint"].child]
-            m, R = jd["m"], k["R"]
-            I_W = R @ jd["I_B"] @ R.T
+            R = k["R"]
+            k["I_W"] = I_W = R @ jd["I_B"] @ R.T
+            M += jd["m"] * k["Jv"].T @ k["Jv"] + k["Jw"].T @ I_W @ k["Jw"]
+        return M
+
+    def mass_and_forces(self, t, q, u):
+        """Kane's ``M u' = f``: ``M`` (nv, nv), ``f`` (nv,) and the ``kinematics`` (each body's
+        entry gains ``F``, the resultant of its loads, springs and gravity, N, world)."""
+        kin = self.kinematics(q, u)
+        M = self.mass_matrix(kin)
+        f = np.zeros(self.nv)
+        spring_wrenches = springs.wrenches(self.scene.springs, kin) if self.scene.springs else {}
+        for jd in self.joints:
+            k = kin[jd["joint"].child]
+            m, R, I_W = jd["m"], k["R"], k["I_W"]
             F, T = jd["loads"].resultant(R)
+            if jd["joint"].child in spring_wrenches:
+                F_s, T_s = spring_wrenches[jd["joint"].child]
+                F, T = F + F_s, T + T_s
             k["F"] = F
-            M += m * k["Jv"].T @ k["Jv"] + k["Jw"].T @ I_W @ k["Jw"]
             f += k["Jv"].T @ (F - m * k["a_bias"])  # generalized active + inertia forces
             f += k["Jw"].T @ (T - I_W @ k["alpha_bias"] - spatial.cross(k["w"], I_W @ k["w"]))
         return M, f, kin

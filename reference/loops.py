@@ -137,17 +137,18 @@ class ClosedLoops(Kane):
         """``(q, v)`` moved onto ``phi(q) = 0`` and ``J(q) v = 0`` in the kinetic-energy metric
         (see the module docstring); ``q`` (nq,), ``v`` (nv,)."""
         zero = np.zeros_like(v)
-        Li = _inverse_cholesky(self.mass_and_forces(0.0, q, zero)[0])  # the metric (loads do not enter it)
+        kin = self.kinematics(q, zero)  # (one pass serves the metric and the first rows: configuration only)
+        Li = _inverse_cholesky(self.mass_matrix(kin))  # the metric (loads do not enter it)
+        phi, J, _, _ = self.constraints(kin)
         last = np.inf
         for _ in range(PROJECTION_ITERATIONS):
-            phi, J, _, _ = self.constraints(self.kinematics(q, zero))
             worst = float(np.max(np.abs(phi)))
             if worst <= PROJECTION_TOL or not worst < 0.5 * last:
                 break
             last = worst
             U, S, V = self._range(J @ Li.T)
             q = cfg.retract(self.blocks, q, Li.T @ (-V @ ((U.T @ phi) / S)))
-        _, J, _, _ = self.constraints(self.kinematics(q, zero))
+            phi, J, _, _ = self.constraints(self.kinematics(q, zero))
         U, S, V = self._range(J @ Li.T)
         w = np.linalg.solve(Li.T, v)  # L^T v
         return q, Li.T @ (w - V @ (V.T @ w))

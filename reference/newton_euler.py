@@ -4,6 +4,8 @@ For each body, with the centre of mass R in world and the attitude Q = R_WB::
 
     M R'' = F                                  (linear momentum, world)
     A w' + w x A w = tau                       (angular momentum about the COM, body frame)
+
+with F and tau the resultant of the loads, gravity and spring-dampers (``dalembert.springs``) on the body.
     Q' = Q Omega,  Omega = skew(w)             (kinematics)
 
 The attitude is either a unit quaternion (default) or the seed's own rotation
@@ -16,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dalembert import spatial
+from dalembert import spatial, springs
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
 from dalembert.reference.configuration import Block
 from dalembert.reference.loads import BodyLoads
@@ -68,14 +70,27 @@ class NewtonEuler:
             return spatial.quat_to_matrix(q_att / np.linalg.norm(q_att))
         return q_att.reshape(3, 3)
 
+    def _spring_wrenches(self, q, v):
+        """The spring-dampers' wrench on each body (``dalembert.springs.wrenches``), from the bodies' states."""
+        states = {"world": dict(R=np.eye(3), p=np.zeros(3), v=np.zeros(3), w=np.zeros(3))}
+        for k, body in enumerate(self.bodies):
+            pos, att = self.blocks[2 * k], self.blocks[2 * k + 1]
+            R = self.rotation(q[att.q])
+            states[body.name] = dict(R=R, p=q[pos.q], v=v[pos.v], w=R @ v[att.v])
+        return springs.wrenches(self.scene.springs, states)
+
     def acceleration(self, t, q, v):
         """``(a_WB_W, dw_WB_B)`` per body, shape (nv,)."""
         out = np.empty_like(v)
+        spring_wrenches = self._spring_wrenches(q, v) if self.scene.springs else {}
         for k, body in enumerate(self.bodies):
             att = self.blocks[2 * k + 1]
             R = self.rotation(q[att.q])
             w = v[att.v]
             F_W, tau_W = self._loads[k].resultant(R)
+            if body.name in spring_wrenches:
+                F_s, tau_s = spring_wrenches[body.name]
+                F_W, tau_W = F_W + F_s, tau_W + tau_s
             I = self._I[k]
             out[6 * k:6 * k + 3] = F_W / body.mass
             out[att.v] = self._I_inv[k] @ (R.T @ tau_W - spatial.cross(w, I @ w))

@@ -40,6 +40,8 @@ def _links(scene):
         return None, "the planar formulation takes serial chains only, no loop closures"
     if scene.loads:
         return None, "the planar formulation takes gravity only, no loads"
+    if scene.springs:
+        return None, "the planar formulation takes gravity only, no spring-dampers"
     if any(j.kind != "revolute" for j in scene.joints):
         return None, "the planar formulation takes revolute joints only"
     children = {}

@@ -41,8 +41,9 @@ def test_every_adapter_meets_the_contract(engine):
     from dalembert.case import load_cases
 
     # every registered case, on a short horizon: the contract is about behaviour (sampling,
-    # repeatability, the audit), not accuracy, and the 27-body cases cost seconds per second in Python
-    cases = [f(t_final=CONTRACT_HORIZON) for _, f in load_cases().items()]
+    # repeatability, the audit), not accuracy, and the 27-body cases cost seconds per second in Python;
+    # a case whose own horizon is shorter keeps it (andrews_squeezer: 30 ms, ~3 ms per evaluation)
+    cases = [f(t_final=min(CONTRACT_HORIZON, f.params["t_final"])) for _, f in load_cases().items()]
     if engine in JIT_COMPILED:
         by_structure = {}
         for c in cases:
