@@ -51,7 +51,13 @@ generalized force the constraints applied, from Drake's own acceleration, mass m
 gravity terms, resolved on the loop's rows. First order in dt like the motion (4.8e-4 of the
 largest reaction at dt = 1e-3 on the four-bar), but near the flat singular position, where SAP's
 near-rigid force along the bars is not the rigid one (0.25 at the sample 2 ms after it at dt = 1e-3,
-4.4e-4 at 1e-4).
+4.4e-4 at 1e-4). And the first step: SAP holds a constraint at the velocity level, ``J(q_n) v_n+1``
+driven to ``-g / (2 dt)``, which has no velocity-product term (the points' relative centripetal
+acceleration); from the second step on, the O(dt) constraint velocity each step leaves carries it,
+but the step from a state exactly on the constraint (t = 0) applies a force short of it: on a
+tilted hinge (``tests/test_drake_loops.py``) 0.2 of the largest reaction at every dt, on the
+parallelogram four-bar nothing (its coupler translates: no relative centripetal term). The
+read-back reports the force Drake applied.
 """
 
 from __future__ import annotations
