@@ -131,8 +131,9 @@ def test_a_loop_to_the_world_matches_the_reference(kind):
 # 0.199 at every dt. There the step starts exactly on the constraint, and SAP's constraint on the
 # velocity, J(q_n) v_n+1, has no velocity-product term (the points' relative centripetal acceleration:
 # zero on the parallelogram, whose coupler translates); from the second step on the O(dt) constraint
-# velocity the step leaves carries it. The force Drake applies in its first step is that much off the
-# rigid one, and the read-back reports it.
+# velocity the step leaves carries it (checked: the shortfall is the velocity-product share of the rigid
+# force, -(J M^-1 J^T)^+ Jdot v, to 1e-2 N; adapters/drake/loops.py). The force Drake applies in its first
+# step is that much off the rigid one, and the read-back reports it.
 HINGE_GAIN = 8.0  # a decade of dt buys 10x in the attitude; room for the constant
 HINGE_QUAT_TOL, HINGE_REACTION_TOL = 3e-3, 4e-3  # at dt = 1e-3: 3x the measured
 FIRST_STEP_REACTION = (0.1, 0.3)  # measured 0.199 at dt = 1e-2 and 1e-3: the first step's missing term
