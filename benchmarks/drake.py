@@ -169,8 +169,8 @@ def loops():
         pos, vel = (invariants.loop_residual(case.scene, traj, lv).max() for lv in ("position", "velocity"))
         wall = float(np.median([o.wall_s for o in outcomes]))
         react = np.linalg.norm(traj.extras["reaction_force:C"] - truth.extras["reaction_force:C"], axis=1) / scale
-        print(f"{dt:>8g}{crank:>11.2e}{rocker:>11.2e}{pos:>11.2e}{vel:>11.2e}{react.max():>11.2e}{react[far].max():>11.2e}"
-              f"{outcomes[0].n_steps:>8}{wall:>12.3f}", flush=True)
+        print(f"{dt:>8g}{crank:>11.2e}{rocker:>11.2e}{pos:>11.2e}{vel:>11.2e}{react.max():>11.2e}"
+              f"{react[far].max():>11.2e}{outcomes[0].n_steps:>8}{wall:>12.3f}", flush=True)
 
 
 def main(argv):
