@@ -5,6 +5,7 @@ the intermediate-axis top side by side with the engines that carry it in body ax
     python -m benchmarks.drake overhead   # part 1 only
     python -m benchmarks.drake tumble     # part 2 only
     python -m benchmarks.drake state      # part 3 only
+    python -m benchmarks.drake loops      # part 4 only (not in the default run)
 
 1. Per canonical case and a few integrators at dt = 1e-3: the adapter's stepping time per
    simulated second (``Outcome.wall_s``: ``AdvanceTo`` each sample time and a state copy) and a
@@ -21,6 +22,12 @@ the intermediate-axis top side by side with the engines that carry it in body ax
    equations, ``q' = q (0, w_B) / 2``) and once in world axes as Drake carries it
    (``w_W' = I_W^-1 (-w_W x I_W w_W)``, ``I_W = R I_B R^T``, ``q' = (0, w_W) q / 2``): the attitude
    error at each dt, so the representation's share is seen apart from the method's order.
+4. The parallelogram four-bar (``dalembert.cases.four_bar``, 0.5 s, its loop closed by two SAP
+   ball constraints) with the ``discrete`` integrator: per dt, the crank's and the rocker's
+   largest angle error against the closed form (rad), the worst loop residual at position (m)
+   and velocity (m/s) level (``invariants.loop_residual``), the loop's reaction error (relative to
+   the largest true reaction; all samples, and beyond 20 ms of the flat singular position), the
+   steps and the stepping time (median of 3, s).
 """
 
 from __future__ import annotations
@@ -135,8 +142,41 @@ def state():
         print(f"{dt:>8g}{row[0]:>12.2e}{row[1]:>12.2e}", flush=True)
 
 
+LOOP_DTS = (1e-2, 1e-3, 1e-4, 1e-5)
+
+
+def loops():
+    from dalembert import invariants
+    from dalembert.cases.four_bar import four_bar, parallelogram_pendulum
+    from dalembert.reference.closed_form import RigidPendulum
+
+    adapter = get_adapter("drake")
+    case = four_bar()
+    m, d, I, g, theta0, rate0 = parallelogram_pendulum()
+    exact = RigidPendulum(m, d, I, g, theta0, rate0).angle(case.times) - np.pi / 2
+    print(f"four_bar, {case.t_final:g} s, Drake {adapter.version()} discrete (SAP)")
+    truth = case.exact(case.times)
+    scale = max(np.abs(f).max() for k, f in truth.extras.items() if k.startswith("reaction_force:"))
+    flat = case.times[np.argmin(np.abs(exact - np.pi))]  # the sample nearest the flat singular position
+    far = np.abs(case.times - flat) > 0.02
+    print(f"{'dt':>8}{'crank':>11}{'rocker':>11}{'loop pos':>11}{'loop vel':>11}{'react C':>11}{'(far)':>11}"
+          f"{'steps':>8}{'stepping s':>12}")
+    for dt in LOOP_DTS:
+        prepared = adapter.prepare(case.scene, case.times, Settings("discrete", dt=dt))
+        outcomes = [adapter.run(prepared) for _ in range(REPEATS)]
+        traj = outcomes[0].trajectory
+        crank, rocker = (np.abs(traj.joints[j].q[:, 0] - exact).max() for j in ("crank", "rocker"))
+        pos, vel = (invariants.loop_residual(case.scene, traj, lv).max() for lv in ("position", "velocity"))
+        wall = float(np.median([o.wall_s for o in outcomes]))
+        react = np.linalg.norm(traj.extras["reaction_force:C"] - truth.extras["reaction_force:C"], axis=1) / scale
+        print(f"{dt:>8g}{crank:>11.2e}{rocker:>11.2e}{pos:>11.2e}{vel:>11.2e}{react.max():>11.2e}"
+              f"{react[far].max():>11.2e}{outcomes[0].n_steps:>8}{wall:>12.3f}", flush=True)
+
+
 def main(argv):
     parts = argv or ["overhead", "tumble", "state"]
+    if "loops" in parts:
+        loops()
     if "overhead" in parts:
         overhead()
     if "tumble" in parts:

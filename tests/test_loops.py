@@ -121,16 +121,8 @@ def test_loop_reaction_is_the_rockers_share_of_newtons_law():
     assert np.abs(total - 1.0 * a_com).max() < 1e-7 * np.abs(a_com).max() + 1e-8
 
 
-@pytest.mark.parametrize("engine", ["drake"])  # exudyn, pinocchio: tests/test_{exudyn,pinocchio}_loops.py; mujoco, mjx below
-def test_engines_without_loops_declare_them_unsupported(engine):
-    from dalembert.adapters.registry import get_adapter
-
-    try:
-        adapter = get_adapter(engine)
-    except Exception as e:  # an optional engine not installed
-        pytest.skip(f"{engine}: {e}")
-    reason = adapter.unsupported(_scene(), Settings(next(iter(adapter.integrators)), dt=0.01))
-    assert reason and "loop:revolute" in reason and "not yet" in reason
+# Every engine closes loops now, at least with one integrator: exudyn, pinocchio, drake (its discrete integrator;
+# its continuous ones declare loops unsupported): tests/test_{exudyn,pinocchio,drake}_loops.py; mujoco, mjx below.
 
 
 @pytest.mark.parametrize("engine", ["mujoco", "mjx"])

@@ -8,6 +8,11 @@ states back in body terms (``readback``); ``audit`` reads the plant back.
 Integrators: Drake's, by its scheme names (``stepping.SCHEMES``), each in
 fixed-step mode (``dt``) and, where Drake estimates its error, error-controlled
 (``<name>-adaptive``: ``rtol`` is Drake's target accuracy, ``atol`` unused).
+
+Loop closures (``loops``): SAP constraints of the discrete plant, so only the integrator
+``discrete`` runs a scene with loops; every continuous integrator declares them unsupported
+(``loops.CONTINUOUS_REASON``). Their reactions are recovered from the step's generalized
+constraint force (Drake reports no constraint forces: ``loops.loop_forces``).
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ import numpy as np
 
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
 from dalembert.adapters.drake.charts import RECHART_PITCH
+from dalembert.adapters.drake.loops import ANCHOR, CONTINUOUS_REASON, LOOP_KINDS
 from dalembert.adapters.drake.stepping import SCHEMES, simulate
 from dalembert.scene import EFFECTS
 
@@ -53,13 +59,20 @@ class DrakeAdapter(Adapter):
     """Drake (``pydrake``): the scene as a ``MultibodyPlant``, Drake's integrators or its discrete mode."""
 
     name = "drake"
-    effects = EFFECTS
+    effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS)  # loops: the discrete integrator only
     integrators = _integrators()
 
     def version(self):
         import pydrake
 
         return pydrake.__version__ if hasattr(pydrake, "__version__") else _distribution_version()
+
+    def unsupported(self, scene, settings):
+        reason = super().unsupported(scene, settings)
+        if reason is None and scene.loops and settings.integrator != "discrete":
+            kinds = ", ".join(sorted({lp.effect for lp in scene.loops}))
+            return f"{kinds} with the integrator {settings.integrator!r}: {CONTINUOUS_REASON}"
+        return reason
 
     def describe(self, scene, settings):
         """The plant's summary, for reports and ``dalembert show-model``."""
@@ -112,7 +125,31 @@ class DrakeAdapter(Adapter):
                                   f"BallRpyJoint frames re-set {outcome.info.get('ball_recharts', 0)} times (rpy = 0, "
                                   f"x along w; at t = 0 and when |pitch| > {RECHART_PITCH} rad) to stay clear of "
                                   "pitch = +-pi/2 (dalembert.adapters.drake.charts)"),
+            **(self._loop_audit(p["model"]) if p["model"].loops else {}),
             "drake_version": self.version(),
+        }
+
+    @staticmethod
+    def _loop_audit(model):
+        """How the loops were closed (``loops``): constraints, their stiffness, what is not read back."""
+        plant = model.plant
+        return {
+            "loops": {lc.loop.name: (f"{lc.loop.kind}: " + (
+                "AddDistanceConstraint (stiffness inf, damping 0)" if lc.loop.kind == "distance" else
+                f"2 AddBallConstraint, the second {lc.lever:g} m along the axis" if lc.loop.kind == "revolute" else
+                "AddBallConstraint")) for lc in model.loops},
+            "loop_summary": str(model.scene.loop_summary()),
+            "loop_constraints": int(plant.num_constraints()),
+            "loop_solver": f"SAP ({plant.get_discrete_contact_solver().name}, "
+                           f"{plant.get_discrete_contact_approximation().name}), time_step {plant.time_step()!r} s",
+            "loop_stiffness": ("near-rigid (SAP's regime for infinite stiffness: regularization beta^2/(4 pi^2) times "
+                               "the Delassus diagonal, beta = 0.1 fixed in Drake; gap relaxed over one time step): "
+                               "the stiffest Drake offers, soft by an amount that shrinks with dt"),
+            "loop_world_anchor": (f"{ANCHOR} welded to the world (Drake 1.51 crashes on constraints to the world body)"
+                                  if any("world" in (lc.loop.body_a, lc.loop.body_b) for lc in model.loops) else ""),
+            "loop_reactions": ("reaction_force:<loop> from the constraints' generalized force in the step "
+                               "(M a + C v - tau_g - tau_loads; Drake reports no constraint forces) resolved on the "
+                               "loop's rows, minimum-norm (loops.loop_forces)"),
         }
 
 

@@ -17,7 +17,10 @@
   from the pose the plant reports on its ``body_poses`` port, at every
   evaluation of the dynamics.
 * Continuous mode (``time_step = 0``: Drake's integrators) or discrete mode
-  (``time_step = dt``: the plant's own discrete update).
+  (``time_step = dt``: the plant's own discrete update, SAP).
+* Loop closures (``Scene.loops``) as SAP ball and distance constraints, in discrete
+  mode only (``loops``: Drake's continuous plant takes no constraints); a loop to the
+  world is attached to a body welded to the world (``loops.ANCHOR``).
 
 Drake's coordinates (converted only through ``dalembert.spatial``): quaternion
 floating joint ``q = (qw, qx, qy, qz, x, y, z)``, ``v = (w_WB_W, v_WB_W)`` — the
@@ -50,6 +53,7 @@ class DrakeModel:
     plant, diagram, loads : the plant, its diagram, the ``SceneLoads`` system (or None)
     bodies : dict body name -> Drake ``RigidBody``
     joints : dict child name -> Drake joint (welds included)
+    loops : list of ``loops.LoopConstraints`` (empty in continuous mode)
     time_step : float — 0 for continuous mode, else the discrete step (s)
     summary : str — the plant as text (``dalembert show-model``)
     """
@@ -61,6 +65,7 @@ class DrakeModel:
         from pydrake.systems.framework import DiagramBuilder
 
         from dalembert.adapters.drake.loads import SceneLoads
+        from dalembert.adapters.drake.loops import add_loops
 
         self.scene, self.time_step = scene, float(time_step)
         builder = DiagramBuilder()
@@ -92,6 +97,8 @@ class DrakeModel:
 
                     joint = WeldJoint(j.child, F, M, RigidTransform())
             self.joints[j.child] = plant.AddJoint(joint)
+        # loop closures: SAP constraints, discrete mode only (``loops``; Drake's integrators take none)
+        self.loops = add_loops(plant, scene, self.bodies) if scene.loops and self.time_step > 0.0 else []
         plant.mutable_gravity_field().set_gravity_vector(np.asarray(scene.gravity, dtype=float))
         if self.time_step > 0.0:  # output ports from the state they are evaluated at, not from the last step
             plant.SetUseSampledOutputPorts(False)
@@ -165,6 +172,14 @@ class DrakeModel:
             lines.append(f"joint {child}: {joint.type_name()} {joint.parent_body().name()} -> {joint.child_body().name()}"
                          f", X_PF p = {X_PF.translation().tolist()}, X_CM p = {X_CM.translation().tolist()}, "
                          f"damping {joint.default_damping_vector().tolist()}")
+        for lc in self.loops:
+            lp = lc.loop
+            what = (f"1 distance constraint ({lp.length:g} m, stiffness inf)" if lp.kind == "distance" else
+                    f"2 ball constraints, the second {lc.lever:g} m along the axis" if lp.kind == "revolute" else
+                    "1 ball constraint")
+            lines.append(f"loop {lp.name}: {lp.kind} {lp.body_a} -> {lp.body_b}: {what} (SAP, near-rigid)")
+        if self.scene.loops and not self.loops:
+            lines.append(f"loops: {len(self.scene.loops)} not built (continuous mode takes no constraints)")
         for ld in self.scene.loads:
             lines.append(f"load {ld.effect} on {ld.body}: {list(ld.vector)} at {list(ld.point)} (SceneLoads system)")
         return "\n".join(lines) + "\n"

@@ -8,6 +8,8 @@ Bodies on other joints are placed by the plant's kinematics, sample by sample.
 Joint reactions come from the plant's ``reaction_forces`` output port: per
 joint, ``F_CJc_Jc``, the force the joint exerts on the child at the origin of
 the child joint frame Jc, in Jc axes; turned into world axes with ``R_WJc``.
+Loop reactions (discrete mode) from the constraints' generalized force in the step
+(``loops.loop_forces``).
 """
 
 from __future__ import annotations
@@ -54,7 +56,26 @@ def read_back(p, X):
         _kinematics(p, X, bodies, jointed, reactions)
     traj_bodies = {name: BodyStates(b["p"], b["q"], b["v"], b["w"]) for name, b in bodies.items()}
     extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
+    if p["model"].loops:
+        extras.update({f"reaction_force:{name}": f for name, f in _loop_reactions(p, X).items()})
     return Trajectory(times, traj_bodies, joints, extras)
+
+
+def _loop_reactions(p, X):
+    """Per loop, the force ON its body b (N, world, (n, 3)) at every finite sample (``loops.loop_forces``)."""
+    from dalembert.adapters.drake.loops import loop_forces
+    from dalembert.closure import RANK_RTOL
+
+    model = p["model"]
+    context = model.diagram.CreateDefaultContext()
+    plant_context = model.plant.GetMyMutableContextFromRoot(context)
+    out = {lc.loop.name: np.full((len(X), 3), np.nan) for lc in model.loops}
+    for k in np.flatnonzero(np.all(np.isfinite(X), axis=1)):
+        context.SetTime(float(p["times"][k]))
+        model.plant.SetPositionsAndVelocities(plant_context, X[k])
+        for name, f in loop_forces(model, context, plant_context, RANK_RTOL).items():
+            out[name][k] = f
+    return out
 
 
 def _rpy_to_matrix(rpy):

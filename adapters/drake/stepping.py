@@ -7,7 +7,13 @@ the accumulated time falls short of it — counted in its statistics, harmless t
 the accuracy) or error-controlled (``set_target_accuracy(rtol)``: Drake has one
 accuracy knob, its weighted error norm has no separate absolute tolerance; the
 largest step is the sample interval). Discrete mode: the plant's periodic update
-of period ``dt``.
+of period ``dt``, whose update at ``t_n = n dt`` maps the state at ``t_n`` to the state at
+``t_n + dt``; the simulator runs the updates triggered before the time it advances to. Sample
+times carry roundoff (``linspace``: 0.30000000000000004 for 6 x 0.05) and Drake's update
+times too, so advancing to ``t_k`` itself ran one update too many at some samples (measured
+on the four-bar at dt = 1e-3: the crank one step ahead at t = 0.3, an error of its rate times
+``dt``, 8e-3 rad); each sample is taken half a step before ``t_k``, where the discrete state is
+already that of ``t_k``.
 
 The state is copied out after every ``AdvanceTo(t_k)``, ball joints in the
 scene's chart (``charts``: their roll-pitch-yaw chart is moved at t = 0 and
@@ -90,10 +96,13 @@ def simulate(p):
     loads = p["model"].loads
     if loads is not None:
         loads.evaluations = 0
+    # Discrete mode: stop half a step short of each sample, so that exactly round((t_k - t_0) / dt) updates
+    # have run whatever the roundoff in t_k (module docstring); continuous mode: the sample itself.
+    early = 0.5 * p["settings"].dt if integrator is None else 0.0
     start = time.perf_counter()
     for k in range(1, len(times)):
         try:
-            simulator.AdvanceTo(float(times[k]))
+            simulator.AdvanceTo(float(times[k]) - early)
         except (RuntimeError, SystemExit) as e:  # pydrake raises SystemExit for a failed internal assertion
             x = _state(p, context)
             if np.all(np.isfinite(x)) and "nan" not in str(e).lower():
@@ -110,5 +119,5 @@ def simulate(p):
     if integrator is not None:
         n_steps, n_rhs = integrator.get_num_steps_taken(), integrator.get_num_derivative_evaluations()
     else:  # discrete: one update, one evaluation of the dynamics per step
-        n_steps = n_rhs = int(round((context.get_time() - times[0]) / p["settings"].dt))
+        n_steps = n_rhs = int(round((context.get_time() + early - times[0]) / p["settings"].dt))
     return X, wall, int(n_steps), int(n_rhs), message, charts.recharts
