@@ -1,0 +1,91 @@
+"""Bricard's mechanism (``cases/bricard.py``, IFToMM A04): the redundant loop, and the reference's truth against
+the library's reference solution as [A04-OS]'s figure shows it and against the reference's RK4 converging to it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dalembert import invariants
+from dalembert.case import make_case
+from dalembert.cases.bricard import RODS, p3
+from dalembert.errors import trajectory_errors
+from dalembert.reference import simulate, truth
+from dalembert.settings import Settings
+
+# Issue 17's bound on the truth's loop residual (m, and m/s): measured 9e-16 m and 2e-15 m/s over 2 s.
+LOOP_RESIDUAL_TOL = 1e-10
+# The truth's energy drift relative to |E(0)| = 29.43 J: measured 8e-16 over 2 s (2.5e-14 J), 2.4e-15 over 10 s;
+# DOP853 at 1e-12 with the states projected onto the loop every sample, so roundoff plus 1e-12 per step.
+TRUTH_ENERGY_TOL = 1e-12
+# [A04-OS]'s figure of the library's reference solution (help/images/A04_kinematics.png), read by eye: at the
+# quarter period P3's x crosses 0 at ~1.25 s, where its y peaks at ~-0.87 m and its z bottoms at ~-0.50 m. The
+# figure resolves ~0.01 m and ~0.05 s (its axes: 1 m per ~240 px, 10 s per ~620 px; the lines ~3 px wide).
+FIGURE_QUARTER_PERIOD, FIGURE_Y_PEAK, FIGURE_Z_LOW = 1.25, -0.87, -0.50
+FIGURE_TIME_TOL, FIGURE_POSITION_TOL = 0.05, 0.01
+# RK4 (the reference's fixed-step Kane + loop multipliers, projected every step) at dt and dt/2 against the truth:
+# its joint error falls by 2^4 per halving where the step is small enough. Measured over 2 s: 2.0e-8 rad at
+# dt = 1e-2, 1.5e-9 at 5e-3 (order 3.75), 1.6e-10 at 2.5e-3; the truth is within ~3e-11 rad of converged (rk4 at
+# 1e-3 and lsoda at 1e-12 sit 3.7e-11 and 3.0e-10 from it), far below the errors compared here.
+RK4_DT = 1e-2
+RK4_ORDER_RANGE = (3.5, 4.5)
+RK4_HALF_STEP_ERROR = 5e-9  # rad; measured 1.5e-9 at dt = 5e-3 over 2 s
+
+
+@pytest.fixture(scope="module")
+def case():
+    return make_case("bricard")
+
+
+@pytest.fixture(scope="module")
+def true_motion(case):
+    """The case's truth (the reference's DOP853 at 1e-12 on Kane + least-squares loop multipliers; ~8 s)."""
+    return truth(case)
+
+
+def test_the_loop_is_redundant_and_leaves_one_degree_of_freedom(case):
+    """Gruebler: 5 rods x 6 - 6 revolutes x 5 = 0. The loop's revolute adds 5 rows to the tree's 5 joint speeds
+    at rank 4: one redundant row, one degree of freedom; the initial position closes exactly."""
+    s = case.scene.loop_summary()
+    assert (s.loops, s.rows, s.rank, s.redundant, s.dof) == (1, 5, 4, 1, 1)
+    assert s.position_residual == 0.0 and s.velocity_residual == 0.0
+    assert "1 redundant" in str(s) and "1 degree(s) of freedom" in str(s)
+    assert set(case.scene.effects) == {"joint:revolute", "loop:revolute", "gravity"}
+    assert [j.child for j in case.scene.joints] == list(RODS)
+
+
+def test_truth_keeps_the_loop_closed_and_the_energy(case, true_motion):
+    for level in ("position", "velocity"):
+        assert np.abs(invariants.loop_residual(case.scene, true_motion, level)).max() < LOOP_RESIDUAL_TOL, level
+    energy = invariants.total_energy(case.scene, true_motion)
+    assert energy[0] == pytest.approx(-29.43, rel=1e-12)  # 5 rods of 1 kg at COM heights 0, -0.5, -1, -1, -0.5 m
+    assert np.abs(energy - energy[0]).max() < TRUTH_ENERGY_TOL * abs(energy[0])
+    assert invariants.kinetic_energy(case.scene, true_motion).max() > 1.0  # it moves (J), despite Gruebler
+
+
+def test_truth_moves_as_the_librarys_reference_figure(case, true_motion):
+    """The quarter period of [A04-OS]'s reference curves: P3 leaves (1, -1, 0) m at rest, its x crosses 0 at
+    ~1.25 s where y peaks (~-0.87 m) and z bottoms (~-0.50 m), to the figure's resolution."""
+    t, P = true_motion.t, p3(true_motion)
+    np.testing.assert_allclose(P[0], [1.0, -1.0, 0.0], atol=1e-15)
+    k = np.flatnonzero(np.diff(np.sign(P[:, 0])) != 0)
+    assert len(k) == 1, "x(P3) crosses 0 once in the default 1.5 s"
+    k = k[0]
+    crossing = t[k] - P[k, 0] * (t[k + 1] - t[k]) / (P[k + 1, 0] - P[k, 0])
+    assert crossing == pytest.approx(FIGURE_QUARTER_PERIOD, abs=FIGURE_TIME_TOL)
+    assert P[:, 1].max() == pytest.approx(FIGURE_Y_PEAK, abs=FIGURE_POSITION_TOL)
+    assert P[:, 2].min() == pytest.approx(FIGURE_Z_LOW, abs=FIGURE_POSITION_TOL)
+    assert t[np.argmax(P[:, 1])] == pytest.approx(crossing, abs=FIGURE_TIME_TOL)
+
+
+def test_rk4_converges_to_the_truth_at_fourth_order(case, true_motion):
+    """A second solution by another integrator: the reference's fixed-step RK4 at dt and dt/2; its error against
+    the truth falls by ~16, so both the truth and RK4 solve the same constrained motion."""
+    errors = []
+    for dt in (RK4_DT, RK4_DT / 2):
+        other = simulate(case.scene, case.times, Settings("rk4", dt=dt))[0]
+        errors.append(trajectory_errors(other, true_motion)["joint"][0])
+    order = np.log2(errors[0] / errors[1])
+    assert RK4_ORDER_RANGE[0] < order < RK4_ORDER_RANGE[1], (errors, order)
+    assert errors[1] < RK4_HALF_STEP_ERROR
+    assert errors[0] < case.tolerances["joint"].value
