@@ -52,6 +52,17 @@ at every position of the motion they have rank 4 (``Scene.loop_summary``): one r
 degree of freedom is left, the motion Gruebler's count misses. The reference takes least-squares multipliers
 (``reference.loops``), so the redundant row gets none.
 
+Reactions: not determined, so not judged. A redundant row means a self-stress: multipliers ``lambda0`` with
+``J^T lambda0 = 0`` (the left null vector of the loop's Jacobian), a set of loads the joints can carry without
+moving anything, so any multiple of it can be added to every joint's reaction without changing the motion (the
+mechanism is statically indeterminate, as a rigid model of it must be). The reference's truth takes the
+least-squares (minimum-norm) multipliers; an engine may take any other. Measured (``dalembert run`` at dt = 1e-3
+over 0.5 s; the report of the branch that added this case): the loop's reaction ON rod5 at P5 differs from the
+truth's by 5-10 N (of ~25 N) in MuJoCo, Pinocchio and Exudyn, and that difference lies along the self-stress
+to 1e-7 N (Pinocchio), 1e-5 N (Exudyn) and 0.2 N (MuJoCo's soft constraints). So the case gives no
+``reaction_force`` tolerance: the reactions are stored and reported, not judged (the harness compares them
+whole, not modulo the self-stress).
+
 The motion. Released at rest, the mechanism swings under gravity through a symmetric position, where P3 is
 at (0, -sqrt(3)/2, -1/2) m, to its mirror position, P3 at (-1, -1, 0) m, at rest again, and back: periodic.
 [A04-OS]'s figure of the library's reference solution shows exactly this (P3's x from 1 to -1 and back over
@@ -103,8 +114,6 @@ POSITION_TOL = Tolerance(2e-6, "m; ANGLE_TOL times the largest lever (the mechan
 VELOCITY_TOL = Tolerance(1e-5, "m/s; the rods' COMs move at up to 1.7 m/s and the joints turn at up to 2.2 "
                                "rad/s: ANGLE_TOL times them, with room")
 RATE_TOL = Tolerance(1e-5, "rad/s; as VELOCITY_TOL")
-REACTION_TOL = Tolerance(1e-5, "relative to the largest reaction; accelerations of the same motion (multipliers "
-                               "and Newton's law), one order looser than the angle")
 ENERGY_TOL = Tolerance(1e-7, "relative (to |E(0)| = 29.43 J); exact (no dissipation: [A04-OS] judges runs by "
                              "the energy's variation), the reference's rk4 keeps 5.9e-9 at dt = 1e-2")
 # The joints' fastest rate (rad/s, measured on the truth over the library's 10 s: 2.23): the velocity closure's
@@ -155,7 +164,7 @@ def bricard(length=1.0, mass=1.0, section=0.1, gravity=9.81, t_final=1.5, sample
     least-squares loop multipliers, DOP853 at 1e-12); see the module docstring for every number's source."""
     scene = bricard_scene(length, mass, section, gravity)
     tolerances = dict(joint=ANGLE_TOL, orientation=ANGLE_TOL, position=POSITION_TOL, velocity=VELOCITY_TOL,
-                      angular_velocity=RATE_TOL, reaction_force=REACTION_TOL, energy=ENERGY_TOL)
+                      angular_velocity=RATE_TOL, energy=ENERGY_TOL)  # no reaction_force: module docstring
     return Case("bricard", scene, t_final, sample_times(t_final, sample_interval, "bricard"), conserved=("energy",),
                 tolerances=tolerances,
                 invariants=(_closure("position", length, "m"), _closure("velocity", length * FASTEST_RATE, "m/s")))
