@@ -56,10 +56,11 @@ Reactions: not determined, so not judged. A redundant row means a self-stress: m
 ``J^T lambda0 = 0`` (the left null vector of the loop's Jacobian), a set of loads the joints can carry without
 moving anything, so any multiple of it can be added to every joint's reaction without changing the motion (the
 mechanism is statically indeterminate, as a rigid model of it must be). The reference's truth takes the
-least-squares (minimum-norm) multipliers; an engine may take any other. Measured (``dalembert run`` at dt = 1e-3
-over 0.5 s; the report of the branch that added this case): the loop's reaction ON rod5 at P5 differs from the
-truth's by 5-10 N (of ~25 N) in MuJoCo, Pinocchio and Exudyn, and that difference lies along the self-stress
-to 1e-7 N (Pinocchio), 1e-5 N (Exudyn) and 0.2 N (MuJoCo's soft constraints). So the case gives no
+least-squares (minimum-norm) multipliers; an engine may take any other. Measured (``dalembert run --case bricard
+--engine mujoco --engine pinocchio --engine exudyn --dt 1e-3 --param t_final=0.5``, each run's ``reaction_force:P5``
+minus the truth's, split along the self-stress's force at P5): the differences reach 5-10 N (of ~25 N) in MuJoCo,
+Pinocchio and Exudyn, and what is left across the self-stress is 1e-7 N (Pinocchio), 1e-5 N (Exudyn) and 0.2 N
+(MuJoCo's soft constraints); ``tests/test_bricard.py`` checks Pinocchio's. So the case gives no
 ``reaction_force`` tolerance: the reactions are stored and reported, not judged (the harness compares them
 whole, not modulo the self-stress).
 
