@@ -18,6 +18,8 @@ actuators only (MJX applies them inside every integrator stage); MuJoCo's
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from dalembert.adapters.base import IntegratorSpec, Outcome, option_choice
@@ -73,16 +75,9 @@ class MjxAdapter(MujocoAdapter):
         reason = super().unsupported(scene, settings)
         if reason:
             return reason
-        import mujoco
-
         from dalembert.adapters.mujoco.mjcf import mjcf
 
-        model = mujoco.MjModel.from_xml_string(mjcf(scene, settings))
-        try:
-            mjx().put_model(model)  # host to device only: nothing is compiled
-        except NotImplementedError as e:
-            return f"MJX cannot put this model on the device (mjx.put_model: NotImplementedError: {e})"
-        return None
+        return _refusal(mjcf(scene, settings))
 
     def variants(self, scene):
         """Default matrix: both precisions (and, where the scene has welds, MuJoCo's weld variants)."""
@@ -147,3 +142,17 @@ class MjxAdapter(MujocoAdapter):
 
             out["float32_floor"] = float32_floor(p["scene"], p["times"], p["settings"].dt)
         return out
+
+
+@functools.lru_cache(maxsize=64)
+def _refusal(xml):
+    """Why ``mjx.put_model`` refuses the model compiled from the MJCF ``xml``, or None; once per model
+    in a worker (every integrator and step of a case asks: ~20 ms a time)."""
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_string(xml)
+    try:
+        mjx().put_model(model)  # host to device only: nothing is compiled
+    except NotImplementedError as e:
+        return f"MJX cannot put this model on the device (mjx.put_model: NotImplementedError: {e})"
+    return None
