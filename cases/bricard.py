@@ -23,25 +23,24 @@ Sources (every number below comes from one of them, or is marked as this case's 
   not its mechanism description nor its reference solution, so no number here is taken from it directly.
 
 Geometry ([A04-CPP]; world axes with y up, as the library has it: no rotation to this project's habit of z up,
-so P3 compares directly with the library's). The rods are the edges of a unit cube's path
-P0 -> P1 -> P2 -> P3 -> P4 -> P5, the ground closing P5 -> P0 (1 m, along z), each joint's axis
-perpendicular to both members it joins:
+so P3 compares directly with the library's). The rods run along edges of a unit cube from joint 1 to joint 6,
+the ground closing joint 6 back to joint 1 (1 m, along z), each joint's axis perpendicular to both members it
+joins (points in m, world, at the initial position):
 
-    joint  point              axis   joins
-    1      P0 = (0, 0, 0)     y      world - rod1 (rod1 along +x)
-    2      P1 = (1, 0, 0)     z      rod1 - rod2  (rod2 along -y)
-    3      P2 = (1, -1, 0)    x      rod2 - rod3  (rod3 along +z)
-    4      P3' = (1, -1, 1)   y      rod3 - rod4  (rod4 along -x)
-    5      P4 = (0, -1, 1)    z      rod4 - rod5  (rod5 along +y)
-    6      P5 = (0, 0, 1)     x      rod5 - world (the loop closure)
+    joint  point          axis   joins
+    1      (0, 0, 0)      y      world - rod1 (rod1 along +x)
+    2      (1, 0, 0)      z      rod1 - rod2  (rod2 along -y)
+    3      (1, -1, 0)     x      rod2 - rod3  (rod3 along +z)
+    4      (1, -1, 1)     y      rod3 - rod4  (rod4 along -x)
+    5      (0, -1, 1)     z      rod4 - rod5  (rod5 along +y)
+    6      (0, 0, 1)      x      rod5 - world (the loop closure, named "joint6")
 
-[A04-OS] calls P3 the point where rods 2 and 3 meet, P2 = (1, -1, 0) in this list (the library's numbering
-counts the ground pivot P0 as its first point): ``P3_POINT`` below. [A04-CPP] builds rod 5 from two half rods
-(0.5 m, 0.5 kg each) welded at its middle; one rod of 1 m and 1 kg here is the same body.
+[A04-OS]'s P3 is the point where rods 2 and 3 meet, joint 3's (1, -1, 0): ``P3_POINT`` below. [A04-CPP] builds
+rod 5 from two half rods (0.5 m, 0.5 kg each) welded at its middle; one rod of 1 m and 1 kg here is the same body.
 
 Every joint's frame is the world's at the initial position and every rod's body frame too (the rods' long
 axes are then x, y, z, x, y), so every joint angle starts at 0 and turns about the table's axis; the loop
-at P5 closes rod5 to the world.
+at joint 6 closes rod5 to the world.
 
 Inertia. [A04-CPP] gives each rod the inertia of a solid bar with a 0.1 m square section: ``Body.box`` of
 (1.0, 0.1, 0.1) m along the rod. (A cylinder of radius 0.1/sqrt(3) m has exactly this inertia, axial moment
@@ -57,21 +56,21 @@ Reactions: not determined, so not judged. A redundant row means a self-stress: m
 moving anything, so any multiple of it can be added to every joint's reaction without changing the motion (the
 mechanism is statically indeterminate, as a rigid model of it must be). The reference's truth takes the
 least-squares (minimum-norm) multipliers; an engine may take any other. Measured (``dalembert run --case bricard
---engine mujoco --engine pinocchio --engine exudyn --dt 1e-3 --param t_final=0.5``, each run's ``reaction_force:P5``
-minus the truth's, split along the self-stress's force at P5): the differences reach 5-10 N (of ~25 N) in MuJoCo,
+--engine mujoco --engine pinocchio --engine exudyn --dt 1e-3 --param t_final=0.5``, each run's ``reaction_force:joint6``
+minus the truth's, split along the self-stress's force at joint 6): the differences reach 5-10 N (of ~25 N) in MuJoCo,
 Pinocchio and Exudyn, and what is left across the self-stress is 1e-7 N (Pinocchio), 1e-5 N (Exudyn) and 0.2 N
 (MuJoCo's soft constraints); ``tests/test_bricard.py`` checks Pinocchio's. So the case gives no
 ``reaction_force`` tolerance: the reactions are stored and reported, not judged (the harness compares them
 whole, not modulo the self-stress).
 
 The motion. Released at rest, the mechanism swings under gravity through a symmetric position, where P3 is
-at (0, -sqrt(3)/2, -1/2) m, to its mirror position, P3 at (-1, -1, 0) m, at rest again, and back: periodic.
+near (0, -0.866, -0.5) m, to its mirror position, P3 at (-1, -1, 0) m, at rest again, and back: periodic.
 [A04-OS]'s figure of the library's reference solution shows exactly this (P3's x from 1 to -1 and back over
 ~5 s, its y rising from -1 to ~-0.87 and its z falling from 0 to -0.5 at a quarter period), read from the
 figure to ~0.01 m and ~0.05 s: no published number is finer. Measured on this case's truth over the library's
 10 s (DOP853 at 1e-12; ``t_final=10``): x(P3) crosses 0 at 1.2479 s and reaches -1 (to 2e-10 m) at
 2.4959 s, +1 at 4.9917 s (the period), and P3 passes (0, -0.8660254, -0.4999999) at the quarter period;
-energy kept to 7e-14 J of 29.43 J, the loop closed to 9e-16 m. ``tests/test_bricard.py`` checks the
+energy kept to 7e-14 J of 29.43 J, the loop closed to 3e-15 m (and m/s). ``tests/test_bricard.py`` checks the
 default horizon's truth against the figure and the reference's RK4.
 
 Horizon. The library's 10 s is ``t_final=10`` (its truth takes ~50 s: 2836 evaluations per 2 s of DOP853 at
@@ -93,7 +92,8 @@ from dalembert.scene import WORLD, Body, Joint, Loop, Scene
 UNITS = dict(length="m", mass="kg", section="m", gravity="m/s^2", t_final="s", sample_interval="s")
 
 # [A04-CPP]: the joints' points (world, m, in units of the rod length) and axes (world) at the initial position,
-# from the ground pivot P0 round to P5; rod k runs from point k-1 to point k, the ground from P5 back to P0.
+# from the ground pivot (joint 1) round to joint 6; rod k runs from point k-1 to point k, the ground from joint 6
+# back to joint 1.
 POINTS = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, -1.0, 0.0], [1.0, -1.0, 1.0], [0.0, -1.0, 1.0],
                    [0.0, 0.0, 1.0]])
 AXES = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0],
@@ -125,7 +125,7 @@ FASTEST_RATE = 2.2
 def _closure(level, scale, unit):
     tilt = "the sine of the axes' tilt" + ("" if level == "position" else ", per s")
     return Invariant(f"loop_residual_{level}", f"largest loop-closure residual at {level} level (the rod5-ground "
-                     f"revolute at P5; {unit}, or {tilt})",
+                     f"revolute at joint 6; {unit}, or {tilt})",
                      unit, scale, CLOSURE_TOL, lambda scene, traj: invariants.loop_residual(scene, traj, level))
 
 
@@ -151,7 +151,7 @@ def bricard_scene(length=1.0, mass=1.0, section=0.1, gravity=9.81, name="bricard
     joints += [Joint("revolute", RODS[k - 1], RODS[k], q0=[0.0], v0=[0.0], axis=AXES[k],
                      parent_point=points[k] - coms[k - 1], child_point=points[k] - coms[k]) for k in range(1, 5)]
     closure = Loop("revolute", WORLD, RODS[4], point_a=points[5], point_b=points[5] - coms[4], axis=AXES[5],
-                   name="P5")
+                   name="joint6")
     return Scene(name, bodies=bodies, joints=joints, gravity=(0.0, -float(gravity), 0.0), loops=[closure])
 
 

@@ -32,9 +32,9 @@ FIGURE_TIME_TOL, FIGURE_POSITION_TOL = 0.05, 0.01
 # at 1e-4 off, 4e-8 at 1e-6), above closure.RANK_RTOL = 1e-8, so the projection's Gauss-Newton steps switch between
 # rank 5 and rank 4 from stage to stage and the right-hand side is not smooth at ~1e-8. With RANK_RTOL = 1e-3
 # (an experiment, not the reference's setting) RK4 converges at order 3.99 (4.3e-8, 1.1e-9, 7.0e-11, 4.4e-12 rad at
-# dt = 2.5e-2, 1e-2, 5e-3, 2.5e-3 over 1.5 s, sampled every 0.05 s). The truth is not affected: DOP853 at 1e-12 agrees with DOP853 at
-# 1e-13 and with itself under RANK_RTOL = 1e-3 to 4e-15 rad. Asserted here: RK4 converges to the truth faster than
-# a second-order method would (a factor above 2^2 per halving) and lands within RK4_HALF_STEP_ERROR.
+# dt = 2.5e-2, 1e-2, 5e-3, 2.5e-3 over 1.5 s, sampled every 0.05 s). The truth is not affected: DOP853 at 1e-12
+# agrees with DOP853 at 1e-13 and with itself under RANK_RTOL = 1e-3 to 4e-15 rad. Asserted here: RK4 converges to
+# the truth faster than a second-order method would (a factor above 2^2 per halving), within RK4_HALF_STEP_ERROR.
 RK4_DT = 1e-2
 RK4_MIN_RATIO = 4.0
 RK4_HALF_STEP_ERROR = 5e-9  # rad
@@ -42,10 +42,10 @@ RK4_HALF_STEP_ERROR = 5e-9  # rad
 # not structural, it holds on the motion's curve only): measured S5/S1 <= 1.6e-16 at every sample, S4/S1 >= 0.50.
 ZERO_SINGULAR_RTOL = 1e-12
 RANK_FLOOR = 0.1
-# The self-stress's force at P5 (N per unit multiplier vector): measured 0.65-0.77 along the default horizon.
+# The self-stress's force at joint 6 (N per unit multiplier vector): measured 0.65-0.77 along the default horizon.
 SELF_STRESS_FORCE_FLOOR = 0.1
-# Pinocchio (constraintDynamics, RK4 at dt = 1e-3) against the truth over the default 1.5 s: its loop reaction at P5
-# differs from the truth's by up to 8.6 N (of ~25 N) but, once the self-stress's share is taken out, by 1.9e-7 N
+# Pinocchio (constraintDynamics, RK4 at dt = 1e-3) against the truth over the default 1.5 s: its loop reaction at
+# joint 6 differs from the truth's by up to 8.6 N (of ~25 N) but, once the self-stress's share is taken out, by 1.9e-7 N
 # (measured; its joint error is ~2e-11 rad). Bounds: the difference is of the reaction's own size, the remainder that
 # of an accurate run's reaction error.
 PINOCCHIO_DT = 1e-3
@@ -112,7 +112,7 @@ def test_rk4_converges_to_the_truth(case, true_motion):
 
 def test_the_redundancy_holds_along_the_motion_and_leaves_the_reactions_undetermined(case, true_motion):
     """At every sample of the truth the loop's 5 rows keep rank 4 (one zero singular value), and the left null
-    vector lambda0 (``J^T lambda0 = 0``, a self-stress) puts a non-zero force on rod5 at P5: the reactions are
+    vector lambda0 (``J^T lambda0 = 0``, a self-stress) puts a non-zero force on rod5 at joint 6: the reactions are
     determined only up to a multiple of it, which is why the case judges no reaction_force."""
     system = ClosedLoops(case.scene)
     zero = np.zeros_like(system.v0)
@@ -128,7 +128,7 @@ def test_the_redundancy_holds_along_the_motion_and_leaves_the_reactions_undeterm
 
 
 def test_an_engines_loop_reaction_differs_from_the_truths_by_a_self_stress(case, true_motion):
-    """Pinocchio's reaction at P5 is not the truth's (it does not take the minimum-norm multipliers), and what
+    """Pinocchio's reaction at joint 6 is not the truth's (it does not take the minimum-norm multipliers), and what
     separates them is a multiple of the self-stress: the part of the reaction the mechanism determines agrees."""
     pytest.importorskip("pinocchio")
     from dalembert.adapters.registry import get_adapter
@@ -137,12 +137,12 @@ def test_an_engines_loop_reaction_differs_from_the_truths_by_a_self_stress(case,
     run = adapter.run(adapter.prepare(case.scene, case.times, Settings("rk4", dt=PINOCCHIO_DT))).trajectory
     system = ClosedLoops(case.scene)
     zero = np.zeros_like(system.v0)
-    difference = run.extras["reaction_force:P5"] - true_motion.extras["reaction_force:P5"]
+    difference = run.extras["reaction_force:joint6"] - true_motion.extras["reaction_force:joint6"]
     remainder = np.empty(len(true_motion.t))
     for i in range(len(true_motion.t)):
         q = np.array([true_motion.joints[rod].q[i, 0] for rod in RODS])
         _, J, _, (rows,) = system.constraints(system.kinematics(q, zero))
-        along = rows.G_b[:, :3].T @ np.linalg.svd(J)[0][:, 4]  # the self-stress's force on rod5 at P5
+        along = rows.G_b[:, :3].T @ np.linalg.svd(J)[0][:, 4]  # the self-stress's force on rod5 at joint 6
         along /= np.linalg.norm(along)
         remainder[i] = np.linalg.norm(difference[i] - (difference[i] @ along) * along)
     assert np.linalg.norm(difference, axis=1).max() > INDETERMINATE_SHARE_FLOOR
