@@ -272,3 +272,14 @@ def test_no_worker_outlives_its_matrix(tmp_path):
     proc.wait()
     gone, alive = psutil.wait_procs(workers, timeout=ORPHAN_GRACE_S)
     assert not alive, [w.pid for w in alive]
+
+
+def test_default_steps_fit_each_cases_sampling():
+    """The default steps that do not divide a case's sample interval are left out for that case (the
+    Andrews squeezer is sampled every 1 ms, the Test Set's grid: no 1e-2 step); a step given on the
+    command line is never changed, and is refused naming the fix."""
+    specs, _ = expand(cases=["andrews_squeezer", "four_bar"], engines=["reference"])
+    steps = {(s.case, s.dt) for s in specs if s.dt is not None}
+    assert steps == {("andrews_squeezer", 1e-3), ("four_bar", 1e-2), ("four_bar", 1e-3)}
+    with pytest.raises(ValueError, match="does not divide the sample interval"):
+        expand(cases=["andrews_squeezer"], engines=["reference"], dts=[1e-2])

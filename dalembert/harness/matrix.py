@@ -11,8 +11,10 @@ import itertools
 import json
 from dataclasses import asdict, dataclass
 
+import numpy as np
+
 from dalembert.registry import suggest
-from dalembert.settings import Settings
+from dalembert.settings import Settings, steps_per_interval
 
 __all__ = ["RunSpec", "expand", "spec", "DEFAULT_DTS", "DEFAULT_RTOLS", "ATOL_PER_RTOL"]
 
@@ -87,6 +89,20 @@ def spec(case, engine, settings, params=(), force=False):
     return made
 
 
+def _dividing(dts, case):
+    """The default steps that divide ``case``'s sample interval (a case sampled every 1 ms runs no
+    1e-2 step), or that interval itself where none does; given steps are never changed (a step
+    that does not divide is then refused, naming the fix)."""
+    fit = []
+    for dt in dts:
+        try:
+            steps_per_interval(case.times, dt)
+            fit.append(dt)
+        except ValueError:
+            pass
+    return fit or [float(np.min(np.diff(case.times)))]
+
+
 def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=None, params=None,
            options=None, force=False):
     """Turn a selection into run specs. Raises ValueError/KeyError before anything runs.
@@ -143,6 +159,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
         if not any(i in a.integrators for a in adapters.values()):
             offered = {n for a in adapters.values() for n in a.integrators}
             raise ValueError(f"--integrator: no selected engine offers {i!r}{suggest(i, offered)}")
+    given_dts = bool(dts)
     dts = tuple(dts or DEFAULT_DTS)
     rtols = tuple(rtols or DEFAULT_RTOLS)
     params = dict(params or {})
@@ -159,7 +176,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
                 if integrators and integ not in integrators:
                     continue
                 if ispec.fixed_step:
-                    knobs = [dict(dt=dt) for dt in dts]
+                    knobs = [dict(dt=dt) for dt in (dts if given_dts else _dividing(dts, case))]
                 else:
                     knobs = [dict(rtol=r, atol=r * ATOL_PER_RTOL) for r in rtols]
                 # given options apply where the integrator takes them; else the engine's own variants
