@@ -5,7 +5,9 @@
 The ``chain`` case (N uniform rods in a revolute chain under gravity, released
 from rest at its default angles) is stepped by each installed engine's fourth-order fixed-step integrator at
 dt = 1e-3 (the reference solver: Kane's equations with RK4; MuJoCo RK4;
-Pinocchio's Lie-group RK4, compiled; Exudyn RK44 on its kinematic tree). For
+Pinocchio's Lie-group RK4, compiled; Exudyn RK44 on its kinematic tree; Drake's
+RK5 at a fixed step, its only fixed-step method of order four or more; MJX RK4
+in float32, compiled once per N in ``prepare``, never timed). For
 each N the horizon grows tenfold from 0.01 s until one run takes at least
 ``--budget`` seconds (or 10 s of simulated time is reached), so every figure is
 a stepping time well above the timer's resolution; the cost is printed as
@@ -32,7 +34,8 @@ from dalembert.adapters import adapter_names, get_adapter
 from dalembert.case import make_case
 
 SIZES = (2, 4, 8, 16, 32, 64)
-INTEGRATORS = {"reference": "rk4", "mujoco": "rk4", "pinocchio": "rk4", "exudyn": "rk44"}
+# each engine's fourth-order fixed-step integrator (Drake has none at a fixed step: its RK5)
+INTEGRATORS = {"reference": "rk4", "mujoco": "rk4", "pinocchio": "rk4", "exudyn": "rk44", "drake": "rk5", "mjx": "rk4"}
 DT = 1e-3
 REPEATS = 3
 MAX_HORIZON_S = 10.0

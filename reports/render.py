@@ -562,11 +562,11 @@ def _loops(doc, store, records):
         if not lines:
             continue
         unsupported = sorted({r.engine for r in runs if r.status == "unsupported"} - {ln.engine for ln in lines})
-        rows = [[Cell(ln.engine), Cell(ln.line, wrap=True), num(ln.runs, "{:d}"), num(ln.best_error),
+        rows = [[Cell(ln.engine), Cell(ln.line.removeprefix(ln.engine + " "), wrap=True), num(ln.runs, "{:d}"), num(ln.best_error),
                  num(ln.worst_position_residual), num(ln.worst_velocity_residual), num(ln.worst_reaction_error),
                  num(ln.target_cost, "{:.3g}"), Cell(ln.target_settings or "not reached", wrap=True)]
                 for ln in lines]
-        doc.table(Table(["engine", "line", "runs", f"best {quantity} error", "worst closure, position",
+        doc.table(Table(["engine", "integrator and options", "runs", f"best {quantity} error", "worst closure, position",
                          "worst closure, velocity", "worst reaction error", f"s/s to reach {LOOP_TARGET:g}",
                          "cheapest run reaching it"], rows))
         if unsupported:
