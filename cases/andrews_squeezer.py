@@ -89,7 +89,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import invariants, spatial
-from dalembert.case import Case, Invariant, Tolerance, case
+from dalembert.case import Case, Invariant, Tolerance, case, loop_closure_invariants
 from dalembert.cases._sampling import sample_times
 from dalembert.scene import Body, Joint, Load, Loop, Scene, Spring
 
@@ -148,12 +148,6 @@ REACTION_TOL = Tolerance(1e-6, "relative to the largest reaction (333 N at O): a
 ENERGY_TOL = Tolerance(1e-8, "relative to the largest kinetic energy (1.5 J); exact: kinetic + spring energy - the "
                              "motor's work (the truth keeps it to 1.3e-13; the reference's dop853 to 3.5e-11 at "
                              "rtol 1e-9, not at 1e-6: 1.7e-7)")
-
-
-def _closure(level, scale, unit):
-    return Invariant(f"loop_residual_{level}", f"largest loop-closure residual at {level} level (the three ball "
-                     f"loops at E; {'m' if level == 'position' else 'm/s'})", unit, scale, CLOSURE_TOL,
-                     lambda scene, traj: invariants.loop_residual(scene, traj, level))
 
 
 def crank_angle(traj, body="body1"):
@@ -231,4 +225,4 @@ def andrews_squeezer(t_final=0.03, sample_interval=1e-3):
                       angular_velocity=RATE_TOL, reaction_force=REACTION_TOL)
     return Case("andrews_squeezer", scene, t_final, sample_times(t_final, sample_interval, "andrews_squeezer"),
                 tolerances=tolerances,
-                invariants=(ENERGY, _closure("position", REACH, "m"), _closure("velocity", SPEED, "m/s")))
+                invariants=(ENERGY, *loop_closure_invariants("the three ball loops at E", REACH, SPEED, CLOSURE_TOL)))

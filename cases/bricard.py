@@ -84,8 +84,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from dalembert import invariants, spatial
-from dalembert.case import Case, Invariant, Tolerance, case
+from dalembert import spatial
+from dalembert.case import Case, Tolerance, case, loop_closure_invariants
 from dalembert.cases._sampling import sample_times
 from dalembert.scene import WORLD, Body, Joint, Loop, Scene
 
@@ -120,13 +120,6 @@ ENERGY_TOL = Tolerance(1e-7, "relative (to |E(0)| = 29.43 J); exact (no dissipat
 # The joints' fastest rate (rad/s; measured on the truth over 2 s, past the quarter period: 2.23): the velocity
 # closure's scale is the rod length times it.
 FASTEST_RATE = 2.2
-
-
-def _closure(level, scale, unit):
-    tilt = "the sine of the axes' tilt" + ("" if level == "position" else ", per s")
-    return Invariant(f"loop_residual_{level}", f"largest loop-closure residual at {level} level (the rod5-ground "
-                     f"revolute at joint 6; {unit}, or {tilt})",
-                     unit, scale, CLOSURE_TOL, lambda scene, traj: invariants.loop_residual(scene, traj, level))
 
 
 def p3(traj, length=1.0):
@@ -169,4 +162,5 @@ def bricard(length=1.0, mass=1.0, section=0.1, gravity=9.81, t_final=1.5, sample
                       angular_velocity=RATE_TOL, energy=ENERGY_TOL)  # no reaction_force: module docstring
     return Case("bricard", scene, t_final, sample_times(t_final, sample_interval, "bricard"), conserved=("energy",),
                 tolerances=tolerances,
-                invariants=(_closure("position", length, "m"), _closure("velocity", length * FASTEST_RATE, "m/s")))
+                invariants=loop_closure_invariants("the rod5-ground revolute at joint 6", length,
+                                                   length * FASTEST_RATE, CLOSURE_TOL))

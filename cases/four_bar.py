@@ -72,8 +72,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from dalembert import invariants, spatial
-from dalembert.case import Case, Invariant, Tolerance, case
+from dalembert import spatial
+from dalembert.case import Case, Tolerance, case, loop_closure_invariants
 from dalembert.cases._sampling import sample_times
 from dalembert.reference.closed_form import RigidPendulum
 from dalembert.scene import Body, Joint, Loop, Scene
@@ -97,12 +97,6 @@ REACTION_TOL = Tolerance(1e-5, "relative to the largest reaction; reactions are 
 ENERGY_TOL = Tolerance(1e-7, "relative; exact, the reference's rk4 keeps 2e-8 at dt = 1e-2")
 CLOSURE_TOL = Tolerance(1e-10, "the loop closes to roundoff on the truth (projection after every sample: ~1e-14); "
                                "an engine's closure drift is judged against it")
-
-
-def _closure(level, scale, unit):
-    return Invariant(f"loop_residual_{level}", f"largest loop-closure residual at {level} level (the coupler-rocker "
-                     f"revolute at C; m, or the sine of the axes' tilt{'' if level == 'position' else ', per s'})",
-                     unit, scale, CLOSURE_TOL, lambda scene, traj: invariants.loop_residual(scene, traj, level))
 
 
 @case(tags=("canonical", "jointed", "gravity", "loop", "singular"), units=UNITS,
@@ -135,7 +129,8 @@ def four_bar(length=1.0, mass=1.0, radius=0.01, gravity=9.81, phi0=np.pi / 2, ra
                       angular_velocity=RATE_TOL, reaction_force=REACTION_TOL, energy=ENERGY_TOL)
     return Case("four_bar", scene, t_final, sample_times(t_final, sample_interval, "four_bar"), exact=exact.trajectory,
                 conserved=("energy",), tolerances=tolerances,
-                invariants=(_closure("position", length, "m"), _closure("velocity", length * max(abs(rate0), 1.0), "m/s")))
+                invariants=loop_closure_invariants("the coupler-rocker revolute at C", length,
+                                                   length * max(abs(rate0), 1.0), CLOSURE_TOL))
 
 
 def parallelogram_pendulum(length=1.0, mass=1.0, radius=0.01, gravity=9.81, phi0=np.pi / 2, rate0=6.0):

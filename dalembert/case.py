@@ -33,12 +33,13 @@ from typing import Callable
 import numpy as np
 
 from dalembert.errors import QUANTITIES
-from dalembert.invariants import CONSERVED
+from dalembert.invariants import CONSERVED, loop_residual
 from dalembert.registry import Registry, suggest
 from dalembert.scene import Scene, SceneError
 
 __all__ = ["Tolerance", "Invariant", "InvariantLabel", "Case", "CaseRecord", "CaseFactory", "case", "make_case",
-           "load_cases", "CASES", "parse_param", "OUT_OF_DEFAULT", "in_default_matrix"]
+           "load_cases", "CASES", "parse_param", "OUT_OF_DEFAULT", "in_default_matrix", "LOOP_RESIDUALS",
+           "loop_closure_invariants"]
 
 CASES = Registry("case")
 # Tags that keep a case out of the default matrix (``dalembert run`` with no selection, ``dalembert
@@ -129,6 +130,23 @@ class Invariant:
     def label(self):
         """The ``InvariantLabel`` a store keeps."""
         return InvariantLabel(self.name, self.description, self.unit, float(self.scale))
+
+
+# The declared invariants of a case that closes loops, by level: their drifts are the worst closure
+# residuals over a run (``RunRecord.drifts``), and reports look them up by these names.
+LOOP_RESIDUALS = {"position": "loop_residual_position", "velocity": "loop_residual_velocity"}
+
+
+def loop_closure_invariants(where, length, speed, tolerance):
+    """The two ``Invariant`` of a scene's loop closures (``invariants.loop_residual``), position and
+    velocity level, scaled by the mechanism's ``length`` (m) and its fastest point's ``speed`` (m/s),
+    each bounded by ``tolerance``; ``where`` names the closures (e.g. "the coupler-rocker revolute at C")."""
+    def one(level, scale, unit, per_s):
+        return Invariant(LOOP_RESIDUALS[level], f"largest loop-closure residual at {level} level ({where}; {unit}, "
+                         f"or the sine of an axis' tilt{per_s})", unit, scale, tolerance,
+                         lambda scene, traj: loop_residual(scene, traj, level))
+
+    return one("position", length, "m", ""), one("velocity", speed, "m/s", ", per s")
 
 
 def _invariant_problems(invariants):

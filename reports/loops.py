@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from dalembert.case import LOOP_RESIDUALS
 from dalembert.reports.work_precision import cheapest_reaching, line_label, points
 
 __all__ = ["LOOP_TARGET", "RESIDUALS", "LoopLine", "loop_lines"]
@@ -23,8 +24,8 @@ __all__ = ["LOOP_TARGET", "RESIDUALS", "LoopLine", "loop_lines"]
 # micrometre on 1-m links — tighter than drawings, looser than every closed form's roundoff.
 LOOP_TARGET = 1e-6
 
-# The declared invariants a closed-loop case carries (``cases/four_bar.py``), by level.
-RESIDUALS = {"position": "loop_residual_position", "velocity": "loop_residual_velocity"}
+# The declared invariants a closed-loop case carries (``case.loop_closure_invariants``), by level.
+RESIDUALS = LOOP_RESIDUALS
 
 
 @dataclass(frozen=True)
