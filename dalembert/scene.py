@@ -579,22 +579,31 @@ def _spring_where(i, sp):
     return f"springs[{i}] ({sp.name!r}: {sp.body_a!r} -> {sp.body_b!r})"
 
 
+def _end_problems(where, element, names):
+    """The problems naming ``element``'s two ends (``body_a``, ``body_b``: bodies of the scene or the world)."""
+    return [f"{where}.{field_name}: no body named {b!r}{_did_you_mean(b, names | {WORLD})}"
+            for field_name in ("body_a", "body_b") for b in [getattr(element, field_name)]
+            if b != WORLD and b not in names]
+
+
+def _numbers_problems(where, field_name, v, n, note=""):
+    """The problem with ``v``, which must hold ``n`` finite numbers (``note``: what they are), as a list."""
+    if len(v) != n:
+        return [f"{where}.{field_name}: needs {n} numbers{note}, got {len(v)}"]
+    if not _finite(v):
+        return [f"{where}.{field_name}: contains NaN or inf"]
+    return []
+
+
 def _spring_problems(i, sp, names):
     where = _spring_where(i, sp)
     problems = []
     add = problems.append
-    for field_name in ("body_a", "body_b"):
-        b = getattr(sp, field_name)
-        if b != WORLD and b not in names:
-            add(f"{where}.{field_name}: no body named {b!r}{_did_you_mean(b, names | {WORLD})}")
+    problems += _end_problems(where, sp, names)
     if sp.body_a == sp.body_b:
         add(f"{where}: joins a body to itself — a spring joins two different bodies (or a body and {WORLD!r})")
     for field_name in ("point_a", "point_b"):
-        v = getattr(sp, field_name)
-        if len(v) != 3:
-            add(f"{where}.{field_name}: needs 3 numbers (m, in the body's frame), got {len(v)}")
-        elif not _finite(v):
-            add(f"{where}.{field_name}: contains NaN or inf")
+        problems += _numbers_problems(where, field_name, getattr(sp, field_name), 3, " (m, in the body's frame)")
     for field_name, unit in (("stiffness", "N/m"), ("damping", "N s/m"), ("rest_length", "m")):
         v = getattr(sp, field_name)
         if not (math.isfinite(v) and v >= 0.0):
@@ -610,19 +619,14 @@ def _loop_problems(i, lp, names):
     add = problems.append
     if lp.kind not in LOOP_KINDS:
         add(f"{where}.kind: unknown {lp.kind!r} — use one of {list(LOOP_KINDS)}")
-    for field_name in ("body_a", "body_b"):
-        b = getattr(lp, field_name)
-        if b != WORLD and b not in names:
-            add(f"{where}.{field_name}: no body named {b!r}{_did_you_mean(b, names | {WORLD})}")
+    problems += _end_problems(where, lp, names)
     if lp.body_a == lp.body_b:
         add(f"{where}: closes a body on itself — a loop joins two different bodies (or a body and {WORLD!r})")
     for field_name, n in (("point_a", 3), ("point_b", 3), ("quat_a", 4), ("quat_b", 4)):
         v = getattr(lp, field_name)
-        if len(v) != n:
-            add(f"{where}.{field_name}: needs {n} numbers, got {len(v)}")
-        elif not _finite(v):
-            add(f"{where}.{field_name}: contains NaN or inf")
-        elif n == 4 and abs(math.sqrt(sum(x * x for x in v)) - 1.0) > QUAT_NORM_TOL:
+        shape = _numbers_problems(where, field_name, v, n)
+        problems += shape
+        if not shape and n == 4 and abs(math.sqrt(sum(x * x for x in v)) - 1.0) > QUAT_NORM_TOL:
             add(f"{where}.{field_name}: quaternion norm is {math.sqrt(sum(x * x for x in v)):.12g}, not 1 — "
                 "normalize it (scalar first: w, x, y, z)")
     if lp.kind == "revolute":
@@ -696,11 +700,7 @@ def _load_problems(i, ld, names):
     if ld.frame not in LOAD_FRAMES:
         add(f"{where}.frame: unknown {ld.frame!r} — use 'body' (a follower load) or 'world'")
     for field_name in ("vector", "point"):
-        v = getattr(ld, field_name)
-        if len(v) != 3:
-            add(f"{where}.{field_name}: needs 3 numbers, got {len(v)}")
-        elif not _finite(v):
-            add(f"{where}.{field_name}: contains NaN or inf")
+        problems += _numbers_problems(where, field_name, getattr(ld, field_name), 3)
     if ld.kind == "torque" and any(ld.point):
         add(f"{where}.point: a torque has no point of application — leave point at (0, 0, 0)")
     return problems
