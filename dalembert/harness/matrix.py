@@ -171,12 +171,13 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
         variants += [(factory, dict(zip(mine, values))) for values in itertools.product(*mine.values())]
     for factory, case_params in variants:
         case = factory(**case_params)
+        case_dts = dts if given_dts else _dividing(dts, case)
         for e, adapter in adapters.items():
             for integ, ispec in adapter.integrators.items():
                 if integrators and integ not in integrators:
                     continue
                 if ispec.fixed_step:
-                    knobs = [dict(dt=dt) for dt in (dts if given_dts else _dividing(dts, case))]
+                    knobs = [dict(dt=dt) for dt in case_dts]
                 else:
                     knobs = [dict(rtol=r, atol=r * ATOL_PER_RTOL) for r in rtols]
                 # given options apply where the integrator takes them; else the engine's own variants
