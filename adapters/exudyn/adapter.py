@@ -375,7 +375,9 @@ class ExudynAdapter(Adapter):
         parameters, ends, initial length and tension read from Exudyn, each compared with the scene) and every
         passive force element it carries (``springs.passive_effects``): the springs' connectors and nothing
         else."""
-        built = outcome.info["built"]
+        built = outcome.info.get("built")
+        if built is None:  # an outcome that did not come from ``run`` (which always keeps its system)
+            return {}
         passive = passive_effects(built["mbs"])
         out = {"passive": passive}
         if scene.springs:
