@@ -87,7 +87,7 @@ def read_springs(mbs, scene, built):
     -------
     dict spring name -> dict: ``element``, ``body_a``, ``body_b``, ``point_a``, ``point_b`` (m, body frames),
     ``stiffness`` (N/m), ``damping`` (N s/m), ``rest_length`` (m), ``preload`` (N), ``velocity_offset`` (m/s),
-    ``user_function``, ``active``, ``initial_length`` (m), ``initial_tension`` (N), and ``mismatches``: each
+    ``user_function``, ``active``, ``initial_length`` (m), ``initial_tension`` (N, > 0 pulls), and ``mismatches``: each
     way the engine's spring differs from the scene's (empty: the spring is the scene's)
     """
     import exudyn as exu
@@ -98,9 +98,10 @@ def read_springs(mbs, scene, built):
     states = {**spatial.initial_body_states(scene), WORLD: closure.world_state()}
     out = {}
     for sp in scene.springs:
-        number, (m0, m1) = built["springs"][sp.name]["object"], built["springs"][sp.name]["markers"]
+        number = built["springs"][sp.name]["object"]
         obj = mbs.GetObject(number)
-        ends = [_marker_end(mbs, m, built) for m in obj["markerNumbers"]]
+        m0, m1 = obj["markerNumbers"]  # the connector's own markers, as Exudyn holds them
+        ends = [_marker_end(mbs, m, built) for m in (m0, m1)]
         length = float(mbs.GetObjectOutput(number, OV.Distance, configuration=current))
         force_a = np.asarray(mbs.GetObjectOutput(number, OV.Force, configuration=current), dtype=float)
         d = np.asarray(mbs.GetObjectOutput(number, OV.Displacement, configuration=current), dtype=float)
