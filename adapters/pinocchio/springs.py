@@ -25,10 +25,12 @@ gives the stiffness and the rest length, and at a velocity ``v = J_l^T`` (rate `
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from dalembert import spatial
 from dalembert.scene import WORLD
 
 __all__ = ["SpringElement", "build", "add_forces", "pack", "mass_matrix", "identify", "IDENTIFY_STRETCH"]
@@ -99,7 +101,7 @@ def _point(data, jid, p_E):
     ``forwardKinematics(q, v)``."""
     X, nu = data.oMi[jid], data.v[jid]
     R = X.rotation
-    return X.translation + R @ p_E, R @ (nu.linear + np.cross(nu.angular, p_E))
+    return X.translation + R @ p_E, R @ (nu.linear + spatial.cross(nu.angular, p_E))  # not np.cross: 10x slower here
 
 
 def add_forces(elements, data, fext):
@@ -111,13 +113,13 @@ def add_forces(elements, data, fext):
         x_a, xd_a = _point(data, el.joint_a, el.p_a)
         x_b, xd_b = _point(data, el.joint_b, el.p_b)
         d = x_b - x_a
-        length = np.linalg.norm(d)
+        length = math.sqrt(d @ d)
         e = d / length
         tension = el.stiffness * (length - el.rest_length) + el.damping * (e @ (xd_b - xd_a))
         for jid, p_E, f_W in ((el.joint_a, el.p_a, tension * e), (el.joint_b, el.p_b, -tension * e)):
             if jid > 0:
                 f_E = data.oMi[jid].rotation.T @ f_W
-                fext[jid] = fext[jid] + pin.Force(f_E, np.cross(p_E, f_E))
+                fext[jid] = fext[jid] + pin.Force(f_E, spatial.cross(p_E, f_E))
 
 
 def pack(elements):
