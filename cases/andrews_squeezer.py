@@ -81,7 +81,8 @@ differential algebraic equation of index 3").
 Its difficulty is speed: the crank turns 2.5 times in 30 ms (beta' reaches 1140 rad/s, Theta' 1424 rad/s)
 and the accelerations reach 5.7e5 rad/s^2, so fixed steps of 1e-3 s or 1e-4 s are useless. An engine
 whose adapter does not build loop closures and spring-dampers declares it unsupported (issue 17); Exudyn
-runs it with its two implicit solvers (tests/test_exudyn_springs.py).
+runs it with its two implicit solvers (tests/test_exudyn_springs.py), Pinocchio with every integrator
+(tests/test_pinocchio_springs.py).
 """
 
 from __future__ import annotations
