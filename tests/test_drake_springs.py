@@ -55,7 +55,8 @@ TUMBLE_RATE_TOL = 1e-9  # rad/s
 DECADE_RATIO = (8.0, 12.0)
 # Andrews' squeezer at rest at its initial angles: Drake's mass matrix and loop rows with the generalized force of
 # its own force elements (gravity field, the spring) and of the motor, projected onto the rigid loops, against the
-# Test Set's 30-digit consistent accelerations: one solve in double precision (measured 2.0e-15 relative).
+# Test Set's 30-digit consistent accelerations and multipliers: one solve in double precision (measured 2.0e-15
+# relative; the multipliers 4e-16).
 RIGID_ACCELERATION_RTOL = 1e-12
 # Drake's own step from that state is not rigid: SAP regularizes each near-rigid constraint by
 # beta^2 / (4 pi^2) ~ 2.5e-4 of its Delassus diagonal (loops.py), so a fraction of the spring's pull, which the
@@ -66,11 +67,13 @@ SAP_ACCELERATION_RTOL = 3e-2
 SAP_MULTIPLIER_RTOL = 1e-2
 # The squeezer in discrete mode at dt = 1e-5 (3000 steps): the largest of the seven angles at t = 0.03 s from the
 # Test Set's published values (themselves within 1.4e-9 rad of the case's truth), measured 2.7e-4 rad (beta turns
-# 16 rad, Theta 16 rad back); 0.12 rad at 1e-4, 1.9e-2 at 5e-5, 2.9e-4 at 5e-6, 7.8e-5 at 1e-6 (not first order
-# below 1e-5: the SAP leak above and its stopping tolerance, loops.py, set a floor). 3x for the machine:
+# 16 rad, Theta 16 rad back); 0.12 rad at 1e-4, 1.9e-2 at 5e-5, 7.8e-5 at 1e-6. Over all samples, against the
+# case's truth (dalembert run), first order: 0.12 / 2.8e-2 / 5.9e-3 / 6.0e-4 rad at 1e-4 / 5e-5 / 1e-5 / 1e-6, so
+# at 0.03 s the error at 1e-5 happens to be 20 times below its largest over the samples. Bound: 3x the measured value.
 SQUEEZER_DT = 1e-5  # s
 SQUEEZER_ANGLE_TOL = 1e-3  # rad
-# The loops' gap there: relaxed over one step, ~dt^2 (measured 1.14e-6 m at dt = 1e-5; 1.1e-8 at 1e-6).
+# The loops' gap there: relaxed over one step, ~dt^2 (measured 1.14e-6 m at dt = 1e-5, 1.1e-8 at 1e-6, the largest
+# over the samples).
 SQUEEZER_GAP_TOL = 5e-6  # m
 
 
@@ -174,7 +177,9 @@ def _angles(traj, k):
 
 def test_squeezer_forces_in_drakes_model_give_the_published_initial_accelerations(squeezer):
     """The spring and the motor as Drake holds them, at rest at the initial angles (no loop solver involved):
-    the rigid projection of Drake's generalized forces onto the loops, against the Test Set's accelerations."""
+    the rigid projection of Drake's generalized forces onto the loops, against the Test Set's accelerations and
+    multipliers. The loops hold the spring's pull statically (the accelerations are the same without it); the
+    multipliers carry it."""
     from pydrake.multibody.tree import MultibodyForces
 
     from dalembert.adapters.drake.loops import _rows
@@ -194,10 +199,13 @@ def test_squeezer_forces_in_drakes_model_give_the_published_initial_acceleration
     J = J[np.abs(J).max(axis=1) > 0.0]  # the out-of-plane rows are zero: the tree keeps the bodies in the plane
     Minv = np.linalg.inv(plant.CalcMassMatrix(plant_context))
     a_free = Minv @ tau
-    a = a_free - Minv @ J.T @ np.linalg.solve(J @ Minv @ J.T, J @ a_free)
+    f = -np.linalg.solve(J @ Minv @ J.T, J @ a_free)  # the loops' forces ON bodies 3, 4, 6 (x, y; N)
+    a = a_free + Minv @ J.T @ f
     index = [model.joints[body].velocity_start() for body in ANGLES.values()]
     want = np.array([*INITIAL_ACCELERATIONS, 0, 0, 0, 0, 0])
     assert np.abs(a[index] - want).max() < RIGID_ACCELERATION_RTOL * np.abs(want).max()
+    lam = np.array([*INITIAL_MULTIPLIERS, 0, 0, 0, 0])  # these hold the spring: without it (0.016, -0.033) N
+    assert np.abs(f - lam).max() < RIGID_ACCELERATION_RTOL * np.abs(lam).max(), f
     # Drake's own (SAP) step from that state: near-rigid loops, short by the regularization's leak
     a_sap = plant.get_generalized_acceleration_output_port().Eval(plant_context)
     assert np.abs(a_sap[index] - want).max() < SAP_ACCELERATION_RTOL * np.abs(want).max()

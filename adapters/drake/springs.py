@@ -19,16 +19,19 @@ Drake also raises, while stepping, when the points come within ``eps l0`` (2.2e-
 length of the spring became nearly zero"); the run then fails with Drake's message (``stepping``). Its soft
 norm changes the length by ``(eps l0)^2 / (2 l)``, ~1e-32 relative: not measurable.
 
-How each mode steps it (measured on one step of a box on a spring, ``tests/test_drake_springs.py``):
+How each mode steps it (measured, ``tests/test_drake_springs.py``):
 
-* continuous mode: a force of the state, evaluated at every stage of Drake's integrator, like gravity;
-* discrete mode: EXPLICIT. The plant's update is semi-implicit (symplectic) Euler, ``v1 = v0 + dt M^-1
-  tau(q0, v0)``, then ``q1`` from ``v1``, and the spring-damper's force (the damper's included) is taken at
-  the step's start ``(q0, v0)``: SAP treats joint damping implicitly, but not this element's. The update is
-  first order in dt (the tension's error per step is ``dt`` times its rate); the spring's own part is
-  symplectic, so an undamped oscillator's energy stays bounded (a phase error that grows linearly in time,
-  ``omega^3 dt^2 t / 24``, and a bounded amplitude error of order ``omega dt``); the explicit damper is stable
-  only while ``dt c / m_eff < 2`` and over-damps nothing: its error is first order like the rest.
+* continuous mode: a force of the state, evaluated at every stage of Drake's integrator, like gravity; each
+  scheme keeps its order (RK3 and Radau3 8-fold per halving, RK5 ~32-fold on the oscillators);
+* discrete mode: EXPLICIT, damper included. The plant's update is semi-implicit (symplectic) Euler,
+  ``v1 = v0 + dt M^-1 tau(q0, v0)``, then ``q1`` from ``v1``, and the spring-damper's force is taken at the
+  step's start ``(q0, v0)``: SAP treats joint damping implicitly, not this element's damper (one step of a
+  2-kg box on a c = 2000 N s/m damper at dt = 1e-2 gives the explicit 4.575 m/s from -0.5 m/s, where the
+  implicit damper would give -0.039 m/s). So the damper adds no implicit smoothing and no implicit error: its
+  error is explicit Euler's, first order like the rest of the update, and it is stable only while
+  ``dt c / m_eff < 2``. On an undamped oscillator of amplitude ``a`` the update keeps the energy bounded (a
+  tilted invariant ellipse) and lags in phase by ``omega^3 dt^2 t / 24``; its position error is led by the
+  phase offset ``a omega dt / 2`` it starts with: first order.
 """
 
 from __future__ import annotations
