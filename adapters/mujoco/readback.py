@@ -7,7 +7,8 @@ velocities of the scene's body frames come from the MuJoCo frames through
 ``dalembert.spatial``. The joint reaction on a child is ``cfrc_int``'s force
 part minus the loads that the site actuators routed through joint space onto
 the child's subtree (MuJoCo counts them as joint torques, not as external
-forces).
+forces), and likewise the spring-dampers' forces on it (tendon forces, applied
+through joint space: ``qfrc_passive``).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.mujoco.mjcf import floating
+from dalembert.adapters.mujoco.springs import spring_force, spring_tendon_ids
 from dalembert.adapters.mujoco.stepping import apply_xfrc
 
 __all__ = ["read_back"]
@@ -52,6 +54,10 @@ def read_back(p, Q, V):
     passive = np.zeros((n, model.nv))
     loops = _loop_rows(model, scene)
     loop_force = {name: np.full((n, 3), np.nan) for name in loops}
+    tendons = spring_tendon_ids(model, scene)
+    spring_ends = [tuple(model.wrap_objid[model.tendon_adr[t] + k] for k in (0, 1)) for t in tendons]
+    spring_f = np.full((n, len(tendons), 3), np.nan)  # each spring's force ON its body b, world
+    other_passive = np.zeros(n)  # |qfrc_passive - the springs' J^T f|: any passive force that is not a spring's
     if p["load_path"] == "actuator":
         d.ctrl[:] = 1.0
     finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)
@@ -70,6 +76,13 @@ def read_back(p, Q, V):
         for name, (kind, eq_ids, sites) in loops.items():
             loop_force[name][k] = _loop_force(d, kind, eq_ids, sites)
         passive[k] = d_passive
+        if tendons:
+            J = d.ten_J.reshape(model.ntendon, model.nv)
+            springs_q = np.zeros(model.nv)
+            for si, (t, sites) in enumerate(zip(tendons, spring_ends)):
+                tension, spring_f[k, si] = spring_force(model, d, t, sites)
+                springs_q -= tension * J[t]  # MuJoCo's tendon force is -tension, applied as J^T f
+            other_passive[k] = np.abs(d_passive - springs_q).max(initial=0.0)
         xpos_all[k], xmat_all[k], cvel_all[k], com_all[k] = d_xpos, d_xmat, d_cvel, d_com
     xpos, xmat, cvel, com = xpos_all[:, ids], xmat_all[:, ids], cvel_all[:, ids], com_all[:, roots]  # (n, nb, .)
     cfrc = cfrc_all[:, child_ids, 3:]  # (n, children, 3)
@@ -98,6 +111,9 @@ def read_back(p, Q, V):
             for ld in scene.loads:
                 if ld.kind == "force" and ld.body in _subtree(scene, child, p["welds"]):
                     f -= spatial.load_to_world(ld, R_WB[:, order[ld.body]])
+        subtree = _subtree(scene, child, p["welds"])
+        for si, sp in enumerate(scene.springs):  # the springs' forces, routed through joint space too
+            f -= spring_f[:, si] * ((sp.body_b in subtree) - (sp.body_a in subtree))
         reactions[child] = f
     bodies = {b.name: BodyStates(pos[:, bi], quat[:, bi], vel[:, bi], omega[:, bi]) for bi, b in enumerate(scene.bodies)}
     joints = {}
@@ -111,6 +127,8 @@ def read_back(p, Q, V):
     extras.update({f"reaction_force:{name}": f for name, f in loop_force.items()})
     audit = {"max_contacts": int(max_ncon), "max_constraint_rows": int(max_nefc),
              "max_abs_passive_force": float(np.abs(passive).max(initial=0.0))}
+    if tendons:
+        audit["max_abs_passive_force_not_springs"] = float(np.nanmax(other_passive, initial=0.0))
     return Trajectory(p["times"], bodies, joints, extras), audit
 
 
