@@ -7,8 +7,10 @@ velocities of the scene's body frames come from the MuJoCo frames through
 ``dalembert.spatial``. The joint reaction on a child is ``cfrc_int``'s force
 part minus the loads that the site actuators routed through joint space onto
 the child's subtree (MuJoCo counts them as joint torques, not as external
-forces), and likewise the spring-dampers' forces on it (tendon forces, applied
-through joint space: ``qfrc_passive``).
+forces). A spring's tendon force is not subtracted: MuJoCo counts a spatial
+tendon's force in ``cfrc_ext`` (measured: a hinged body pulled by a tendon of
+tension 10 N has ``cfrc_ext`` the 10 N and ``cfrc_int`` the joint's -10 N), so
+``cfrc_int`` is the joint's reaction already.
 """
 
 from __future__ import annotations
@@ -56,7 +58,6 @@ def read_back(p, Q, V):
     loop_force = {name: np.full((n, 3), np.nan) for name in loops}
     tendons = spring_tendon_ids(model, scene)
     spring_ends = [tuple(model.wrap_objid[model.tendon_adr[t] + k] for k in (0, 1)) for t in tendons]
-    spring_f = np.full((n, len(tendons), 3), np.nan)  # each spring's force ON its body b, world
     other_passive = np.zeros(n)  # |qfrc_passive - the springs' J^T f|: any passive force that is not a spring's
     if p["load_path"] == "actuator":
         d.ctrl[:] = 1.0
@@ -77,10 +78,10 @@ def read_back(p, Q, V):
             loop_force[name][k] = _loop_force(d, kind, eq_ids, sites)
         passive[k] = d_passive
         if tendons:
-            J = d.ten_J.reshape(model.ntendon, model.nv)
+            J = _tendon_jacobian(model, d)
             springs_q = np.zeros(model.nv)
-            for si, (t, sites) in enumerate(zip(tendons, spring_ends)):
-                tension, spring_f[k, si] = spring_force(model, d, t, sites)
+            for t, sites in zip(tendons, spring_ends):
+                tension, _ = spring_force(model, d, t, sites)
                 springs_q -= tension * J[t]  # MuJoCo's tendon force is -tension, applied as J^T f
             other_passive[k] = np.abs(d_passive - springs_q).max(initial=0.0)
         xpos_all[k], xmat_all[k], cvel_all[k], com_all[k] = d_xpos, d_xmat, d_cvel, d_com
@@ -111,9 +112,6 @@ def read_back(p, Q, V):
             for ld in scene.loads:
                 if ld.kind == "force" and ld.body in _subtree(scene, child, p["welds"]):
                     f -= spatial.load_to_world(ld, R_WB[:, order[ld.body]])
-        subtree = _subtree(scene, child, p["welds"])
-        for si, sp in enumerate(scene.springs):  # the springs' forces, routed through joint space too
-            f -= spring_f[:, si] * ((sp.body_b in subtree) - (sp.body_a in subtree))
         reactions[child] = f
     bodies = {b.name: BodyStates(pos[:, bi], quat[:, bi], vel[:, bi], omega[:, bi]) for bi, b in enumerate(scene.bodies)}
     joints = {}
@@ -130,6 +128,18 @@ def read_back(p, Q, V):
     if tendons:
         audit["max_abs_passive_force_not_springs"] = float(np.nanmax(other_passive, initial=0.0))
     return Trajectory(p["times"], bodies, joints, extras), audit
+
+
+def _tendon_jacobian(model, d):
+    """The tendons' Jacobian ``ten_J`` as a dense (ntendon, nv) array, whether MuJoCo keeps it sparse
+    (the model's ``ten_J_rownnz/rowadr/colind``) or dense."""
+    import mujoco
+
+    if d.ten_J.size == model.ntendon * model.nv and not mujoco.mj_isSparse(model):
+        return d.ten_J.reshape(model.ntendon, model.nv)
+    J = np.zeros((model.ntendon, model.nv))
+    mujoco.mju_sparse2dense(J, d.ten_J, model.ten_J_rownnz, model.ten_J_rowadr, model.ten_J_colind)
+    return J
 
 
 def _subtree(scene, name, welds="tree"):
