@@ -19,7 +19,7 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.mujoco.mjcf import floating
-from dalembert.adapters.mujoco.springs import spring_force, spring_tendon_ids
+from dalembert.adapters.mujoco.springs import spring_tendon_ids, spring_tension
 from dalembert.adapters.mujoco.stepping import apply_xfrc
 
 __all__ = ["read_back"]
@@ -57,7 +57,6 @@ def read_back(p, Q, V):
     loops = _loop_rows(model, scene)
     loop_force = {name: np.full((n, 3), np.nan) for name in loops}
     tendons = spring_tendon_ids(model, scene)
-    spring_ends = [tuple(model.wrap_objid[model.tendon_adr[t] + k] for k in (0, 1)) for t in tendons]
     other_passive = np.zeros(n)  # |qfrc_passive - the springs' J^T f|: any passive force that is not a spring's
     if p["load_path"] == "actuator":
         d.ctrl[:] = 1.0
@@ -80,9 +79,8 @@ def read_back(p, Q, V):
         if tendons:
             J = _tendon_jacobian(model, d)
             springs_q = np.zeros(model.nv)
-            for t, sites in zip(tendons, spring_ends):
-                tension, _ = spring_force(model, d, t, sites)
-                springs_q -= tension * J[t]  # MuJoCo's tendon force is -tension, applied as J^T f
+            for t in tendons:
+                springs_q -= spring_tension(model, d, t) * J[t]  # MuJoCo's tendon force is -tension, applied as J^T f
             other_passive[k] = np.abs(d_passive - springs_q).max(initial=0.0)
         xpos_all[k], xmat_all[k], cvel_all[k], com_all[k] = d_xpos, d_xmat, d_cvel, d_com
     xpos, xmat, cvel, com = xpos_all[:, ids], xmat_all[:, ids], cvel_all[:, ids], com_all[:, roots]  # (n, nb, .)

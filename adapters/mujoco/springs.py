@@ -6,8 +6,8 @@ nonlinear terms, and its two sites' bodies and positions, turned back into the s
 frames (``read_springs``); ``check_springs`` compares them with the scene before anything runs;
 ``other_passive`` lists every other passive parameter that the spring and damper flags switch on
 (joint stiffness and damping, the other tendons', their polynomials) and MuJoCo's fluid model; and
-``spring_force`` is the force of each spring on its second body at the state an ``MjData`` holds,
-from MuJoCo's own tendon length and velocity.
+``spring_tension`` is a spring's tension at the state an ``MjData`` holds, from MuJoCo's own tendon
+length and velocity (the read-back compares ``qfrc_passive`` with the springs' ``J^T f``).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 
 from dalembert.adapters.mujoco.mjcf import spring_tendon
 
-__all__ = ["read_springs", "check_springs", "other_passive", "spring_tendon_ids", "spring_force", "SPRING_REL_TOL"]
+__all__ = ["read_springs", "check_springs", "other_passive", "spring_tendon_ids", "spring_tension", "SPRING_REL_TOL"]
 
 # The compiled spring must reproduce the scene's to this relative accuracy: the numbers go through
 # repr() into the MJCF and back (exact), the site positions through one rotation to MuJoCo's body frame
@@ -108,12 +108,9 @@ def other_passive(model, scene):
     }
 
 
-def spring_force(model, d, tendon, sites):
-    """``(tension, force)``: the tension (N) and the force (3,) ON the spring's second body (N, world) at the
-    state ``d`` holds, from MuJoCo's own ``ten_length`` and ``ten_velocity`` and the compiled stiffness,
-    damping and spring length: ``k (L - L0) + c L'`` and ``-tension e``, ``e`` the unit vector from the
-    first site to the second (``site_xpos``)."""
-    tension = (model.tendon_stiffness[tendon] * (d.ten_length[tendon] - model.tendon_lengthspring[tendon][0])
-               + model.tendon_damping[tendon] * d.ten_velocity[tendon])
-    e = d.site_xpos[sites[1]] - d.site_xpos[sites[0]]
-    return float(tension), -tension * e / np.linalg.norm(e)
+def spring_tension(model, d, tendon):
+    """The tension (N, > 0 pulls) of the spring whose tendon is ``tendon`` at the state ``d`` holds, from
+    MuJoCo's own ``ten_length`` and ``ten_velocity`` and the compiled stiffness, damping and spring length:
+    ``k (L - L0) + c L'``. MuJoCo's tendon force is its negative, applied as ``J^T f`` (``qfrc_passive``)."""
+    return float(model.tendon_stiffness[tendon] * (d.ten_length[tendon] - model.tendon_lengthspring[tendon][0])
+                 + model.tendon_damping[tendon] * d.ten_velocity[tendon])
