@@ -188,3 +188,33 @@ def test_spring_on_a_jointed_chain_follows_the_reference_reactions_included():
     e = error_series(_run(scene, times, "rk4", 1e-3)[0], ref)
     for key in ("position", "orientation", "joint", "reaction_force"):
         assert e[key].max() < CHAIN_TOL, (key, e[key].max())
+
+
+# MuJoCo's tendon length and velocity against dalembert.springs at the same state: one formula each side, in
+# double precision (lengths ~1 m, rates ~1 m/s).
+CONVENTION_TOL = 1e-14
+
+
+def test_the_tendons_length_rate_and_force_are_dalembert_springs():
+    """At a tumbling state of the off-centre oscillator, MuJoCo's ten_length and ten_velocity are the spring's
+    length and rate (``dalembert.springs.state``), and qfrc_passive is the spring's force and its moment about the
+    COM (free joint: force in world axes, moment in body axes)."""
+    import mujoco
+
+    from dalembert import spatial, springs
+    from dalembert.closure import world_state
+
+    scene = _oscillator(DAMPING, point_b=(0.05, 0.1, 0.15))
+    prepared = ADAPTER.prepare(scene, TIMES, Settings("rk4", dt=1e-2))
+    model, d = prepared["model"], prepared["scratch"]
+    p, quat = np.array([0.2, -0.1, -1.1]), spatial.quat_normalize(np.array([0.9, 0.2, -0.3, 0.1]))
+    v, w_B = np.array([0.3, -0.4, 0.5]), np.array([1.0, -2.0, 3.0])
+    d.qpos[:], d.qvel[:] = np.concatenate([p, quat]), np.concatenate([v, w_B])
+    mujoco.mj_forward(model, d)
+    R = spatial.quat_to_matrix(quat)
+    s = springs.state(scene.springs[0], world_state(), dict(R=R, p=p, v=v, w=R @ w_B))
+    assert d.ten_length[0] == pytest.approx(s.length, abs=CONVENTION_TOL)
+    assert d.ten_velocity[0] == pytest.approx(s.rate, abs=CONVENTION_TOL)
+    (F, tau), = springs.wrenches(scene.springs, {"world": world_state(), "b": dict(R=R, p=p, v=v, w=R @ w_B)}).values()
+    assert np.abs(d.qfrc_passive[:3] - F).max() < CONVENTION_TOL * np.abs(F).max()
+    assert np.abs(d.qfrc_passive[3:] - R.T @ tau).max() < CONVENTION_TOL * np.abs(tau).max()
