@@ -27,7 +27,9 @@ SCENES = {**{name: factory().scene for name, factory in load_cases().items()},
           "chain": chain_case().scene, "free_world_loads": free_body_world_loads_case().scene}
 # Every stage the scenes never call for, disabled in every model: MuJoCo would otherwise add
 # contacts, joint limits, friction loss, springs, dampers, control clamping, auto-reset.
-ALWAYS_DISABLED = ("contact", "limit", "frictionloss", "spring", "damper", "clampctrl", "autoreset")
+ALWAYS_DISABLED = ("contact", "limit", "frictionloss", "clampctrl", "autoreset")
+# What a model without spring-dampers also disables (the springs' tendons are the only passive forces).
+PASSIVE_STAGES = ("spring", "damper")
 # What a model without weld constraints also disables (nothing holds it then).
 CONSTRAINT_STAGES = ("constraint", "equality")
 INERTIA_REL_TOL = 1e-12  # a rotated inertia tensor keeps its principal moments to roundoff
@@ -99,6 +101,7 @@ def test_every_stage_the_scene_does_not_call_for_is_disabled(models, name, welds
     constrained = (welds == "equality" and any(j.kind == "weld" for j in scene.joints)) or bool(scene.loops)
     disabled = {k for k, v in flag.attrib.items() if v == "disable"}
     expected = set(ALWAYS_DISABLED) | (set() if constrained else set(CONSTRAINT_STAGES))
+    expected |= set() if scene.springs else set(PASSIVE_STAGES)
     if scene.loops:  # RK4 runs loop constraints at one step, below refsafe's two (mjcf.LOOP_SOLREF_STEPS)
         expected.add("refsafe")
     assert disabled == expected | ({"gravity"} if not any(scene.gravity) else set())

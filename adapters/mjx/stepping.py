@@ -70,9 +70,15 @@ def _rollout():
         jax.config.update("jax_compilation_cache_dir", cache_dir("jax"))
     step = mjx().step
 
+    def same_types(new, old):
+        # MJX 3.17 in float64 returns a tendon's wrap indices (ten_wrapadr, ten_wrapnum, wrap_obj) as int64
+        # where mjx.put_data made them int32; the loop's carry must keep its types (a model without tendons has
+        # none to cast: every astype is then the identity)
+        return jax.tree.map(lambda a, b: a.astype(b.dtype) if a.dtype != b.dtype else a, new, old)
+
     def rollout(m, d, steps):
         def interval(d, n):
-            d = jax.lax.fori_loop(0, n, lambda i, d: step(m, d), d)
+            d = jax.lax.fori_loop(0, n, lambda i, d: same_types(step(m, d), d), d)
             return d, (d.qpos, d.qvel)
 
         _, (Q, V) = jax.lax.scan(interval, d, steps)

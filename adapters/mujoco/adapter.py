@@ -1,10 +1,10 @@
 """``MujocoAdapter``: the contract (``dalembert.adapters``) for MuJoCo.
 
 ``prepare`` compiles the generated MJCF (``mjcf``) and checks the compiled mass
-properties against the scene's; ``run`` steps (``stepping``) with MuJoCo's
+properties and springs against the scene's; ``run`` steps (``stepping``) with MuJoCo's
 warnings sent to the adapter, not to ``MUJOCO_LOG.TXT`` or the console, then
 reads the states back in body terms (``readback``); ``audit`` reads the
-compiled options back from the model.
+compiled options, loop constraints and springs back from the model.
 """
 
 from __future__ import annotations
@@ -15,8 +15,9 @@ from dalembert import spatial
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert.adapters.mujoco.mjcf import LOAD_PATHS, WELDS, engine_frames, loop_softness, mjcf
 from dalembert.adapters.mujoco.readback import read_back
+from dalembert.adapters.mujoco.springs import check_springs, other_passive, read_springs
 from dalembert.adapters.mujoco.stepping import step_loop, step_rollout
-from dalembert.scene import EFFECTS, LOOP_EFFECTS
+from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
 from dalembert.settings import steps_per_interval
 
 __all__ = ["MujocoAdapter"]
@@ -30,6 +31,16 @@ DISTANCE_REASON = ("the tendon equality holds the closure and the motion (7e-7 m
 # Compiled mass properties must reproduce the scene's to this relative accuracy:
 # MuJoCo diagonalizes the full inertia (an eigen-solve), which costs a few ulps.
 MASS_PROPERTY_REL_TOL = 1e-10
+# How each integrator treats a spring's tendon force (measured, one step of a damper alone: Euler's velocity
+# falls by h c / m, implicit's and implicitfast's by the factor 1 / (1 + h c / m); the eulerdamp flag changes
+# neither, it covers joint damping only).
+SPRING_INTEGRATION = {
+    "euler": "stiffness and damping explicit (semi-implicit Euler); MuJoCo's eulerdamp covers joint damping only",
+    "rk4": "stiffness and damping explicit, in every RK4 stage",
+    "implicit": "stiffness explicit; tendon damping implicit in velocity (backward Euler: -h c J^T J in the matrix)",
+    "implicitfast": "stiffness explicit; tendon damping implicit in velocity (backward Euler: -h c J^T J in the matrix)",
+    "discrete": "stiffness explicit; tendon damping implicit in velocity (MuJoCo's discrete integrator)",
+}
 
 
 class MujocoAdapter(Adapter):
@@ -38,8 +49,9 @@ class MujocoAdapter(Adapter):
 
     name = "mujoco"
     # loops: equality constraints (mjcf), soft as MuJoCo's are: the audit states their softness. A distance
-    # loop (a tendon equality) is generated but not declared: DISTANCE_REASON
-    effects = EFFECTS | (LOOP_EFFECTS - {"loop:distance"})
+    # loop (a tendon equality) is generated but not declared: DISTANCE_REASON. Springs: spatial tendons (mjcf),
+    # checked against the scene when built and read back in the audit.
+    effects = EFFECTS | (LOOP_EFFECTS - {"loop:distance"}) | SPRING_EFFECTS
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "semi-implicit Euler"),
         "rk4": IntegratorSpec(True, OPTIONS, "classical RK4"),
@@ -82,6 +94,7 @@ class MujocoAdapter(Adapter):
         X_EB = engine_frames(scene, welds)
         ids = {b.name: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b.name) for b in scene.bodies}
         self._check_mass_properties(model, scene, X_EB, ids)
+        check_springs(model, scene, X_EB)
         data = mujoco.MjData(model)
         qpos0, qvel0 = np.zeros(model.nq), np.zeros(model.nv)
         state0 = spatial.initial_body_states(scene) if welds == "equality" else {}
@@ -168,6 +181,7 @@ class MujocoAdapter(Adapter):
             "max_damping": float(np.abs(model.dof_damping).max(initial=0.0)),
             "ngeom": int(model.ngeom),
             **self._loop_audit(prepared),
+            **self._spring_audit(prepared),
             **self._read_audit(outcome),
         }
 
@@ -193,6 +207,19 @@ class MujocoAdapter(Adapter):
                               "solver's regularization leaves each constraint force ~1e-4 relative short, made up by the "
                               "residual's spring: the closure is not exact, its residual is the run's loop_residual"),
         }
+
+    @staticmethod
+    def _spring_audit(prepared):
+        """The springs as the compiled model holds them (``springs.read_springs``: stiffness, damping, rest
+        length, the bodies and points of the tendon's sites), every other passive parameter (all zero), and
+        how the integrator treats them (none: empty)."""
+        model, scene = prepared["model"], prepared["scene"]
+        if not scene.springs:
+            return {}
+        springs = [{k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in s.items()}
+                   for s in read_springs(model, scene, prepared["frames"])]
+        return {"springs": springs, "passive_not_springs": other_passive(model, scene),
+                "spring_integration": SPRING_INTEGRATION.get(prepared["settings"].integrator, "")}
 
     @staticmethod
     def _read_audit(outcome):

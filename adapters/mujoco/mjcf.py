@@ -14,7 +14,9 @@ MuJoCo: nothing here calls it.
   equality constraint (``welds=equality``).
 * Gravity from the scene, and the gravity stage disabled when it is zero
   (MuJoCo's default is -9.81). Contact, constraint, equality, limit,
-  frictionloss, spring, damper, control clamping and auto-reset are disabled.
+  frictionloss, spring, damper, control clamping and auto-reset are disabled (spring and
+  damper stay enabled in a scene with spring-dampers: every joint's own stiffness and damping
+  are written as zero, and the audit reads them back).
 * Loop closures (``Scene.loops``) as equality constraints between sites at the loop's points
   (``loop_sites``): ``ball`` a ``<connect>``; ``revolute`` two connects, at the points and at
   ``AXIS_LEVER`` along the axis from them (MuJoCo has no revolute equality; its documentation:
@@ -23,6 +25,13 @@ MuJoCo: nothing here calls it.
   equality (whose offset is the length minus the tendon's length at MuJoCo's reference
   configuration ``qpos0``, computed here from the MJCF's own body placements). All as stiff as
   MuJoCo allows (``LOOP_SOLREF_STEPS``, ``LOOP_SOLIMP``).
+* Spring-dampers (``Scene.springs``) as spatial tendons between two sites at the spring's points
+  (``spring_sites``; a site on the worldbody for a world end) with ``stiffness``, ``damping`` and
+  ``springlength`` the spring's (the rest length, both ends of MuJoCo's dead band). MuJoCo's tendon
+  force ``-stiffness (L - springlength) - damping L'``, with ``L'`` its ``ten_velocity`` and the force
+  applied through the tendon Jacobian, is ``dalembert.springs``' tension with its sign (measured:
+  ``qfrc_passive`` along the line, ``ten_velocity`` the rate of the length). Tendons are named
+  ``spring_tendon(name)``.
 * Loads through site actuators with a constant control of 1 and
   ``gear = (force, torque)``: a follower load in a site whose axes are the body
   axes, a world-frame load with a ``refsite`` at the world origin. MuJoCo then
@@ -39,7 +48,7 @@ import numpy as np
 from dalembert import spatial
 from dalembert.scene import WORLD
 
-__all__ = ["mjcf", "engine_frames", "floating", "loop_sites", "loop_softness", "INTEGRATORS", "LOAD_PATHS", "WELDS",
+__all__ = ["mjcf", "engine_frames", "floating", "loop_sites", "loop_softness", "spring_sites", "spring_tendon", "INTEGRATORS", "LOAD_PATHS", "WELDS",
            "AXIS_LEVER", "LOOP_SOLREF_STEPS", "LOOP_SOLREF_STEPS_DEFAULT", "LOOP_SOLIMP"]
 
 # Engine name -> MJCF integrator attribute.
@@ -127,6 +136,23 @@ def loop_sites(scene, welds="tree"):
     return out
 
 
+def spring_tendon(name):
+    """The MuJoCo name of the spatial tendon of the spring ``name`` (kept apart from the loops' tendons)."""
+    return f"spring:{name}"
+
+
+def spring_sites(scene, welds="tree"):
+    """The two sites of every spring (``scene.springs`` order): a list of pairs ``((body_a, p_Ea),
+    (body_b, p_Eb))``, each point in its body's MuJoCo frame E (the world's for ``"world"``), m."""
+    X_EB = engine_frames(scene, welds)
+    X_EB["world"] = (np.zeros(3), np.eye(3))
+    out = []
+    for sp in scene.springs:
+        out.append(tuple((body, X_EB[body][0] + X_EB[body][1] @ np.array(point))
+                         for body, point in ((sp.body_a, sp.point_a), (sp.body_b, sp.point_b))))
+    return out
+
+
 def _placement(scene, j, X_EB, welds, state0):
     """Where the MJCF places the child of ``j`` in its parent's MuJoCo frame (the world's for a
     floating body): ``(pos (3,), quat (4,))``, MuJoCo's reference configuration ``qpos0``."""
@@ -167,12 +193,16 @@ def mjcf(scene, settings):
         for k, ((a, pa), (b, pb)) in enumerate(pairs):
             for end, body, pos in (("a", a, pa), ("b", b, pb)):
                 site_lines.setdefault(body, []).append(f'<site name="loop{i}_{end}{k}" pos="{_f(pos)}"/>')
+    for i, ends in enumerate(spring_sites(scene, welds)):
+        for end, (body, pos) in zip("ab", ends):
+            site_lines.setdefault(body, []).append(f'<site name="spring{i}_{end}" pos="{_f(pos)}"/>')
     children = {}
     for j in scene.joints:  # a welded body held by a constraint hangs from the world, free
         children.setdefault(WORLD if j in weld_constraints else j.parent, []).append(j)
     gravity = np.array(scene.gravity)
     constrained = bool(weld_constraints or scene.loops)
-    disabled = [f for f in DISABLED if not (constrained and f in ("constraint", "equality"))]
+    disabled = [f for f in DISABLED if not (constrained and f in ("constraint", "equality"))
+                and not (scene.springs and f in ("spring", "damper"))]
     if scene.loops and _loop_steps(settings) < 2.0:
         disabled.append("refsafe")  # MuJoCo would clamp the time constant to 2 steps
     flags = " ".join(f'{f}="disable"' for f in disabled)
@@ -219,11 +249,16 @@ def mjcf(scene, settings):
         lines += body_xml(j, "    ")
     lines.append("  </worldbody>")
     distance = [(i, lp) for i, lp in enumerate(scene.loops) if lp.kind == "distance"]
-    if distance:
+    if distance or scene.springs:
         lines.append("  <tendon>")
         for i, lp in distance:
             lines += [f'    <spatial name="{lp.name}" limited="false" stiffness="0" damping="0" frictionloss="0">',
                       f'      <site site="loop{i}_a0"/>', f'      <site site="loop{i}_b0"/>', "    </spatial>"]
+        for i, sp in enumerate(scene.springs):
+            rest = f"{sp.rest_length!r} {sp.rest_length!r}"  # no dead band: both ends at the rest length
+            lines += [f'    <spatial name="{spring_tendon(sp.name)}" limited="false" stiffness="{sp.stiffness!r}" '
+                      f'damping="{sp.damping!r}" springlength="{rest}" frictionloss="0">',
+                      f'      <site site="spring{i}_a"/>', f'      <site site="spring{i}_b"/>', "    </spatial>"]
         lines.append("  </tendon>")
     if weld_constraints or scene.loops:
         lines.append("  <equality>")

@@ -7,7 +7,10 @@ velocities of the scene's body frames come from the MuJoCo frames through
 ``dalembert.spatial``. The joint reaction on a child is ``cfrc_int``'s force
 part minus the loads that the site actuators routed through joint space onto
 the child's subtree (MuJoCo counts them as joint torques, not as external
-forces).
+forces). A spring's tendon force is not subtracted: MuJoCo counts a spatial
+tendon's force in ``cfrc_ext`` (measured: a hinged body pulled by a tendon of
+tension 10 N has ``cfrc_ext`` the 10 N and ``cfrc_int`` the joint's -10 N), so
+``cfrc_int`` is the joint's reaction already.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.mujoco.mjcf import floating
+from dalembert.adapters.mujoco.springs import spring_tendon_ids, spring_tension
 from dalembert.adapters.mujoco.stepping import apply_xfrc
 
 __all__ = ["read_back"]
@@ -52,6 +56,8 @@ def read_back(p, Q, V):
     passive = np.zeros((n, model.nv))
     loops = _loop_rows(model, scene)
     loop_force = {name: np.full((n, 3), np.nan) for name in loops}
+    tendons = spring_tendon_ids(model, scene)
+    other_passive = np.zeros(n)  # |qfrc_passive - the springs' J^T f|: any passive force that is not a spring's
     if p["load_path"] == "actuator":
         d.ctrl[:] = 1.0
     finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)
@@ -70,6 +76,12 @@ def read_back(p, Q, V):
         for name, (kind, eq_ids, sites) in loops.items():
             loop_force[name][k] = _loop_force(d, kind, eq_ids, sites)
         passive[k] = d_passive
+        if tendons:
+            J = _tendon_jacobian(model, d)
+            springs_q = np.zeros(model.nv)
+            for t in tendons:
+                springs_q -= spring_tension(model, d, t) * J[t]  # MuJoCo's tendon force is -tension, applied as J^T f
+            other_passive[k] = np.abs(d_passive - springs_q).max(initial=0.0)
         xpos_all[k], xmat_all[k], cvel_all[k], com_all[k] = d_xpos, d_xmat, d_cvel, d_com
     xpos, xmat, cvel, com = xpos_all[:, ids], xmat_all[:, ids], cvel_all[:, ids], com_all[:, roots]  # (n, nb, .)
     cfrc = cfrc_all[:, child_ids, 3:]  # (n, children, 3)
@@ -111,7 +123,21 @@ def read_back(p, Q, V):
     extras.update({f"reaction_force:{name}": f for name, f in loop_force.items()})
     audit = {"max_contacts": int(max_ncon), "max_constraint_rows": int(max_nefc),
              "max_abs_passive_force": float(np.abs(passive).max(initial=0.0))}
+    if tendons:
+        audit["max_abs_passive_force_not_springs"] = float(np.nanmax(other_passive, initial=0.0))
     return Trajectory(p["times"], bodies, joints, extras), audit
+
+
+def _tendon_jacobian(model, d):
+    """The tendons' Jacobian ``ten_J`` as a dense (ntendon, nv) array, whether MuJoCo keeps it sparse
+    (the model's ``ten_J_rownnz/rowadr/colind``) or dense."""
+    import mujoco
+
+    if d.ten_J.size == model.ntendon * model.nv and not mujoco.mj_isSparse(model):
+        return d.ten_J.reshape(model.ntendon, model.nv)
+    J = np.zeros((model.ntendon, model.nv))
+    mujoco.mju_sparse2dense(J, d.ten_J, model.ten_J_rownnz, model.ten_J_rowadr, model.ten_J_colind)
+    return J
 
 
 def _subtree(scene, name, welds="tree"):
