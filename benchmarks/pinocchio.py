@@ -29,7 +29,7 @@ STAGES = {"euler": 1, "rk4": 4, "rk4-naive": 4}
 def bare_aba_seconds(pm, q, v, n=20000):
     import pinocchio as pin
 
-    fext = pm.external_forces(q) if pm.has_loads else None
+    fext = pm.external_forces(q, v) if pm.has_forces else None
     args = (pm.model, pm.data, q, v, pm.tau) + ((fext,) if fext is not None else ())
     pin.aba(*args)
     t0 = time.perf_counter()

@@ -79,9 +79,10 @@ the reference's RK4 at dt = 1e-5 is within 3e-10 rad of it (deTestSet's manual p
 ``pkg/deTestSet/man/ex_andrews.Rd`` of the same repository, calls it "a non-stiff second order
 differential algebraic equation of index 3").
 Its difficulty is speed: the crank turns 2.5 times in 30 ms (beta' reaches 1140 rad/s, Theta' 1424 rad/s)
-and the accelerations reach 5.7e5 rad/s^2, so fixed steps of 1e-3 s or 1e-4 s are useless. Every engine
-but the reference declares it unsupported until its adapter builds loop closures and spring-dampers
-(issue 17).
+and the accelerations reach 5.7e5 rad/s^2, so fixed steps of 1e-3 s or 1e-4 s are useless. An engine
+whose adapter does not build loop closures and spring-dampers declares it unsupported (issue 17); Exudyn
+runs it with its two implicit solvers (tests/test_exudyn_springs.py), Pinocchio with every integrator
+(tests/test_pinocchio_springs.py).
 """
 
 from __future__ import annotations

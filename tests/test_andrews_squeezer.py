@@ -169,7 +169,7 @@ def test_truth_keeps_the_loops_closed_and_the_energy_balance(case, true_motion):
     assert max(np.abs(b.position[:, 2]).max() for b in true_motion.bodies.values()) == 0.0
 
 
-@pytest.mark.parametrize("engine", ["mujoco", "pinocchio", "exudyn", "drake", "mjx"])
+@pytest.mark.parametrize("engine", ["mujoco", "mjx"])  # exudyn, pinocchio, drake: tests/test_<engine>_springs.py
 def test_engines_declare_the_squeezer_unsupported_until_they_build_springs(case, engine):
     from dalembert.adapters.registry import get_adapter
     from dalembert.settings import Settings

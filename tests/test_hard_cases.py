@@ -18,6 +18,10 @@ HARD = [n for n, f in load_cases().items() if "hard" in f.tags]
 ENGINES = ["reference", "mujoco", "pinocchio", "exudyn"]
 # Each engine's fourth-order fixed-step integrator: the smoke test of the stability grid.
 SMOKE_INTEGRATORS = ["rk4", "rk44"]
+# Per-run limit of the smoke matrix, s: it catches a hung run, not a slow one. Each smoke run takes seconds
+# on an idle machine; 30 min is beyond any loaded machine's slowdown of that and inside CI's 90-min limit
+# (120 s was a false alarm: one run timed out while the machine's 2 cores ran 4 other jobs).
+HUNG_RUN_S = 1800
 # Horizons for the tests (the full ones are for `dalembert run --tag hard`).
 SHORT = {"free_top_long_horizon": dict(t_final=5.0), "pivoted_rod_violent": {},
          "particle_box_welded": dict(t_final=0.5)}  # 27 bodies: the reference's Kane loop is slow
@@ -90,7 +94,8 @@ def test_every_engine_gets_a_verdict_on_every_hard_case(tmp_path):
                  *[a for i in SMOKE_INTEGRATORS for a in ("--integrator", i)], "--dt", "1e-2", "--param", "t_final=1",
                  "--no-maps"]
     # no deadline of its own: a busy CI machine makes this slow, not wrong
-    proc = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", *selection, "--timeout", "120",
+    proc = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", *selection,
+                           "--timeout", str(HUNG_RUN_S),
                            "--out", str(out)], capture_output=True, text=True)
     assert "runs stored" in proc.stderr, proc.stderr[-2000:]
     records = Store(out).records()

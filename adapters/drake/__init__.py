@@ -5,7 +5,8 @@ the audit read back from the plant), ``loads`` (the loads system that turns
 follower forces with the body's pose), ``stepping`` (a ``Simulator`` from
 sample to sample: Drake's integrators, fixed-step or error-controlled, or the
 plant's discrete update), ``loops`` (loop closures as SAP constraints of the
-discrete plant), ``readback`` (Drake's states in body terms, joint reactions),
+discrete plant), ``springs`` (spring-dampers as ``LinearSpringDamper``
+force elements, and their read-back for the audit), ``readback`` (Drake's states in body terms, joint reactions),
 ``adapter`` (``DrakeAdapter``). Drake itself is imported only
 inside functions.
 """

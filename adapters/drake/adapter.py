@@ -13,6 +13,10 @@ Loop closures (``loops``): SAP constraints of the discrete plant, so only the in
 ``discrete`` runs a scene with loops; every continuous integrator declares them unsupported
 (``loops.CONTINUOUS_REASON``). Their reactions are recovered from the step's generalized
 constraint force (Drake reports no constraint forces: ``loops.loop_forces``).
+
+Spring-dampers (``springs``): ``LinearSpringDamper`` force elements, in both modes; a spring of rest
+length 0 is unsupported (Drake's element needs a positive free length: ``springs.ZERO_REST_REASON``).
+The audit reads every spring back from the plant and checks it against the scene.
 """
 
 from __future__ import annotations
@@ -22,8 +26,9 @@ import numpy as np
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
 from dalembert.adapters.drake.charts import RECHART_PITCH
 from dalembert.adapters.drake.loops import ANCHOR, CONTINUOUS_REASON, LOOP_KINDS
+from dalembert.adapters.drake.springs import refusal as spring_refusal
 from dalembert.adapters.drake.stepping import SCHEMES, simulate
-from dalembert.scene import EFFECTS
+from dalembert.scene import EFFECTS, SPRING_EFFECTS
 
 __all__ = ["DrakeAdapter"]
 
@@ -59,7 +64,8 @@ class DrakeAdapter(Adapter):
     """Drake (``pydrake``): the scene as a ``MultibodyPlant``, Drake's integrators or its discrete mode."""
 
     name = "drake"
-    effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS)  # loops: the discrete integrator only
+    # loops: the discrete integrator only; springs: both modes, a positive rest length only
+    effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS) | SPRING_EFFECTS
     integrators = _integrators()
 
     def version(self):
@@ -72,6 +78,8 @@ class DrakeAdapter(Adapter):
         if reason is None and scene.loops and settings.integrator != "discrete":
             kinds = ", ".join(sorted({lp.effect for lp in scene.loops}))
             return f"{kinds} with the integrator {settings.integrator!r}: {CONTINUOUS_REASON}"
+        if reason is None and scene.springs:
+            return spring_refusal(scene)
         return reason
 
     def describe(self, scene, settings):
@@ -126,6 +134,7 @@ class DrakeAdapter(Adapter):
                                   f"x along w; at t = 0 and when |pitch| > {RECHART_PITCH} rad) to stay clear of "
                                   "pitch = +-pi/2 (dalembert.adapters.drake.charts)"),
             **(self._loop_audit(p["model"]) if p["model"].loops else {}),
+            **self._spring_audit(p["model"]),
             "drake_version": self.version(),
         }
 
@@ -150,6 +159,32 @@ class DrakeAdapter(Adapter):
             "loop_reactions": ("reaction_force:<loop> from the constraints' generalized force in the step "
                                "(M a + C v - tau_g - tau_loads; Drake reports no constraint forces) resolved on the "
                                "loop's rows, minimum-norm (loops.loop_forces)"),
+        }
+
+
+    @staticmethod
+    def _spring_audit(model):
+        """The springs as the plant holds them (``springs.read_springs``: bodies, points, free length, stiffness,
+        damping read from its ``LinearSpringDamper`` elements, not from the scene), whether they are exactly the
+        scene's, and the plant's other passive elements (none: joint damping is ``max_joint_damping``)."""
+        from dalembert.adapters.drake.springs import passive_elements, read_springs
+
+        plant = model.plant
+        built = read_springs(plant)
+        wanted = [dict(body_a=sp.body_a, point_a=sp.point_a, body_b=sp.body_b, point_b=sp.point_b,
+                       rest_length=sp.rest_length, stiffness=sp.stiffness, damping=sp.damping)
+                  for sp in model.scene.springs]
+        return {
+            "springs": {sp.name: (f"LinearSpringDamper {b['body_a']} {list(b['point_a'])} -> {b['body_b']} "
+                                  f"{list(b['point_b'])}, free length {b['rest_length']!r} m, stiffness "
+                                  f"{b['stiffness']!r} N/m, damping {b['damping']!r} N s/m")
+                        for sp, b in zip(model.scene.springs, built)},
+            "springs_as_scene": built == wanted,  # bit for bit: every number went in unchanged
+            "spring_force_path": ("" if not built else
+                                  "force element: at every stage (continuous)" if plant.time_step() == 0.0 else
+                                  "force element: explicit, at the step's start (q0, v0), damper included "
+                                  "(discrete update; SAP's implicit damping is joint damping only)"),
+            "other_passive_elements": passive_elements(plant),
         }
 
 

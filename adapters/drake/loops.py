@@ -178,8 +178,9 @@ def loop_forces(model, context, plant_context, rcond):
     state in ``plant_context`` (``context``: the diagram's, for the loads).
 
     SAP's step solves ``M (v' - v) / dt = tau(q, v) - C(q, v) v + J^T gamma / dt`` (no joint damping, no
-    contact: the ``kLagged`` approximation changes contact only), so the constraints' generalized force is
-    ``tau_c = M a + C v - tau_g - tau_loads`` with ``a = (v' - v) / dt`` the plant's generalized
+    contact: the ``kLagged`` approximation changes contact only; ``tau`` holds gravity, the loads and the
+    spring-dampers, all explicit at ``(q, v)``: ``springs``), so the constraints' generalized force is
+    ``tau_c = M a + C v - tau_g - tau_springs - tau_loads`` with ``a = (v' - v) / dt`` the plant's generalized
     acceleration (its output port, evaluated from this state: ``SetUseSampledOutputPorts(False)``). The
     loop forces ``f`` solve ``J^T f = tau_c`` in the least-squares, minimum-norm sense (singular values below
     ``rcond`` of the largest cut, as the reference cuts its redundant rows: ``closure.RANK_RTOL``), so a
@@ -190,15 +191,15 @@ def loop_forces(model, context, plant_context, rcond):
 
     plant = model.plant
     a = plant.get_generalized_acceleration_output_port().Eval(plant_context)
-    tau = plant.CalcMassMatrix(plant_context) @ a + plant.CalcBiasTerm(plant_context) \
-        - plant.CalcGravityGeneralizedForces(plant_context)
+    forces = MultibodyForces(plant)
+    plant.CalcForceElementsContribution(plant_context, forces)  # gravity and the spring-dampers, at (q, v)
     if model.loads is not None:
-        forces = MultibodyForces(plant)
         for F in model.loads.get_output_port(0).Eval(model.loads.GetMyContextFromRoot(context)):
             body = plant.get_body(F.body_index)
             R_WB = plant.EvalBodyPoseInWorld(plant_context, body).rotation().matrix()
             body.AddInForce(plant_context, R_WB @ F.p_BoBq_B, F.F_Bq_W, plant.world_frame(), forces)
-        tau = tau - plant.CalcGeneralizedForces(plant_context, forces)
+    tau = plant.CalcMassMatrix(plant_context) @ a + plant.CalcBiasTerm(plant_context) \
+        - plant.CalcGeneralizedForces(plant_context, forces)
     rows = _rows(model, plant_context)
     J = np.vstack([np.atleast_2d(Jl) for Jl, _ in rows])
     f = np.linalg.lstsq(J.T, tau, rcond=rcond)[0]

@@ -18,6 +18,8 @@
   evaluation of the dynamics.
 * Continuous mode (``time_step = 0``: Drake's integrators) or discrete mode
   (``time_step = dt``: the plant's own discrete update, SAP).
+* Spring-dampers (``Scene.springs``) as ``LinearSpringDamper`` force elements
+  (``springs``), in both modes; the only force elements besides the gravity field.
 * Loop closures (``Scene.loops``) as SAP ball and distance constraints, in discrete
   mode only (``loops``: Drake's continuous plant takes no constraints); a loop to the
   world is attached to a body welded to the world (``loops.ANCHOR``).
@@ -54,6 +56,7 @@ class DrakeModel:
     bodies : dict body name -> Drake ``RigidBody``
     joints : dict child name -> Drake joint (welds included)
     loops : list of ``loops.LoopConstraints`` (empty in continuous mode)
+    springs : list of ``springs.SpringElement`` (one per scene spring)
     time_step : float — 0 for continuous mode, else the discrete step (s)
     summary : str — the plant as text (``dalembert show-model``)
     """
@@ -66,6 +69,7 @@ class DrakeModel:
 
         from dalembert.adapters.drake.loads import SceneLoads
         from dalembert.adapters.drake.loops import add_loops
+        from dalembert.adapters.drake.springs import add_springs
 
         self.scene, self.time_step = scene, float(time_step)
         builder = DiagramBuilder()
@@ -99,6 +103,7 @@ class DrakeModel:
             self.joints[j.child] = plant.AddJoint(joint)
         # loop closures: SAP constraints, discrete mode only (``loops``; Drake's integrators take none)
         self.loops = add_loops(plant, scene, self.bodies) if scene.loops and self.time_step > 0.0 else []
+        self.springs = add_springs(plant, scene, self.bodies)
         plant.mutable_gravity_field().set_gravity_vector(np.asarray(scene.gravity, dtype=float))
         if self.time_step > 0.0:  # output ports from the state they are evaluated at, not from the last step
             plant.SetUseSampledOutputPorts(False)
@@ -149,7 +154,8 @@ class DrakeModel:
             "collision_geometries": int(plant.num_collision_geometries()),
             "actuators": int(plant.num_actuators()),
             "constraints": int(plant.num_constraints()),
-            "force_elements": int(plant.num_force_elements()),  # 1: the uniform gravity field, always present
+            # the uniform gravity field, always present, and one LinearSpringDamper per spring
+            "force_elements": int(plant.num_force_elements()),
             "time_step": float(plant.time_step()),
             "nq": int(plant.num_positions()), "nv": int(plant.num_velocities()),
         }
@@ -180,6 +186,11 @@ class DrakeModel:
             lines.append(f"loop {lp.name}: {lp.kind} {lp.body_a} -> {lp.body_b}: {what} (SAP, near-rigid)")
         if self.scene.loops and not self.loops:
             lines.append(f"loops: {len(self.scene.loops)} not built (continuous mode takes no constraints)")
+        for se in self.springs:
+            fe = se.element
+            lines.append(f"spring {se.spring.name}: LinearSpringDamper {fe.bodyA().name()} {fe.p_AP().tolist()} -> "
+                         f"{fe.bodyB().name()} {fe.p_BQ().tolist()}, free length {fe.free_length():g} m, stiffness "
+                         f"{fe.stiffness():g} N/m, damping {fe.damping():g} N s/m")
         for ld in self.scene.loads:
             lines.append(f"load {ld.effect} on {ld.body}: {list(ld.vector)} at {list(ld.point)} (SceneLoads system)")
         return "\n".join(lines) + "\n"

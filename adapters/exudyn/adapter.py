@@ -11,7 +11,9 @@ accuracy), ``trapezoidal-index2``, ``explicit-euler``, ``explicit-midpoint``,
 ``ode23`` (adaptive: ``rtol``/``atol``, driven sample by sample). ``DVERK6`` is
 listed by Exudyn 1.13 but not implemented, so it is not offered. Loop closures
 (``Scene.loops``, built by ``model``) run with the two implicit solvers only; each
-loop's force ON its body b is read back as ``reaction_force:<loop name>``. A solver that
+loop's force ON its body b is read back as ``reaction_force:<loop name>``. Spring-dampers
+(``Scene.springs``, ``springs``) run with every solver and both joint formulations; the audit reads
+each back from the system that ran. A solver that
 stops before the end raises, and the run is stored as ``failed`` with the time
 reached.
 """
@@ -25,7 +27,8 @@ from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_cho
 from dalembert.adapters.exudyn import sampling
 from dalembert.adapters.exudyn.loops import loop_axes
 from dalembert.adapters.exudyn.model import CONSTRAINED_AXES, JOINTS, NODES, build, rigid_bodies
-from dalembert.scene import EFFECTS, LOOP_EFFECTS, WORLD
+from dalembert.adapters.exudyn.springs import passive_effects, unexpected_passive
+from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS, WORLD
 
 __all__ = ["ExudynAdapter"]
 
@@ -61,7 +64,7 @@ class ExudynAdapter(Adapter):
 
     name = "exudyn"
     # ball joints and welds only with joints=redundant, loops only with implicit solvers (see ``unsupported``)
-    effects = EFFECTS | LOOP_EFFECTS
+    effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS
     integrators = {
         **{k: IntegratorSpec(True, OPTIONS, f"Exudyn {v}") for k, v in IMPLICIT.items()},
         **{k: IntegratorSpec(k not in ADAPTIVE, OPTIONS, f"Exudyn {v}") for k, v in EXPLICIT.items()},
@@ -209,7 +212,8 @@ class ExudynAdapter(Adapter):
                 "constraints": sum(sum(CONSTRAINED_AXES[p["scene"].joint(c).kind]) for c in built["redundant_joints"])
                 + sum(sum(r.axes) for r in built["loop_rows"].values()),
                 "loop_rows": {name: dict(constrained=sum(r.axes), dropped=list(r.dropped))
-                              for name, r in built["loop_rows"].items()}}
+                              for name, r in built["loop_rows"].items()},
+                "built": built}  # the system that ran, for the audit to read back
         n_rhs = (solved["steps"] + rejected) * STAGES.get(integrator, 1)
         return Outcome(read, solved["wall"], solved["steps"], n_rhs, info)
 
@@ -288,6 +292,10 @@ class ExudynAdapter(Adapter):
                 for lp in scene.loops:  # the loop forces on this link (equal and opposite on a and b)
                     if name in (lp.body_a, lp.body_b):
                         f -= loop_forces[lp.name] if lp.body_b == name else -loop_forces[lp.name]
+                for sp in scene.springs:  # Exudyn's spring force: its Force is the one on a's point
+                    if name in (sp.body_a, sp.body_b):
+                        f_a = series(f"__spring:{sp.name}", "f", 3)
+                        f -= f_a if sp.body_a == name else -f_a
                 reactions[name] = f
         for child, R0 in built["redundant_joints"].items():  # redundant coordinates: from the bodies
             j = scene.joint(child)
@@ -338,6 +346,7 @@ class ExudynAdapter(Adapter):
             "exudyn_version": self.version(),
             "reactions": self._reaction_method(scene, st),
             **({"loops": self._loop_audit(scene, outcome)} if scene.loops else {}),
+            **self._spring_audit(scene, outcome),
             **({"known_issue": ROTVEC_LG_REACTION} if self._rotvec_lg_reactions(scene, st) else {}),
         }
 
@@ -359,6 +368,23 @@ class ExudynAdapter(Adapter):
                          "frame) turned into world axes and negated; the ObjectConnectorDistance's Force (a scalar, "
                          "the tension) along the line from b's point to a's"),
         }
+
+    @staticmethod
+    def _spring_audit(scene, outcome):
+        """The springs as the system that ran holds them (``springs.read_springs`` once it was assembled:
+        parameters, ends, initial length and tension read from Exudyn, each compared with the scene) and every
+        passive force element it carries (``springs.passive_effects``): the springs' connectors and nothing
+        else."""
+        built = outcome.info.get("built")
+        if built is None:  # an outcome that did not come from ``run`` (which always keeps its system)
+            return {}
+        passive = passive_effects(built["mbs"])
+        out = {"passive": passive}
+        if scene.springs:
+            out["springs"] = built["spring_readout"]
+        rigid = sum(owner != WORLD for owner in built["owners"].values())
+        out["passive_extra"] = unexpected_passive(passive, scene, rigid)  # empty: no passive force but the scene's
+        return out
 
     @staticmethod
     def _rotvec_lg_reactions(scene, settings):

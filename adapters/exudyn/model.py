@@ -36,6 +36,9 @@ Free bodies on rigid-body nodes, jointed trees in minimal coordinates
   redundant rows), ``ObjectConnectorDistance`` for distance loops. Constraints make any scene an
   index-3 (or, with trapezoidal-index2, index-2) DAE: implicit solvers only. The loop's force is read
   from its ``ForceLocal`` (ball, revolute) or ``Force`` (distance: the scalar tension).
+* Spring-dampers (``Scene.springs``), in either formulation: one ``ObjectConnectorSpringDamper`` from a
+  marker at body a's point (marker 0) to one at body b's (``springs``), whose force is read from its
+  ``Force`` (the force on body a's point, world axes). They run with every solver.
 * Loads: ``LoadForceVector``/``LoadTorqueVector`` on a rigid marker at the
   body point, ``bodyFixed=True`` for follower loads (with ``bodyFixed=False``
   the force stays world-fixed: phi(2 s) = 2.44 rad instead of 12 on the rod).
@@ -48,6 +51,7 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.exudyn.loops import joint_frame, loop_axes
+from dalembert.adapters.exudyn.springs import add_springs, read_springs
 from dalembert.scene import WORLD
 
 __all__ = ["build", "rigid_bodies", "axis_frame", "NODES", "JOINTS", "CONSTRAINED_AXES"]
@@ -74,11 +78,13 @@ def build(scene, settings, assemble=True):
     unless ``assemble`` is False (for the summary alone).
 
     Returns a dict: ``SC``, ``mbs`` (the system container and system), ``sensors`` (body or
-    ``__q``/``__v``/``__joint:<child>``/``__loop:<loop name>`` -> quantity -> sensor number), ``X_EB``
+    ``__q``/``__v``/``__joint:<child>``/``__loop:<loop name>``/``__spring:<spring name>`` -> quantity -> sensor number), ``X_EB``
     (per link), ``links`` (the kinematic tree's bodies, in link order), ``redundant_joints`` (child ->
     joint frame in the parent's axes, ``R_PJ R_A``), ``loops`` (loop name -> its joint frame Ja in body
-    a's scene frame, ``R_BJa``), ``loop_rows`` (loop name -> ``loops.LoopRows``) and ``summary`` (text,
-    for reports).
+    a's scene frame, ``R_BJa``), ``loop_rows`` (loop name -> ``loops.LoopRows``), ``springs`` (spring name
+    -> its connector's object and marker numbers, ``springs.add_springs``), ``owners`` (rigid body or ground
+    object number -> scene body name, ``WORLD`` for a ground), ``summary`` (text, for reports) and
+    ``spring_readout`` (``springs.read_springs`` right after assembly; empty unassembled).
     """
     import exudyn as exu
     from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid, ObjectConnectorDistance,
@@ -94,6 +100,7 @@ def build(scene, settings, assemble=True):
     redundant = settings.options.get("joints", "minimal") == "redundant"
     OV = exu.OutputVariableType
     summary, sensors, markers, bodies = [], {}, {}, {}
+    owners = {}  # rigid body or ground object number -> scene body name (WORLD for a ground)
     # --- rigid bodies: free bodies, and every body with joints=redundant
     rigid = rigid_bodies(scene, redundant)
     state0 = spatial.initial_body_states(scene) if rigid else {}  # world states at t = 0
@@ -107,6 +114,7 @@ def build(scene, settings, assemble=True):
             kwargs["gravity"] = list(g)
         obj = mbs.CreateRigidBody(**kwargs)["bodyNumber"]
         bodies[name] = obj
+        owners[int(obj)] = name
         markers[name] = lambda p, R=np.eye(3), obj=obj: mbs.AddMarker(MarkerBodyRigid(
             bodyNumber=obj, localHT=exu.HT(rotation=R, translation=list(p))))
         sensors[name] = {k: mbs.AddSensor(SensorBody(bodyNumber=obj, outputVariableType=v))
@@ -118,6 +126,7 @@ def build(scene, settings, assemble=True):
     redundant_joints = {}
     if redundant and any(j.kind != "free" for j in scene.joints):
         ground = mbs.AddObject(ObjectGround())
+        owners[int(ground)] = WORLD
         for j in scene.joints:
             if j.kind == "free":
                 continue
@@ -189,11 +198,13 @@ def build(scene, settings, assemble=True):
                        f"(minimal coordinates), gravity {g.tolist()}")
     # --- loop closures: one constraint object from a marker on body a (marker 0) to one on body b,
     # its rows those independent at the initial state (``loops.loop_axes``)
-    loops, rows = {}, {}
-    if scene.loops:
+    if scene.loops or scene.springs:  # their ends on the world: markers on a ground
         ground = mbs.AddObject(ObjectGround())
+        owners[int(ground)] = WORLD
         markers[WORLD] = lambda p, R=np.eye(3): mbs.AddMarker(MarkerBodyRigid(
             bodyNumber=ground, localHT=exu.HT(rotation=R, translation=list(p))))
+    loops, rows = {}, {}
+    if scene.loops:
         rows = loop_axes(scene)
         for lp in scene.loops:
             R_BJa, R_BJb = joint_frame(lp)
@@ -210,6 +221,9 @@ def build(scene, settings, assemble=True):
             sensors[f"__loop:{lp.name}"] = {"f": mbs.AddSensor(SensorObject(
                 objectNumber=obj, outputVariableType=OV.Force if lp.kind == "distance" else OV.ForceLocal))}
             loops[lp.name] = R_BJa
+    # --- spring-dampers: one ObjectConnectorSpringDamper from a marker on body a (marker 0) to one on body b
+    springs, lines = add_springs(mbs, scene, markers, sensors)
+    summary += lines
     # --- loads
     for ld in scene.loads:
         R_EB = X_EB.get(ld.body, (None, np.eye(3)))[1]  # a rigid body's E is B
@@ -219,7 +233,12 @@ def build(scene, settings, assemble=True):
         Load = LoadForceVector if ld.kind == "force" else LoadTorqueVector
         mbs.AddLoad(Load(markerNumber=marker, loadVector=vec, bodyFixed=follower))
         summary.append(f"{Load.__name__} on {ld.body} at {list(ld.point)}, bodyFixed={follower}")
+    built = dict(SC=SC, mbs=mbs, sensors=sensors, X_EB=X_EB, links=[b.name for b in links],
+                 redundant_joints=redundant_joints, loops=loops, loop_rows=rows, springs=springs, owners=owners,
+                 summary="\n".join(summary) + "\n", spring_readout={})
     if assemble:
         mbs.Assemble()
-    return dict(SC=SC, mbs=mbs, sensors=sensors, X_EB=X_EB, links=[b.name for b in links],
-                redundant_joints=redundant_joints, loops=loops, loop_rows=rows, summary="\n".join(summary) + "\n")
+        # the springs as Exudyn holds them, at the initial state (its connectors report their length and
+        # force in the current configuration only, which is the initial one until the solve)
+        built["spring_readout"] = read_springs(mbs, scene, built)
+    return built

@@ -8,7 +8,9 @@ step), or in Python with ``--option loop=python`` and wherever the compiled loop
 cannot be built (the audit says which ran). Welds as constraints and loop
 closures (``loops``: ball and revolute; distance is unsupported) run
 ``pin.constraintDynamics``, which the compiled loop does not have: their
-fixed-step runs take the Python loop.
+fixed-step runs take the Python loop. Spring-dampers (``springs``) are external
+forces at every evaluation, in every loop; the audit identifies each one's
+stiffness, damping and rest length from the dynamics the run used.
 """
 
 from __future__ import annotations
@@ -19,10 +21,10 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
-from dalembert.adapters.pinocchio import loops
+from dalembert.adapters.pinocchio import loops, springs
 from dalembert.adapters.pinocchio.integrators import STAGES, adaptive, fixed_step
 from dalembert.adapters.pinocchio.model import WELDS, PinocchioModel
-from dalembert.scene import EFFECTS
+from dalembert.scene import EFFECTS, SPRING_EFFECTS
 from dalembert.settings import steps_per_interval
 
 __all__ = ["PinocchioAdapter"]
@@ -36,7 +38,8 @@ class PinocchioAdapter(Adapter):
     """Pinocchio (``pin``), integrators owned by the adapter."""
 
     name = "pinocchio"
-    effects = EFFECTS | frozenset(f"loop:{k}" for k in loops.LOOP_KINDS)  # loop:distance: loops.DISTANCE_REASON
+    # loop:distance: loops.DISTANCE_REASON
+    effects = EFFECTS | SPRING_EFFECTS | frozenset(f"loop:{k}" for k in loops.LOOP_KINDS)
     integrators = {
         "euler": IntegratorSpec(True, ("loop", "welds"), "semi-implicit Euler on the group"),
         "rk4": IntegratorSpec(True, ("loop", "welds"), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
@@ -64,6 +67,9 @@ class PinocchioAdapter(Adapter):
         if scene.loads:
             return ("welds=constraint with loads: pin.constraintDynamics takes no external forces — "
                     "use welds=tree")
+        if scene.springs:
+            return ("welds=constraint with spring-dampers: pin.constraintDynamics takes no external forces (and the "
+                    "springs' joint torques are not checked against welds held by constraints) — use welds=tree")
         if any(j.kind in ("revolute", "ball") for j in scene.joints):
             return ("welds=constraint with revolute or ball joints: their reactions would miss the "
                     "constraint forces — use welds=tree")
@@ -152,7 +158,7 @@ class PinocchioAdapter(Adapter):
                     for lc in pm.loop_contacts:
                         loop_forces[lc.loop.name][k] = loops.force_on_b(pm.cdatas, lc, lams)
                     forces = pm.constraint_forces(lams)
-                fext = pm.external_forces(q) if pm.has_loads else None
+                fext = pm.external_forces(q, v) if pm.has_forces else None
                 if forces is not None:
                     fext = forces if fext is None else [f + c for f, c in zip(fext, forces)]
                 if fext is None:
@@ -198,18 +204,53 @@ class PinocchioAdapter(Adapter):
     # ------------------------------------------------------------ audit
     def audit(self, prepared, outcome):
         pm = prepared["pm"]
+        model = pm.model
         return {
-            "gravity": tuple(float(g) for g in pm.model.gravity.linear),
-            "joints": {name: pm.model.joints[jid].shortname() for name, jid in pm.joint_ids.items()},
-            "external_forces_per_evaluation": [f"{ld.effect} on {ld.body}" for ld in prepared["scene"].loads],
-            "nq": int(pm.model.nq), "nv": int(pm.model.nv),
+            "gravity": tuple(float(g) for g in model.gravity.linear),
+            "joints": {name: model.joints[jid].shortname() for name, jid in pm.joint_ids.items()},
+            "external_forces_per_evaluation": [f"{ld.effect} on {ld.body}" for ld in prepared["scene"].loads]
+            + [f"spring_damper {el.name}: frames {model.frames[el.frame_a].name} -> {model.frames[el.frame_b].name}"
+               for el in pm.springs],
+            "nq": int(model.nq), "nv": int(model.nv),
             "integrator": prepared["settings"].integrator,
             "loop": outcome.info.get("loop", ""),
             "pinocchio_version": self.version(),
             "contacts": 0,
             "constraint_rows": int(sum(cm.residualSize() for cm in pm.cmodels)) if pm.constrained else 0,
+            # what Pinocchio's joints could add on their own: none is set (springs are external forces only)
+            "joint_passive_effects": {name: float(np.abs(getattr(model, name)).max(initial=0.0))
+                                      for name in ("damping", "friction", "armature", "rotorInertia")},
             **(self._loop_audit(pm) if pm.loop_contacts else {}),
+            **(self._spring_audit(prepared, outcome) if pm.springs else {}),
         }
+
+    @staticmethod
+    def _spring_audit(prepared, outcome):
+        """Each spring identified from the generalized force the run's right-hand side gives it at the initial
+        configuration (``springs.identify``): the compiled one's where the compiled loop ran, else the Python
+        one's (the joint torques ``constraintDynamics`` is given, with loops or welds as constraints)."""
+        import pinocchio as pin
+
+        pm = prepared["pm"]
+        model, data = pm.model, pm.data
+        native = prepared["native"] if outcome.info.get("loop", "").startswith("C++") else None
+        if native is not None:
+            by = "the compiled right-hand side (stepper.cpp): M a"
+
+            def forces(q, v, elements):
+                return springs.mass_matrix(model, data, q) @ native.acceleration(q, v, elements)
+        elif pm.constrained:
+            by = "the joint torques given to pin.constraintDynamics (PinocchioModel.load_torques)"
+            forces = pm.load_torques
+        else:
+            by = "the Python right-hand side (pin.aba with the external forces): M a"
+
+            def forces(q, v, elements):
+                a = pin.aba(model, data, q, v, pm.tau, pm.external_forces(q, v, elements))
+                return springs.mass_matrix(model, data, q) @ a
+        q0 = prepared["q0"]
+        return {"springs": {el.name: springs.identify(pm, el, forces, q0) for el in pm.springs},
+                "springs_identified_from": by}
 
     @staticmethod
     def _loop_audit(pm):

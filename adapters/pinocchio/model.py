@@ -10,6 +10,8 @@
   the scene body frame.
 * Loop closures: 3D ``RigidConstraintModel``s between the joints that carry the two bodies
   (``loops``), solved with the welds' by ``pin.constraintDynamics``.
+* Spring-dampers: an operational frame at each end and external forces at every evaluation
+  (``springs``: Pinocchio has no spring element).
 * ``model.gravity`` is set from the scene — Pinocchio defaults to -9.81 in z,
   so a scene without gravity gets zero explicitly.
 
@@ -28,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import closure, spatial
+from dalembert.adapters.pinocchio import springs
 from dalembert.scene import WORLD
 
 __all__ = ["PinocchioModel", "WELDS", "depth_first_order"]
@@ -118,6 +121,11 @@ class PinocchioModel:
             model.addFrame(pin.Frame(body.name, jid, X_EB, pin.FrameType.OP_FRAME))
             lines.append(f"{body.name}: {j.kind} -> pin joint {jid} "
                          f"({model.joints[jid].shortname() if jid else 'universe'}), mass {body.mass:g} kg")
+        self.springs = springs.build(self, model)  # frames at the ends: before createData
+        for el in self.springs:
+            lines.append(f"spring {el.name!r}: external forces between frames {model.frames[el.frame_a].name!r} "
+                         f"(joint {el.joint_a}) and {model.frames[el.frame_b].name!r} (joint {el.joint_b}), "
+                         f"k = {el.stiffness:g} N/m, c = {el.damping:g} N s/m, l0 = {el.rest_length:g} m")
         self.model = model
         self.data = model.createData()
         self.cmodels = self.cdatas = self.prox = None
@@ -249,16 +257,24 @@ class PinocchioModel:
                 self.world_loads.append((jid, p_E, vec if ld.kind == "force" else None,
                                          vec if ld.kind == "torque" else None))
         self.has_loads = bool(self.scene.loads)
+        self.has_forces = self.has_loads or bool(self.springs)  # external forces at every evaluation
         self.fext = pin.StdVec_Force()
         for _ in range(model.njoints):
             self.fext.append(pin.Force.Zero())
         self.tau = np.zeros(model.nv)
 
-    def external_forces(self, q):
-        """Per-joint local forces for ``aba``/``rnea`` at configuration ``q``."""
+    def external_forces(self, q, v=None, spring_elements=None):
+        """Per-joint local forces for ``aba``/``rnea`` at ``(q, v)`` (``pin.StdVec_Force``, reused): the
+        loads and the springs (``spring_elements``, default every one; ``v`` (nv,) is needed when there are
+        any: the dampers act on the rate)."""
         import pinocchio as pin
 
-        if self.world_loads:
+        elements = self.springs if spring_elements is None else spring_elements
+        if elements:
+            if v is None:
+                raise ValueError("PinocchioModel.external_forces: v is None — the springs need the velocities")
+            pin.forwardKinematics(self.model, self.data, q, v)
+        elif self.world_loads:
             pin.forwardKinematics(self.model, self.data, q)
         for i in range(self.model.njoints):
             self.fext[i] = self.const_f.get(i, pin.Force.Zero())
@@ -269,14 +285,16 @@ class PinocchioModel:
                 self.fext[jid] = self.fext[jid] + pin.Force(f_E, np.cross(p_E, f_E))
             else:
                 self.fext[jid] = self.fext[jid] + pin.Force(np.zeros(3), R_WE.T @ t_W)
+        springs.add_forces(elements, self.data, self.fext)
         return self.fext
 
-    def load_torques(self, q, v):
-        """The loads' generalized forces ``sum J_i^T f_i`` (nv,) at ``(q, v)``: ``constraintDynamics`` takes
-        no external forces, only ``tau``; ``rnea`` with them subtracts exactly this from ``nle``."""
+    def load_torques(self, q, v, spring_elements=None):
+        """The loads' and springs' (``external_forces``) generalized forces ``sum J_i^T f_i`` (nv,) at ``(q, v)``:
+        ``constraintDynamics`` takes no external forces, only ``tau``; ``rnea`` with them subtracts exactly this
+        from ``nle``."""
         import pinocchio as pin
 
-        fext = self.external_forces(q)
+        fext = self.external_forces(q, v, spring_elements)
         return (pin.nonLinearEffects(self.model, self.data, q, v)
                 - pin.rnea(self.model, self.data, q, v, np.zeros(self.model.nv), fext))
 
@@ -284,23 +302,23 @@ class PinocchioModel:
         import pinocchio as pin
 
         if self.constrained:
-            tau = self.load_torques(q, v) if self.has_loads else self.tau
+            tau = self.load_torques(q, v) if self.has_forces else self.tau
             return pin.constraintDynamics(self.model, self.data, q, v, tau, self.cmodels, self.cdatas, self.prox)
-        if self.has_loads:
-            return pin.aba(self.model, self.data, q, v, self.tau, self.external_forces(q))
+        if self.has_forces:
+            return pin.aba(self.model, self.data, q, v, self.tau, self.external_forces(q, v))
         return pin.aba(self.model, self.data, q, v, self.tau)
 
     def acceleration_function(self):
         """``acc(q, v)`` with the fewest Python calls: the external forces are built once
-        when they do not depend on the configuration (no world-frame loads)."""
+        when they do not depend on the state (no world-frame loads, no springs)."""
         import pinocchio as pin
 
         aba, model, data, tau = pin.aba, self.model, self.data, self.tau
         if self.constrained:
             return self.acceleration
-        if not self.has_loads:
+        if not self.has_forces:
             return lambda q, v: aba(model, data, q, v, tau)
-        if not self.world_loads:
+        if not self.world_loads and not self.springs:
             fext = self.external_forces(None)  # follower loads only: constant in the joint frames
             return lambda q, v: aba(model, data, q, v, tau, fext)
         return self.acceleration

@@ -2,7 +2,7 @@
 
 A Python loop around Pinocchio's C++ calls costs 6-9x the calls themselves
 (``python -m benchmarks.pinocchio``), so the work-precision diagrams would
-measure Python, not Pinocchio. The same integrators and loads in C++ against the
+measure Python, not Pinocchio. The same integrators, loads and spring-dampers in C++ against the
 installed Pinocchio (headers and library from the ``pin`` wheel, Eigen from
 ``cmeel-eigen``) give the same numbers (tests/test_pinocchio.py) without a
 Python call per step.
@@ -27,6 +27,7 @@ import sys
 
 import numpy as np
 
+from dalembert.adapters.pinocchio import springs
 from dalembert.cache import cache_dir
 
 __all__ = ["library", "NativeModel", "METHODS"]
@@ -95,17 +96,19 @@ def library():
         _cached["error"] = f"{type(e).__name__}: {e}" if not isinstance(e, RuntimeError) else str(e)
         raise RuntimeError(_cached["error"]) from None
     D, Li, In = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long), ctypes.POINTER(ctypes.c_int)
+    forces = [ctypes.c_int, D, ctypes.c_int, In, D, D, In, ctypes.c_int, In, D, D]  # has_forces ... spring_params
     lib.dalembert_pin_fixed.restype = ctypes.c_int
     lib.dalembert_pin_fixed.argtypes = [ctypes.c_char_p, ctypes.c_int, ctypes.c_int, D, D, ctypes.c_int, D, Li,
-                                        ctypes.c_int, D, ctypes.c_int, In, D, D, In, D, D, Li, ctypes.c_char_p,
-                                        ctypes.c_int]
+                                        *forces, D, D, Li, ctypes.c_char_p, ctypes.c_int]
+    lib.dalembert_pin_acc.restype = ctypes.c_int
+    lib.dalembert_pin_acc.argtypes = [ctypes.c_char_p, D, D, *forces, D, ctypes.c_char_p, ctypes.c_int]
     _cached["lib"] = lib
     return lib
 
 
 class NativeModel:
     """A ``PinocchioModel`` made ready for the compiled loop: the library loaded (built if
-    needed), the model serialized and the constant loads packed, once (in the adapter's
+    needed), the model serialized and the constant loads and the springs packed, once (in the adapter's
     ``prepare``, not timed). ``RuntimeError`` with the reason where the library cannot be had.
     """
 
@@ -115,7 +118,8 @@ class NativeModel:
         self.nq, self.nv = model.nq, model.nv
         self.model_bytes = model.saveToString().encode()
         self.dexpinv_kind = min(pm.dexpinv_kind(), 2)
-        self.has_loads = int(pm.has_loads)
+        self.has_forces = int(pm.has_forces)
+        self.springs = pm.springs
         self.const = np.zeros((model.njoints, 6))
         for jid, force in pm.const_f.items():
             self.const[jid] = force.vector
@@ -125,6 +129,27 @@ class NativeModel:
         self.w_point = _arr([w[1] for w in world] or [np.zeros(3)])
         self.w_vec = _arr([w[2] if w[2] is not None else w[3] for w in world] or [np.zeros(3)])
         self.w_torque = _arr([w[2] is None for w in world] or [0], np.int32)
+
+    def _forces(self, elements):
+        """The force arguments of both entry points, with the springs ``elements`` (``springs.pack``)."""
+        D, In = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_int)
+        joints, points, params = (_arr(x, x.dtype) for x in springs.pack(elements))
+        keep = (joints, points, params)  # alive until the call returns: the pointers point into them
+        return keep, (self.has_forces, self.const.ctypes.data_as(D), self.n_world, self.w_joint.ctypes.data_as(In),
+                      self.w_point.ctypes.data_as(D), self.w_vec.ctypes.data_as(D), self.w_torque.ctypes.data_as(In),
+                      len(elements), joints.ctypes.data_as(In), points.ctypes.data_as(D), params.ctypes.data_as(D))
+
+    def acceleration(self, q, v, elements=None):
+        """One evaluation of the compiled right-hand side: the accelerations (nv,) at ``q (nq,)``, ``v (nv,)``,
+        with the loads and the springs ``elements`` (default every one; the audit leaves one out)."""
+        D = ctypes.POINTER(ctypes.c_double)
+        q, v, a = _arr(q), _arr(v), np.full(self.nv, np.nan)
+        keep, forces = self._forces(self.springs if elements is None else elements)
+        err = ctypes.create_string_buffer(_ERR_LEN)
+        if self.lib.dalembert_pin_acc(self.model_bytes, q.ctypes.data_as(D), v.ctypes.data_as(D), *forces,
+                                      a.ctypes.data_as(D), err, _ERR_LEN):
+            raise RuntimeError(f"the compiled right-hand side failed: {err.value.decode()}")
+        return a
 
     def run(self, method, q0, v0, times, steps):
         """Step through ``times`` with ``steps[k]`` substeps per interval by ``method``.
@@ -137,12 +162,12 @@ class NativeModel:
         Q = np.full((len(times), self.nq), np.nan)
         V = np.full((len(times), self.nv), np.nan)
         taken, err = ctypes.c_long(0), ctypes.create_string_buffer(_ERR_LEN)
+        keep, forces = self._forces(self.springs)
         rc = self.lib.dalembert_pin_fixed(
             self.model_bytes, METHODS[method], self.dexpinv_kind, q0.ctypes.data_as(D), v0.ctypes.data_as(D),
-            len(times), times.ctypes.data_as(D), steps.ctypes.data_as(Li), self.has_loads,
-            self.const.ctypes.data_as(D), self.n_world, self.w_joint.ctypes.data_as(In),
-            self.w_point.ctypes.data_as(D), self.w_vec.ctypes.data_as(D), self.w_torque.ctypes.data_as(In),
+            len(times), times.ctypes.data_as(D), steps.ctypes.data_as(Li), *forces,
             Q.ctypes.data_as(D), V.ctypes.data_as(D), ctypes.byref(taken), err, _ERR_LEN)
+        del keep
         return Q, V, int(taken.value), (err.value.decode() if rc else None)
 
 
