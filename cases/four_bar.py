@@ -74,8 +74,8 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.case import Case, Tolerance, case, loop_closure_invariants
+from dalembert.cases._parallelogram import ParallelogramChain, rod_pivot_inertia
 from dalembert.cases._sampling import sample_times
-from dalembert.reference.closed_form import RigidPendulum
 from dalembert.scene import Body, Joint, Loop, Scene
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
@@ -136,39 +136,41 @@ def four_bar(length=1.0, mass=1.0, radius=0.01, gravity=9.81, phi0=np.pi / 2, ra
 def parallelogram_pendulum(length=1.0, mass=1.0, radius=0.01, gravity=9.81, phi0=np.pi / 2, rate0=6.0):
     """The closed form's pendulum (module docstring): ``(mass, com_distance, inertia_pivot, gravity, theta0,
     rate0)`` for ``dalembert.reference.closed_form.RigidPendulum``, with ``theta = phi + pi/2``."""
-    I_A = mass * (3 * radius**2 + length**2) / 12 + mass * (0.5 * length) ** 2
-    return 2 * mass, length, 2 * I_A + mass * length**2, gravity, phi0 + np.pi / 2, rate0
+    p = _chain(length, mass, radius, gravity, phi0, rate0).pendulum
+    return p.mass, p.com_distance, p.inertia_pivot, p.gravity, p.theta0, p.rate0
+
+
+def _chain(length, mass, radius, gravity, phi0, rate0):
+    """The one-window ``ParallelogramChain`` (``cases._parallelogram``) of the four-bar's parameters."""
+    return ParallelogramChain(1, length, mass, rod_pivot_inertia(length, mass, radius), gravity, phi0, rate0)
 
 
 class ParallelogramFourBar:
-    """The four-bar's motion in closed form (module docstring): bodies, joints and reactions.
+    """The four-bar's motion in closed form (module docstring): bodies, joints and reactions, the one-window
+    case of ``cases._parallelogram.ParallelogramChain`` placed in the x-z plane.
 
     Parameters are ``four_bar``'s (m, kg, m, m/s^2, rad, rad/s).
     """
 
     def __init__(self, length, mass, radius, gravity, phi0, rate0):
-        self.length, self.mass, self.gravity = float(length), float(mass), float(gravity)
-        self.pendulum = RigidPendulum(*parallelogram_pendulum(length, mass, radius, gravity, phi0, rate0))
-        self.I_A = mass * (3 * radius**2 + length**2) / 12 + mass * (0.5 * length) ** 2
+        self.length = float(length)
+        self.chain = _chain(length, mass, radius, gravity, phi0, rate0)
+        self.pendulum = self.chain.pendulum
 
     def angle(self, t):
         """Crank (and rocker) angle ``phi`` (rad) from +x towards +z, shape of ``t`` (s); continuous."""
-        return self.pendulum.angle(t) - np.pi / 2
+        return self.chain.angle(t)
 
     def trajectory(self, t):
         """The ``Trajectory`` at times ``t`` (ndarray (n,), s): body states (world), the joints'
         coordinates and rates, and the reactions ``reaction_force:<joint>`` (ON the child) and
         ``reaction_force:C`` (the loop's, ON the rocker), N, world."""
         t = np.asarray(t, dtype=float)
-        L, m, g = self.length, self.mass, self.gravity
-        phi, rate = self.angle(t), self.pendulum.rate(t)
-        I = self.pendulum.inertia_pivot
-        alpha = -2.0 * m * g * L * np.cos(phi) / I  # Lagrange's equation (module docstring)
+        L = self.length
+        phi, rate = self.chain.angle(t), self.chain.rate(t)
         c, s = np.cos(phi), np.sin(phi)
         zero = np.zeros_like(phi)
         u, n = np.stack([c, zero, s], axis=1), np.stack([-s, zero, c], axis=1)
-        tip_a = L * (alpha[:, None] * n - (rate**2)[:, None] * u)  # acceleration of B and C (and of the coupler)
-        a_rod = 0.5 * tip_a
         # joint frames (x along world x, z the axis along -y) turned by phi about their z
         q_rod = spatial.quat_multiply(spatial.matrix_to_quat(R_WJ), spatial.quat_from_axis_angle([0.0, 0.0, 1.0], phi))
         q_coupler = np.tile(spatial.matrix_to_quat(R_WJ), (len(t), 1))
@@ -181,10 +183,8 @@ class ParallelogramFourBar:
         joints = {"crank": JointStates(phi[:, None], rate[:, None]),
                   "coupler": JointStates(-phi[:, None], -rate[:, None]),
                   "rocker": JointStates(phi[:, None], rate[:, None])}
-        F_C = np.stack([0.5 * m * L * rate**2 * c - m**2 * g * L**2 * c * s / I, zero,
-                        -0.5 * m * (tip_a[:, 2] + g)], axis=1)
-        F_B = np.stack([F_C[:, 0] + m * tip_a[:, 0], zero, -F_C[:, 2]], axis=1)
-        lift = np.array([0.0, 0.0, m * g])  # minus the weight
-        extras = {"reaction_force:crank": m * a_rod + lift + F_B, "reaction_force:coupler": F_B,
-                  "reaction_force:rocker": m * a_rod + lift - F_C, "reaction_force:C": F_C}
+        H, G, pivot = self.chain.pin_forces(t)
+        to_world = lambda f: np.stack([f[:, 0], zero, f[:, 1]], axis=1)  # noqa: E731  (h, v) -> (x, y, z)
+        extras = {"reaction_force:crank": to_world(pivot[:, 0]), "reaction_force:coupler": to_world(G[:, 0]),
+                  "reaction_force:rocker": to_world(pivot[:, 1]), "reaction_force:C": to_world(H[:, 0])}
         return Trajectory(t, bodies, joints, extras)

@@ -192,13 +192,13 @@ class _SolveIVP:
             try:
                 with np.errstate(over="ignore", invalid="ignore"):
                     solver = self.solver(rhs, times[k], y, times[k + 1], **tols)
-                    taken = 0
+                    taken, failure = 0, None
                     while solver.status == "running" and taken < MAX_STEPS_PER_INTERVAL:
-                        solver.step()
+                        failure = solver.step()  # scipy returns its message when the step fails (else None)
                         taken += 1
                     steps, nfev = steps + taken, nfev + int(solver.nfev)
                     if solver.status != "finished":
-                        message = self._stalled(solver, times[k], times[k + 1], taken)
+                        message = self._stalled(solver, times[k], times[k + 1], taken, failure)
                         break
                     q, v = project(solver.y[:nq], solver.y[nq:])
             except Exception as e:  # a blown-up state: NaN from here on (contract item 5)
@@ -211,12 +211,14 @@ class _SolveIVP:
             Y[k + 1] = y
         return Y[:, :nq], Y[:, nq:], Stats(steps, nfev, message)
 
-    def _stalled(self, solver, t0, t1, taken):
-        """Why the interval ``[t0, t1]`` (s) did not finish: scipy's own failure, or the step cap."""
+    def _stalled(self, solver, t0, t1, taken, failure):
+        """Why the interval ``[t0, t1]`` (s) did not finish: scipy's own failure (``failure``, the message its
+        last ``step()`` returned; its solvers keep none), or the step cap."""
+        last = "none taken" if solver.step_size is None else f"{solver.step_size:.3g} s"  # None before its first step
         where = (f"{self.name} stopped at t = {solver.t:.10g} s in the sample interval [{t0:g}, {t1:g}] s after "
-                 f"{taken} steps (last step {solver.step_size:.3g} s)")
+                 f"{taken} steps (last step {last})")
         if solver.status == "failed":
-            return f"{where}: {solver.message}"
+            return f"{where}: {failure}"
         return (f"{where}: more than MAX_STEPS_PER_INTERVAL = {MAX_STEPS_PER_INTERVAL} steps, its step size "
                 "collapsing (near a singular position of a closed loop the projected right-hand side cannot meet "
                 "the tolerance)")
