@@ -26,7 +26,7 @@ from dalembert.adapters.base import IntegratorSpec, Outcome, option_choice
 from dalembert.adapters.mujoco import MujocoAdapter
 from dalembert.adapters.mujoco.mjcf import WELDS
 from dalembert.adapters.mujoco.readback import read_back
-from dalembert.adapters.mjx.stepping import PRECISIONS, compile_rollout, mjx, precision, run_rollout, to_host
+from dalembert.adapters.mjx.stepping import PRECISIONS, chunks, compile_rollout, mjx, precision, run_rollout, to_host
 
 __all__ = ["MjxAdapter"]
 
@@ -98,8 +98,8 @@ class MjxAdapter(MujocoAdapter):
         with precision(p["precision"]):
             p["mx"] = mjx().put_model(p["model"])
             p["dx0"] = mjx().put_data(p["model"], data)
-            p["steps_device"] = jnp.asarray(p["steps"], dtype=jnp.int32)
-            p["compile_s"] = compile_rollout(p["mx"], p["dx0"], p["steps_device"])
+            p["steps_device"] = [jnp.asarray(c) for c in chunks(p["steps"])]
+            p["compile_s"] = compile_rollout(p["mx"], p["dx0"])
         p["backend"] = jax.default_backend()
         return p
 
@@ -112,7 +112,7 @@ class MjxAdapter(MujocoAdapter):
         info = {"message": ""}
 
         def read():
-            Qh, Vh = to_host(Q, V, p["qpos0"], p["qvel0"])
+            Qh, Vh = to_host(Q, V, p["qpos0"], p["qvel0"], len(p["times"]))
             traj, info["audit"] = read_back(p, Qh, Vh)
             return traj
 
