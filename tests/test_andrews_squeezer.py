@@ -13,9 +13,9 @@ from dalembert import invariants
 from dalembert.case import make_case
 from dalembert.cases.andrews_squeezer import (ANGLES, INITIAL_ANGLES, PARAMETERS, REFERENCE_ANGLES, REFERENCE_RATES,
                                               REFERENCE_T, crank_angle, squeezer_scene)
-from dalembert.reference import truth
 from dalembert.reference.loops import ClosedLoops
 from dalembert.scene import SceneError
+from truths import shared_truth
 
 # [TS-R] (pkg/deTestSet/R/ex_andrews.R, rforge/bvpsolve): the consistent initial accelerations of beta and Theta
 # (rad/s^2; the other five are zero) and multipliers (N; lambda_1, lambda_2, the others zero), to 30 digits.
@@ -66,9 +66,9 @@ def case():
 
 
 @pytest.fixture(scope="module")
-def true_motion(case):
+def true_motion(case, shared_dir):
     """The case's truth (the reference's DOP853 at 1e-12; ~3700 evaluations, 10-20 s)."""
-    return truth(case)
+    return shared_truth(case, shared_dir)  # once per session: the case contract needs it too
 
 
 def _angles(traj):

@@ -10,9 +10,10 @@ from dalembert import invariants
 from dalembert.case import make_case
 from dalembert.cases.bricard import RODS, p3
 from dalembert.errors import trajectory_errors
-from dalembert.reference import simulate, truth
+from dalembert.reference import simulate
 from dalembert.reference.loops import ClosedLoops
 from dalembert.settings import Settings
+from truths import shared_truth
 
 # Issue 17's bound on the truth's loop residual (m, and m/s): measured 9e-16 m and 2e-15 m/s over 2 s.
 LOOP_RESIDUAL_TOL = 1e-10
@@ -59,9 +60,9 @@ def case():
 
 
 @pytest.fixture(scope="module")
-def true_motion(case):
+def true_motion(case, shared_dir):
     """The case's truth (the reference's DOP853 at 1e-12 on Kane + least-squares loop multipliers; ~8 s)."""
-    return truth(case)
+    return shared_truth(case, shared_dir)  # once per session: the case contract needs it too
 
 
 def test_the_loop_is_redundant_and_leaves_one_degree_of_freedom(case):

@@ -10,6 +10,7 @@ import pytest
 from dalembert import testing
 from dalembert.case import CASES, load_cases
 from dalembert.reference import truth
+from truths import shared_truth
 
 load_cases()
 NAMES = list(CASES)
@@ -21,15 +22,10 @@ def case(request):
     return factory(t_final=testing.HARD_HORIZON) if "hard" in factory.tags else factory()
 
 
-_TRUTHS = {}
-
-
 @pytest.fixture
-def case_truth(case):
-    """The case's truth, computed once per case for this module."""
-    if case.name not in _TRUTHS:
-        _TRUTHS[case.name] = truth(case)
-    return _TRUTHS[case.name]
+def case_truth(case, shared_dir):
+    """The case's truth, computed once per case in the session (``truths.shared_truth``)."""
+    return shared_truth(case, shared_dir)
 
 
 def test_registry_is_not_empty():
