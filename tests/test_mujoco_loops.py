@@ -11,6 +11,7 @@ from dalembert import Settings, invariants  # noqa: E402
 from dalembert.adapters import get_adapter  # noqa: E402
 from dalembert.case import make_case  # noqa: E402
 from dalembert.errors import error_series  # noqa: E402
+from engine_runs import run_with_audit  # noqa: E402
 from dalembert.reference import simulate  # noqa: E402
 from dalembert.scene import Loop, Scene  # noqa: E402
 
@@ -34,12 +35,7 @@ RK4_ENERGY_TOL = 1e-7
 REACTION_TOL = 1e-4
 
 
-def _run(scene, times, integrator, dt, engine="mujoco", **options):
-    adapter = get_adapter(engine)
-    settings = Settings(integrator, dt=dt, options=options)
-    prepared = adapter.prepare(scene, times, settings)
-    out = adapter.run(prepared)
-    return out.trajectory, adapter.audit(prepared, out)
+_run = run_with_audit  # (trajectory, audit) of one fixed-step run
 
 
 @pytest.fixture(scope="module")

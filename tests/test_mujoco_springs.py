@@ -13,6 +13,7 @@ from dalembert import Settings, invariants, make_case  # noqa: E402
 from dalembert.cases.andrews_squeezer import ANGLES, REFERENCE_ANGLES, REFERENCE_T, energy_with_motor_work  # noqa: E402
 from dalembert.adapters import get_adapter  # noqa: E402
 from dalembert.errors import error_series  # noqa: E402
+from engine_runs import run_with_audit  # noqa: E402
 from dalembert.reference import simulate  # noqa: E402
 from dalembert.scene import Body, Joint, Scene, Spring  # noqa: E402
 from test_springs import (DAMPING, GRAVITY, MASS, ORDER_RATIO, POSITION_TOL, REST, STIFFNESS, STRETCH, TIMES,  # noqa: E402
@@ -38,12 +39,7 @@ OTHER_PASSIVE_TOL = 1e-12
 REFERENCE_RTOL = 1e-12
 
 
-def _run(scene, times, integrator, dt, engine="mujoco", **options):
-    adapter = get_adapter(engine)
-    settings = Settings(integrator, dt=dt, options=options)
-    prepared = adapter.prepare(scene, times, settings)
-    out = adapter.run(prepared)
-    return out.trajectory, adapter.audit(prepared, out)
+_run = run_with_audit  # (trajectory, audit) of one fixed-step run
 
 
 def _z_error(scene, integrator, dt, damping, gravity, engine="mujoco", **options):
