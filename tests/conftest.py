@@ -9,3 +9,10 @@ def shared_dir(tmp_path_factory, worker_id):
     is a child of one; ``master`` when the session is not distributed). For ``truths.shared_truth``."""
     base = tmp_path_factory.getbasetemp()
     return base if worker_id == "master" else base.parent
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``long`` (each takes >= ~10 s on 2 cores: an engine's contract over every case, MJX
+    compilations, matrices through the command line) run first, so that pytest-xdist's workers, handed
+    tests in collection order, do not end the session with one of them running alone."""
+    items.sort(key=lambda item: item.get_closest_marker("long") is None)  # stable: the order otherwise kept

@@ -47,6 +47,7 @@ def test_unwritable_output(capsys):
     assert "cannot write" in capsys.readouterr().err
 
 
+@pytest.mark.long
 def test_validate_writes_the_table(tmp_path, capsys):
     assert main(["validate", "--case", "pivoted_rod", "--jobs", "2", "--out", str(tmp_path)]) == 0
     md = (tmp_path / "reference-validation.md").read_text()

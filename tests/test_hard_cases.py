@@ -81,6 +81,7 @@ def test_reference_is_stable_and_matches_the_truth(name):
             assert errors[q][0] <= tol.value, (q, errors[q][0])
 
 
+@pytest.mark.long
 def test_every_engine_gets_a_verdict_on_every_hard_case(tmp_path):
     """A smoke test of the stability grid: every hard case in every built-in engine, with its
     fourth-order fixed-step integrator at a coarse step over 1 s, gets a stored verdict and no

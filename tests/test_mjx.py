@@ -16,6 +16,7 @@ from bounds import BOX_COM_TOL, ORDER_SLACK, ROD_ANGLE_TOL, ROD_REACTION_TOL
 from scenes import chain_case
 
 pytest.importorskip("mujoco.mjx")  # CI installs it (dalembert[mjx]): this never skips there
+pytestmark = pytest.mark.long  # every test here compiles an MJX rollout (seconds each)
 
 ADAPTER = get_adapter("mjx")
 F64 = {"precision": "float64"}

@@ -19,6 +19,7 @@ pytest.importorskip("mujoco.mjx")  # CI installs it (dalembert[mjx]): this never
 ROUNDOFF_ONLY = 1.0  # times the floor of the run's number type
 
 
+@pytest.mark.long
 def test_parity_is_the_difference_of_the_two_engines_runs(tmp_path):
     """The section's figures equal MJX and MuJoCo C run afresh at the same settings
     (``adapters.mjx.parity.horizon``, which steps both engines itself), with the float32 floor of

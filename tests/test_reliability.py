@@ -159,6 +159,7 @@ def test_resume_refuses_rows_of_another_matrix(store, tmp_path, capsys):
     assert "not in its manifest" in capsys.readouterr().err
 
 
+@pytest.mark.long
 def test_a_run_writes_nothing_outside_its_store(tmp_path, monkeypatch):
     """Every built-in engine, from a clean working directory: only --out is written (no engine log
     files). The engines are named: other tests register deliberately broken ones in this process."""
@@ -280,6 +281,7 @@ TIMING_FIELDS = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "bui
                  "provenance", "load_start", "load_end", "concurrent", "repeats"}
 
 
+@pytest.mark.long
 def test_a_lost_scheduler_loses_no_work(tmp_path):
     """The scheduler killed mid-matrix: the runs it lost are not stored (exit 4, the --resume
     command printed), and --resume on a new cluster finishes the matrix identical to an

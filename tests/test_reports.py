@@ -142,6 +142,7 @@ def test_report_renders_in_a_real_browser(store, tmp_path):
         assert os.path.getsize(shot) > 5_000
 
 
+@pytest.mark.long
 def test_report_reads_only_the_store(store, tmp_path):
     """With the cases, the reference solver and the engines unimportable, the report still
     builds from the store alone — through the command line, as a user runs it — and shows the

@@ -36,6 +36,7 @@ for _name, _cls in (("broken", Broken), ("no-follower", NoFollower)):
         register_adapter(_name, _cls)
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("engine", ENGINES)
 def test_every_adapter_meets_the_contract(engine):
     from dalembert.case import load_cases
@@ -116,6 +117,7 @@ def _cli(*args, **kw):
                             stderr=subprocess.PIPE, **kw)
 
 
+@pytest.mark.long
 def test_interrupted_run_resumes_to_the_same_store(tmp_path):
     selection = ["--case", "free_top", "--case", "pivoted_rod", "--engine", "reference", "--dt", "1e-2,5e-3",
                  "--rtol", "1e-6", "--param", "t_final=1", "--jobs", "1"]

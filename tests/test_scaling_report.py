@@ -1,6 +1,7 @@
 """The report's scaling section: a case swept over its size, cost against the number of bodies."""
 
 import numpy as np
+import pytest
 
 from dalembert.harness.cli import main
 from dalembert.reports.scaling import fitted_exponent, size_sweeps
@@ -14,6 +15,7 @@ def test_the_fitted_exponent_recovers_a_power_law():
     assert fitted_exponent([(4, 1.0), (4, 2.0)]) is None
 
 
+@pytest.mark.long
 def test_a_size_sweep_is_drawn_with_its_exponents(tmp_path):
     """chain swept over n: the section lists, per engine line, the sizes run and the exponent fitted
     to the stored costs; a case of one size has no such section."""
