@@ -31,7 +31,8 @@ import numpy as np
 from dalembert import spatial
 from dalembert.registry import suggest
 
-__all__ = ["WORLD", "JOINT_KINDS", "LOOP_KINDS", "EFFECTS", "LOOP_EFFECTS", "SPRING_EFFECTS", "Body", "Joint", "Loop",
+__all__ = ["WORLD", "JOINT_KINDS", "AXIS_KINDS", "LOOP_KINDS", "EFFECTS", "LOOP_EFFECTS", "SPRING_EFFECTS",
+           "PRISMATIC_EFFECTS", "Body", "Joint", "Loop",
            "Load", "Spring", "Scene", "SceneError", "mass_properties", "LOOP_CLOSURE_TOL"]
 
 WORLD = "world"
@@ -41,10 +42,15 @@ WORLD = "world"
 #            the child in world; v = (vx, vy, vz, wx, wy, wz): COM velocity in
 #            world (m/s) and angular velocity w_WB_B in the child body frame (rad/s).
 #   revolute q = (angle,) (rad) about `axis` in the joint frame; v = (rate,) (rad/s).
+#   prismatic q = (displacement,) (m) of the child joint frame along the unit `axis` of the
+#            parent joint frame (the two frames keep their relative attitude, identity; at
+#            q = 0 they coincide); v = (rate,) (m/s).
 #   ball     q = quaternion of the child joint frame in the parent joint frame;
 #            v = relative angular velocity in the child joint frame (rad/s).
 #   weld     no coordinates.
-JOINT_KINDS = {"free": (7, 6), "revolute": (1, 1), "ball": (4, 3), "weld": (0, 0)}
+JOINT_KINDS = {"free": (7, 6), "revolute": (1, 1), "prismatic": (1, 1), "ball": (4, 3), "weld": (0, 0)}
+# The kinds that take an ``axis`` (in the joint frame, any non-zero length).
+AXIS_KINDS = ("revolute", "prismatic")
 LOAD_KINDS = ("force", "torque")
 LOAD_FRAMES = ("world", "body")
 # Loop closures (``Loop``), per kind: the constraint rows in ``dalembert.closure.ROWS``.
@@ -54,8 +60,11 @@ LOAD_FRAMES = ("world", "body")
 LOOP_KINDS = ("ball", "revolute", "distance")
 # Every effect tag a tree scene can call for (``Scene.effects`` draws from these): what an
 # adapter declares with ``effects = EFFECTS``.
-EFFECTS = frozenset({"gravity"} | {f"joint:{k}" for k in JOINT_KINDS}
+EFFECTS = frozenset({"gravity"} | {f"joint:{k}" for k in JOINT_KINDS if k != "prismatic"}
                     | {f"load:{w}_{k}" for w in ("follower", "world") for k in LOAD_KINDS})
+# The prismatic joint's tag, apart while adapters learn it: one that builds prismatic joints declares
+# ``EFFECTS | PRISMATIC_EFFECTS``, every other one refuses the scenes that have them.
+PRISMATIC_EFFECTS = frozenset({"joint:prismatic"})
 # The tags of loop closures, apart: an adapter that closes loops declares them explicitly
 # (``EFFECTS | LOOP_EFFECTS``), so one that builds trees only declares them unsupported.
 LOOP_EFFECTS = frozenset(f"loop:{k}" for k in LOOP_KINDS)
@@ -195,7 +204,8 @@ class Joint:
     """The joint of ``child`` to its ``parent`` (a body name or ``"world"``).
 
     See ``JOINT_KINDS`` for the coordinates ``q0``/``v0`` of each kind. ``axis``
-    (revolute only) is expressed in the joint frame and need not be unit length.
+    (revolute and prismatic only: the rotation axis, the sliding direction) is expressed in the
+    joint frame and need not be unit length.
     """
 
     kind: str
@@ -520,15 +530,16 @@ class Scene:
                 frames = (j.parent_point, j.child_point, j.parent_quat, j.child_quat)
                 if frames != ((0.0,) * 3, (0.0,) * 3, (1.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)):
                     add(f"{where}: a free joint's q0 is the COM pose itself — leave the joint frames at identity")
-            if j.kind == "revolute":
+            if j.kind in AXIS_KINDS:
+                what = "rotation axis" if j.kind == "revolute" else "sliding direction"
                 if j.axis is None or len(j.axis) != 3:
-                    add(f"{where}.axis: a revolute joint needs a 3-vector axis (in the joint frame)")
+                    add(f"{where}.axis: a {j.kind} joint needs a 3-vector axis (its {what}, in the joint frame)")
                 elif not all(math.isfinite(v) for v in j.axis):
                     add(f"{where}.axis: contains NaN or inf")
                 elif math.sqrt(sum(v * v for v in j.axis)) == 0.0:
-                    add(f"{where}.axis: zero length — give the rotation axis direction")
+                    add(f"{where}.axis: zero length — give the {what}")
             elif j.axis is not None:
-                add(f"{where}.axis: only revolute joints take an axis")
+                add(f"{where}.axis: only {' and '.join(AXIS_KINDS)} joints take an axis")
         for b in sorted(names - set(parents)):
             add(f"bodies[{b!r}]: has no joint — give it one (a free body: Joint('free', 'world', {b!r}, ...))")
         # Cycles: follow parents up from every body; a path that never reaches the

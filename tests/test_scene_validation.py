@@ -83,6 +83,13 @@ def test_zero_length_axis():
     assert "axis" in p and "zero length" in p
 
 
+def test_a_prismatic_joint_needs_its_sliding_direction_and_a_ball_takes_none():
+    (p,) = problems(joints=[Joint("prismatic", "world", "b", [0.0], [0.0])])
+    assert p.startswith("joints[0] (prismatic 'world' -> 'b').axis:") and "sliding direction" in p
+    (p,) = problems(joints=[Joint("ball", "world", "b", [1.0, 0, 0, 0], [0.0] * 3, axis=[0, 0, 1])])
+    assert "only revolute and prismatic joints take an axis" in p
+
+
 def test_nan_anywhere():
     ps = problems(joints=[Joint("free", "world", "b", FREE_Q0, [0, 0, 0, np.nan, 0, 0])],
                   loads=[Load("b", "force", [np.inf, 0, 0], "body")], gravity=(0, 0, np.nan))
