@@ -450,19 +450,22 @@ def initial_body_states(scene, velocities=None):
             continue
         P = out[j.parent]
         R_WJp = P["R"] @ quat_to_matrix(j.parent_quat)
+        # The child joint frame relative to the parent's: rotation, and the slide (world axes)
+        R_J, w_rel, d_W, d_rate_W = np.eye(3), zero, zero, zero
         if j.kind == "revolute":
             a = np.asarray(j.axis, dtype=float) / np.linalg.norm(j.axis)
             R_J, w_rel = so3_exp(a * q0[0]), R_WJp @ a * v0[0]
+        elif j.kind == "prismatic":
+            a_W = R_WJp @ (np.asarray(j.axis, dtype=float) / np.linalg.norm(j.axis))
+            d_W, d_rate_W = a_W * q0[0], a_W * v0[0]
         elif j.kind == "ball":
             R_J = quat_to_matrix(q0 / np.linalg.norm(q0))
             w_rel = R_WJp @ R_J @ v0  # v0 in the child joint frame
-        else:  # weld
-            R_J, w_rel = np.eye(3), zero
         R = R_WJp @ R_J @ quat_to_matrix(j.child_quat).T
-        r_PJ = P["R"] @ np.asarray(j.parent_point, dtype=float)  # parent COM -> joint point
+        r_PJ = P["R"] @ np.asarray(j.parent_point, dtype=float) + d_W  # parent COM -> child joint point
         r_JC = -R @ np.asarray(j.child_point, dtype=float)  # joint point -> child COM
         w = P["w"] + w_rel
         out[body.name] = dict(R=R, p=P["p"] + r_PJ + r_JC, w=w,
-                              v=P["v"] + cross(P["w"], r_PJ) + cross(w, r_JC))
+                              v=P["v"] + cross(P["w"], r_PJ) + d_rate_W + cross(w, r_JC))
     del out["world"]
     return out

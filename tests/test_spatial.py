@@ -112,3 +112,21 @@ def test_initial_body_states_match_kanes_kinematics():
     for name, got in spatial.initial_body_states(scene).items():
         for key in ("R", "p", "v", "w"):
             np.testing.assert_allclose(got[key], expected[name][key], rtol=0, atol=1e-14, err_msg=f"{name} {key}")
+
+
+def test_initial_body_states_of_a_bead_sliding_on_a_spinning_rod():
+    """A prismatic joint on a revolute hub: the bead at r along the rod turned by theta, its velocity the
+    slide plus the hub's rotation, v = r' e_r + omega r e_theta (polar coordinates, exact)."""
+    from dalembert.scene import Body, Joint, Scene
+
+    theta, omega, r, r_dot, h = 0.7, 2.0, 0.3, -0.5, 0.25
+    scene = Scene("bead", (Body.box("hub", 1.0, (0.1, 0.1, 0.1)), Body.box("bead", 0.2, (0.02, 0.02, 0.02))),
+                  (Joint("revolute", "world", "hub", (theta,), (omega,), axis=(0, 0, 2)),
+                   Joint("prismatic", "hub", "bead", (r,), (r_dot,), axis=(3, 0, 0), parent_point=(0, 0, h))),
+                  gravity=(0, 0, -9.81))
+    e_r, e_t = np.array([np.cos(theta), np.sin(theta), 0.0]), np.array([-np.sin(theta), np.cos(theta), 0.0])
+    bead = spatial.initial_body_states(scene)["bead"]
+    np.testing.assert_allclose(bead["p"], r * e_r + [0, 0, h], rtol=0, atol=ROUNDOFF)
+    np.testing.assert_allclose(bead["v"], r_dot * e_r + omega * r * e_t, rtol=0, atol=ROUNDOFF)
+    np.testing.assert_allclose(bead["w"], [0, 0, omega], rtol=0, atol=ROUNDOFF)
+    np.testing.assert_allclose(bead["R"], spatial.so3_exp(np.array([0, 0, theta])), rtol=0, atol=ROUNDOFF)
