@@ -13,7 +13,11 @@ listed by Exudyn 1.13 but not implemented, so it is not offered. Loop closures
 (``Scene.loops``, built by ``model``) run with the two implicit solvers only; each
 loop's force ON its body b is read back as ``reaction_force:<loop name>``. Spring-dampers
 (``Scene.springs``, ``springs``) run with every solver and both joint formulations; the audit reads
-each back from the system that ran. A solver that
+each back from the system that ran. Prismatic joints (``joint:prismatic``) are built in both joint
+formulations (``model``); like revolute ones, on a free body only with redundant joints, and with
+redundant joints only by the implicit solvers. Every joint is read back from the system that ran
+(``joints.read_joints``: its type, axis, joint point, initial coordinate) into the audit's
+``joint_readout``. A solver that
 stops before the end raises, and the run is stored as ``failed`` with the time
 reached.
 """
