@@ -165,6 +165,12 @@ def angular_momentum_com(scene, traj):
     x_c = np.einsum("b,bni->ni", masses, x) / masses.sum()
     v_c = np.einsum("b,bni->ni", masses, v) / masses.sum()
     total = np.einsum("b,bni->ni", masses, np.cross(x - x_c, v - v_c)) if len(masses) > 1 else np.zeros_like(x_c)
+    return total + _spins(scene, traj)
+
+
+def _spins(scene, traj):
+    """``sum R I R^T w``: the bodies' angular momenta about their own COMs (kg m^2/s), world, (n, 3)."""
+    total = np.zeros((len(traj.t), 3))
     for body in scene.bodies:
         R = _R(traj, body.name)
         I_W = R @ body.inertia_matrix @ np.swapaxes(R, 1, 2)
@@ -184,7 +190,7 @@ def angular_momentum_about(scene, traj, point_W):
     o = np.asarray(point_W, dtype=float)
     orbital = sum(body.mass * np.cross(traj.bodies[body.name].position - o, traj.bodies[body.name].velocity)
                   for body in scene.bodies)
-    return orbital + angular_momentum_com(scene, traj)
+    return orbital + _spins(scene, traj)  # (the orbital part about the COM is in ``orbital`` already)
 
 
 def orthonormality_error(scene, traj):
