@@ -9,6 +9,8 @@
 * A bead on a spinning rod (a free hub on a revolute joint, the bead sliding along a rod off the hub's
   axis): no closed form, but the energy and the angular momentum about the hub's axis are conserved, and
   the frictionless slide exerts no force along its axis; and the whole motion against the reference (Kane).
+* Two of the reference's scenes (tests/test_prismatic.py): the slider on a swinging rod, against it; the
+  slider-crank closed over its prismatic joint, against its closed-form kinematics.
 * MJX (one compile, ``long``): the slider and the bead in one model, in float64.
 """
 
@@ -55,6 +57,14 @@ BEAD_ROUNDOFF = 1e-13
 # rtol-1e-10 run): measured 2.3e-11 rad (hub angle), 1.1e-11 m, 2.5e-11 rad/s, 1.7e-11 m/s, 2.2e-12 N, 16-fold
 # under the 3.6e-10 rad at dt = 1e-2 (fourth order); a slide frame, rate or Coriolis term wrong would be O(1e-2).
 BEAD_REFERENCE_TOL = 1e-10
+# The reference's slider on a swinging rod (tests/test_prismatic.py: a spring along the rod, gravity across it),
+# MuJoCo RK4 at dt = 5e-3 over 2 s against the reference's DOP853 at 1e-12: measured 5.5e-8 m, 4.5e-8 rad,
+# 4.1e-7 m/s, 2.8e-7 N, 16-fold under dt = 1e-2 (8.9e-7 m, 6.5e-6 m/s): fourth order; 3.6x the largest.
+SWING_REFERENCE_TOL = 1.5e-6
+# The slider-crank closed over its prismatic joint by a revolute loop (two connects, MuJoCo's soft equality),
+# RK4 at dt = 1e-3 over 0.35 s through both dead centres: the slide off its closed-form kinematics by the loop's
+# softness, measured 2.0e-6 m (2.0e-8 at dt = 1e-4: as dt^2, the time constant's two steps); 5x.
+CRANK_KINEMATICS_TOL = 1e-5
 # MJX against MuJoCo C, the same RK4 on the same model in float64 over 100 steps: the two libraries' arithmetic
 # in different orders; at most a few hundred roundings of ~1 (measured 2.2e-16 in the hinge's and slide's q and v).
 MJX_PARITY_TOL = 1e-12
@@ -215,6 +225,25 @@ def test_bead_on_a_spinning_rod_follows_the_reference():
     for name in ("hub", "bead"):
         assert np.abs(traj.joints[name].q - ref.joints[name].q).max() < BEAD_REFERENCE_TOL
         assert np.abs(traj.joints[name].v - ref.joints[name].v).max() < BEAD_REFERENCE_TOL
+
+
+def test_the_references_slider_on_a_swinging_rod_and_slider_crank():
+    """Two of the reference's prismatic scenes (tests/test_prismatic.py): a slide on a moving parent with a
+    spring, against the reference; a slide closed into a loop, against its closed-form kinematics."""
+    from test_prismatic import CRANK, ROD, _slider_crank, _slider_on_a_swinging_rod
+
+    scene, times = _slider_on_a_swinging_rod(), np.linspace(0.0, 2.0, 201)
+    ref = simulate(scene, times, Settings("dop853", rtol=1e-12, atol=1e-12))[0]
+    e = trajectory_errors(run_with_audit(scene, times, "rk4", 5e-3)[0], ref)
+    for q in ("position", "orientation", "velocity", "angular_velocity", "joint", "reaction_force"):
+        assert e[q][0] < SWING_REFERENCE_TOL, (q, e[q])
+    crank = _slider_crank()
+    traj, audit = run_with_audit(crank, np.linspace(0.0, 0.35, 15), "rk4", 1e-3)
+    phi = traj.joints["crank"].q[:, 0]
+    assert phi.min() < np.pi and phi.max() > 2 * np.pi  # through both dead centres
+    x = CRANK * np.cos(phi) + np.sqrt(ROD**2 - CRANK**2 * np.sin(phi) ** 2)
+    assert np.abs(traj.joints["slider"].q[:, 0] - x).max() < CRANK_KINEMATICS_TOL
+    assert audit["loop_constraints"] == {crank.loops[0].name: "connect", f"{crank.loops[0].name}:axis": "connect"}
 
 
 @pytest.mark.long
