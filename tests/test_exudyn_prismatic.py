@@ -377,3 +377,52 @@ def test_a_slider_crank_closed_over_its_prismatic_joint_keeps_its_closed_form(op
     assert np.abs(traj.joints["slider"].q[:, 0] - x).max() < CRANK_CLOSURE_TOL
     assert invariants.drift("energy", scene, traj) < CRANK_ENERGY_DRIFT
     assert audit["joint_readout"]["slider"]["mismatches"] == []
+
+
+# --------------------------------------------------------------------------- the flyball governor (IFToMM A05)
+# The case's truth (the reference's Kane on Radau at 1e-12, shared with tests/test_flyball_governor.py) over its
+# default 2 s. Stiff (decay rates up to 8117 1/s): rk44 diverges at dt = 1e-3 (NaN from 0.01 s), so it runs at
+# 2e-4, where its joints are within 9.74e-12 (rad, m; 4.48e-13 at 1e-4: fourth order) and the shaft's and rods'
+# reactions within 3.3e-5 and 1.1e-4 N of 203 and 162 N (the dampers' 4e4 N s/m times a 6.9e-9 m/s velocity
+# error). The slider's reaction is not compared: the truth's is 4e-15 N (the case's docstring).
+FLYBALL_RK44_DT = 2e-4
+FLYBALL_RK44_JOINT_TOL = 2e-11  # rad, m: 2x the measured
+FLYBALL_RK44_REACTION_TOL = 3e-4  # N: 2.7x the rods' measured
+# Generic joints on Euler-parameter nodes, trapezoidal-index2 at 2e-4 and 1e-4 (second order): joints within
+# 1.03e-6 and 2.58e-7 (rad, m). (Generalized-alpha with generic joints stops at these steps, its Newton short of
+# the adapter's NEWTON_RTOL on these stiff springs; measured: with newton_rtol = newton_atol = 1e-10 it runs
+# at 1e-4, within 3.0e-7.)
+FLYBALL_GENERIC_STEPS = (2e-4, 1e-4)
+FLYBALL_GENERIC_JOINT_TOL = 5e-7  # rad, m: 1.9x the measured at 1e-4
+
+
+@pytest.fixture(scope="module")
+def flyball(shared_dir):
+    from dalembert.case import make_case
+    from truths import shared_truth
+
+    case = make_case("flyball_governor")
+    return case, shared_truth(case, shared_dir)
+
+
+def _joint_error(traj, truth):
+    return max(np.abs(traj.joints[j].q - truth.joints[j].q).max() for j in truth.joints)
+
+
+def test_flyball_governor_on_the_tree_with_rk44(flyball):
+    case, truth = flyball
+    traj, audit = _run(case.scene, case.times, "rk44", FLYBALL_RK44_DT)
+    assert _joint_error(traj, truth) < FLYBALL_RK44_JOINT_TOL
+    for body in ("shaft", "rod1", "rod2"):
+        key = f"reaction_force:{body}"
+        assert np.abs(traj.extras[key] - truth.extras[key]).max() < FLYBALL_RK44_REACTION_TOL, body
+    assert audit["joint_readout"]["slider"]["joint_type"] == "PrismaticZ"
+    assert all(got["mismatches"] == [] for got in audit["joint_readout"].values())
+
+
+def test_flyball_governor_with_generic_joints_at_second_order(flyball):
+    case, truth = flyball
+    errors = [_joint_error(_run(case.scene, case.times, "trapezoidal-index2", dt, joints="redundant", node="ep")[0],
+                           truth) for dt in FLYBALL_GENERIC_STEPS]
+    assert abs(np.log2(errors[0] / errors[1]) - 2) < ORDER_SLACK, errors
+    assert errors[1] < FLYBALL_GENERIC_JOINT_TOL
