@@ -192,3 +192,87 @@ def test_the_compiled_loop_is_the_python_loop(make, integrator):
             x = getattr(runs["native"].trajectory.joints[body], name)
             y = getattr(runs["python"].trajectory.joints[body], name)
             assert np.abs(x - y).max() <= LOOPS_AGREE_REL * max(1.0, np.abs(y).max()), (body, name)
+
+
+# ---------------------------------------------------------------- the slider-crank (a loop through a prismatic joint)
+CRANK, ROD, OFFSET = 0.1, 0.3, 0.02  # m: crank and connecting-rod lengths, the slide's offset from the crank pivot
+CRANK_ANGLE, CRANK_RATE = 0.4, 8.0  # rad, rad/s at t = 0
+SLIDER_CRANK_MASS = 1.2  # kg, the slider's
+CRANK_G = np.array([0.0, -9.81, 0.0])  # in the mechanism's plane
+CRANK_TIMES = np.linspace(0.0, 1.0, 101)
+CRANK_STEPS = (1e-3, 5e-4)
+# RK4 with constraintDynamics (Baumgarte-corrected, adapters/pinocchio/loops.py) over 1 s (the crank swings back
+# through 4 rad): the slide's distance from its closed-form kinematics, measured 4.6e-10 / 2.8e-11 m, and the
+# energy's drift 1.3e-8 / 8.5e-10 J (of up to 1.13 J kinetic) at dt = 1e-3 / 5e-4 (16-fold: fourth order); bounds
+# a factor ~3 above the finer step's.
+CRANK_CLOSURE_TOL = 1e-10  # m
+CRANK_ENERGY_TOL = 3e-9  # J
+# What the slide and the loop exert on the slider, with its weight, has no component across the slide (it
+# moves only along it), and the frictionless slide pushes nothing along itself: exact but for roundoff on
+# ~40-N forces (measured <= 2.1e-14 N).
+CRANK_FORCE_TOL = 1e-11  # N
+
+
+def _slider_crank():
+    """A crank (revolute to the world about z at the origin), a connecting rod (revolute on the crank's tip), a
+    slider (prismatic to the world along x, ``OFFSET`` off the pivot in y); a revolute loop joins the rod's far
+    end to the slider. The initial rod angle and the slide's displacement and rates are the closed-form kinematics:
+    with ``s = sqrt(ROD^2 - (CRANK sin(theta) - OFFSET)^2)``, ``x = CRANK cos(theta) + s``."""
+    th, th_dot = CRANK_ANGLE, CRANK_RATE
+    s = np.sqrt(ROD**2 - (CRANK * np.sin(th) - OFFSET) ** 2)
+    x = CRANK * np.cos(th) + s
+    x_dot = -CRANK * np.sin(th) * th_dot - (CRANK * np.sin(th) - OFFSET) * CRANK * np.cos(th) * th_dot / s
+    phi = np.arctan2(OFFSET - CRANK * np.sin(th), x - CRANK * np.cos(th))  # the rod's direction
+    phi_dot = -CRANK * np.cos(th) * th_dot / (ROD * np.cos(phi))
+    return Scene("slider_crank", (Body.box("crank", 0.5, (CRANK, 0.02, 0.02)), Body.box("rod", 0.8, (ROD, 0.02, 0.02)),
+                                  Body.box("slider", SLIDER_CRANK_MASS, (0.05, 0.03, 0.03))),
+                 (Joint("revolute", "world", "crank", (th,), (th_dot,), axis=(0, 0, 1), child_point=(-CRANK / 2, 0, 0)),
+                  Joint("revolute", "crank", "rod", (phi - th,), (phi_dot - th_dot,), axis=(0, 0, 1),
+                        parent_point=(CRANK / 2, 0, 0), child_point=(-ROD / 2, 0, 0)),
+                  Joint("prismatic", "world", "slider", (x,), (x_dot,), axis=(1, 0, 0), parent_point=(0, OFFSET, 0))),
+                 gravity=tuple(CRANK_G), loops=(Loop("revolute", "rod", "slider", point_a=(ROD / 2, 0, 0), axis=(0, 0, 1)),))
+
+
+def test_slider_crank_closes_its_loop_through_the_prismatic_joint():
+    """pin.constraintDynamics with a prismatic joint in the loop: the slide follows the crank's closed-form
+    kinematics, the energy is kept at fourth order, and the slider's forces balance across the slide."""
+    scene = _slider_crank()
+    closure, energy = [], []
+    for dt in CRANK_STEPS:
+        prepared, out = _run(scene, CRANK_TIMES, Settings("rk4", dt=dt))
+        traj = out.trajectory
+        th, x = traj.joints["crank"].q[:, 0], traj.joints["slider"].q[:, 0]
+        closure.append(np.abs(x - (CRANK * np.cos(th) + np.sqrt(ROD**2 - (CRANK * np.sin(th) - OFFSET) ** 2))).max())
+        e = invariants.total_energy(scene, traj)
+        energy.append(np.abs(e - e[0]).max())
+    assert prepared["pm"].constrained and np.ptp(th) > 3.0  # the loop was solved; the crank swung through 3 rad
+    assert closure[1] < CRANK_CLOSURE_TOL and energy[1] < CRANK_ENERGY_TOL, (closure, energy)
+    assert ORDER_RATIO[0] < energy[0] / energy[1] < ORDER_RATIO[1], energy
+    slide, loop = traj.extras["reaction_force:slider"], traj.extras["reaction_force:loop_rod_slider"]
+    assert np.abs(slide[:, 0]).max() < CRANK_FORCE_TOL  # nothing along the frictionless slide
+    across = slide + loop + SLIDER_CRANK_MASS * CRANK_G
+    assert np.abs(across[:, 1:]).max() < CRANK_FORCE_TOL
+    assert np.abs(loop).max() > 10.0  # the loop does carry the rod's push
+
+
+# ---------------------------------------------------------------- the audit and what is refused
+def test_the_audit_reads_the_joint_and_its_axis_back_from_the_built_model():
+    scene, _ = _inclined_slider()
+    prepared, out = _run(scene, SLIDER_TIMES, Settings("rk4", dt=SLIDER_DT))
+    audit = ADAPTER.audit(prepared, out)
+    assert audit["joints"] == {"b": "JointModelPrismaticUnaligned"}
+    np.testing.assert_allclose(audit["joint_axes"]["b"], np.array(SLIDER_AXIS) / 3.0, rtol=0, atol=1e-16)
+    assert audit["nq"] == audit["nv"] == 1
+    assert "b: prismatic -> pin joint 1 (JointModelPrismaticUnaligned, axis [0.333333333333, -0.666666666667, " \
+           "0.666666666667] (joint frame))" in ADAPTER.describe(scene, Settings("rk4", dt=SLIDER_DT))
+    assert "joint:prismatic" in ADAPTER.effects
+
+
+def test_welds_as_constraints_refuse_a_prismatic_joint():
+    """With welds as constraints the tree joints' reactions would miss the constraint forces: refused, saying so."""
+    scene, _ = _inclined_slider()
+    scene = Scene(scene.name, (*scene.bodies, Body.box("w", 0.1, (0.01, 0.01, 0.01))),
+                  (*scene.joints, Joint("weld", "b", "w", (), ())), gravity=scene.gravity)
+    reason = ADAPTER.unsupported(scene, Settings("rk4", dt=SLIDER_DT, options={"welds": "constraint"}))
+    assert reason.startswith("welds=constraint with revolute, prismatic or ball joints")
+    assert ADAPTER.unsupported(scene, Settings("rk4", dt=SLIDER_DT)) is None
