@@ -42,8 +42,8 @@ def _inclined_slider():
     joint frame (point and attitude), so that every frame of the joint enters."""
     q_p = tuple(spatial.quat_normalize(np.array([0.9, 0.2, -0.3, 0.1])))
     q_c = tuple(spatial.quat_normalize(np.array([0.8, -0.1, 0.4, 0.2])))
-    joint = Joint("prismatic", "world", "b", (SLIDER_D0,), (SLIDER_V0,), axis=SLIDER_AXIS, parent_point=(0.1, -0.2, 0.5),
-                  parent_quat=q_p, child_point=(0.05, 0.02, -0.1), child_quat=q_c)
+    joint = Joint("prismatic", "world", "b", (SLIDER_D0,), (SLIDER_V0,), axis=SLIDER_AXIS,
+                  parent_point=(0.1, -0.2, 0.5), parent_quat=q_p, child_point=(0.05, 0.02, -0.1), child_quat=q_c)
     scene = Scene("inclined_slider", [Body.box("b", SLIDER_MASS, (0.1, 0.2, 0.3))], [joint], gravity=tuple(SLIDER_G))
     a_W = spatial.quat_to_matrix(q_p) @ (np.array(SLIDER_AXIS) / np.linalg.norm(SLIDER_AXIS))
     return scene, a_W
@@ -60,12 +60,13 @@ def _run(scene, times, settings):
                          + [("rk45", "python"), ("dop853", "python")])  # the adaptive runs have one loop
 def test_inclined_slider_slides_and_reacts_exactly(integrator, loop):
     """``d = d0 + v0 t + (g . a) t^2 / 2`` along the world axis ``a`` (semi-implicit Euler adds exactly
-    ``(g . a) h t / 2`` to d, nothing to its exact rate: v first, then q with the new v); the COM moves by ``(d - d0) a`` without turning; the joint
-    pushes ON the box with ``m (g . a) a - m g``, the part of the weight off the axis, reversed."""
+    ``(g . a) h t / 2`` to d, nothing to its exact rate: v first, then q with the new v); the COM moves by
+    ``(d - d0) a`` without turning; the joint pushes ON the box with ``m (g . a) a - m g``, the part of the weight
+    off the axis, reversed."""
     scene, a_W = _inclined_slider()
     settings = (Settings(integrator, dt=SLIDER_DT, options={"loop": loop}) if integrator in FIXED
                 else Settings(integrator, rtol=ADAPTIVE_TOL, atol=ADAPTIVE_TOL))
-    prepared, out = _run(scene, SLIDER_TIMES, settings)
+    _, out = _run(scene, SLIDER_TIMES, settings)
     t, g_a = SLIDER_TIMES, float(SLIDER_G @ a_W)
     d = SLIDER_D0 + SLIDER_V0 * t + g_a * t**2 / 2 + (g_a * SLIDER_DT * t / 2 if integrator == "euler" else 0.0)
     d_rate = SLIDER_V0 + g_a * t
@@ -256,7 +257,8 @@ def _slider_crank():
                   Joint("revolute", "crank", "rod", (phi - th,), (phi_dot - th_dot,), axis=(0, 0, 1),
                         parent_point=(CRANK / 2, 0, 0), child_point=(-ROD / 2, 0, 0)),
                   Joint("prismatic", "world", "slider", (x,), (x_dot,), axis=(1, 0, 0), parent_point=(0, OFFSET, 0))),
-                 gravity=tuple(CRANK_G), loops=(Loop("revolute", "rod", "slider", point_a=(ROD / 2, 0, 0), axis=(0, 0, 1)),))
+                 gravity=tuple(CRANK_G),
+                 loops=(Loop("revolute", "rod", "slider", point_a=(ROD / 2, 0, 0), axis=(0, 0, 1)),))
 
 
 def test_slider_crank_closes_its_loop_through_the_prismatic_joint():
