@@ -298,6 +298,8 @@ def so3_exp(theta):
     theta = np.asarray(theta, dtype=float)
     if theta.ndim == 1:
         a = math.sqrt(theta @ theta)
+        if not math.isfinite(a):  # a blown-up state (|theta| past 1e154 overflows): NaN, as numpy's path gives
+            return np.full((3, 3), np.nan)
         if a < _SMALL_ANGLE:
             s1, s2 = 1.0 - a * a / 6.0, 0.5 - a * a / 24.0
         else:

@@ -130,3 +130,12 @@ def test_initial_body_states_of_a_bead_sliding_on_a_spinning_rod():
     np.testing.assert_allclose(bead["v"], r_dot * e_r + omega * r * e_t, rtol=0, atol=ROUNDOFF)
     np.testing.assert_allclose(bead["w"], [0, 0, omega], rtol=0, atol=ROUNDOFF)
     np.testing.assert_allclose(bead["R"], spatial.so3_exp(np.array([0, 0, theta])), rtol=0, atol=ROUNDOFF)
+
+
+def test_so3_exp_of_a_blown_up_angle_is_nan_not_an_exception():
+    """A run that blew up to finite but huge angles (1.9e202 rad: seen on a stiff case at too large a step) reads
+    back as NaN, the harness's mark of a divergence, in both the single and the batched path."""
+    huge = np.array([0.0, 0.0, 1.9e202])
+    assert np.all(np.isnan(spatial.so3_exp(huge)))
+    with np.errstate(invalid="ignore", over="ignore"):
+        assert np.all(np.isnan(spatial.so3_exp(huge[None])))
