@@ -24,7 +24,7 @@ def error_series(traj, truth):
 
     Orientation is the geodesic angle; vectors by Euclidean norm; joint
     coordinates by max-abs over the joint's ``q`` (revolute angles); reaction
-    forces relative to the largest true reaction.
+    forces relative to the largest true reaction, modulo the truth's self-stresses.
     """
     if traj.t.shape != truth.t.shape or np.any(np.abs(traj.t - truth.t) > 1e-12 * max(1.0, truth.t[-1])):
         raise ValueError("trajectory and truth must share sample times")
@@ -40,12 +40,33 @@ def error_series(traj, truth):
     for name, tj in truth.joints.items():
         if name in traj.joints and tj.q.shape[1] == 1:
             out["joint"] = np.maximum(out.get("joint", np.zeros(n)), np.abs(traj.joints[name].q - tj.q).max(axis=1))
-    for key, tf in truth.extras.items():
-        if key.startswith("reaction_force:") and key in traj.extras:
-            scale = float(np.max(np.linalg.norm(tf, axis=1))) or 1.0
-            e = np.linalg.norm(traj.extras[key] - tf, axis=1) / scale
-            out["reaction_force"] = np.maximum(out.get("reaction_force", np.zeros(n)), e)
+    reactions = _reaction_errors(traj, truth)
+    if reactions is not None:
+        out["reaction_force"] = reactions
     return out
+
+
+def _reaction_errors(traj, truth):
+    """Per sample, the largest reaction error (n,) relative to each joint's largest true reaction,
+    modulo the truth's self-stresses (``reaction_mode:<k>:<joint>`` extras, ``reference.loops``):
+    loads a rigid model leaves undetermined, removed from the errors by least squares in the
+    relative units the errors are measured in. None when neither side has reactions."""
+    names = [k.split(":", 1)[1] for k in truth.extras if k.startswith("reaction_force:") and k in traj.extras]
+    if not names:
+        return None
+    tf = np.stack([truth.extras[f"reaction_force:{j}"] for j in names], axis=1)  # (n, J, 3)
+    scale = np.max(np.linalg.norm(tf, axis=2), axis=0)
+    scale[~(scale > 0.0)] = 1.0
+    E = (np.stack([traj.extras[f"reaction_force:{j}"] for j in names], axis=1) - tf) / scale[:, None]
+    modes = sorted({int(k.split(":")[1]) for k in truth.extras if k.startswith("reaction_mode:")})
+    if modes:
+        A = np.stack([np.stack([truth.extras.get(f"reaction_mode:{k}:{j}", np.zeros_like(tf[:, 0])) for j in names],
+                               axis=1) / scale[:, None] for k in modes], axis=1)  # (n, K, J, 3)
+        for i in np.flatnonzero(np.all(np.isfinite(A), axis=(1, 2, 3)) & np.all(np.isfinite(E), axis=(1, 2))):
+            basis = A[i].reshape(len(modes), -1).T  # (3J, K)
+            coef = np.linalg.lstsq(basis, E[i].ravel(), rcond=None)[0]
+            E[i] -= (basis @ coef).reshape(E[i].shape)
+    return np.max(np.linalg.norm(E, axis=2), axis=1)
 
 
 def trajectory_errors(traj, truth):

@@ -165,6 +165,12 @@ def angular_momentum_com(scene, traj):
     x_c = np.einsum("b,bni->ni", masses, x) / masses.sum()
     v_c = np.einsum("b,bni->ni", masses, v) / masses.sum()
     total = np.einsum("b,bni->ni", masses, np.cross(x - x_c, v - v_c)) if len(masses) > 1 else np.zeros_like(x_c)
+    return total + _spins(scene, traj)
+
+
+def _spins(scene, traj):
+    """``sum R I R^T w``: the bodies' angular momenta about their own COMs (kg m^2/s), world, (n, 3)."""
+    total = np.zeros((len(traj.t), 3))
     for body in scene.bodies:
         R = _R(traj, body.name)
         I_W = R @ body.inertia_matrix @ np.swapaxes(R, 1, 2)
@@ -184,7 +190,7 @@ def angular_momentum_about(scene, traj, point_W):
     o = np.asarray(point_W, dtype=float)
     orbital = sum(body.mass * np.cross(traj.bodies[body.name].position - o, traj.bodies[body.name].velocity)
                   for body in scene.bodies)
-    return orbital + angular_momentum_com(scene, traj)
+    return orbital + _spins(scene, traj)  # (the orbital part about the COM is in ``orbital`` already)
 
 
 def orthonormality_error(scene, traj):
@@ -235,8 +241,10 @@ def joint_residual(scene, traj):
     """Largest violation of any joint (m for points, rad for axes), shape (n,).
 
     Per non-free joint: distance between the joint point as placed by the
-    parent and by the child; for revolute joints also the angle between the
-    axis as carried by each side; for welds the relative rotation angle.
+    parent and by the child (for prismatic joints, its part normal to the
+    sliding axis: the slide itself is the joint's coordinate); for revolute
+    joints also the angle between the axis as carried by each side; for welds
+    and prismatic joints the relative rotation angle.
     """
     n = len(traj.t)
     err = np.zeros(n)
@@ -250,15 +258,19 @@ def joint_residual(scene, traj):
         p_C, R_C = traj.bodies[j.child].position, _R(traj, j.child)
         x_P = p_P + np.einsum("nij,j->ni", R_P, np.array(j.parent_point))
         x_C = p_C + np.einsum("nij,j->ni", R_C, np.array(j.child_point))
-        err = np.maximum(err, np.linalg.norm(x_P - x_C, axis=1))
         R_WJp = R_P @ spatial.quat_to_matrix(j.parent_quat)
         R_WJc = R_C @ spatial.quat_to_matrix(j.child_quat)
+        gap = x_C - x_P
+        if j.kind == "prismatic":  # the slide along the parent's axis is free
+            a_P = R_WJp @ (np.array(j.axis) / np.linalg.norm(j.axis))
+            gap = gap - np.einsum("ni,ni->n", gap, a_P)[:, None] * a_P
+        err = np.maximum(err, np.linalg.norm(gap, axis=1))
         if j.kind == "revolute":
             a = np.array(j.axis) / np.linalg.norm(j.axis)
             a_P, a_C = R_WJp @ a, R_WJc @ a
             err = np.maximum(err, np.arctan2(np.linalg.norm(np.cross(a_P, a_C), axis=1),
                                              np.einsum("ni,ni->n", a_P, a_C)))
-        elif j.kind == "weld":
+        elif j.kind in ("weld", "prismatic"):
             err = np.maximum(err, spatial.rotation_angle(spatial.matrix_to_quat(R_WJp),
                                                          spatial.matrix_to_quat(R_WJc)))
     return err

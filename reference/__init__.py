@@ -10,8 +10,15 @@ def truth(case):
     """The case's truth trajectory at its sample times.
 
     The closed form where the case has one (``case.exact``), else the reference
-    solver with ``truth_settings(case.scene)``.
+    solver with ``truth_settings(case.scene)``. A scene with loops gets its
+    self-stresses beside (``loops.reaction_modes``): reactions are judged modulo them.
     """
-    if case.exact is not None:
-        return case.exact(case.times)
-    return simulate(case.scene, case.times, truth_settings(case.scene))[0]
+    from dataclasses import replace
+
+    from dalembert.reference.loops import reaction_modes
+
+    traj = case.exact(case.times) if case.exact is not None else simulate(case.scene, case.times,
+                                                                            truth_settings(case.scene))[0]
+    if case.scene.loops:
+        traj = replace(traj, extras={**traj.extras, **reaction_modes(case.scene, traj)})
+    return traj

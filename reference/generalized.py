@@ -1,5 +1,5 @@
 """d'Alembert's principle in generalized coordinates (Kane's form) for trees of
-rigid bodies with free, revolute, ball and weld joints.
+rigid bodies with free, revolute, prismatic, ball and weld joints.
 
 Seed 003: with partial velocities ``dV_i/du_j`` (of each body's centre of mass)
 and partial angular velocities ``dw_i/du_j``, the generalized active forces
@@ -20,7 +20,14 @@ system ``M u' = f`` with
 
 all in world axes (``F_i``, ``T_i``: the loads, gravity and spring-dampers on body i, force and
 moment about its COM). Jacobians and bias accelerations come from one recursive
-pass from the root to the leaves. Joint reaction forces follow from Newton's
+pass from the root to the leaves.
+
+A prismatic joint slides the child joint frame by ``d a_W`` along the unit axis ``a_W`` fixed in
+the parent joint frame (no relative rotation): the lever from the parent's COM to the child's
+joint point, ``r = r_PJ + d a_W``, gains the slide; the COM's partial velocity in ``d'`` is
+``a_W``; and since ``a_W`` turns with the parent, ``d/dt (d' a_W) = d'' a_W + d' w_P x a_W`` while
+the lever's transport ``w_P x r`` changes by ``w_P x (d' a_W)`` too: the bias acceleration gains
+the Coriolis term ``2 w_P x (d' a_W)`` (the centripetal ``w_P x (w_P x r)`` uses the slid lever). Joint reaction forces follow from Newton's
 law per body, from the leaves back to the root.
 """
 
@@ -56,7 +63,7 @@ class Kane:
             if j.kind == "free":
                 jb = [Block("vector", slice(iq, iq + 3), slice(iv, iv + 3)),
                       Block("quat", slice(iq + 3, iq + 7), slice(iv + 3, iv + 6))]
-            elif j.kind == "revolute":
+            elif j.kind in ("revolute", "prismatic"):
                 jb = [Block("vector", slice(iq, iq + 1), slice(iv, iv + 1))]
             elif j.kind == "ball":
                 jb = [Block("quat", slice(iq, iq + 4), slice(iv, iv + 3))]
@@ -109,10 +116,17 @@ class Kane:
                 R_J = np.eye(3)
             R_WJc = R_WJp @ R_J
             R = R_WJc @ jd["R_CJ"].T
-            r_PJ = P["R"] @ jd["p_PJ"]  # parent COM -> joint point
+            r_PJ = P["R"] @ jd["p_PJ"]  # parent COM -> (parent's) joint point
             r_JC = -R @ jd["p_CJ"]  # joint point -> child COM
             Jw = P["Jw"].copy()
             w, alpha_bias = P["w"].copy(), P["alpha_bias"].copy()
+            v_slide, a_slide, Jv_slide = np.zeros(3), np.zeros(3), np.zeros((3, n))
+            if j.kind == "prismatic":
+                a_W = R_WJp @ jd["axis"]
+                r_PJ = r_PJ + a_W * qj[0]  # parent COM -> the child's joint point, slid
+                v_slide = a_W * uj[0]
+                a_slide = 2.0 * spatial.cross(P["w"], v_slide)  # Coriolis: the axis turns with the parent
+                Jv_slide[:, jd["v"]] = a_W[:, None]
             if j.kind == "revolute":
                 s = R_WJp @ jd["axis"]
                 Jw[:, jd["v"]] += s[:, None]
@@ -124,10 +138,10 @@ class Kane:
                 w_rel = R_WJc @ uj
                 w += w_rel
                 alpha_bias += spatial.cross(w, w_rel)
-            Jv = P["Jv"] - spatial.skew(r_PJ) @ P["Jw"] - spatial.skew(r_JC) @ Jw
-            v = P["v"] + spatial.cross(P["w"], r_PJ) + spatial.cross(w, r_JC)
+            Jv = P["Jv"] - spatial.skew(r_PJ) @ P["Jw"] + Jv_slide - spatial.skew(r_JC) @ Jw
+            v = P["v"] + spatial.cross(P["w"], r_PJ) + v_slide + spatial.cross(w, r_JC)
             a_bias = (P["a_bias"] + spatial.cross(P["alpha_bias"], r_PJ) + spatial.cross(P["w"], spatial.cross(P["w"], r_PJ))
-                      + spatial.cross(alpha_bias, r_JC) + spatial.cross(w, spatial.cross(w, r_JC)))
+                      + a_slide + spatial.cross(alpha_bias, r_JC) + spatial.cross(w, spatial.cross(w, r_JC)))
             out[j.child] = dict(R=R, p=P["p"] + r_PJ + r_JC, w=w, v=v, Jv=Jv, Jw=Jw,
                                 a_bias=a_bias, alpha_bias=alpha_bias)
         return out

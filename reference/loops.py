@@ -44,6 +44,13 @@ Reactions: a loop's multipliers act on body a as the wrench ``G_a^T lambda`` and
 ``G_b^T lambda`` (``closure.Rows``: force and moment about the COM, world); the force ON body b
 is the trajectory's ``reaction_force:<loop name>``, and the tree joints' reactions include the
 loops' forces on their bodies.
+
+Self-stresses. Redundant rows (a planar loop's out-of-plane ones, Bricard's one) leave multipliers
+``lambda0`` with ``J^T lambda0 = 0``: loads the joints carry without moving anything, so a rigid model
+determines the reactions only up to them, and the truth's least-squares choice is one of many.
+``reaction_modes`` gives, at each sample, the joint and loop forces of each such ``lambda0`` (static
+equilibrium with nothing else acting), so that reactions are compared modulo them
+(``dalembert.errors``).
 """
 
 from __future__ import annotations
@@ -56,7 +63,7 @@ from dalembert.reference.generalized import Kane
 from dalembert.scene import WORLD
 from dalembert.trajectory import Trajectory
 
-__all__ = ["ClosedLoops", "PROJECTION_TOL", "PROJECTION_ITERATIONS"]
+__all__ = ["ClosedLoops", "PROJECTION_TOL", "PROJECTION_ITERATIONS", "reaction_modes"]
 
 # Gauss-Newton stops when every position row is below this (m, or the sine of a tilt): bodies of a
 # metre carry roundoff of ~2e-16 m per coordinate, and a closure sums a few of them.
@@ -132,6 +139,31 @@ class ClosedLoops(Kane):
         """Force each loop exerts ON its body b (N, world), dict loop name -> (3,)."""
         return self._solve(t, q, v)[1][("loops",)]
 
+    def self_stresses(self, q):
+        """The self-stresses at configuration ``q`` (nq,) (module docstring): one dict per independent
+        ``lambda0`` (an orthonormal basis of ``J``'s left null space in the solver's own rank decision),
+        joint or loop name -> the force it exerts ON its child (loop: ON body b), N, world."""
+        kin = self.kinematics(q, np.zeros(self.nv))
+        _, J, _, found = self.constraints(kin)
+        Li = _inverse_cholesky(self.mass_matrix(kin))
+        U, S, _ = np.linalg.svd(J @ Li.T, full_matrices=True)  # left null space of J L^-T = that of J
+        rank = int(np.sum(S > closure.RANK_RTOL * S[0])) if len(S) and S[0] > 0.0 else 0
+        modes = []
+        for lam in U[:, rank:].T:
+            on_body, out, i = {}, {}, 0
+            for loop, r in zip(self.loops, found):
+                m = len(r.phi)
+                for body, G in ((loop.body_a, r.G_a), (loop.body_b, r.G_b)):
+                    on_body[body] = on_body.get(body, 0.0) + (G.T @ lam[i:i + m])[:3]
+                out[loop.name] = (r.G_b.T @ lam[i:i + m])[:3]
+                i += m
+            for jd in reversed(self.joints):  # Newton per body, at rest and unloaded: -F_loops + children
+                name = jd["joint"].child
+                children = sum((out[c["joint"].child] for c in self.joints if c["joint"].parent == name), np.zeros(3))
+                out[name] = children - on_body.get(name, np.zeros(3))
+            modes.append(out)
+        return modes
+
     # ------------------------------------------------------------ projection
     def project(self, q, v):
         """``(q, v)`` moved onto ``phi(q) = 0`` and ``J(q) v = 0`` in the kinetic-energy metric
@@ -165,3 +197,24 @@ class ClosedLoops(Kane):
                     forces[name][i] = f
         return Trajectory(traj.t, traj.bodies, traj.joints,
                           {**traj.extras, **{f"reaction_force:{name}": f for name, f in forces.items()}})
+
+
+def reaction_modes(scene, traj):
+    """The self-stresses of ``scene`` along ``traj`` (its joints' coordinates, any source: a closed
+    form's or a solver's), as extras ``reaction_mode:<k>:<joint or loop>`` (n, 3), N per unit
+    ``lambda0``, world: mode ``k`` at each sample (zero where a sample has fewer modes, e.g. away
+    from a singular position; NaN where the sample is not finite). Empty for a scene without
+    redundant rows anywhere along ``traj``."""
+    system = ClosedLoops(scene)
+    n = len(traj.t)
+    Q = np.concatenate([traj.joints[jd["joint"].child].q for jd in system.joints], axis=1)
+    per_sample = [system.self_stresses(Q[i]) if np.all(np.isfinite(Q[i])) else None for i in range(n)]
+    count = max((len(m) for m in per_sample if m is not None), default=0)
+    names = [jd["joint"].child for jd in system.joints if jd["joint"].kind != "free"] + [lp.name for lp in scene.loops]
+    out = {f"reaction_mode:{k}:{name}": np.zeros((n, 3)) for k in range(count) for name in names}
+    for i, modes in enumerate(per_sample):
+        for k in range(count):
+            for name in names:
+                key = f"reaction_mode:{k}:{name}"
+                out[key][i] = np.nan if modes is None else (modes[k][name] if k < len(modes) else 0.0)
+    return out

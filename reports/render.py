@@ -27,8 +27,8 @@ from dalembert.reports.loops import LOOP_TARGET, RESIDUALS, loop_lines
 from dalembert.reports.maps import COST_TARGET, stability_maps
 from dalembert.reports.parity import parities
 from dalembert.reports.scaling import size_sweeps
-from dalembert.reports.findings import (ACCURACY_TARGETS, DISAGREEMENT_FACTOR, ENERGY_HAZARD, ENERGY_LIKE, HAZARDS,
-                                         NAMED, find, run_name, settings_text)
+from dalembert.reports.findings import (ACCURACY_TARGETS, CLOSURE_GROWTH, DISAGREEMENT_FACTOR, ENERGY_HAZARD,
+                                         ENERGY_LIKE, HAZARDS, NAMED, find, run_name, settings_text)
 from dalembert.reports.tables import MISSING, SORT_SCRIPT, Cell, Table, escape_html, escape_md, num
 from dalembert.reports.timing import timing_note
 from dalembert.reports.work_precision import cheapest_reaching, cost_per_sim_s, headline_quantity, series, sweep_key
@@ -38,6 +38,7 @@ __all__ = ["build_report"]
 
 DECADES = 100.0  # a time plot's values spanning more than this factor (two decades) get a log axis
 HAZARD_TITLES = {"diverged": "Diverged", "failed": "Stopped early", "energy": "Energy not kept",
+                 "closure": "Loops still opening", "reactions": "Motion right, reactions wrong",
                  "tolerance": "Finite but beyond the tolerance", "disagreement": "Engines disagree",
                  "unsupported": "Not supported (not run, not drawn)"}
 
@@ -179,7 +180,8 @@ def _hazards(doc, found, titles):
     doc.para("What to know before trusting a setting: every run named is in its case's table of runs. Energy is "
              f"judged against {100 * ENERGY_HAZARD:g} % of its scale over the horizon, disagreement at a factor "
              f"{DISAGREEMENT_FACTOR:g} between engines with the same integrator and step, beyond the case's "
-             "tolerance.")
+             f"tolerance; a loop is still opening when its closure residual is beyond the case's bound and its "
+             f"largest value over the horizon's last quarter is more than {CLOSURE_GROWTH:g} times that over its first half.")
     for f in found:
         if not f.hazards:
             continue

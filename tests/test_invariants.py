@@ -74,3 +74,22 @@ def test_a_finite_blow_up_is_judged_diverged_not_drifting():
     summary = invariants.summary(case.scene, run, case.conserved, truth=truth)
     verdict = judge("ok", "", {}, summary.drifts, case.tolerances, summary.growths)
     assert summary.growths["energy"] > BLOWUP and verdict.verdict == "diverged" and "blow-up" in verdict.reason
+
+
+def test_angular_momentum_about_a_point_counts_each_bodys_orbit_once():
+    """Two spinning boxes passing each other: L_o = sum m (x - o) x v + R I R^T w, written out by hand
+    (the orbital part about the system's COM is inside the first sum: adding it again doubled it)."""
+    from dalembert.scene import Body, Joint, Scene
+
+    a, b = Body.box("a", 2.0, (0.1, 0.2, 0.3)), Body.box("b", 3.0, (0.3, 0.1, 0.2))
+    scene = Scene("pair", [a, b], [Joint("free", "world", "a", [0, 0, 0, 1, 0, 0, 0], [0] * 6),
+                                   Joint("free", "world", "b", [0, 0, 0, 1, 0, 0, 0], [0] * 6)], (0, 0, 0))
+    x = {"a": np.array([[1.0, 0.0, 0.5]]), "b": np.array([[-0.5, 2.0, 0.0]])}
+    v = {"a": np.array([[0.0, 1.0, 0.0]]), "b": np.array([[0.3, 0.0, -1.0]])}
+    w = {"a": np.array([[0.0, 0.0, 2.0]]), "b": np.array([[1.0, 0.0, 0.0]])}
+    q = np.array([[1.0, 0.0, 0.0, 0.0]])  # the body axes are the world's: R I R^T = I
+    traj = Trajectory(np.zeros(1), {n: BodyStates(x[n], q, v[n], w[n]) for n in "ab"})
+    o = np.array([0.2, -0.1, 0.3])
+    expected = sum(body.mass * np.cross(x[body.name][0] - o, v[body.name][0]) + body.inertia_matrix @ w[body.name][0]
+                   for body in (a, b))
+    np.testing.assert_allclose(invariants.angular_momentum_about(scene, traj, o)[0], expected, rtol=1e-15, atol=1e-15)

@@ -185,3 +185,28 @@ def test_an_adaptive_run_that_stalls_at_a_singular_position_ends_as_data(monkeyp
                         params={"phi0": -0.05, "rate0": 7.7, "t_final": 0.02})
     record, _ = execute(spec, Timing(min_repeats=1, min_total_s=0.0, max_repeats=1))
     assert record.status == "diverged" and "non-finite state from t = 0.01 s (dop853 stopped at t = " in record.message
+
+
+def test_a_planar_loops_self_stresses_are_out_of_its_plane_and_its_reactions_are_judged_modulo_them():
+    """The four-bar moves in a plane (axes along world y) but its loop is a 3-D revolute: 5 rows, rank 2, so three
+    self-stresses (``reference.loops.reaction_modes``): a force along the axes carried by every joint alike (each
+    bar in equilibrium under equal and opposite forces at its two ends) and two moments, which put no force on any
+    joint. A reaction error along them is no error: adding one to the truth's reactions changes nothing."""
+    from dataclasses import replace
+
+    from dalembert.reference import truth
+
+    case = four_bar()
+    true = truth(case)  # the closed form, with the self-stresses beside
+    names = ("crank", "coupler", "rocker", "C")
+    forces = [k for k in range(3) if np.abs(true.extras[f"reaction_mode:{k}:C"]).max() > 0.0]
+    assert len(forces) == 1 and f"reaction_mode:3:C" not in true.extras
+    k = forces[0]
+    for name in names:
+        mode = true.extras[f"reaction_mode:{k}:{name}"]
+        np.testing.assert_allclose(np.abs(mode), np.tile([0.0, 1.0, 0.0], (len(true.t), 1)), rtol=0, atol=1e-14)
+    shifted = replace(true, extras={**true.extras, **{f"reaction_force:{n}": true.extras[f"reaction_force:{n}"]
+                                                      + 50.0 * true.extras[f"reaction_mode:{k}:{n}"] for n in names}})
+    assert error_series(shifted, true)["reaction_force"].max() < REACTION_REL_TOL
+    bent = replace(shifted, extras={**shifted.extras, "reaction_force:C": shifted.extras["reaction_force:C"] + [1, 0, 0]})
+    assert error_series(bent, true)["reaction_force"].max() > 1e-3  # an in-plane error stays one

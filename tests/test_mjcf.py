@@ -146,11 +146,11 @@ def test_joints_are_the_scenes_without_damping_armature_or_limits(models, name, 
             assert np.array_equal(floats(element, "quat"), j.q0[3:])
         if joints:
             (joint,) = joints
-            assert joint.get("type") == {"revolute": "hinge", "ball": "ball"}[kind]
+            assert joint.get("type") == {"revolute": "hinge", "prismatic": "slide", "ball": "ball"}[kind]
             for attribute in ("damping", "armature", "stiffness", "frictionloss"):
                 assert float(joint.get(attribute)) == 0.0, attribute
             assert joint.get("limited") == "false"
-            if kind == "revolute":
+            if kind in ("revolute", "prismatic"):  # in MuJoCo's body frame E = Jc, whose attitude is Jp's at q = 0
                 assert np.array_equal(floats(joint, "axis"), j.axis)
     welds_held = [j for j in scene.joints if j.kind == "weld" and welds == "equality"]
     constraints = list(root.iter("weld"))

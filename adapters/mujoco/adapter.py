@@ -4,7 +4,7 @@
 properties and springs against the scene's; ``run`` steps (``stepping``) with MuJoCo's
 warnings sent to the adapter, not to ``MUJOCO_LOG.TXT`` or the console, then
 reads the states back in body terms (``readback``); ``audit`` reads the
-compiled options, loop constraints and springs back from the model.
+compiled options, joints, loop constraints and springs back from the model.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from dalembert.adapters.mujoco.mjcf import LOAD_PATHS, WELDS, engine_frames, loo
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mujoco.springs import check_springs, other_passive, read_springs
 from dalembert.adapters.mujoco.stepping import step_loop, step_rollout
-from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
+from dalembert.scene import EFFECTS, LOOP_EFFECTS, PRISMATIC_EFFECTS, SPRING_EFFECTS
 from dalembert.settings import steps_per_interval
 
 __all__ = ["MujocoAdapter"]
@@ -50,8 +50,9 @@ class MujocoAdapter(Adapter):
     name = "mujoco"
     # loops: equality constraints (mjcf), soft as MuJoCo's are: the audit states their softness. A distance
     # loop (a tendon equality) is generated but not declared: DISTANCE_REASON. Springs: spatial tendons (mjcf),
-    # checked against the scene when built and read back in the audit.
-    effects = EFFECTS | (LOOP_EFFECTS - {"loop:distance"}) | SPRING_EFFECTS
+    # checked against the scene when built and read back in the audit. Prismatic joints: slide joints (mjcf),
+    # read back in the audit (``_joint_audit``).
+    effects = EFFECTS | PRISMATIC_EFFECTS | (LOOP_EFFECTS - {"loop:distance"}) | SPRING_EFFECTS
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "semi-implicit Euler"),
         "rk4": IntegratorSpec(True, OPTIONS, "classical RK4"),
@@ -180,10 +181,42 @@ class MujocoAdapter(Adapter):
             "max_armature": float(np.abs(model.dof_armature).max(initial=0.0)),
             "max_damping": float(np.abs(model.dof_damping).max(initial=0.0)),
             "ngeom": int(model.ngeom),
+            "joints": self._joint_audit(prepared),
             **self._loop_audit(prepared),
             **self._spring_audit(prepared),
             **self._read_audit(outcome),
         }
+
+    @staticmethod
+    def _joint_audit(prepared):
+        """Every scene joint MuJoCo builds as a joint, as the compiled model holds it: dict joint (child) name ->
+        ``type`` (MuJoCo's: free, ball, slide, hinge), ``axis_W`` (hinge and slide: the unit axis in world axes at
+        the initial state, MuJoCo's ``xaxis``; else None) and the joint's own limit, stiffness, damping,
+        armature and friction loss (``limited`` a bool, the others the largest magnitude over its dofs)."""
+        import mujoco
+
+        model, scene = prepared["model"], prepared["scene"]
+        d = mujoco.MjData(model)
+        d.qpos[:] = prepared["qpos0"]
+        mujoco.mj_kinematics(model, d)
+        out = {}
+        for j in scene.joints:
+            jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j.child)
+            if jid < 0:  # a weld built as nesting: no joint
+                continue
+            kind = mujoco.mjtJoint(model.jnt_type[jid])
+            dofs = np.flatnonzero(model.dof_jntid == jid)
+            axial = kind in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
+            out[j.child] = {
+                "type": kind.name[len("mjJNT_"):].lower(),
+                "axis_W": [float(v) for v in d.xaxis[jid]] if axial else None,
+                "limited": bool(model.jnt_limited[jid]),
+                "stiffness": float(abs(model.jnt_stiffness[jid])),
+                "damping": float(np.abs(model.dof_damping[dofs]).max()),
+                "armature": float(np.abs(model.dof_armature[dofs]).max()),
+                "frictionloss": float(np.abs(model.dof_frictionloss[dofs]).max()),
+            }
+        return out
 
     @staticmethod
     def _loop_audit(prepared):

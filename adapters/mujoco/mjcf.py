@@ -9,9 +9,12 @@ MuJoCo: nothing here calls it.
   frame is its child joint frame, so its inertial has a COM offset — MuJoCo's
   diagonalized ``body_ipos/iquat/inertia`` are checked against the scene after
   compiling.
-* ``<freejoint/>`` (no inherited damping/armature), hinge, ball; a weld is a
+* ``<freejoint/>`` (no inherited damping/armature), hinge, slide, ball; a weld is a
   body without a joint (option ``welds=tree``), or a free body held by an
-  equality constraint (``welds=equality``).
+  equality constraint (``welds=equality``). A slide joint (the scene's prismatic) has its axis in
+  the body's MuJoCo frame E = Jc, which keeps Jp's attitude, so the scene's axis (given in Jp) is
+  written as is; MuJoCo moves E by ``qpos * a`` from its placement at ``qpos0`` = 0, which is Jp:
+  the scene's child joint frame at ``d * a`` in Jp.
 * Gravity from the scene, and the gravity stage disabled when it is zero
   (MuJoCo's default is -9.81). Contact, constraint, equality, limit,
   frictionloss, spring, damper, control clamping and auto-reset are disabled (spring and
@@ -229,6 +232,9 @@ def mjcf(scene, settings):
             out.append(f'{indent}  <freejoint name="{body.name}"/>')
         elif j.kind == "revolute":
             out.append(f'{indent}  <joint name="{body.name}" type="hinge" pos="0 0 0" axis="{_f(j.axis)}" '
+                       'damping="0" armature="0" stiffness="0" frictionloss="0" limited="false"/>')
+        elif j.kind == "prismatic":  # E = Jc keeps Jp's attitude: the axis in E is the scene's, in Jp
+            out.append(f'{indent}  <joint name="{body.name}" type="slide" pos="0 0 0" axis="{_f(j.axis)}" '
                        'damping="0" armature="0" stiffness="0" frictionloss="0" limited="false"/>')
         elif j.kind == "ball":
             out.append(f'{indent}  <joint name="{body.name}" type="ball" pos="0 0 0" '
