@@ -124,8 +124,9 @@ def check_truth_conserves(case, truth):
 def second_solution(case):
     """The reference by a second route than the truth's: ``(label, trajectory)``.
 
-    LSODA (scipy's Adams/BDF multistep methods, another family than the truth's one-step DOP853)
-    at ``SECOND_RTOL`` on Kane's equations, which for a planar chain are also another formulation
+    LSODA (scipy's Adams/BDF multistep methods, another family than the truth's one-step DOP853, or
+    its one-step Radau for a stiff scene) at ``SECOND_RTOL`` on Kane's equations, which for a planar
+    chain are also another formulation
     than the truth's (``reference.truth_settings``). Never the truth's own integrator and
     formulation: that would compare the truth with itself.
     """

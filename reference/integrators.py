@@ -254,3 +254,39 @@ class LSODA(_SolveIVP):
     @staticmethod
     def steps(sol):
         return int(sol.nfev)  # multistep: about one evaluation per step (corrector iterations aside)
+
+
+@integrator("radau")
+class Radau(_SolveIVP):
+    """scipy's Radau IIA (implicit Runge-Kutta of order 5, L-stable; Jacobians by finite differences) on the
+    embedded coordinates, with its dense output at the sample times: the truth of stiff scenes
+    (``solver.truth_settings``), where DOP853's explicit steps are held to its stability bound.
+    Measured on ``flyball_governor`` over 1 s at rtol = atol = 1e-12: within 3.1e-13 (coordinates) and
+    1.3e-12 (rates) of DOP853 at 1e-12, with 10729 evaluations against DOP853's 47513."""
+
+    method = "Radau"
+    solver = scipy_integrate.Radau
+
+    def run(self, system, times, settings):
+        if getattr(system, "project", None) is not None:  # constrained: stepped per interval (steps counted there)
+            return super().run(system, times, settings)
+        nq = len(system.q0)
+        b = system.blocks
+
+        def rhs(t, y):
+            q, v = y[:nq], y[nq:]
+            return np.concatenate([cfg.qdot(b, q, v), system.acceleration(t, q, v)])
+
+        y0 = np.concatenate([system.q0, system.v0]).astype(float)
+        Y = np.full((len(times), len(y0)), np.nan)
+        tols = dict(rtol=settings.rtol or DOP853.TRUTH_RTOL, atol=settings.atol or DOP853.TRUTH_ATOL)
+        try:  # dense output rather than t_eval: the same interpolants, and the steps are then known
+            sol = solve_ivp(rhs, (times[0], times[-1]), y0, method=self.method, dense_output=True, **tols)
+        except Exception as e:  # a blown-up state: NaN (contract item 5)
+            if not is_numerical_failure(e):
+                raise
+            return Y[:, :nq], Y[:, nq:], Stats(0, 0)
+        reached = times <= sol.t[-1]
+        Y[reached] = sol.sol(times[reached]).T
+        Y[0] = y0  # (the initial state itself, not its interpolant)
+        return Y[:, :nq], Y[:, nq:], Stats(len(sol.t) - 1, int(sol.nfev), "" if sol.success else sol.message)

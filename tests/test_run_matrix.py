@@ -285,3 +285,26 @@ def test_default_steps_fit_each_cases_sampling():
     assert steps == {("andrews_squeezer", 1e-3), ("four_bar", 1e-2), ("four_bar", 1e-3)}
     with pytest.raises(ValueError, match="does not divide the sample interval"):
         expand(cases=["andrews_squeezer"], engines=["reference"], dts=[1e-2])
+
+
+def test_a_free_worker_keeps_to_its_sweep_and_otherwise_takes_a_sweep_nobody_holds():
+    """Runs sharing an engine's compiled program (case, engine, integrator, options: a step sweep) go to the worker
+    that ran the last of them; a worker without one takes the next run of a group no busy worker is on."""
+    from types import SimpleNamespace
+
+    from dalembert.harness.pool import _take, affinity
+
+    specs, _ = expand(cases=["pivoted_rod"], engines=["reference"], integrators=["rk4", "euler", "rkmk4"],
+                      dts=[1e-2, 5e-3, 2e-3])
+    sweeps = [s.integrator for s in specs[::3]]  # expand's order: a sweep's three runs in a row
+    assert [s.integrator for s in specs] == [i for i in sweeps for _ in range(3)]
+    queue = [(affinity(s), s) for s in reversed(specs)]
+    a, b = SimpleNamespace(group=None), SimpleNamespace(group=None)
+    first = _take(queue, a, set())
+    a.group = affinity(first)
+    second = _take(queue, b, {a.group})  # plain order would give b the rk4 sweep's second run
+    b.group = affinity(second)
+    assert (first.integrator, second.integrator) == tuple(sweeps[:2])
+    assert [_take(queue, a, {b.group}).integrator for _ in range(2)] == [sweeps[0]] * 2
+    assert _take(queue, a, {b.group}).integrator == sweeps[2]  # its sweep done: the one nobody holds
+    assert sorted(s.integrator for _, s in queue) == sorted([sweeps[1]] * 2 + [sweeps[2]] * 2)

@@ -10,6 +10,13 @@ out-of-memory killer, an operator) is the infrastructure's failure, not the
 run's: that run is not stored, and ``--resume`` runs it again. Every finished run is written to
 the store at once. Workers die with the process that started them
 (``dalembert.harness.lifetime``).
+
+Affinity: a worker that becomes free takes, before anything else, a run of the same group as its last
+(``affinity``: case, engine, integrator and options — the runs of a step or tolerance sweep), and
+otherwise the first run of a group no other worker holds. An engine that compiles a program per model
+and integrator (MJX: seconds per compilation, kept in the process) then compiles it once per worker
+and group instead of once per run, where plain order would hand a sweep's runs to the workers in turn.
+The matrix's runs and records are the same; only who runs which, and when, changes.
 """
 
 from __future__ import annotations
@@ -26,7 +33,7 @@ from dalembert.harness.lifetime import die_with_parent
 from dalembert.harness.truths import prepare_cases
 from dalembert.record import BAD_STATUSES
 
-__all__ = ["run_matrix", "DEFAULT_TIMEOUT_S", "finish"]
+__all__ = ["run_matrix", "DEFAULT_TIMEOUT_S", "finish", "affinity"]
 
 DEFAULT_TIMEOUT_S = 600.0
 # How long the parent waits for a worker's next message before checking the timeouts again.
@@ -66,6 +73,22 @@ def _serve(conn, parent_pid):
         conn.send(execute(spec, timing, truths[key], concurrent))
 
 
+def affinity(spec):
+    """The group of runs that share an engine's compiled program (module docstring)."""
+    return (spec.case, spec.case_version, spec.engine, spec.integrator, spec.options)
+
+
+def _take(queue, worker, held):
+    """Pop from ``queue`` (``(group, spec)``, next run last) the run ``worker`` should do: one of its last
+    run's group, else the first of a group not in ``held`` (the groups the busy workers are on), else the
+    next."""
+    for wanted in (lambda g: g == worker.group, lambda g: g not in held):
+        for i in range(len(queue) - 1, -1, -1):
+            if wanted(queue[i][0]):
+                return queue.pop(i)[1]
+    return queue.pop()[1]
+
+
 class _Worker:
     """The parent's handle on one worker: its pipe, its process, the run it is doing."""
 
@@ -76,13 +99,13 @@ class _Worker:
         self.proc = ctx.Process(target=_serve, args=(child, parent), daemon=True)
         self.proc.start()
         child.close()
-        self.spec, self.started, self.truths = None, 0.0, set()
+        self.spec, self.started, self.truths, self.group = None, 0.0, set(), None
 
     def submit(self, spec, timing, truth, concurrent):
         key = (spec.case, spec.case_version)
         self.conn.send((spec, timing, None if key in self.truths else truth, concurrent))
         self.truths.add(key)
-        self.spec, self.started = spec, time.monotonic()
+        self.spec, self.started, self.group = spec, time.monotonic(), affinity(spec)
 
     def kill(self):
         self.proc.kill()
@@ -121,13 +144,14 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(todo) or 1))
     ctx = _context()
     counts = {"done": 0, "bad": 0, "total": len(todo)}
-    queue = list(reversed(todo))
+    queue = [(affinity(s), s) for s in reversed(todo)]
     idle, busy, lost = [], {}, []  # busy: connection -> worker
     try:
         idle = [_Worker(ctx) for _ in range(jobs if todo else 0)]
         while queue or busy:
             while queue and idle:
-                worker, spec = idle.pop(), queue.pop()
+                worker = idle.pop()
+                spec = _take(queue, worker, {w.group for w in busy.values()})
                 worker.submit(spec, timing, truths[(spec.case, spec.case_version)], len(busy) + 1)
                 busy[worker.conn] = worker
             for conn in wait(list(busy), timeout=POLL_S):
