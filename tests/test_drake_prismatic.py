@@ -4,15 +4,18 @@ along the axis (the oscillators' closed forms of ``test_springs``), a bead on a 
 the angular momentum about the hub's axis, exactly conserved), and the trammel of Archimedes (two sliders on
 perpendicular axes held a rod's length apart by a distance loop: uniform rotation, closed-form reactions); against
 the reference solver (Kane) at tight tolerance on the bead and on ``test_prismatic``'s slider on a swinging rod and
-slider-crank; its audit reads the joints back from the finalized plant."""
+slider-crank; the stiff flyball governor (IFToMM A05) against its truth on either side of the explicit methods'
+stability bounds; its audit reads the joints back from the finalized plant."""
 
 import numpy as np
 import pytest
 
 from dalembert import invariants, spatial
 from dalembert.adapters import get_adapter
+from dalembert.case import make_case
 from dalembert.errors import trajectory_errors
-from dalembert.reference import simulate
+from dalembert.reference import simulate, truth
+from dalembert.reference.solver import decay_rate
 from dalembert.scene import PRISMATIC_EFFECTS, Body, Joint, Loop, Scene, Spring
 from dalembert.settings import Settings
 from test_drake_springs import LEADING_TERM_RTOL, THIRD_ORDER_RATIO
@@ -328,3 +331,36 @@ def test_discrete_slider_crank_closes_over_its_prismatic_joint():
     assert gap.max() < CRANK_GAP_TOL, gap.max()
     assert angles[0] / angles[1] > CRANK_DECADE_GAIN and angles[1] < CRANK_ANGLE_TOL, angles
     assert reaction < CRANK_REACTION_RTOL, reaction
+
+
+# ---------------------------------------------------------------------------- the flyball governor (IFToMM A05)
+# Over its first 0.5 s (the slider from 0.5 m up to its first peak, ~0.74 m): the truth is the reference on Radau
+# (~3 s). Its fastest decay at the start, decay_rate = 8117 1/s (the dampers against the balls), bounds the steps
+# of explicit methods: h < 2.51 / rate = 3.1e-4 s for RK3 (the real-axis end of its stability region), h < 2 / rate
+# = 2.5e-4 s for the discrete plant (semi-implicit Euler taking the damper explicitly: springs.py).
+FLYBALL_T = 0.5  # s
+RK3_STABILITY = 2.5127  # -z where |1 + z + z^2/2 + z^3/6| = 1 on the negative real axis
+EULER_STABILITY = 2.0  # -z where |1 + z| = 1
+# Below the bounds by 0.65 and 0.8, above by 1.3 and 1.2 (measured: RK3 at 4e-4 blows up within 0.01 s, the discrete
+# plant at 3e-4 within 0.11 s, its rate changing along the motion).
+RK3_STEPS, DISCRETE_STEPS_STIFF, DISCRETE_UNSTABLE = (2e-4, 4e-4), (2e-4, 1e-4), 3e-4
+# RK3 at 2e-4 meets every tolerance of the case (measured 5.2e-11 m, 1.6e-8 m/s; the tolerances 1e-6 m and
+# 1e-5 m/s). The discrete plant's error is first order: halving the step halves it (measured 1.62e-4 -> 8.11e-5 m).
+HALVING_RATIO = (1.8, 2.2)
+
+
+def test_flyball_governor_on_either_side_of_the_explicit_stability_bounds():
+    case = make_case("flyball_governor", t_final=FLYBALL_T)
+    rate = decay_rate(case.scene)
+    assert RK3_STEPS[0] < RK3_STABILITY / rate < RK3_STEPS[1]
+    assert DISCRETE_STEPS_STIFF[0] < EULER_STABILITY / rate < DISCRETE_UNSTABLE
+    ref = truth(case)
+    stable, unstable = (_run(case.scene, case.times, Settings("rk3", dt=dt))[1].trajectory for dt in RK3_STEPS)
+    errors = trajectory_errors(stable, ref)
+    for q in ("joint", "position", "orientation", "velocity", "angular_velocity"):
+        assert errors[q][0] < case.tolerances[q].value, (q, errors[q])
+    assert not unstable.is_finite()  # a blow-up is data, not an exception
+    discrete = [trajectory_errors(_run(case.scene, case.times, Settings("discrete", dt=dt))[1].trajectory, ref)
+                ["joint"][0] for dt in DISCRETE_STEPS_STIFF]
+    assert HALVING_RATIO[0] < discrete[0] / discrete[1] < HALVING_RATIO[1], discrete
+    assert not _run(case.scene, case.times, Settings("discrete", dt=DISCRETE_UNSTABLE))[1].trajectory.is_finite()
