@@ -12,6 +12,7 @@ import pytest
 
 from dalembert import invariants, spatial
 from dalembert.adapters import get_adapter
+from dalembert.adapters.drake.model import AXIS_ROUNDOFF
 from dalembert.case import make_case
 from dalembert.errors import trajectory_errors
 from dalembert.reference import simulate, truth
@@ -143,7 +144,7 @@ def test_audit_reads_the_prismatic_joint_back_from_the_plant():
         audit = ADAPTER.audit(prepared, outcome)
         built = prepared["model"].prismatic_joints()["b"]
         assert built["type"] == "prismatic" and (built["parent"], built["child"]) == ("world", "b")
-        np.testing.assert_allclose(built["axis_F"], np.array(SLIDER_AXIS) / 3.0, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(built["axis_F"], np.array(SLIDER_AXIS) / 3.0, rtol=0, atol=AXIS_ROUNDOFF)
         for key in ("position_limits", "velocity_limits", "acceleration_limits"):
             assert built[key] == (-np.inf, np.inf), key
         assert built["damping"] == 0.0 and audit["max_joint_damping"] == 0.0 and audit["finite_limits"] == 0
