@@ -47,7 +47,7 @@ def error_series(traj, truth):
 
 
 def _reaction_errors(traj, truth):
-    """Per sample, the largest reaction error (n,) relative to each joint's largest true reaction,
+    """Per sample, the largest reaction error (n,) relative to the largest true reaction of any joint,
     modulo the truth's self-stresses (``reaction_mode:<k>:<joint>`` extras, ``reference.loops``):
     loads a rigid model leaves undetermined, removed from the errors by least squares in the
     relative units the errors are measured in. None when neither side has reactions."""
@@ -55,13 +55,14 @@ def _reaction_errors(traj, truth):
     if not names:
         return None
     tf = np.stack([truth.extras[f"reaction_force:{j}"] for j in names], axis=1)  # (n, J, 3)
-    scale = np.max(np.linalg.norm(tf, axis=2), axis=0)
-    scale[~(scale > 0.0)] = 1.0
-    E = (np.stack([traj.extras[f"reaction_force:{j}"] for j in names], axis=1) - tf) / scale[:, None]
+    # One scale for every joint, the largest true reaction anywhere: a joint that carries ~nothing (the
+    # flyball governor's slider, by symmetry: 4e-15 N) would make its own roundoff a relative error of 1.
+    scale = float(np.max(np.linalg.norm(tf, axis=2), initial=0.0)) or 1.0
+    E = (np.stack([traj.extras[f"reaction_force:{j}"] for j in names], axis=1) - tf) / scale
     modes = sorted({int(k.split(":")[1]) for k in truth.extras if k.startswith("reaction_mode:")})
     if modes:
         A = np.stack([np.stack([truth.extras.get(f"reaction_mode:{k}:{j}", np.zeros_like(tf[:, 0])) for j in names],
-                               axis=1) / scale[:, None] for k in modes], axis=1)  # (n, K, J, 3)
+                               axis=1) / scale for k in modes], axis=1)  # (n, K, J, 3)
         for i in np.flatnonzero(np.all(np.isfinite(A), axis=(1, 2, 3)) & np.all(np.isfinite(E), axis=(1, 2))):
             basis = A[i].reshape(len(modes), -1).T  # (3J, K)
             coef = np.linalg.lstsq(basis, E[i].ravel(), rcond=None)[0]

@@ -383,24 +383,33 @@ def xyzw_to_wxyz(q):
     return np.concatenate([q[..., 3:], q[..., :3]], axis=-1)
 
 
-def joint_coordinates(joint, R_WP, R_WC, w_WP_W, w_WC_W):
+def joint_coordinates(joint, R_WP, R_WC, w_WP_W, w_WC_W, p_WP=None, p_WC=None, v_WP_W=None, v_WC_W=None):
     """A joint's coordinates (``Joint`` conventions) from its parent's and child's motion.
 
     For engines that simulate bodies in redundant coordinates. A revolute angle
-    is unwrapped and shifted by whole turns to start at ``joint.q0``.
+    is unwrapped and shifted by whole turns to start at ``joint.q0``. A prismatic
+    joint's slide needs the bodies' positions and velocities too: it is the child
+    joint point's offset from the parent's along the axis, ``d = a_W . r`` with
+    ``r = p_Jc - p_Jp`` and ``a_W = R_WJp a``, and its rate ``a_W . (r' - w_WP x r)``
+    (``a_W`` turns with the parent).
 
     Parameters
     ----------
-    joint : dalembert.scene.Joint — revolute, ball or weld
+    joint : dalembert.scene.Joint — revolute, prismatic, ball or weld
     R_WP, R_WC : array_like (n, 3, 3) or (3, 3) — parent and child body rotations
         ``R_WB`` (world: the identity)
     w_WP_W, w_WC_W : array_like (n, 3) — their angular velocities, world axes, rad/s
+    p_WP, p_WC : array_like (n, 3) or (3,), optional — parent and child COM positions,
+        world, m (world: the origin); prismatic joints only
+    v_WP_W, v_WC_W : array_like (n, 3) or (3,), optional — their COM velocities, world
+        axes, m/s (world: zero); prismatic joints only
 
     Returns
     -------
-    q : ndarray (n, nq) — angle (rad), scalar-first quaternion ``q_JpJc``, or (n, 0)
-    v : ndarray (n, nv) — rate about the axis (rad/s), ``w_JpJc`` in the child
-        joint frame (rad/s), or (n, 0)
+    q : ndarray (n, nq) — angle (rad), displacement (m), scalar-first quaternion
+        ``q_JpJc``, or (n, 0)
+    v : ndarray (n, nv) — rate about the axis (rad/s), rate along it (m/s),
+        ``w_JpJc`` in the child joint frame (rad/s), or (n, 0)
     """
     w_rel = np.asarray(w_WC_W, dtype=float) - np.asarray(w_WP_W, dtype=float)
     n = len(w_rel)
@@ -408,6 +417,25 @@ def joint_coordinates(joint, R_WP, R_WC, w_WP_W, w_WC_W):
         return np.zeros((n, 0)), np.zeros((n, 0))
     R_WJp = np.asarray(R_WP, dtype=float) @ quat_to_matrix(joint.parent_quat)
     R_WJc = np.asarray(R_WC, dtype=float) @ quat_to_matrix(joint.child_quat)
+    if joint.kind == "prismatic":
+        missing = [k for k, v in (("p_WP", p_WP), ("p_WC", p_WC), ("v_WP_W", v_WP_W), ("v_WC_W", v_WC_W)) if v is None]
+        if missing:
+            raise ValueError(f"joint_coordinates.{missing[0]}: a prismatic joint's slide needs the parent's and "
+                             "child's COM positions and velocities — pass p_WP, p_WC, v_WP_W, v_WC_W")
+        R_WP_n = np.broadcast_to(np.asarray(R_WP, dtype=float), (n, 3, 3))
+        R_WC_n = np.broadcast_to(np.asarray(R_WC, dtype=float), (n, 3, 3))
+        w_P = np.broadcast_to(np.asarray(w_WP_W, dtype=float), (n, 3))
+        w_C = np.broadcast_to(np.asarray(w_WC_W, dtype=float), (n, 3))
+        # the joint points in world (lever from each COM, world axes) and their velocities
+        rho_P = R_WP_n @ np.asarray(joint.parent_point, dtype=float)
+        rho_C = R_WC_n @ np.asarray(joint.child_point, dtype=float)
+        r = (np.asarray(p_WC, dtype=float) + rho_C) - (np.asarray(p_WP, dtype=float) + rho_P)  # Jp -> Jc, (n, 3)
+        r_dot = (np.asarray(v_WC_W, dtype=float) + cross(w_C, rho_C)) - (np.asarray(v_WP_W, dtype=float)
+                                                                         + cross(w_P, rho_P))
+        a_W = np.broadcast_to(R_WJp, (n, 3, 3)) @ (np.asarray(joint.axis, dtype=float) / np.linalg.norm(joint.axis))
+        slide = np.einsum("ni,ni->n", a_W, r)
+        rate = np.einsum("ni,ni->n", a_W, r_dot - cross(w_P, r))
+        return slide[:, None], rate[:, None]
     R_J = np.broadcast_to(np.swapaxes(R_WJp, -1, -2) @ R_WJc, (n, 3, 3))
     if joint.kind == "ball":
         return matrix_to_quat(R_J), np.einsum("nji,nj->ni", np.broadcast_to(R_WJc, (n, 3, 3)), w_rel)

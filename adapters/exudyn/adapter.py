@@ -13,7 +13,11 @@ listed by Exudyn 1.13 but not implemented, so it is not offered. Loop closures
 (``Scene.loops``, built by ``model``) run with the two implicit solvers only; each
 loop's force ON its body b is read back as ``reaction_force:<loop name>``. Spring-dampers
 (``Scene.springs``, ``springs``) run with every solver and both joint formulations; the audit reads
-each back from the system that ran. A solver that
+each back from the system that ran. Prismatic joints (``joint:prismatic``) are built in both joint
+formulations (``model``); like revolute ones, on a free body only with redundant joints, and with
+redundant joints only by the implicit solvers. Every joint is read back from the system that ran
+(``joints.read_joints``: its type, axis, joint point, initial coordinate) into the audit's
+``joint_readout``. A solver that
 stops before the end raises, and the run is stored as ``failed`` with the time
 reached.
 """
@@ -26,9 +30,9 @@ from dalembert import spatial
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert.adapters.exudyn import sampling
 from dalembert.adapters.exudyn.loops import loop_axes
-from dalembert.adapters.exudyn.model import CONSTRAINED_AXES, JOINTS, NODES, build, rigid_bodies
+from dalembert.adapters.exudyn.model import CONSTRAINED_AXES, JOINTS, NODES, TREE_JOINTS, build, rigid_bodies
 from dalembert.adapters.exudyn.springs import passive_effects, unexpected_passive
-from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS, WORLD
+from dalembert.scene import EFFECTS, LOOP_EFFECTS, PRISMATIC_EFFECTS, SPRING_EFFECTS, WORLD
 
 __all__ = ["ExudynAdapter"]
 
@@ -64,7 +68,7 @@ class ExudynAdapter(Adapter):
 
     name = "exudyn"
     # ball joints and welds only with joints=redundant, loops only with implicit solvers (see ``unsupported``)
-    effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS
+    effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS | PRISMATIC_EFFECTS
     integrators = {
         **{k: IntegratorSpec(True, OPTIONS, f"Exudyn {v}") for k, v in IMPLICIT.items()},
         **{k: IntegratorSpec(k not in ADAPTIVE, OPTIONS, f"Exudyn {v}") for k, v in EXPLICIT.items()},
@@ -123,8 +127,8 @@ class ExudynAdapter(Adapter):
                     f"joints only — use --option joints=redundant")
         free = {j.child for j in scene.joints if j.kind == "free"}
         for j in scene.joints:
-            if j.kind == "revolute" and j.parent != WORLD and j.parent in free:
-                return ("a revolute joint on a free body: the kinematic tree here has a fixed base — use "
+            if j.kind in TREE_JOINTS and j.parent != WORLD and j.parent in free:
+                return (f"a {j.kind} joint on a free body: the kinematic tree here has a fixed base — use "
                         "--option joints=redundant")
         return None
 
@@ -300,8 +304,13 @@ class ExudynAdapter(Adapter):
         for child, R0 in built["redundant_joints"].items():  # redundant coordinates: from the bodies
             j = scene.joint(child)
             R_WP = np.eye(3) if j.parent == WORLD else R_WB[j.parent]
-            w_P = np.zeros((n, 3)) if j.parent == WORLD else bodies[j.parent].angular_velocity
-            joints[child] = spatial.joint_coordinates(j, R_WP, R_WB[child], w_P, bodies[child].angular_velocity)
+            zero = np.zeros((n, 3))
+            P = None if j.parent == WORLD else bodies[j.parent]
+            C = bodies[child]
+            joints[child] = spatial.joint_coordinates(
+                j, R_WP, R_WB[child], zero if P is None else P.angular_velocity, C.angular_velocity,
+                p_WP=zero if P is None else P.position, p_WC=C.position,
+                v_WP_W=zero if P is None else P.velocity, v_WC_W=C.velocity)
             f_local = series(f"__joint:{child}", "f", 3)
             reactions[child] = -np.einsum("...ij,...j->...i", R_WP @ R0, f_local)  # ON the child, world axes
         joints = {k: v if isinstance(v, JointStates) else JointStates(*v) for k, v in joints.items()}
@@ -347,6 +356,7 @@ class ExudynAdapter(Adapter):
             "reactions": self._reaction_method(scene, st),
             **({"loops": self._loop_audit(scene, outcome)} if scene.loops else {}),
             **self._spring_audit(scene, outcome),
+            **self._joint_audit(outcome),
             **({"known_issue": ROTVEC_LG_REACTION} if self._rotvec_lg_reactions(scene, st) else {}),
         }
 
@@ -368,6 +378,16 @@ class ExudynAdapter(Adapter):
                          "frame) turned into world axes and negated; the ObjectConnectorDistance's Force (a scalar, "
                          "the tension) along the line from b's point to a's"),
         }
+
+    @staticmethod
+    def _joint_audit(outcome):
+        """The joints as the system that ran holds them (``joints.read_joints`` once it was assembled: joint
+        type, axis, joint point, initial coordinate and rate read from Exudyn, each compared with the scene)."""
+        built = outcome.info.get("built")
+        if built is None or not built["joint_readout"]:
+            return {}
+        return {"joint_readout": {child: {k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in got.items()}
+                                 for child, got in built["joint_readout"].items()}}
 
     @staticmethod
     def _spring_audit(scene, outcome):

@@ -15,15 +15,21 @@ Free bodies on rigid-body nodes, jointed trees in minimal coordinates
 * Jointed scenes two ways (option ``joints``):
 
   - ``minimal`` (default): one ``ObjectKinematicTree`` whose links rotate about
-    their local z; each link frame is the scene's child joint frame turned so
-    that z is the joint axis. It runs with every solver. Ball joints and welds
-    are not single-axis joints: ``unsupported``. The pivot reaction is read back
+    (revolute: ``RevoluteZ``) or slide along (prismatic: ``PrismaticZ``) their local
+    z; each link frame is the scene's child joint frame turned so that z is the
+    joint axis (a prismatic joint keeps the parent joint frame's attitude, so the
+    link frame is the parent joint frame's turned alike, moved by q along z). It
+    runs with every solver. Ball joints and welds are not single-axis joints:
+    ``unsupported``. The pivot reaction is read back
     by Newton's law on each link, ``R = m a_com - F_ext - m g + sum R_children``,
     with ``a_com`` from the tree's acceleration sensor;
   - ``redundant``: every body an ``ObjectRigidBody`` (the node type as above),
     each joint an ``ObjectJointGeneric`` (revolute: the five axes other than the
-    joint axis constrained; ball: translations; weld: all six) from a marker on
-    the parent (marker 0) to one on the child, each marker frame = joint frame. An index-3 DAE: implicit solvers
+    rotation about the joint axis constrained; prismatic: the five other than the
+    translation along it; ball: translations; weld: all six) from a marker on
+    the parent (marker 0) to one on the child, each marker frame = joint frame turned so that z is
+    the axis (Exudyn measures the generic joint's relative translation in marker 0's frame: a
+    prismatic joint's slide along marker 0's z, as in the scene). An index-3 DAE: implicit solvers
     only. The reaction is the joint's ``ForceLocal``: the force on the marker-0
     (parent) side in the marker-0 frame, so the force ON the child in world axes is
     ``-R_WP R_PJ ForceLocal``. Initial body states come from the
@@ -50,17 +56,15 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
+from dalembert.adapters.exudyn.joints import CONSTRAINED_AXES, TREE_JOINTS, read_joints
 from dalembert.adapters.exudyn.loops import joint_frame, loop_axes
 from dalembert.adapters.exudyn.springs import add_springs, read_springs
 from dalembert.scene import WORLD
 
-__all__ = ["build", "rigid_bodies", "axis_frame", "NODES", "JOINTS", "CONSTRAINED_AXES"]
+__all__ = ["build", "rigid_bodies", "axis_frame", "NODES", "JOINTS", "CONSTRAINED_AXES", "TREE_JOINTS"]
 
 NODES = {"rotvec-lg": "RotationRotationVector", "ep": "RotationEulerParameters", "rxyz": "RotationRxyz"}
 JOINTS = ("minimal", "redundant")
-# ObjectJointGeneric's constrainedAxes (x, y, z translation; x, y, z rotation) in the
-# joint frame, whose z is a revolute joint's axis.
-CONSTRAINED_AXES = {"revolute": [1, 1, 1, 1, 1, 0], "ball": [1, 1, 1, 0, 0, 0], "weld": [1, 1, 1, 1, 1, 1]}
 
 
 def rigid_bodies(scene, redundant):
@@ -79,12 +83,14 @@ def build(scene, settings, assemble=True):
 
     Returns a dict: ``SC``, ``mbs`` (the system container and system), ``sensors`` (body or
     ``__q``/``__v``/``__joint:<child>``/``__loop:<loop name>``/``__spring:<spring name>`` -> quantity -> sensor number), ``X_EB``
-    (per link), ``links`` (the kinematic tree's bodies, in link order), ``redundant_joints`` (child ->
-    joint frame in the parent's axes, ``R_PJ R_A``), ``loops`` (loop name -> its joint frame Ja in body
-    a's scene frame, ``R_BJa``), ``loop_rows`` (loop name -> ``loops.LoopRows``), ``springs`` (spring name
+    (per link), ``links`` (the kinematic tree's bodies, in link order), ``tree``, ``tree_node`` (the
+    kinematic tree's object and node numbers, or None), ``redundant_joints`` (child -> joint frame in the
+    parent's axes, ``R_PJ R_A``), ``joint_objects`` (child -> its ObjectJointGeneric's number), ``loops``
+    (loop name -> its joint frame Ja in body a's scene frame, ``R_BJa``), ``loop_rows`` (loop name -> ``loops.LoopRows``), ``springs`` (spring name
     -> its connector's object and marker numbers, ``springs.add_springs``), ``owners`` (rigid body or ground
-    object number -> scene body name, ``WORLD`` for a ground), ``summary`` (text, for reports) and
-    ``spring_readout`` (``springs.read_springs`` right after assembly; empty unassembled).
+    object number -> scene body name, ``WORLD`` for a ground), ``summary`` (text, for reports),
+    ``spring_readout`` (``springs.read_springs`` right after assembly; empty unassembled) and
+    ``joint_readout`` (``joints.read_joints`` likewise).
     """
     import exudyn as exu
     from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid, ObjectConnectorDistance,
@@ -123,14 +129,14 @@ def build(scene, settings, assemble=True):
         summary.append(f"{name}: ObjectRigidBody on {node_type.name} node, mass {body.mass:g} kg, "
                        f"inertia at COM (inertiaTensorAtCOM=True)")
     # --- joints=redundant: generic joints between rigid bodies (marker 0 on the parent)
-    redundant_joints = {}
+    redundant_joints, joint_objects = {}, {}
     if redundant and any(j.kind != "free" for j in scene.joints):
         ground = mbs.AddObject(ObjectGround())
         owners[int(ground)] = WORLD
         for j in scene.joints:
             if j.kind == "free":
                 continue
-            R_A = axis_frame(j.axis) if j.kind == "revolute" else np.eye(3)
+            R_A = axis_frame(j.axis) if j.kind in TREE_JOINTS else np.eye(3)
             R0 = spatial.quat_to_matrix(j.parent_quat) @ R_A  # joint frame in the parent's frame
             R1 = spatial.quat_to_matrix(j.child_quat) @ R_A
             parent = ground if j.parent == WORLD else bodies[j.parent]
@@ -144,11 +150,13 @@ def build(scene, settings, assemble=True):
             sensors[f"__joint:{j.child}"] = {"f": mbs.AddSensor(SensorObject(
                 objectNumber=joint, outputVariableType=OV.ForceLocal))}
             redundant_joints[j.child] = R0
+            joint_objects[j.child] = joint
             summary.append(f"ObjectJointGeneric {j.parent} -> {j.child} ({j.kind}), constrainedAxes "
                            f"{CONSTRAINED_AXES[j.kind]} (redundant coordinates)")
-    # --- joints=minimal: revolute tree(s) in one kinematic tree
-    links = [] if redundant else [b for b in scene.topological_order() if scene.joint(b.name).kind == "revolute"]
+    # --- joints=minimal: revolute and prismatic tree(s) in one kinematic tree
+    links = [] if redundant else [b for b in scene.topological_order() if scene.joint(b.name).kind in TREE_JOINTS]
     X_EB = {}  # link -> (p_EB, R_EB): its scene frame B in its link frame E, x_E = p_EB + R_EB x_B
+    tree = node = None
     if links:
         index = {b.name: i for i, b in enumerate(links)}
         Ts, offsets, coms, inertias, masses, parents, q0, v0 = [], [], [], [], [], [], [], []
@@ -176,7 +184,8 @@ def build(scene, settings, assemble=True):
         node = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0] * n, initialCoordinates=q0,
                                            initialCoordinates_t=v0, numberOfODE2Coordinates=n))
         tree = mbs.AddObject(ObjectKinematicTree(
-            nodeNumber=node, jointTypes=[exu.JointType.RevoluteZ] * n, linkParents=parents,
+            nodeNumber=node, jointTypes=[getattr(exu.JointType, TREE_JOINTS[scene.joint(b.name).kind]) for b in links],
+            linkParents=parents,
             jointTransformations=exu.Matrix3DList(Ts), jointOffsets=exu.Vector3DList(offsets),
             linkInertiasCOM=exu.Matrix3DList(inertias), linkCOMs=exu.Vector3DList(coms), linkMasses=masses,
             baseOffset=[0.0, 0.0, 0.0], gravity=list(g)))
@@ -194,7 +203,8 @@ def build(scene, settings, assemble=True):
                 for k, v in outputs}
         sensors["__q"] = {"q": mbs.AddSensor(SensorNode(nodeNumber=node, outputVariableType=OV.Coordinates))}
         sensors["__v"] = {"v": mbs.AddSensor(SensorNode(nodeNumber=node, outputVariableType=OV.Coordinates_t))}
-        summary.append(f"ObjectKinematicTree: {n} RevoluteZ link(s) {[b.name for b in links]} "
+        summary.append(f"ObjectKinematicTree: {n} link(s) "
+                       f"{[f'{b.name} ({TREE_JOINTS[scene.joint(b.name).kind]})' for b in links]} "
                        f"(minimal coordinates), gravity {g.tolist()}")
     # --- loop closures: one constraint object from a marker on body a (marker 0) to one on body b,
     # its rows those independent at the initial state (``loops.loop_axes``)
@@ -233,12 +243,14 @@ def build(scene, settings, assemble=True):
         Load = LoadForceVector if ld.kind == "force" else LoadTorqueVector
         mbs.AddLoad(Load(markerNumber=marker, loadVector=vec, bodyFixed=follower))
         summary.append(f"{Load.__name__} on {ld.body} at {list(ld.point)}, bodyFixed={follower}")
-    built = dict(SC=SC, mbs=mbs, sensors=sensors, X_EB=X_EB, links=[b.name for b in links],
-                 redundant_joints=redundant_joints, loops=loops, loop_rows=rows, springs=springs, owners=owners,
-                 summary="\n".join(summary) + "\n", spring_readout={})
+    built = dict(SC=SC, mbs=mbs, sensors=sensors, X_EB=X_EB, links=[b.name for b in links], tree=tree,
+                 tree_node=node, redundant_joints=redundant_joints, joint_objects=joint_objects, loops=loops,
+                 loop_rows=rows, springs=springs, owners=owners, summary="\n".join(summary) + "\n",
+                 spring_readout={}, joint_readout={})
     if assemble:
         mbs.Assemble()
-        # the springs as Exudyn holds them, at the initial state (its connectors report their length and
-        # force in the current configuration only, which is the initial one until the solve)
+        # the springs and joints as Exudyn holds them, at the initial state (its connectors and markers report
+        # their outputs in the current configuration only, which is the initial one until the solve)
         built["spring_readout"] = read_springs(mbs, scene, built)
+        built["joint_readout"] = read_joints(mbs, scene, built)
     return built

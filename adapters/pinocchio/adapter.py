@@ -1,6 +1,7 @@
 """``PinocchioAdapter``: the contract (``dalembert.adapters``) for Pinocchio.
 
-The scene through Pinocchio's dynamics (ABA, RNEA; ``model``), with the
+The scene through Pinocchio's dynamics (ABA, RNEA; ``model``: free, revolute,
+prismatic, ball and weld joints), with the
 integrators owned here (``integrators``), so their quality is part of what is
 measured. The fixed-step loops run compiled (``native``: the same integrators
 and loads in ``stepper.cpp`` against the installed Pinocchio, no Python call per
@@ -24,7 +25,7 @@ from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_cho
 from dalembert.adapters.pinocchio import loops, springs
 from dalembert.adapters.pinocchio.integrators import STAGES, adaptive, fixed_step
 from dalembert.adapters.pinocchio.model import WELDS, PinocchioModel
-from dalembert.scene import EFFECTS, SPRING_EFFECTS
+from dalembert.scene import AXIS_KINDS, EFFECTS, PRISMATIC_EFFECTS, SPRING_EFFECTS
 from dalembert.settings import steps_per_interval
 
 __all__ = ["PinocchioAdapter"]
@@ -32,6 +33,9 @@ __all__ = ["PinocchioAdapter"]
 # Fixed-step loops: compiled (stepper.cpp, the default) or the Python one
 # (the same integrators, kept as the readable specification and the fallback).
 LOOPS = ("native", "python")
+# The joint kinds whose reactions are read back (``reaction_force:<child>``): the force through the joint from
+# ``rnea`` (``data.f``, the joint's LOCAL frame), rotated to world axes.
+REACTING = ("revolute", "prismatic", "ball")
 
 
 class PinocchioAdapter(Adapter):
@@ -39,7 +43,7 @@ class PinocchioAdapter(Adapter):
 
     name = "pinocchio"
     # loop:distance: loops.DISTANCE_REASON
-    effects = EFFECTS | SPRING_EFFECTS | frozenset(f"loop:{k}" for k in loops.LOOP_KINDS)
+    effects = EFFECTS | PRISMATIC_EFFECTS | SPRING_EFFECTS | frozenset(f"loop:{k}" for k in loops.LOOP_KINDS)
     integrators = {
         "euler": IntegratorSpec(True, ("loop", "welds"), "semi-implicit Euler on the group"),
         "rk4": IntegratorSpec(True, ("loop", "welds"), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
@@ -70,8 +74,8 @@ class PinocchioAdapter(Adapter):
         if scene.springs:
             return ("welds=constraint with spring-dampers: pin.constraintDynamics takes no external forces (and the "
                     "springs' joint torques are not checked against welds held by constraints) — use welds=tree")
-        if any(j.kind in ("revolute", "ball") for j in scene.joints):
-            return ("welds=constraint with revolute or ball joints: their reactions would miss the "
+        if any(j.kind in REACTING for j in scene.joints):
+            return ("welds=constraint with revolute, prismatic or ball joints: their reactions would miss the "
                     "constraint forces — use welds=tree")
         return None
 
@@ -143,7 +147,7 @@ class PinocchioAdapter(Adapter):
         bodies = {b.name: [np.full((n, 3), np.nan), None, np.full((n, 3), np.nan),
                            np.full((n, 3), np.nan)] for b in scene.bodies}
         R_WB = {b.name: np.full((n, 3, 3), np.nan) for b in scene.bodies}  # to quaternions once, below
-        reacting = [j for j in scene.joints if j.kind in ("revolute", "ball")]
+        reacting = [j for j in scene.joints if j.kind in REACTING]
         reactions = {j.child: np.full((n, 3), np.nan) for j in reacting}
         loop_forces = {lc.loop.name: np.full((n, 3), np.nan) for lc in pm.loop_contacts}
         finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)  # once, not per sample
@@ -208,6 +212,9 @@ class PinocchioAdapter(Adapter):
         return {
             "gravity": tuple(float(g) for g in model.gravity.linear),
             "joints": {name: model.joints[jid].shortname() for name, jid in pm.joint_ids.items()},
+            # the unaligned revolute and prismatic joints' axes as the built model holds them (unit, joint frame)
+            "joint_axes": {j.child: model.joints[pm.joint_ids[j.child]].extract().axis.tolist()
+                           for j in prepared["scene"].joints if j.kind in AXIS_KINDS},
             "external_forces_per_evaluation": [f"{ld.effect} on {ld.body}" for ld in prepared["scene"].loads]
             + [f"spring_damper {el.name}: frames {model.frames[el.frame_a].name} -> {model.frames[el.frame_b].name}"
                for el in pm.springs],

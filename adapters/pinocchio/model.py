@@ -1,8 +1,12 @@
 """A scene as a Pinocchio model: ``PinocchioModel``.
 
 * A FreeFlyer for each free body, whose joint frame is the body frame at the
-  COM; a revolute (``JointModelRevoluteUnaligned``) or spherical joint whose
-  frame is the scene's child joint frame, placed in the parent's joint frame;
+  COM; a revolute (``JointModelRevoluteUnaligned``), prismatic
+  (``JointModelPrismaticUnaligned``) or spherical joint whose frame is the
+  scene's child joint frame, placed in the parent's joint frame (the scene's
+  axis, unit, in that frame: Pinocchio's unaligned joints take it as it is, so
+  the joint frame stays the scene's and no alignment rotation enters the
+  placements, the read-back or the reactions' frame);
   a weld adds the body to its parent's joint (option ``welds=tree``) or gets a
   FreeFlyer of its own held by a 6D constraint (``welds=constraint``). Each
   body's inertia is ``pin.Inertia(mass, lever, I_com)`` in its joint frame
@@ -31,19 +35,33 @@ import numpy as np
 
 from dalembert import closure, spatial
 from dalembert.adapters.pinocchio import springs
-from dalembert.scene import WORLD
+from dalembert.scene import AXIS_KINDS, WORLD
 
 __all__ = ["PinocchioModel", "WELDS", "depth_first_order"]
 
 # Welds: merged into the parent's joint (``tree``, exact), or 6D constraints between free
 # flyers solved by ``pin.constraintDynamics`` (``constraint``).
 WELDS = ("tree", "constraint")
+# The joints built here whose configuration space is a vector space (``integrate(q, v) = q + v``), so
+# ``dexp^-1`` is the identity: a model of these only needs no ``dIntegrate`` solve (``dexpinv_kind``).
+VECTOR_SPACE_JOINTS = ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned")
 
 
 def _se3(R, p):
     import pinocchio as pin
 
     return pin.SE3(np.asarray(R, dtype=float), np.asarray(p, dtype=float))
+
+
+def _joint_model(joint):
+    """The ``pin.JointModel*`` of a revolute, prismatic or ball ``joint``: the unaligned revolute and prismatic
+    joints take the scene's axis (unit, in the joint frame) as it is."""
+    import pinocchio as pin
+
+    if joint.kind == "ball":
+        return pin.JointModelSpherical()
+    axis = np.asarray(joint.axis, dtype=float) / np.linalg.norm(joint.axis)
+    return (pin.JointModelRevoluteUnaligned if joint.kind == "revolute" else pin.JointModelPrismaticUnaligned)(axis)
 
 
 def depth_first_order(scene):
@@ -104,9 +122,8 @@ class PinocchioModel:
                 X_EB = _se3(np.eye(3), np.zeros(3))
                 if j.kind == "weld":  # the weld frame, in the parent's joint frame and in the child's (= body)
                     self.constraints.append((parent_id, X_EpP * X_PJ, jid, X_CJ))
-            elif j.kind in ("revolute", "ball"):
-                jm = (pin.JointModelRevoluteUnaligned(np.array(j.axis) / np.linalg.norm(j.axis))
-                      if j.kind == "revolute" else pin.JointModelSpherical())
+            elif j.kind in ("revolute", "prismatic", "ball"):
+                jm = _joint_model(j)
                 jid = model.addJoint(parent_id, jm, X_EpP * X_PJ, body.name)
                 X_EB = X_CJ.inverse()
             else:  # weld: rigidly on the parent's joint
@@ -119,8 +136,10 @@ class PinocchioModel:
             model.appendBodyToJoint(jid, pin.Inertia(body.mass, p, R @ body.inertia_matrix @ R.T),
                                     _se3(np.eye(3), np.zeros(3)))
             model.addFrame(pin.Frame(body.name, jid, X_EB, pin.FrameType.OP_FRAME))
+            axis = (f", axis {np.round(model.joints[jid].extract().axis, 12).tolist()} (joint frame)"
+                    if j.kind in AXIS_KINDS else "")  # read back from the built joint
             lines.append(f"{body.name}: {j.kind} -> pin joint {jid} "
-                         f"({model.joints[jid].shortname() if jid else 'universe'}), mass {body.mass:g} kg")
+                         f"({model.joints[jid].shortname() if jid else 'universe'}{axis}), mass {body.mass:g} kg")
         self.springs = springs.build(self, model)  # frames at the ends: before createData
         for el in self.springs:
             lines.append(f"spring {el.name!r}: external forces between frames {model.frames[el.frame_a].name!r} "
@@ -324,18 +343,18 @@ class PinocchioModel:
         return self.acceleration
 
     def dexpinv_kind(self):
-        """0: the configuration space is a vector space (only revolute joints); 2: the
+        """0: the configuration space is a vector space (only revolute and prismatic joints); 2: the
         ``dIntegrate`` solve; 3: several FreeFlyers and nothing else (the same solve, block by
         block) — see ``dexpinv_function``. The compiled loop takes 0 and 2."""
         names = [self.model.joints[i].shortname() for i in range(1, self.model.njoints)]
-        if all(n.startswith("JointModelR") for n in names):  # RevoluteUnaligned / RX / RY / RZ
+        if all(n in VECTOR_SPACE_JOINTS for n in names):
             return 0
         return 3 if len(names) > 1 and all(n == "JointModelFreeFlyer" for n in names) else 2
 
     def dexpinv_function(self):
         """``dexpinv(q, theta, vel)``: the tangent ``theta'`` of ``q (+) theta`` moving with
         velocity ``vel`` — ``dIntegrate(q, theta, ARG1)^-1 vel`` — or None where it is ``vel``
-        (only revolute joints: the configuration space is a vector space).
+        (only revolute and prismatic joints: the configuration space is a vector space).
 
         Always the solve: Pinocchio's closed-form inverse, ``Jlog6(exp6(theta))``, is off by up
         to 5e-9 for rotations of 1e-4 to 1e-3 rad (measured against the solve, which agrees with

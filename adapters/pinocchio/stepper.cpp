@@ -1,7 +1,8 @@
 // The Pinocchio adapter's fixed-step loop in C++: the same integrators as its Python
 // loop (adapters/pinocchio/integrators.py: euler, rk4 = Runge-Kutta-Munthe-Kaas, rk4-naive),
 // the same model (passed as Pinocchio's own serialization of the Python-built pin.Model),
-// the same loads and spring-dampers (adapters/pinocchio/springs.py), with no Python call per step. Compiled on first use by
+// the same loads and spring-dampers (adapters/pinocchio/springs.py), with no Python call per step; generic over
+// Pinocchio's joint variant (free, revolute, prismatic, spherical alike). Compiled on first use by
 // adapters/pinocchio/native.py against the installed Pinocchio; called through ctypes.
 #include <cmath>
 #include <cstring>
@@ -23,7 +24,7 @@ using Mat = Eigen::MatrixXd;
 namespace {
 
 enum Method { EULER = 0, RK4 = 1, RK4_NAIVE = 2 };
-// dexp^-1 of the configuration space: identity (only revolute joints) or the dIntegrate
+// dexp^-1 of the configuration space: identity (only revolute and prismatic joints) or the dIntegrate
 // solve (see PinocchioModel.dexpinv_function for why not Jlog6).
 enum Dexpinv { IDENTITY = 0, SOLVE = 2 };
 
