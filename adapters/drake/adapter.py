@@ -17,6 +17,10 @@ constraint force (Drake reports no constraint forces: ``loops.loop_forces``).
 Spring-dampers (``springs``): ``LinearSpringDamper`` force elements, in both modes; a spring of rest
 length 0 is unsupported (Drake's element needs a positive free length: ``springs.ZERO_REST_REASON``).
 The audit reads every spring back from the plant and checks it against the scene.
+
+Prismatic joints (``PrismaticJoint``, ``model``): in both modes, with every integrator, springs and loops; no
+limits, no damping. The audit reads each back from the finalized plant (type, axis, limits, damping:
+``prismatic_joints``) and checks it against the scene (``prismatic_as_scene``).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from dalembert.adapters.drake.charts import RECHART_PITCH
 from dalembert.adapters.drake.loops import ANCHOR, CONTINUOUS_REASON, LOOP_KINDS
 from dalembert.adapters.drake.springs import refusal as spring_refusal
 from dalembert.adapters.drake.stepping import SCHEMES, simulate
-from dalembert.scene import EFFECTS, SPRING_EFFECTS
+from dalembert.scene import EFFECTS, PRISMATIC_EFFECTS, SPRING_EFFECTS
 
 __all__ = ["DrakeAdapter"]
 
@@ -64,8 +68,9 @@ class DrakeAdapter(Adapter):
     """Drake (``pydrake``): the scene as a ``MultibodyPlant``, Drake's integrators or its discrete mode."""
 
     name = "drake"
-    # loops: the discrete integrator only; springs: both modes, a positive rest length only
-    effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS) | SPRING_EFFECTS
+    # loops: the discrete integrator only; springs: both modes, a positive rest length only; prismatic joints: both
+    # modes, every integrator (``PrismaticJoint``, model)
+    effects = EFFECTS | PRISMATIC_EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS) | SPRING_EFFECTS
     integrators = _integrators()
 
     def version(self):

@@ -6,7 +6,10 @@
   identity for every body (``dalembert.adapters.base``).
 * Joints between frames fixed in parent and child (``FixedOffsetFrame`` at the
   scene's joint frames): a free body gets a ``QuaternionFloatingJoint`` to the
-  world, a revolute joint a ``RevoluteJoint`` about the normalized axis, a ball
+  world, a revolute joint a ``RevoluteJoint`` about the normalized axis, a
+  prismatic joint a ``PrismaticJoint`` along it (Drake's axis is in the joint's
+  frame F, as the scene's is in the parent joint frame; ``p_FM = d a``, ``R_FM = I``:
+  the scene's convention exactly, so q and v go in and out unchanged), a ball
   joint a ``BallRpyJoint`` (Drake has no quaternion ball joint: roll-pitch-yaw
   coordinates, singular at pitch = +-pi/2, kept clear of it by ``charts``), a weld a ``WeldJoint``; every damping
   zero, no limits.
@@ -38,7 +41,10 @@ import numpy as np
 from dalembert import spatial
 from dalembert.scene import WORLD
 
-__all__ = ["DrakeModel"]
+__all__ = ["DrakeModel", "AXIS_ROUNDOFF"]
+
+# A unit axis Drake normalized once more against the scene's normalized one: a few roundoffs of a unit vector.
+AXIS_ROUNDOFF = 1e-15
 
 
 def _transform(quat, point):
@@ -63,8 +69,8 @@ class DrakeModel:
 
     def __init__(self, scene, time_step=0.0):
         from pydrake.multibody.plant import MultibodyPlant
-        from pydrake.multibody.tree import (BallRpyJoint, FixedOffsetFrame, QuaternionFloatingJoint, RevoluteJoint,
-                                            RotationalInertia, SpatialInertia, WeldJoint)
+        from pydrake.multibody.tree import (BallRpyJoint, FixedOffsetFrame, PrismaticJoint, QuaternionFloatingJoint,
+                                            RevoluteJoint, RotationalInertia, SpatialInertia, WeldJoint)
         from pydrake.systems.framework import DiagramBuilder
 
         from dalembert.adapters.drake.loads import SceneLoads
@@ -94,6 +100,9 @@ class DrakeModel:
                 if j.kind == "revolute":
                     axis = np.asarray(j.axis, dtype=float)
                     joint = RevoluteJoint(j.child, F, M, axis / np.linalg.norm(axis), 0.0)
+                elif j.kind == "prismatic":  # no limits (Drake's default: +-inf), no damping
+                    axis = np.asarray(j.axis, dtype=float)
+                    joint = PrismaticJoint(j.child, F, M, axis / np.linalg.norm(axis), -np.inf, np.inf, 0.0)
                 elif j.kind == "ball":
                     joint = BallRpyJoint(j.child, F, M, 0.0)
                 else:
@@ -130,7 +139,7 @@ class DrakeModel:
                 quat = np.asarray(j.q0[3:], dtype=float)
                 q[a:a + 7] = np.concatenate([quat, j.q0[:3]])  # Drake: w in world axes, the scene's in body axes
                 v[b:b + 6] = np.concatenate([spatial.body_to_world(quat, j.v0[3:]), j.v0[:3]])
-            elif j.kind == "revolute":
+            elif j.kind in ("revolute", "prismatic"):  # the angle (rad) or the slide (m), and its rate
                 q[a], v[b] = j.q0[0], j.v0[0]
             elif j.kind == "ball":  # rpy of R_FM; w in F = R_FM w in M (the child joint frame)
                 R_FM = spatial.quat_to_matrix(np.asarray(j.q0, dtype=float))
@@ -158,6 +167,54 @@ class DrakeModel:
             "force_elements": int(plant.num_force_elements()),
             "time_step": float(plant.time_step()),
             "nq": int(plant.num_positions()), "nv": int(plant.num_velocities()),
+            **self._prismatic_audit(),
+        }
+
+    def prismatic_joints(self):
+        """Every ``PrismaticJoint`` of the finalized plant, read back from the plant (not from the scene): a dict
+        joint name -> dict ``type`` (Drake's type name), ``parent``, ``child`` (body names), ``axis_F`` (3-tuple,
+        the unit sliding direction in the joint's frame F on the parent), ``position_limits`` (m),
+        ``velocity_limits`` (m/s), ``acceleration_limits`` (m/s^2) as (lower, upper) pairs, and ``damping``
+        (N s/m, the default the simulator's context starts from)."""
+        from pydrake.multibody.tree import PrismaticJoint
+
+        plant, out = self.plant, {}
+        pair = lambda lo, hi: (float(lo[0]), float(hi[0]))  # noqa: E731
+        for i in plant.GetJointIndices():
+            jt = plant.get_joint(i)
+            if isinstance(jt, PrismaticJoint):
+                out[jt.name()] = dict(
+                    type=jt.type_name(), parent=jt.parent_body().name(), child=jt.child_body().name(),
+                    axis_F=tuple(float(x) for x in jt.translation_axis()),
+                    position_limits=pair(jt.position_lower_limits(), jt.position_upper_limits()),
+                    velocity_limits=pair(jt.velocity_lower_limits(), jt.velocity_upper_limits()),
+                    acceleration_limits=pair(jt.acceleration_lower_limits(), jt.acceleration_upper_limits()),
+                    damping=float(jt.default_damping()))
+        return out
+
+    def _prismatic_audit(self):
+        """The prismatic joints as the plant holds them (``prismatic_joints``), and whether each is the scene's:
+        type ``prismatic``, the scene's unit axis (to a rounding: Drake normalizes it again), every limit infinite,
+        no damping."""
+        built = self.prismatic_joints()
+        if not built:
+            return {}
+        inf = (-np.inf, np.inf)
+        free = lambda b: b["position_limits"] == b["velocity_limits"] == b["acceleration_limits"] == inf  # noqa: E731
+        same = []
+        for j in self.scene.joints:
+            if j.kind == "prismatic":
+                b = built.get(j.child)
+                a = np.asarray(j.axis, dtype=float) / np.linalg.norm(j.axis)
+                same.append(b is not None and b["type"] == "prismatic" and b["child"] == j.child and free(b)
+                            and b["damping"] == 0.0 and np.allclose(b["axis_F"], a, rtol=0.0, atol=AXIS_ROUNDOFF))
+        return {
+            "prismatic_joints": {name: (f"{b['type']} {b['parent']} -> {b['child']}, axis_F {list(b['axis_F'])}, "
+                                        f"position limits {b['position_limits']} m, velocity limits "
+                                        f"{b['velocity_limits']} m/s, acceleration limits {b['acceleration_limits']} "
+                                        f"m/s^2, damping {b['damping']!r} N s/m")
+                                 for name, b in built.items()},
+            "prismatic_as_scene": len(built) == len(same) and all(same),
         }
 
     def _summary(self):
@@ -177,7 +234,10 @@ class DrakeModel:
             X_CM = joint.frame_on_child().GetFixedPoseInBodyFrame()
             lines.append(f"joint {child}: {joint.type_name()} {joint.parent_body().name()} -> {joint.child_body().name()}"
                          f", X_PF p = {X_PF.translation().tolist()}, X_CM p = {X_CM.translation().tolist()}, "
-                         f"damping {joint.default_damping_vector().tolist()}")
+                         f"damping {joint.default_damping_vector().tolist()}"
+                         + (f", translation axis (in F) {joint.translation_axis().tolist()}, position limits "
+                            f"[{joint.position_lower_limit()}, {joint.position_upper_limit()}] m"
+                            if joint.type_name() == "prismatic" else ""))
         for lc in self.loops:
             lp = lc.loop
             what = (f"1 distance constraint ({lp.length:g} m, stiffness inf)" if lp.kind == "distance" else

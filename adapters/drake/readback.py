@@ -23,7 +23,7 @@ __all__ = ["read_back"]
 
 def read_back(p, X):
     """The ``Trajectory`` of the sampled plant states ``X (n, nq + nv)`` (NaN rows stay NaN), with the
-    reaction force on every revolute, ball or welded child (N, world axes, on the child) as extras."""
+    reaction force on every revolute, prismatic, ball or welded child (N, world axes, on the child) as extras."""
     from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
     model, scene, times = p["model"], p["scene"], p["times"]
@@ -46,7 +46,7 @@ def read_back(p, X):
                                           np.concatenate([vj[:, 3:], w_B], axis=1))
             continue
         jointed.append(j)
-        if j.kind == "revolute":
+        if j.kind in ("revolute", "prismatic"):  # Drake's coordinates are the scene's (model)
             joints[j.child] = JointStates(qj, vj)
         elif j.kind == "ball":  # rpy of R_FM -> quaternion q_JpJc; w_FM_F -> the child joint frame
             R_FM = _rpy_to_matrix(qj)
@@ -88,7 +88,7 @@ def _rpy_to_matrix(rpy):
 
 
 def _kinematics(p, X, bodies, jointed, reactions):
-    """Poses and velocities of the bodies on revolute, ball and weld joints, and the joints' reactions,
+    """Poses and velocities of the bodies on revolute, prismatic, ball and weld joints, and the joints' reactions,
     from the plant sample by sample (the loads system is evaluated for the reactions, as in a step)."""
     model = p["model"]
     plant = model.plant
