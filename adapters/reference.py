@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
-from dalembert.scene import EFFECTS, LOOP_EFFECTS, PRISMATIC_EFFECTS, SPRING_EFFECTS
+from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
 
 __all__ = ["ReferenceAdapter"]
 
@@ -21,7 +21,7 @@ class ReferenceAdapter(Adapter):
 
     name = "reference"
     # loops: Kane's tree plus multipliers (reference.loops); prismatic joints: Kane's (reference.generalized)
-    effects = EFFECTS | PRISMATIC_EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS
+    effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS
     integrators = {
         "dop853": IntegratorSpec(False, ("formulation",), "scipy DOP853, adaptive 8th order"),
         "rk4": IntegratorSpec(True, ("formulation",), "classical RK4 on embedded coordinates"),

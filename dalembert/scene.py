@@ -32,7 +32,7 @@ from dalembert import spatial
 from dalembert.registry import suggest
 
 __all__ = ["WORLD", "JOINT_KINDS", "AXIS_KINDS", "LOOP_KINDS", "EFFECTS", "LOOP_EFFECTS", "SPRING_EFFECTS",
-           "PRISMATIC_EFFECTS", "Body", "Joint", "Loop",
+           "Body", "Joint", "Loop",
            "Load", "Spring", "Scene", "SceneError", "mass_properties", "LOOP_CLOSURE_TOL"]
 
 WORLD = "world"
@@ -60,11 +60,8 @@ LOAD_FRAMES = ("world", "body")
 LOOP_KINDS = ("ball", "revolute", "distance")
 # Every effect tag a tree scene can call for (``Scene.effects`` draws from these): what an
 # adapter declares with ``effects = EFFECTS``.
-EFFECTS = frozenset({"gravity"} | {f"joint:{k}" for k in JOINT_KINDS if k != "prismatic"}
+EFFECTS = frozenset({"gravity"} | {f"joint:{k}" for k in JOINT_KINDS}
                     | {f"load:{w}_{k}" for w in ("follower", "world") for k in LOAD_KINDS})
-# The prismatic joint's tag, apart while adapters learn it: one that builds prismatic joints declares
-# ``EFFECTS | PRISMATIC_EFFECTS``, every other one refuses the scenes that have them.
-PRISMATIC_EFFECTS = frozenset({"joint:prismatic"})
 # The tags of loop closures, apart: an adapter that closes loops declares them explicitly
 # (``EFFECTS | LOOP_EFFECTS``), so one that builds trees only declares them unsupported.
 LOOP_EFFECTS = frozenset(f"loop:{k}" for k in LOOP_KINDS)

@@ -17,7 +17,7 @@ from dalembert.case import make_case
 from dalembert.errors import trajectory_errors
 from dalembert.reference import simulate, truth
 from dalembert.reference.solver import decay_rate
-from dalembert.scene import PRISMATIC_EFFECTS, Body, Joint, Loop, Scene, Spring
+from dalembert.scene import Body, Joint, Loop, Scene, Spring
 from dalembert.settings import Settings
 from test_drake_springs import LEADING_TERM_RTOL, THIRD_ORDER_RATIO
 from test_prismatic import CRANK, ROD, TIGHT, _slider_crank, _slider_on_a_swinging_rod
@@ -97,7 +97,7 @@ def _run(scene, times, settings):
 
 def test_prismatic_joints_are_supported_in_both_modes():
     scene = _slider()
-    assert PRISMATIC_EFFECTS <= ADAPTER.effects and PRISMATIC_EFFECTS <= scene.effects
+    assert {"joint:prismatic"} <= ADAPTER.effects and {"joint:prismatic"} <= scene.effects
     for integrator in ("rk3", "rk5-adaptive", "radau3", "discrete"):
         assert ADAPTER.unsupported(scene, Settings(integrator, dt=1e-3, rtol=1e-6)) is None, integrator
 

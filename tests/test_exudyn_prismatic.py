@@ -16,7 +16,7 @@ from dalembert import invariants, spatial
 from dalembert.adapters import get_adapter
 from dalembert.adapters.exudyn.joints import read_joints
 from dalembert.adapters.exudyn.model import build
-from dalembert.scene import PRISMATIC_EFFECTS, Body, Joint, Scene, Spring
+from dalembert.scene import Body, Joint, Scene, Spring
 from dalembert.reference import simulate
 from dalembert.settings import Settings
 from bounds import ORDER_SLACK
@@ -134,7 +134,7 @@ def _assert_slider(scene, a_W, traj, audit, d_error=0.0, reaction_tol=ROUNDOFF):
 
 
 def test_the_slider_effect_is_declared():
-    assert PRISMATIC_EFFECTS <= ADAPTER.effects
+    assert {"joint:prismatic"} <= ADAPTER.effects
     scene, _ = inclined_slider()
     assert ADAPTER.unsupported(scene, Settings("rk44", dt=SLIDER_DT)) is None
 

@@ -32,7 +32,7 @@ from dalembert.adapters.drake.charts import RECHART_PITCH
 from dalembert.adapters.drake.loops import ANCHOR, CONTINUOUS_REASON, LOOP_KINDS
 from dalembert.adapters.drake.springs import refusal as spring_refusal
 from dalembert.adapters.drake.stepping import SCHEMES, simulate
-from dalembert.scene import EFFECTS, PRISMATIC_EFFECTS, SPRING_EFFECTS
+from dalembert.scene import EFFECTS, SPRING_EFFECTS
 
 __all__ = ["DrakeAdapter"]
 
@@ -70,7 +70,7 @@ class DrakeAdapter(Adapter):
     name = "drake"
     # loops: the discrete integrator only; springs: both modes, a positive rest length only; prismatic joints: both
     # modes, every integrator (``PrismaticJoint``, model)
-    effects = EFFECTS | PRISMATIC_EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS) | SPRING_EFFECTS
+    effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS) | SPRING_EFFECTS
     integrators = _integrators()
 
     def version(self):

@@ -32,7 +32,7 @@ from dalembert.adapters.exudyn import sampling
 from dalembert.adapters.exudyn.loops import loop_axes
 from dalembert.adapters.exudyn.model import CONSTRAINED_AXES, JOINTS, NODES, TREE_JOINTS, build, rigid_bodies
 from dalembert.adapters.exudyn.springs import passive_effects, unexpected_passive
-from dalembert.scene import EFFECTS, LOOP_EFFECTS, PRISMATIC_EFFECTS, SPRING_EFFECTS, WORLD
+from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS, WORLD
 
 __all__ = ["ExudynAdapter"]
 
@@ -68,7 +68,7 @@ class ExudynAdapter(Adapter):
 
     name = "exudyn"
     # ball joints and welds only with joints=redundant, loops only with implicit solvers (see ``unsupported``)
-    effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS | PRISMATIC_EFFECTS
+    effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS
     integrators = {
         **{k: IntegratorSpec(True, OPTIONS, f"Exudyn {v}") for k, v in IMPLICIT.items()},
         **{k: IntegratorSpec(k not in ADAPTIVE, OPTIONS, f"Exudyn {v}") for k, v in EXPLICIT.items()},

@@ -17,7 +17,7 @@ from dalembert.adapters.mujoco.mjcf import LOAD_PATHS, WELDS, engine_frames, loo
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mujoco.springs import check_springs, other_passive, read_springs
 from dalembert.adapters.mujoco.stepping import step_loop, step_rollout
-from dalembert.scene import EFFECTS, LOOP_EFFECTS, PRISMATIC_EFFECTS, SPRING_EFFECTS
+from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
 from dalembert.settings import steps_per_interval
 
 __all__ = ["MujocoAdapter"]
@@ -52,7 +52,7 @@ class MujocoAdapter(Adapter):
     # loop (a tendon equality) is generated but not declared: DISTANCE_REASON. Springs: spatial tendons (mjcf),
     # checked against the scene when built and read back in the audit. Prismatic joints: slide joints (mjcf),
     # read back in the audit (``_joint_audit``).
-    effects = EFFECTS | PRISMATIC_EFFECTS | (LOOP_EFFECTS - {"loop:distance"}) | SPRING_EFFECTS
+    effects = EFFECTS | (LOOP_EFFECTS - {"loop:distance"}) | SPRING_EFFECTS
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "semi-implicit Euler"),
         "rk4": IntegratorSpec(True, OPTIONS, "classical RK4"),

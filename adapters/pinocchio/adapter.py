@@ -25,7 +25,7 @@ from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_cho
 from dalembert.adapters.pinocchio import loops, springs
 from dalembert.adapters.pinocchio.integrators import STAGES, adaptive, fixed_step
 from dalembert.adapters.pinocchio.model import WELDS, PinocchioModel
-from dalembert.scene import AXIS_KINDS, EFFECTS, PRISMATIC_EFFECTS, SPRING_EFFECTS
+from dalembert.scene import AXIS_KINDS, EFFECTS, SPRING_EFFECTS
 from dalembert.settings import steps_per_interval
 
 __all__ = ["PinocchioAdapter"]
@@ -43,7 +43,7 @@ class PinocchioAdapter(Adapter):
 
     name = "pinocchio"
     # loop:distance: loops.DISTANCE_REASON
-    effects = EFFECTS | PRISMATIC_EFFECTS | SPRING_EFFECTS | frozenset(f"loop:{k}" for k in loops.LOOP_KINDS)
+    effects = EFFECTS | SPRING_EFFECTS | frozenset(f"loop:{k}" for k in loops.LOOP_KINDS)
     integrators = {
         "euler": IntegratorSpec(True, ("loop", "welds"), "semi-implicit Euler on the group"),
         "rk4": IntegratorSpec(True, ("loop", "welds"), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
