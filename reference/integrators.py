@@ -153,7 +153,10 @@ class _SolveIVP:
     options = ()
     method = ""
 
-    def run(self, system, times, settings):
+    @staticmethod
+    def _problem(system, times, settings):
+        """The first-order problem on ``y = (q, v)``: ``nq``, the right-hand side, ``y0``, the sampled
+        states ``Y`` (NaN until reached) and the tolerances."""
         nq = len(system.q0)
         b = system.blocks
 
@@ -163,7 +166,10 @@ class _SolveIVP:
 
         y0 = np.concatenate([system.q0, system.v0]).astype(float)
         Y = np.full((len(times), len(y0)), np.nan)
-        tols = dict(rtol=settings.rtol or DOP853.TRUTH_RTOL, atol=settings.atol or DOP853.TRUTH_ATOL)
+        return nq, rhs, y0, Y, dict(rtol=settings.rtol or DOP853.TRUTH_RTOL, atol=settings.atol or DOP853.TRUTH_ATOL)
+
+    def run(self, system, times, settings):
+        nq, rhs, y0, Y, tols = self._problem(system, times, settings)
         project = getattr(system, "project", None)
         if project is not None:  # a constrained system: integrate sample to sample, projecting at each
             return self._run_projected(rhs, project, nq, times, y0, Y, tols)
@@ -270,16 +276,7 @@ class Radau(_SolveIVP):
     def run(self, system, times, settings):
         if getattr(system, "project", None) is not None:  # constrained: stepped per interval (steps counted there)
             return super().run(system, times, settings)
-        nq = len(system.q0)
-        b = system.blocks
-
-        def rhs(t, y):
-            q, v = y[:nq], y[nq:]
-            return np.concatenate([cfg.qdot(b, q, v), system.acceleration(t, q, v)])
-
-        y0 = np.concatenate([system.q0, system.v0]).astype(float)
-        Y = np.full((len(times), len(y0)), np.nan)
-        tols = dict(rtol=settings.rtol or DOP853.TRUTH_RTOL, atol=settings.atol or DOP853.TRUTH_ATOL)
+        nq, rhs, y0, Y, tols = self._problem(system, times, settings)
         try:  # dense output rather than t_eval: the same interpolants, and the steps are then known
             sol = solve_ivp(rhs, (times[0], times[-1]), y0, method=self.method, dense_output=True, **tols)
         except Exception as e:  # a blown-up state: NaN (contract item 5)
