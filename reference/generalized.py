@@ -194,13 +194,21 @@ class Kane:
         return self._reactions(*self._solve(t, q, v))
 
     def _reactions(self, udot, kin):
+        unbalanced = {}
+        for jd in self.joints:
+            k = kin[jd["joint"].child]
+            unbalanced[jd["joint"].child] = jd["m"] * (k["Jv"] @ udot + k["a_bias"]) - k["F"]
+        return self.joint_forces(unbalanced)
+
+    def joint_forces(self, unbalanced):
+        """Newton's law per body, from the leaves back to the root: the force each joint exerts ON its child
+        (N, world, dict joint name -> (3,)) when each body's ``m a - F`` (its force not balanced by the other
+        loads, ``unbalanced``: dict body name -> (3,)) is carried by its joint and its children's joints."""
         out = {}
         for jd in reversed(self.joints):
             name = jd["joint"].child
-            k = kin[name]
-            a = k["Jv"] @ udot + k["a_bias"]
             children = sum((out[c["joint"].child] for c in self.joints if c["joint"].parent == name), np.zeros(3))
-            out[name] = jd["m"] * a - k["F"] + children
+            out[name] = unbalanced[name] + children
         return out
 
     # ------------------------------------------------------------ read-back

@@ -150,18 +150,17 @@ class ClosedLoops(Kane):
         rank = int(np.sum(S > closure.RANK_RTOL * S[0])) if len(S) and S[0] > 0.0 else 0
         modes = []
         for lam in U[:, rank:].T:
-            on_body, out, i = {}, {}, 0
+            on_body, loops, i = {}, {}, 0
             for loop, r in zip(self.loops, found):
                 m = len(r.phi)
                 for body, G in ((loop.body_a, r.G_a), (loop.body_b, r.G_b)):
                     on_body[body] = on_body.get(body, 0.0) + (G.T @ lam[i:i + m])[:3]
-                out[loop.name] = (r.G_b.T @ lam[i:i + m])[:3]
+                loops[loop.name] = (r.G_b.T @ lam[i:i + m])[:3]
                 i += m
-            for jd in reversed(self.joints):  # Newton per body, at rest and unloaded: -F_loops + children
-                name = jd["joint"].child
-                children = sum((out[c["joint"].child] for c in self.joints if c["joint"].parent == name), np.zeros(3))
-                out[name] = children - on_body.get(name, np.zeros(3))
-            modes.append(out)
+            # at rest and unloaded but for the loop forces: each body's unbalanced force is -F_loops
+            tree = self.joint_forces({jd["joint"].child: -on_body.get(jd["joint"].child, np.zeros(3))
+                                      for jd in self.joints})
+            modes.append({**tree, **loops})
         return modes
 
     # ------------------------------------------------------------ projection
