@@ -31,7 +31,8 @@ from dalembert.settings import is_numerical_failure, knob_problems, steps_per_in
 from dalembert.stepping import march
 from dalembert.reference import configuration as cfg
 
-__all__ = ["INTEGRATORS", "integrator", "Stats", "check_settings", "steps_per_interval", "MAX_STEPS_PER_INTERVAL"]
+__all__ = ["INTEGRATORS", "integrator", "Stats", "check_settings", "steps_per_interval", "MAX_STEPS_PER_INTERVAL",
+           "first_order"]
 
 INTEGRATORS = Registry("integrator")
 
@@ -145,6 +146,18 @@ class MuntheKaasRK4(_FixedStep):
         return cfg.retract(b, q, theta), v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
 
 
+def first_order(system):
+    """``system`` as a first-order problem on the embedded state ``y = (q, v)``: ``nq``, the right-hand side
+    ``rhs(t, y) -> y'`` (``(q', v')``, q' through the blocks' kinematics) and the initial state ``y0``."""
+    nq, b = len(system.q0), system.blocks
+
+    def rhs(t, y):
+        q, v = y[:nq], y[nq:]
+        return np.concatenate([cfg.qdot(b, q, v), system.acceleration(t, q, v)])
+
+    return nq, rhs, np.concatenate([system.q0, system.v0]).astype(float)
+
+
 class _SolveIVP:
     """An adaptive method of scipy's ``solve_ivp`` on the embedded coordinates, sampled by its
     dense output at the sample times."""
@@ -157,14 +170,7 @@ class _SolveIVP:
     def _problem(system, times, settings):
         """The first-order problem on ``y = (q, v)``: ``nq``, the right-hand side, ``y0``, the sampled
         states ``Y`` (NaN until reached) and the tolerances."""
-        nq = len(system.q0)
-        b = system.blocks
-
-        def rhs(t, y):
-            q, v = y[:nq], y[nq:]
-            return np.concatenate([cfg.qdot(b, q, v), system.acceleration(t, q, v)])
-
-        y0 = np.concatenate([system.q0, system.v0]).astype(float)
+        nq, rhs, y0 = first_order(system)
         Y = np.full((len(times), len(y0)), np.nan)
         return nq, rhs, y0, Y, dict(rtol=settings.rtol or DOP853.TRUTH_RTOL, atol=settings.atol or DOP853.TRUTH_ATOL)
 

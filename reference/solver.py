@@ -8,8 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from dalembert.reference.generalized import Kane
-from dalembert.reference import configuration as cfg
-from dalembert.reference.integrators import INTEGRATORS, DOP853, check_settings
+from dalembert.reference.integrators import INTEGRATORS, DOP853, check_settings, first_order
 from dalembert.reference.loops import ClosedLoops
 from dalembert.reference.newton_euler import NewtonEuler
 from dalembert.reference.planar import PlanarChain, why_not
@@ -86,20 +85,13 @@ def decay_rate(scene):
     anyway), so a scene without a damper is 0 without computing anything."""
     if not any(sp.damping > 0.0 for sp in scene.springs):
         return 0.0
-    system = FORMULATIONS[default_formulation(scene)](scene)
-    nq = len(system.q0)
-
-    def rhs(y):
-        q, v = y[:nq], y[nq:]
-        return np.concatenate([cfg.qdot(system.blocks, q, v), system.acceleration(0.0, q, v)])
-
-    y0 = np.concatenate([system.q0, system.v0]).astype(float)
+    _, rhs, y0 = first_order(FORMULATIONS[default_formulation(scene)](scene))
     J = np.empty((len(y0), len(y0)))
     for i in range(len(y0)):
         h = _JACOBIAN_STEP * max(1.0, abs(y0[i]))
         e = np.zeros_like(y0)
         e[i] = h
-        J[:, i] = (rhs(y0 + e) - rhs(y0 - e)) / (2.0 * h)
+        J[:, i] = (rhs(0.0, y0 + e) - rhs(0.0, y0 - e)) / (2.0 * h)
     return float(max(0.0, -np.linalg.eigvals(J).real.min()))
 
 

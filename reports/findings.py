@@ -283,11 +283,10 @@ def _closure(e, case, store):
     for r in e.runs:
         if not (r.ok and r.verdict != "diverged" and r.trajectory):
             continue
-        for level, name in LOOP_RESIDUALS.items():
-            tol = case.tolerances.get(name)
-            if tol is None or not r.drifts.get(name, 0.0) > tol.value:
-                continue
-            traj = store.trajectory(r.key)
+        beyond = [(level, name) for level, name in LOOP_RESIDUALS.items()
+                  if name in case.tolerances and r.drifts.get(name, 0.0) > case.tolerances[name].value]
+        traj = store.trajectory(r.key) if beyond else None  # (read once for both levels)
+        for level, _ in beyond:
             with np.errstate(invalid="ignore", over="ignore"):
                 ratio = _growth_to_the_end(traj.t, loop_residual(case.scene, traj, level))
             if ratio > CLOSURE_GROWTH:
