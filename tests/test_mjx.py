@@ -3,6 +3,9 @@
 Every new model structure costs MJX a JIT compilation of seconds to a minute on a busy machine, so
 the tests share prepared models (``_prepared``) and each precision's tests run together (a process
 switching precision clears JAX's caches: ``adapters.mjx.stepping``): float64 first, float32 last.
+The one-step parity steps the top's own compiled rollout. ``particle_box`` is not here: its welded
+particles are one free body in the model MuJoCo compiles (as the top is), so MJX runs it on the top's
+code path, and its model would cost a compilation of its own (MuJoCo C checks the box's welds).
 """
 
 import numpy as np
@@ -12,7 +15,7 @@ from dalembert import Settings, make_case
 from dalembert.adapters import get_adapter
 from dalembert.errors import trajectory_errors
 from dalembert.reference import simulate
-from bounds import BOX_COM_TOL, ORDER_SLACK, ROD_ANGLE_TOL, ROD_REACTION_TOL
+from bounds import ORDER_SLACK, ROD_ANGLE_TOL, ROD_REACTION_TOL
 from scenes import chain_case
 
 pytest.importorskip("mujoco.mjx")  # CI installs it (dalembert[mjx]): this never skips there
@@ -70,8 +73,6 @@ def test_float64_rk4_on_the_canonical_cases():
     rod = errors(make_case("pivoted_rod"), s)
     assert rod["joint"][0] < ROD_ANGLE_TOL and rod["reaction_force"][0] < ROD_REACTION_TOL, rod
     assert errors(make_case("free_top"), s)["orientation"][0] < MJX_RK4_ORIENTATION_TOL
-    box = errors(make_case("particle_box"), s)
-    assert box["position"][0] < BOX_COM_TOL and box["orientation"][0] < MJX_RK4_ORIENTATION_TOL, box
 
 
 def test_float64_rk4_is_second_order_on_the_top():
@@ -107,7 +108,7 @@ def test_every_joint_kind_frame_and_load_against_the_reference():
 
 
 def test_audit_proves_only_the_scene_physics_and_the_precision():
-    for name in ("pivoted_rod", "free_top", "particle_box"):
+    for name in ("pivoted_rod", "free_top"):
         case = make_case(name)
         prepared, outcome = run(case, Settings("rk4", dt=1e-3, options=F64))
         audit = ADAPTER.audit(prepared, outcome)
