@@ -19,6 +19,7 @@ actuators only (MJX applies them inside every integrator stage); MuJoCo's
 from __future__ import annotations
 
 import functools
+import os
 
 import numpy as np
 
@@ -132,6 +133,9 @@ class MjxAdapter(MujocoAdapter):
             "precision": str(np.asarray(mx.opt.timestep).dtype),
             "dtype_qpos": str(p["dx0"].qpos.dtype),
             "backend": p["backend"], "jax_version": jax.__version__,
+            # XLA's flags shape MJX's cost (with the CPU fusion emitters on, its kinematics are exponential in a
+            # chain's depth: benchmarks/scaling.py): the run says which it had
+            "xla_flags": os.environ.get("XLA_FLAGS", ""),
             "jit_compile_s": p["compile_s"],
             "mjx_version": self.version(),
             "reactions": "MuJoCo C mj_rnePostConstraint on MJX's sampled states (double)",
