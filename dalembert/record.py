@@ -84,7 +84,8 @@ class Cost:
     concurrent : runs in flight on this machine's pool when this one started, itself included
         (its timings compete with that many; 1 with ``--jobs 1``)
     load_start, load_end : the machine's 1-minute load average when the run started and ended
-        (a load above the cores means the timings were shared with other work)
+        (a load above the cores by more than a matrix's own footprint means the timings were shared with
+        other work: ``reports.timing``)
     """
 
     build_s: float = _NAN

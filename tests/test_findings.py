@@ -1,6 +1,7 @@
 """The findings the report opens with: every hazard shown by a small store that has it, named in the
 report's text; the cheapest setting per accuracy; nothing constant in the summary; a loaded machine."""
 
+import json
 import math
 import os
 import shutil
@@ -147,13 +148,35 @@ def test_nothing_in_the_summary_is_constant_across_its_rows(tmp_path):
         assert len({r.strip("|").split("|")[j] for r in rows}) > 1, cells[j]
 
 
+def _manifest_load(store, start, end):
+    """Plant the matrix's own load readings (the seed store holds the test machine's, whatever it was then)."""
+    path = os.path.join(store.path, "manifest.json")
+    manifest = json.load(open(path))
+    manifest["load_average"] = {"start": [start, start, start], "end": [end, end, end]}
+    json.dump(manifest, open(path, "w"))
+
+
 def test_a_loaded_machine_is_warned_about(store):
     quiet = replace(base(store).cost, load_start=0.5, load_end=0.5)  # whatever the machine had when it ran
     tamper(store, lambda r: replace(r, cost=quiet))
+    _manifest_load(store, 0.5, 0.5)
     add_run(store, "busy", integrator="euler", dt=1e-2, cost=replace(quiet, load_start=3.5))
     md = open(_summary_md(store)).read()
     assert "Timings shared the machine: the 1-minute load average reached 3.5 on 2 cores" in md
     assert "free_top reference euler dt=0.01" in md.split("Timings shared the machine")[1].split("\n")[0]
+
+
+def test_a_matrix_s_own_load_is_not_a_warning(store):
+    """Two workers on two cores with the parent and the OS: the load of a quiet default matrix (peak 2.69,
+    reports.timing.OWN_LOAD) is not another process's; one more busy process (+1) is."""
+    from dalembert.reports.timing import OWN_LOAD
+
+    quiet = replace(base(store).cost, load_start=2.69, load_end=2.35)
+    tamper(store, lambda r: replace(r, cost=quiet))
+    _manifest_load(store, 2.0, 2.69)
+    assert "Timings shared the machine" not in open(_summary_md(store)).read()
+    add_run(store, "busy", integrator="euler", dt=1e-2, cost=replace(quiet, load_end=2 + OWN_LOAD + 0.6))
+    assert "Timings shared the machine: the 1-minute load average reached 3.35 on 2 cores" in open(_summary_md(store)).read()
 
 
 def test_stored_strings_are_escaped(store):
