@@ -222,18 +222,16 @@ def loop_residual(scene, traj, level="position"):
 
     if level not in ("position", "velocity"):
         raise ValueError(f"level: {level!r} — use 'position' or 'velocity'")
-    n = len(traj.t)
-    err = np.zeros(n)
-    for i in range(n):
-        states = {"world": closure.world_state()}
-        for loop in scene.loops:
-            for name in (loop.body_a, loop.body_b):
-                if name not in states:
-                    b = traj.bodies[name]
-                    states[name] = dict(R=spatial.quat_to_matrix(spatial.quat_normalize(b.quaternion[i])),
-                                        p=b.position[i], v=b.velocity[i], w=b.angular_velocity[i])
-            r = closure.rows(loop, states[loop.body_a], states[loop.body_b])
-            err[i] = max(err[i], float(np.max(np.abs(r.phi if level == "position" else r.velocity))))
+    states = {"world": closure.world_state()}
+    for name in {n for loop in scene.loops for n in (loop.body_a, loop.body_b)} - {"world"}:
+        b = traj.bodies[name]
+        states[name] = dict(R=spatial.quat_to_matrix(spatial.quat_normalize(b.quaternion)), p=b.position,
+                            v=b.velocity, w=b.angular_velocity)
+    err = np.zeros(len(traj.t))
+    for loop in scene.loops:
+        phi, velocity = closure.residuals(loop, states[loop.body_a], states[loop.body_b])
+        # NaN where a state is not finite (np.maximum keeps NaN; a plain max would drop it)
+        err = np.maximum(err, np.max(np.abs(phi if level == "position" else velocity), axis=-1))
     return err
 
 

@@ -210,3 +210,37 @@ def test_a_planar_loops_self_stresses_are_out_of_its_plane_and_its_reactions_are
     assert error_series(shifted, true)["reaction_force"].max() < REACTION_REL_TOL
     bent = replace(shifted, extras={**shifted.extras, "reaction_force:C": shifted.extras["reaction_force:C"] + [1, 0, 0]})
     assert error_series(bent, true)["reaction_force"].max() > 1e-3  # an in-plane error stays one
+
+
+def test_residuals_of_many_states_are_the_rows_of_each():
+    """``closure.residuals`` (every sample at once, what ``invariants.loop_residual`` reads) against
+    ``closure.rows`` (one state, what the reference solver steps with) on random states: every kind of loop,
+    to a body and to the world, off-centre points and turned joint frames; and a non-finite state is NaN."""
+    from dalembert import closure, spatial
+
+    rng = np.random.default_rng(7)
+    n = 9
+
+    def states():
+        q = spatial.quat_normalize(rng.normal(size=(n, 4)))
+        return dict(R=spatial.quat_to_matrix(q), p=rng.normal(size=(n, 3)), v=rng.normal(size=(n, 3)),
+                    w=rng.normal(size=(n, 3)))
+
+    turned = tuple(spatial.quat_exp([0.3, -0.2, 0.5]))
+    loops = [Loop("ball", "a", "b", point_a=[0.1, 0.2, 0.3], point_b=[-0.3, 0.0, 0.2]),
+             Loop("revolute", "a", "b", point_a=[0.1, 0.0, 0.0], point_b=[0.0, 0.4, 0.0], axis=[1.0, 2.0, 0.5],
+                  quat_a=turned, quat_b=tuple(spatial.quat_exp([-0.1, 0.4, 0.2]))),
+             Loop("distance", "a", "b", point_a=[0.2, 0.0, 0.1], point_b=[0.0, -0.1, 0.3], length=0.7)]
+    for loop in loops:
+        for A, B in ((states(), states()), (states(), closure.world_state())):
+            phi, velocity = closure.residuals(loop, A, B)
+            for k in range(n):
+                one = closure.rows(loop, {x: v[k] for x, v in A.items()},
+                                   {x: (v[k] if np.ndim(v) == np.ndim(A[x]) else v) for x, v in B.items()})
+                assert np.allclose(phi[k], one.phi, rtol=0, atol=1e-15), (loop.kind, k)
+                assert np.allclose(velocity[k], one.velocity, rtol=0, atol=1e-14), (loop.kind, k)
+    case = four_bar(t_final=0.1)
+    traj = case.exact(case.times)
+    traj.bodies["coupler"].position[3] = np.nan
+    residual = invariants.loop_residual(case.scene, traj, "position")
+    assert np.isnan(residual[3]) and np.all(np.isfinite(np.delete(residual, 3)))
