@@ -225,7 +225,8 @@ def residuals(loop, A, B):
 
     Returns
     -------
-    phi, velocity : ndarray (n, m) — m for point rows, dimensionless for axis rows; m/s, rad/s
+    phi, velocity : ndarray (n, m), (m,) for two single states — m for point rows, dimensionless for axis rows;
+        m/s, rad/s
     """
     rho_a, rho_b = A["R"] @ np.asarray(loop.point_a, float), B["R"] @ np.asarray(loop.point_b, float)
     d = A["p"] + rho_a - B["p"] - rho_b
@@ -241,7 +242,6 @@ def residuals(loop, A, B):
             s_b = R_WJb @ u
             phi.append(np.sum(s_b * s_a, axis=-1)[..., None])
             vel.append(np.sum((A["w"] - B["w"]) * np.cross(s_a, s_b), axis=-1)[..., None])
-    n = max(np.shape(x)[0] for x in phi if np.ndim(x) == 2)
-    return (np.concatenate([np.broadcast_to(x, (n, x.shape[-1])) for x in phi], axis=-1),
-            np.concatenate([np.broadcast_to(x, (n, x.shape[-1])) for x in vel], axis=-1))
+    # every piece carries the sample axis of whichever state has one (the world's has none)
+    return np.concatenate(phi, axis=-1), np.concatenate(vel, axis=-1)
 

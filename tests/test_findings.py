@@ -151,9 +151,11 @@ def test_nothing_in_the_summary_is_constant_across_its_rows(tmp_path):
 def _manifest_load(store, start, end):
     """Plant the matrix's own load readings (the seed store holds the test machine's, whatever it was then)."""
     path = os.path.join(store.path, "manifest.json")
-    manifest = json.load(open(path))
+    with open(path) as f:
+        manifest = json.load(f)
     manifest["load_average"] = {"start": [start, start, start], "end": [end, end, end]}
-    json.dump(manifest, open(path, "w"))
+    with open(path, "w") as f:
+        json.dump(manifest, f)
 
 
 def test_a_loaded_machine_is_warned_about(store):
