@@ -52,3 +52,13 @@ class Still(ReferenceAdapter):
         from dataclasses import replace
 
         return super().prepare(replace(scene, loads=()), times, settings)
+
+
+class Threads(ReferenceAdapter):
+    """The reference, whose audit also reports the threads of the process's BLAS pools."""
+
+    def audit(self, prepared, outcome):
+        from threadpoolctl import threadpool_info
+
+        blas = [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+        return {**super().audit(prepared, outcome), "blas_threads": blas}

@@ -1,6 +1,20 @@
 """Fixtures shared by the test modules."""
 
+import os
+
 import pytest
+
+from dalembert.harness import threads
+
+
+def pytest_configure(config):
+    """pytest-xdist's workers share the cores as a matrix's workers do (``dalembert.harness.threads``): each
+    one's BLAS and OpenMP pools get its share, through the variables the libraries read when they load, set
+    here before the workers start (they inherit them; a value the user set is kept)."""
+    n = getattr(config.option, "numprocesses", None)
+    if isinstance(n, int) and n > 1 and "PYTEST_XDIST_WORKER" not in os.environ:
+        for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
+            os.environ.setdefault(var, str(threads.per_worker(n)))
 
 
 @pytest.fixture(scope="session")

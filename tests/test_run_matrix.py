@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from dalembert.adapters import adapter_names, check_adapter, register_adapter
-from broken_adapters import Broken, NoFollower
+from broken_adapters import Broken, NoFollower, Threads
 from dalembert.harness.execute import Timing, execute
 from dalembert.harness.matrix import RunSpec, expand
 from dalembert.harness.pool import run_matrix
@@ -35,7 +35,7 @@ JIT_TREE_CASE = "pivoted_rod"
 
 
 ENGINES = adapter_names()  # before the test-only adapters below are registered
-for _name, _cls in (("broken", Broken), ("no-follower", NoFollower)):
+for _name, _cls in (("broken", Broken), ("no-follower", NoFollower), ("threads", Threads)):
     if _name not in adapter_names():
         register_adapter(_name, _cls)
 
@@ -258,6 +258,19 @@ def test_the_store_carries_the_case_as_run(tmp_path):
     assert stored.sample_times == case.sample_times and stored.truth == "closed form"
     truth = store.truth("pivoted_rod", case.version)
     assert np.array_equal(truth.joints["rod"].q, case.exact(case.times).joints["rod"].q)
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_each_worker_s_blas_pools_get_its_share_of_the_cores(tmp_path, jobs):
+    """As many workers as cores, each with BLAS pools as wide as the machine, oversubscribe it: a worker's
+    pools take cores // jobs threads (at least one), read back inside the worker from the libraries themselves."""
+    specs, _ = expand(cases=["pivoted_rod"], engines=["threads"], integrators=["rk4"], dts=[1e-2, 5e-3],
+                      params={"t_final": 0.1})
+    store = Store(tmp_path).create({})
+    run_matrix(specs, store, jobs=jobs, timing=FAST)
+    share = max(1, (os.cpu_count() or 1) // jobs)
+    seen = [r.audit["blas_threads"] for r in store.records()]
+    assert len(seen) == 2 and all(blas and set(blas) == {share} for blas in seen), (share, seen)
 
 
 def test_no_worker_outlives_its_matrix(tmp_path):

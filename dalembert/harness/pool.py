@@ -9,7 +9,8 @@ the matrix goes on. A worker killed from outside by SIGKILL (the system's
 out-of-memory killer, an operator) is the infrastructure's failure, not the
 run's: that run is not stored, and ``--resume`` runs it again. Every finished run is written to
 the store at once. Workers die with the process that started them
-(``dalembert.harness.lifetime``).
+(``dalembert.harness.lifetime``), and each one's BLAS and OpenMP thread pools are sized to its share of
+the cores (``dalembert.harness.threads``).
 
 Affinity: a worker that becomes free takes, before anything else, a run of the same group as its last
 (``affinity``: case, engine, integrator and options — the runs of a step or tolerance sweep), and
@@ -28,6 +29,7 @@ import threading
 import time
 from multiprocessing.connection import wait
 
+from dalembert.harness import threads
 from dalembert.harness.execute import Timing, execute, unfinished
 from dalembert.harness.lifetime import die_with_parent
 from dalembert.harness.truths import prepare_cases
@@ -54,10 +56,12 @@ def _context():
     return ctx
 
 
-def _serve(conn, parent_pid):
+def _serve(conn, parent_pid, n_threads):
     """A worker's life: run each ``(spec, timing, truth, concurrent)`` it is sent, answer with
-    ``(record, npz)``; a truth is sent once per case version (``None`` afterwards: kept here)."""
+    ``(record, npz)``; a truth is sent once per case version (``None`` afterwards: kept here).
+    ``n_threads``: what its native thread pools may use."""
     die_with_parent(parent_pid)
+    threads.limit(n_threads)
     truths = {}
     while True:
         try:
@@ -92,11 +96,11 @@ def _take(queue, worker, held):
 class _Worker:
     """The parent's handle on one worker: its pipe, its process, the run it is doing."""
 
-    def __init__(self, ctx):
+    def __init__(self, ctx, n_threads):
         self.conn, child = ctx.Pipe()
         # a forked worker's parent is this process; a forkserver's child's is the forkserver
         parent = os.getpid() if ctx.get_start_method() == "fork" else None
-        self.proc = ctx.Process(target=_serve, args=(child, parent), daemon=True)
+        self.proc = ctx.Process(target=_serve, args=(child, parent, n_threads), daemon=True)
         self.proc.start()
         child.close()
         self.spec, self.started, self.truths, self.group = None, 0.0, set(), None
@@ -141,13 +145,14 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
     """
     truths = prepare_cases(specs, store)
     todo = [s for s in specs if s.key not in store.done_keys()]
+    n_threads = threads.per_worker(jobs or os.cpu_count())  # as asked (the manifest's), not as capped below
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(todo) or 1))
     ctx = _context()
     counts = {"done": 0, "bad": 0, "total": len(todo)}
     queue = [(affinity(s), s) for s in reversed(todo)]
     idle, busy, lost = [], {}, []  # busy: connection -> worker
     try:
-        idle = [_Worker(ctx) for _ in range(jobs if todo else 0)]
+        idle = [_Worker(ctx, n_threads) for _ in range(jobs if todo else 0)]
         while queue or busy:
             while queue and idle:
                 worker = idle.pop()
@@ -161,7 +166,7 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
                 except EOFError:  # the worker died without an answer (crash, killed): replace it
                     worker.kill()
                     dead, code = worker.spec, worker.proc.exitcode
-                    idle.append(_Worker(ctx))
+                    idle.append(_Worker(ctx, n_threads))
                     if code == -signal.SIGKILL:  # killed from outside: not the run's doing, not stored
                         lost.append((dead.key, f"{dead.case} {dead.engine} {dead.settings.label()}: its worker was "
                                                "killed by SIGKILL from outside (out of memory?)"))
@@ -177,7 +182,7 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
                     worker.kill()
                     finish(store, unfinished(worker.spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"),
                            None, progress, counts)
-                    idle.append(_Worker(ctx))
+                    idle.append(_Worker(ctx, n_threads))
     finally:  # normal end, an error or Ctrl-C: no worker is left behind
         for worker in idle:
             worker.stop()

@@ -10,6 +10,8 @@ from __future__ import annotations
 import os
 from datetime import datetime
 
+from dalembert.harness import threads
+
 __all__ = ["manifest", "start", "end", "load_average", "default_out"]
 
 
@@ -36,7 +38,8 @@ def manifest(specs, command, timeout, timing, jobs, scheduler=None):
         "harness_version": dalembert.__version__, "harness_commit": harness_commit(), "machine": machine_info(),
         "engines": {e: get_adapter(e).version() for e in sorted({s.engine for s in specs})},
         "command": command, "started": now(), "ended": None, "timeout_s": timeout, "timing": vars(timing),
-        "jobs": jobs, "scheduler": scheduler, "load_average": {"start": load_average(), "end": None},
+        "jobs": jobs, "threads_per_worker": None if scheduler else threads.per_worker(jobs), "scheduler": scheduler,
+        "load_average": {"start": load_average(), "end": None},
         "specs": [s.to_json() for s in specs],
     }
 
