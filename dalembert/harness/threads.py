@@ -7,13 +7,14 @@ cores x cores threads competing for the cores (4 on 2 cores, 4096 on 64). Each
 worker's pools are limited to ``cores // jobs`` threads (at least one), the rule
 joblib's loky workers follow; ``--jobs 1`` leaves them at the cores.
 
-On this project's 2-core machines the gain is within the run-to-run spread:
-``python -m benchmarks.matrix``'s speed-up passes, the reference engine's 64 runs
-at a 2-s horizon each timed once, took 78.6 s with 1 worker and 42.6 s with 2
-(speed-up 1.85; 1.62 in another invocation) with the pools as wide as the
-machine, and 77.1 s and 38.2 s (2.02) with them at one thread; two processes each
-running a 7-s slice of the reference's contract showed no difference between
-pools of 1 and 2 threads in three alternating tries.
+Measured on this project's 2-core machine, whose run-to-run spread is some 15%
+(``python -m benchmarks.matrix --t-final 2``, one invocation each, its speed-up
+passes: every run timed once, with 1 and with 2 workers): every engine's runs
+together went from a speed-up of 1.43 with the pools as wide as the machine to
+1.73 with this limit, the reference engine's 64 runs from 1.62 to 2.07 (the same
+runs in a separate pair of passes: 1.85 and 2.02). Two processes each running a
+7-s slice of the reference's contract showed no difference between pools of 1
+and 2 threads in three alternating tries: the gain is not in every workload.
 
 XLA's own thread pool (MJX) is neither BLAS nor OpenMP and is left as the engine
 configures it.
