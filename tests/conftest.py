@@ -13,7 +13,7 @@ def pytest_configure(config):
     here before the workers start (they inherit them; a value the user set is kept)."""
     n = getattr(config.option, "numprocesses", None)
     if isinstance(n, int) and n > 1 and "PYTEST_XDIST_WORKER" not in os.environ:
-        for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
+        for var in threads.VARIABLES:
             os.environ.setdefault(var, str(threads.per_worker(n)))
 
 

@@ -24,7 +24,10 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["per_worker", "limit"]
+__all__ = ["per_worker", "limit", "VARIABLES"]
+
+# What OpenBLAS and the OpenMP runtimes read for their pools' width when they load.
+VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")
 
 
 def per_worker(jobs, cores=None):
@@ -33,7 +36,11 @@ def per_worker(jobs, cores=None):
 
 
 def limit(threads):
-    """Limit this process's BLAS and OpenMP pools (those loaded now and their settings) to ``threads``."""
+    """Limit this process's BLAS and OpenMP pools to ``threads``: those loaded now through their libraries'
+    calls, those loaded later (an engine imported in a forkserver's worker) through the variables they read
+    when they load."""
     from threadpoolctl import threadpool_limits
 
+    for var in VARIABLES:
+        os.environ[var] = str(threads)
     threadpool_limits(limits=threads)
