@@ -27,9 +27,14 @@ def _loads(r):
     return [x for x in (r.cost.load_start, r.cost.load_end) if math.isfinite(x)]
 
 
+def _shared(load, cores):
+    """Whether a 1-minute load average says other work shared the ``cores`` (above them by more than ``OWN_LOAD``)."""
+    return load > cores + OWN_LOAD
+
+
 def loaded_runs(records, cores):
     """The runs that started or ended with the 1-minute load average above ``cores + OWN_LOAD``."""
-    return [r for r in records if any(x > cores + OWN_LOAD for x in _loads(r))]
+    return [r for r in records if any(_shared(x, cores) for x in _loads(r))]
 
 
 def timing_note(manifest, records):
@@ -42,7 +47,7 @@ def timing_note(manifest, records):
     peak = max(marks + [x for r in records for x in _loads(r)], default=0.0)
     jobs = manifest.get("jobs") or 0
     parts = []
-    if peak > cores + OWN_LOAD:
+    if _shared(peak, cores):
         parts.append(f"the 1-minute load average reached {peak:.3g} on {cores} cores")
         if loaded:
             timed = sum(1 for r in records if _loads(r))
