@@ -212,12 +212,18 @@ class Kane:
         return out
 
     # ------------------------------------------------------------ read-back
+    def forces(self, udot, kin):
+        """The forces read back at one state, from its ``_solve``: each joint's ON its child
+        (``_reactions``; N, world, dict name -> (3,))."""
+        return self._reactions(udot, kin)
+
     def trajectory(self, t, Q, V):
-        """Sampled states as a ``Trajectory`` (bodies, joints and joint reaction forces)."""
+        """Sampled states as a ``Trajectory``: bodies, joints, and each non-free joint's ``forces`` as
+        ``reaction_force:<name>``, all from one ``_solve`` per sample."""
         n = len(t)
         bodies = {jd["joint"].child: [np.full((n, 3), np.nan), np.full((n, 4), np.nan), np.full((n, 3), np.nan),
                                       np.full((n, 3), np.nan)] for jd in self.joints}
-        reactions = {jd["joint"].child: np.full((n, 3), np.nan) for jd in self.joints}
+        forces = {}
         for i in range(n):
             if not (np.all(np.isfinite(Q[i])) and np.all(np.isfinite(V[i]))):
                 continue
@@ -225,14 +231,20 @@ class Kane:
             for name, arrs in bodies.items():
                 arrs[0][i], arrs[2][i], arrs[3][i] = kin[name]["p"], kin[name]["v"], kin[name]["w"]
                 arrs[1][i] = spatial.matrix_to_quat(kin[name]["R"])
-            for name, f in self._reactions(udot, kin).items():
-                reactions[name][i] = f
+            for name, f in self.forces(udot, kin).items():
+                forces.setdefault(name, np.full((n, 3), np.nan))[i] = f
         # A free joint's attitude is the stored quaternion itself (its norm drift is data).
+        free = {jd["joint"].child for jd in self.joints if jd["joint"].kind == "free"}
         for jd in self.joints:
-            if jd["joint"].kind == "free":
+            if jd["joint"].child in free:
                 bodies[jd["joint"].child][1] = Q[:, jd["q"]][:, 3:].copy()
         traj_bodies = {name: BodyStates(*arrs) for name, arrs in bodies.items()}
         joints = {jd["joint"].child: JointStates(Q[:, jd["q"]], V[:, jd["v"]]) for jd in self.joints}
-        extras = {f"reaction_force:{name}": f for name, f in reactions.items()
-                  if self.scene.joint(name).kind != "free"}
+        extras = {f"reaction_force:{name}": forces.get(name, np.full((n, 3), np.nan))
+                  for name in self.force_names if name not in free}
         return Trajectory(t, traj_bodies, joints, extras)
+
+    @property
+    def force_names(self):
+        """The names ``forces`` returns, in order: the joints' (by child)."""
+        return [jd["joint"].child for jd in self.joints]

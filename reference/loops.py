@@ -61,7 +61,6 @@ from dalembert import closure
 from dalembert.reference import configuration as cfg
 from dalembert.reference.generalized import Kane
 from dalembert.scene import WORLD
-from dalembert.trajectory import Trajectory
 
 __all__ = ["ClosedLoops", "PROJECTION_TOL", "PROJECTION_ITERATIONS", "reaction_modes"]
 
@@ -185,17 +184,15 @@ class ClosedLoops(Kane):
         return q, Li.T @ (w - V @ (V.T @ w))
 
     # ------------------------------------------------------------ read-back
-    def trajectory(self, t, Q, V):
-        """Kane's read-back (bodies, joints, tree reactions with the loop forces included) plus each
-        loop's ``reaction_force:<loop name>`` (force ON body b, N, world)."""
-        traj = super().trajectory(t, Q, V)
-        forces = {loop.name: np.full((len(t), 3), np.nan) for loop in self.loops}
-        for i in range(len(t)):
-            if np.all(np.isfinite(Q[i])) and np.all(np.isfinite(V[i])):
-                for name, f in self.multiplier_forces(t[i], Q[i], V[i]).items():
-                    forces[name][i] = f
-        return Trajectory(traj.t, traj.bodies, traj.joints,
-                          {**traj.extras, **{f"reaction_force:{name}": f for name, f in forces.items()}})
+    def forces(self, udot, kin):
+        """Kane's reactions (the tree joints', which include the loops' forces on their bodies) plus each
+        loop's force ON its body b (N, world), from the same ``_solve``: the trajectory's
+        ``reaction_force:<loop name>``."""
+        return {**super().forces(udot, kin), **kin[("loops",)]}
+
+    @property
+    def force_names(self):
+        return super().force_names + [loop.name for loop in self.loops]
 
 
 def reaction_modes(scene, traj):
