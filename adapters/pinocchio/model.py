@@ -249,8 +249,8 @@ class PinocchioModel:
                 F2 = -F1
             else:
                 f_W = cd.oMc1.rotation @ lam
-                F1 = pin.Force(f_W, np.cross(cd.oMc1.translation, f_W))
-                F2 = pin.Force(-f_W, np.cross(cd.oMc2.translation, -f_W))
+                F1 = pin.Force(f_W, spatial.cross(cd.oMc1.translation, f_W))
+                F2 = pin.Force(-f_W, spatial.cross(cd.oMc2.translation, -f_W))
             for jid, F in ((cm.joint1_id, F1), (cm.joint2_id, F2)):
                 if jid > 0:
                     out[jid] = out[jid] + data.oMi[jid].actInv(F)
@@ -301,7 +301,7 @@ class PinocchioModel:
             R_WE = self.data.oMi[jid].rotation
             if f_W is not None:
                 f_E = R_WE.T @ f_W
-                self.fext[jid] = self.fext[jid] + pin.Force(f_E, np.cross(p_E, f_E))
+                self.fext[jid] = self.fext[jid] + pin.Force(f_E, spatial.cross(p_E, f_E))
             else:
                 self.fext[jid] = self.fext[jid] + pin.Force(np.zeros(3), R_WE.T @ t_W)
         springs.add_forces(elements, self.data, self.fext)
