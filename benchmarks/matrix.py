@@ -9,10 +9,13 @@ invocation — with the default timing policy on 1 worker, then timed once on 1 
 on 2 workers — and prints per engine:
 
 * the share of each run's worker time spent outside building the model and
-  stepping (read-back, errors against the truth, invariants, serialization,
-  timing bookkeeping), for runs whose stepping takes more than 50 ms (median
-  and worst) and over all its runs (worker seconds outside / worker seconds), from
-  the first pass (the default policy, as a matrix runs it);
+  stepping, for runs whose stepping takes more than 50 ms (median and worst) and
+  over all its runs (worker seconds outside / worker seconds), from the first pass
+  (the default policy, as a matrix runs it); and of it, the read-back (the
+  adapter turning the engine's sampled states into body terms, once per run: where
+  an engine gives reactions only from a dynamics evaluation, one per sample) and
+  the rest (errors against the truth, invariants, the audit, serialization, timing
+  bookkeeping, each repeat's time outside the engine's stepping);
 * the wall time of its runs with ``--jobs 1`` and ``--jobs 2``, the speed-up, and
   where it goes: the cores each pass kept busy (CPU seconds of the workers and of
   the parent, which writes the store, per wall second) and the CPU seconds the
@@ -94,13 +97,17 @@ def _pass(specs, cases, out, jobs, timing):
 def _overhead_row(engine, records):
     ok = [r for r in records if r.ok]
     long = [r for r in ok if r.cost.wall_s_median > LONG_RUN_S]
-    share = np.array([_outside(r) / r.cost.worker_s for r in long])
+    outside = np.array([_outside(r) / r.cost.worker_s for r in long])
+    readback = np.array([r.cost.readback_s / r.cost.worker_s for r in long])
     overall = sum(_outside(r) for r in ok) / sum(r.cost.worker_s for r in ok) if ok else float("nan")
-    worst = max(long, key=lambda r: _outside(r) / r.cost.worker_s) if long else None
-    return (f"{engine:<11}{len(long):>10}{np.median(share) if len(share) else float('nan'):>9.1%}"
-            f"{share.max() if len(share) else float('nan'):>9.1%}   {overall:>9.1%}  "
-            + (f"{worst.case} {worst.settings_label} ({_outside(worst):.3f} of {worst.cost.worker_s:.3f} s)"
-               if worst else ""))
+    worst = long[int(np.argmax(outside))] if long else None
+
+    def spread(share):  # median and worst
+        return f"{np.median(share) if len(share) else np.nan:>8.1%}{share.max() if len(share) else np.nan:>7.1%}"
+
+    return (f"{engine:<11}{len(long):>9}{spread(outside)}{spread(readback)}{spread(outside - readback)}{overall:>9.1%}  "
+            + (f"{worst.case} {worst.settings_label} ({_outside(worst):.3f} of {worst.cost.worker_s:.3f} s, read-back "
+               f"{worst.cost.readback_s:.3f} s)" if worst else ""))
 
 
 def main(argv=None):
@@ -128,7 +135,8 @@ def main(argv=None):
                   f"{walls[engine, 2]:.1f} s (load average {load:.2f} before, {after:.2f} after)", flush=True)
     print(f"\nshare of worker time outside build and stepping (default timing, --jobs 1; goal <= {OVERHEAD_GOAL:.0%} "
           f"for runs > {LONG_RUN_S * 1e3:.0f} ms)")
-    print(f"{'engine':<11}{'runs>50ms':>10}{'median':>9}{'worst':>9}   {'all runs':>9}  worst run")
+    print(f"{'':<20}{'outside':>15}{'read-back':>15}{'the rest':>15}")
+    print(f"{'engine':<11}{'runs>50ms':>9}" + f"{'median':>8}{'worst':>7}" * 3 + f"{'all runs':>9}  worst run")
     for engine in engines:
         print(_overhead_row(engine, records[engine]))
     print(f"\n--jobs 1 against --jobs 2, each run timed once (the same work): wall s, cores kept busy (CPU s per "

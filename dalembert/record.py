@@ -19,7 +19,7 @@ identity        ``key``, ``schema_version``, ``case``, ``case_version``, ``param
 outcome         ``status``, ``message``, ``t_final`` (s), ``t_diverged`` (s),
                 ``traceback``
 cost            ``build_s``, ``wall_s_median``, ``wall_s_min``, ``wall_s_max`` (stepping
-                alone), ``repeats``, ``n_steps``, ``n_rhs``, ``overhead_s``,
+                alone), ``repeats``, ``n_steps``, ``n_rhs``, ``overhead_s``, ``readback_s``,
                 ``stepping_total_s``, ``worker_s`` (all s), ``concurrent`` (runs in
                 flight), ``load_start``, ``load_end`` (1-minute load average)
 errors          ``err_<quantity>_max``, ``err_<quantity>_final`` (``dalembert.errors.QUANTITIES``)
@@ -79,6 +79,8 @@ class Cost:
     n_steps, n_rhs : steps and right-hand-side evaluations of one run
     overhead_s : median time per timed repeat of ``Adapter.run`` outside its stepping (the
         read-back is not in it: it runs once per run, ``Outcome.read_back``)
+    readback_s : the read-back, once per run: the adapter turning the engine's sampled states into
+        body terms (reactions cost a dynamics evaluation per sample in some engines)
     stepping_total_s : stepping time of the warm-up and every repeat
     worker_s : wall time of the whole run in its worker
     concurrent : runs in flight on this machine's pool when this one started, itself included
@@ -96,6 +98,7 @@ class Cost:
     n_steps: int = 0
     n_rhs: int = 0
     overhead_s: float = _NAN
+    readback_s: float = _NAN
     stepping_total_s: float = _NAN
     worker_s: float = _NAN
     concurrent: int = 0

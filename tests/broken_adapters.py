@@ -1,6 +1,7 @@
 """Deliberately misbehaving adapters for the run-matrix tests (importable by worker processes)."""
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -62,3 +63,19 @@ class Threads(ReferenceAdapter):
 
         blas = [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
         return {**super().audit(prepared, outcome), "blas_threads": blas}
+
+
+class SlowReadBack(ReferenceAdapter):
+    """The reference, whose read-back takes ``PAUSE_S`` longer."""
+
+    PAUSE_S = 0.5
+
+    def run(self, prepared):
+        out = super().run(prepared)
+        read_back = out.read_back
+
+        def slow():
+            time.sleep(self.PAUSE_S)
+            return read_back()
+
+        return replace(out, read_back=slow)

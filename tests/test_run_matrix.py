@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from dalembert.adapters import adapter_names, check_adapter, register_adapter
-from broken_adapters import Broken, NoFollower, Threads
+from broken_adapters import Broken, NoFollower, SlowReadBack, Threads
 from dalembert.harness.execute import Timing, execute
 from dalembert.harness.matrix import RunSpec, expand
 from dalembert.harness.pool import run_matrix
@@ -35,7 +35,8 @@ JIT_TREE_CASE = "pivoted_rod"
 
 
 ENGINES = adapter_names()  # before the test-only adapters below are registered
-for _name, _cls in (("broken", Broken), ("no-follower", NoFollower), ("threads", Threads)):
+for _name, _cls in (("broken", Broken), ("no-follower", NoFollower), ("threads", Threads),
+                    ("slow-read-back", SlowReadBack)):
     if _name not in adapter_names():
         register_adapter(_name, _cls)
 
@@ -95,6 +96,20 @@ def test_unsupported_effect_is_a_stored_result():
     record, npz = execute(spec, FAST)
     assert record.status == "unsupported" and "load:follower_force" in record.message and npz is None
     assert record.verdict == "unsupported" and record.verdict_reason == record.message
+
+
+def test_the_read_back_is_timed_once_and_apart_from_the_stepping():
+    """A read-back that sleeps 0.5 s: the record's ``readback_s`` holds it once (not once per timed
+    repeat: that would be 4 x 0.5 s), the stepping times do not hold it (20 RK4 steps of a rod take ~1 ms),
+    the worker's time holds both."""
+    (spec,), _ = expand(cases=["pivoted_rod"], engines=["slow-read-back"], integrators=["rk4"], dts=[1e-2],
+                        params={"t_final": 0.2})
+    record, _ = execute(spec, Timing(min_repeats=3, min_total_s=0.0, max_repeats=3))
+    cost, pause = record.cost, SlowReadBack.PAUSE_S
+    assert record.status == "ok" and cost.repeats == 3
+    assert pause <= cost.readback_s < 4 * pause
+    assert cost.wall_s_max < pause
+    assert cost.worker_s >= cost.build_s + cost.stepping_total_s + cost.readback_s
 
 
 def test_stored_row_and_trajectory_round_trip(tmp_path):
@@ -162,7 +177,7 @@ def test_dask_cluster_gives_the_same_rows(tmp_path):
                                   processes=True) as cluster, distributed.Client(cluster) as client:
         run_matrix_dask(specs, remote, client, timing=FAST)
     # everything but where and how long it ran
-    drop = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "build_s", "worker_s", "stepping_total_s",
+    drop = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "readback_s", "build_s", "worker_s", "stepping_total_s",
             "provenance", "load_start", "load_end"}
     strip = lambda rows: [{k: v for k, v in r.items() if k not in drop} for r in rows]  # noqa: E731
     assert strip(local.rows()) == strip(remote.rows())

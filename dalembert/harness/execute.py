@@ -96,7 +96,9 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
         prepared = adapter.prepare(case.scene, case.times, settings)
         build_s = time.perf_counter() - t0
         first = adapter.run(prepared)  # warm-up, not timed
-        traj = first.trajectory
+        t0 = time.perf_counter()
+        traj = first.trajectory  # the read-back, once
+        readback_s = time.perf_counter() - t0
         found["audit"] = adapter.audit(prepared, first)
         if hasattr(adapter, "describe"):
             found["model"] = adapter.describe(case.scene, settings)
@@ -104,7 +106,7 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
             t_bad = traj.first_nonfinite_time()
             cost = Cost(build_s=build_s, wall_s_median=first.wall_s, wall_s_min=first.wall_s,
                         wall_s_max=first.wall_s, repeats=1, n_steps=first.n_steps, n_rhs=first.n_rhs,
-                        concurrent=concurrent, load_start=load_start, load_end=_load())
+                        readback_s=readback_s, concurrent=concurrent, load_start=load_start, load_end=_load())
             why = first.info.get("message", "")  # the engine's own account, where it gives one
             return _record(spec, "diverged", f"non-finite state from t = {t_bad} s" + (f" ({why})" if why else ""),
                            t_diverged=t_bad, cost=cost,
@@ -129,7 +131,7 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
         npz = trajectory_to_npz(traj)
         cost = Cost(build_s=build_s, wall_s_median=float(np.median(walls)), wall_s_min=float(np.min(walls)),
                     wall_s_max=float(np.max(walls)), repeats=len(walls), n_steps=first.n_steps, n_rhs=first.n_rhs,
-                    overhead_s=float(np.median(np.array(totals) - np.array(walls))),
+                    overhead_s=float(np.median(np.array(totals) - np.array(walls))), readback_s=readback_s,
                     stepping_total_s=float(first.wall_s + sum(walls)), worker_s=time.perf_counter() - started,
                     concurrent=concurrent, load_start=load_start, load_end=_load())
         return _record(spec, "ok", "", errors, summary.drifts, case.tolerances, drift_rates=summary.drift_rates,
