@@ -221,7 +221,7 @@ class Kane:
         """Sampled states as a ``Trajectory``: bodies, joints, and each non-free joint's ``forces`` as
         ``reaction_force:<name>``, all from one ``_solve`` per sample."""
         n = len(t)
-        bodies = {jd["joint"].child: [np.full((n, 3), np.nan), np.full((n, 4), np.nan), np.full((n, 3), np.nan),
+        bodies = {jd["joint"].child: [np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan), np.full((n, 3), np.nan),
                                       np.full((n, 3), np.nan)] for jd in self.joints}
         forces = {}
         for i in range(n):
@@ -229,10 +229,12 @@ class Kane:
                 continue
             udot, kin = self._solve(t[i], Q[i], V[i])  # one solve gives poses and reactions
             for name, arrs in bodies.items():
-                arrs[0][i], arrs[2][i], arrs[3][i] = kin[name]["p"], kin[name]["v"], kin[name]["w"]
-                arrs[1][i] = spatial.matrix_to_quat(kin[name]["R"])
+                k = kin[name]
+                arrs[0][i], arrs[1][i], arrs[2][i], arrs[3][i] = k["p"], k["R"], k["v"], k["w"]
             for name, f in self.forces(udot, kin).items():
                 forces.setdefault(name, np.full((n, 3), np.nan))[i] = f
+        for arrs in bodies.values():  # to quaternions at once (NaN where a sample was not finite)
+            arrs[1] = spatial.matrix_to_quat(arrs[1])
         # A free joint's attitude is the stored quaternion itself (its norm drift is data).
         free = {jd["joint"].child for jd in self.joints if jd["joint"].kind == "free"}
         for jd in self.joints:
