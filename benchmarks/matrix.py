@@ -105,7 +105,8 @@ def _overhead_row(engine, records):
     def spread(share):  # median and worst
         return f"{np.median(share) if len(share) else np.nan:>8.1%}{share.max() if len(share) else np.nan:>7.1%}"
 
-    return (f"{engine:<11}{len(long):>9}{spread(outside)}{spread(readback)}{spread(outside - readback)}{overall:>9.1%}  "
+    return (f"{engine:<11}{len(long):>9}{spread(outside)}{spread(readback)}{spread(outside - readback)}"
+            f"{overall:>9.1%}  "
             + (f"{worst.case} {worst.settings_label} ({_outside(worst):.3f} of {worst.cost.worker_s:.3f} s, read-back "
                f"{worst.cost.readback_s:.3f} s)" if worst else ""))
 

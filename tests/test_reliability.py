@@ -277,8 +277,8 @@ class _Cluster:
 
 
 # everything but where and how long a run ran
-TIMING_FIELDS = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "readback_s", "build_s", "worker_s", "stepping_total_s",
-                 "provenance", "load_start", "load_end", "concurrent", "repeats"}
+TIMING_FIELDS = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "readback_s", "build_s", "worker_s",
+                 "stepping_total_s", "provenance", "load_start", "load_end", "concurrent", "repeats"}
 
 
 @pytest.mark.long

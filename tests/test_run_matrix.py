@@ -177,8 +177,8 @@ def test_dask_cluster_gives_the_same_rows(tmp_path):
                                   processes=True) as cluster, distributed.Client(cluster) as client:
         run_matrix_dask(specs, remote, client, timing=FAST)
     # everything but where and how long it ran
-    drop = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "readback_s", "build_s", "worker_s", "stepping_total_s",
-            "provenance", "load_start", "load_end"}
+    drop = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "readback_s", "build_s", "worker_s",
+            "stepping_total_s", "provenance", "load_start", "load_end"}
     strip = lambda rows: [{k: v for k, v in r.items() if k not in drop} for r in rows]  # noqa: E731
     assert strip(local.rows()) == strip(remote.rows())
     for key in local.done_keys():
