@@ -29,7 +29,8 @@ drifts          ``drift_<name>``, ``drift_rate_<name>`` (1/s) per conserved quan
 checks          ``orthonormality``, ``quaternion_norm``, ``joint_residual`` (maxima)
 judgement       ``within_tolerance``, ``beyond_tolerance`` (names, space-separated),
                 ``verdict``, ``verdict_reason``
-engine          ``audit`` (JSON), ``model`` (text), ``provenance`` (JSON: host, pid)
+engine          ``audit`` (JSON), ``model`` (text), ``provenance`` (JSON: host, pid, threads:
+                the width its BLAS and OpenMP pools were given)
 files           ``trajectory`` (path relative to the store)
 ==============  ==================================================================
 
@@ -130,7 +131,7 @@ class RunRecord:
     beyond : tuple of str — the tolerances exceeded; verdict, verdict_reason : str
         (``dalembert.judge``); within_tolerance : bool or None
     audit : dict — effects read back from the engine; model : str — its model, as text
-    provenance : dict — where it ran (host, pid)
+    provenance : dict — where it ran (host, pid) and its BLAS/OpenMP pools' width (threads, None when not set)
     trajectory : str — path of its trajectory in the store, "" when none
     traceback : str — for failed runs
     schema_version : int

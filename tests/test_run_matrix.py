@@ -164,18 +164,26 @@ def test_interrupted_run_resumes_to_the_same_store(tmp_path):
         assert after[key].errors == row.errors
 
 
-def test_dask_cluster_gives_the_same_rows(tmp_path):
+def test_dask_cluster_gives_the_same_rows(tmp_path, monkeypatch):
+    """The same rows as a local pool; each task's BLAS and OpenMP pools get its share of its host's cores (two
+    single-threaded workers on one host: half of them each, as a local pool of two), whatever the workers
+    inherited."""
     distributed = pytest.importorskip("distributed")
     from dalembert.harness.dask import run_matrix_dask
+    from dalembert.harness.threads import VARIABLES
+
+    for var in VARIABLES:
+        monkeypatch.setenv(var, "7")
 
     specs, _ = expand(cases=["pivoted_rod"], engines=["reference"], integrators=["rk4", "dop853"], dts=[1e-2],
                       rtols=[1e-6], params={"t_final": 1.0})
     local = Store(tmp_path / "local").create({})
     run_matrix(specs, local, jobs=1, timing=FAST)
     remote = Store(tmp_path / "dask").create({})
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
                                   processes=True) as cluster, distributed.Client(cluster) as client:
         run_matrix_dask(specs, remote, client, timing=FAST)
+    assert [r.provenance["threads"] for r in remote.records()] == [max(1, (os.cpu_count() or 1) // 2)] * len(specs)
     # everything but where and how long it ran
     drop = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "readback_s", "build_s", "worker_s",
             "stepping_total_s", "provenance", "load_start", "load_end"}

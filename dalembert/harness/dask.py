@@ -8,25 +8,52 @@ import subprocess
 import sys
 from dataclasses import asdict
 
+from dalembert.harness import threads
 from dalembert.harness.execute import Timing, unfinished
 from dalembert.harness.matrix import RunSpec
 from dalembert.harness.pool import DEFAULT_TIMEOUT_S, finish
 from dalembert.harness.truths import prepare_cases
 
-__all__ = ["run_matrix_dask", "execute_isolated"]
+__all__ = ["run_matrix_dask", "execute_isolated", "tasks_per_host"]
 
 
-def execute_isolated(spec_json, timing_json, truth_npz, timeout):
+def tasks_per_host(client):
+    """Tasks each host of the cluster at ``client`` runs at once: its workers' threads, summed (host -> int)."""
+    out = {}
+    for w in client.scheduler_info()["workers"].values():
+        out[w["host"]] = out.get(w["host"], 0) + w["nthreads"]
+    return out
+
+
+def _threads(hosts):
+    """This task's share of its host's cores (``harness.threads``): the host's cores over the tasks its workers
+    run at once (``hosts``, from ``tasks_per_host``; this worker's own threads for a host not in it). None
+    outside a Dask worker."""
+    from distributed import get_worker
+    from distributed.comm import get_address_host
+
+    try:
+        worker = get_worker()
+    except ValueError:
+        return None
+    return threads.per_worker(hosts.get(get_address_host(worker.address), worker.state.nthreads))
+
+
+def execute_isolated(spec_json, timing_json, truth_npz, timeout, hosts=None):
     """Run one spec in a fresh Python subprocess (the Dask task): ``(RunRecord, npz)``.
 
     A subprocess, not a fork: Dask workers are daemonic and cannot have
-    multiprocessing children; the subprocess also gives a hard timeout.
+    multiprocessing children; the subprocess also gives a hard timeout. Its BLAS and
+    OpenMP pools get its share of the host's cores (``_threads``; ``hosts`` from
+    ``tasks_per_host``), as a local pool's workers do.
     """
     spec = RunSpec.from_json(spec_json)
     payload = pickle.dumps({"spec": spec_json, "timing": timing_json, "truth": truth_npz, "parent": os.getpid()})
+    n = _threads(hosts or {})
+    env = None if n is None else {**os.environ, **{var: str(n) for var in threads.VARIABLES}}
     try:
         proc = subprocess.run([sys.executable, "-m", "dalembert.harness.worker"], input=payload, capture_output=True,
-                              timeout=timeout)
+                              timeout=timeout, env=env)
     except subprocess.TimeoutExpired:
         return unfinished(spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"), None
     if proc.returncode != 0:
@@ -49,8 +76,9 @@ def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=T
     truths = {k: trajectory_to_npz(t) for k, t in prepare_cases(specs, store).items()}
     todo = [s for s in specs if s.key not in store.done_keys()]
     counts = {"done": 0, "bad": 0, "total": len(todo)}
+    hosts = tasks_per_host(client)  # (workers that join later share by their own threads)
     futures = {client.submit(execute_isolated, s.to_json(), asdict(timing), truths[(s.case, s.case_version)],
-                             timeout, pure=False): s for s in todo}
+                             timeout, hosts, pure=False): s for s in todo}
     lost = []
     try:
         for fut in as_completed(futures):

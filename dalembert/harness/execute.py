@@ -50,7 +50,16 @@ def _record(spec, status, message="", errors=None, drifts=None, tolerances=None,
                      options=dict(spec.options), params=dict(spec.params), status=status, message=message,
                      errors=errors, drifts=drifts, beyond=verdict.beyond, verdict=verdict.verdict,
                      verdict_reason=verdict.reason, within_tolerance=verdict.within_tolerance,
-                     provenance={"host": socket.gethostname(), "pid": os.getpid()}, **fields)
+                     provenance={"host": socket.gethostname(), "pid": os.getpid(), "threads": _pool_width()},
+                     **fields)
+
+
+def _pool_width():
+    """The width this process's BLAS and OpenMP pools were given (``harness.threads``), or None."""
+    from dalembert.harness.threads import VARIABLES
+
+    width = os.environ.get(VARIABLES[0])
+    return int(width) if width and width.isdigit() else None
 
 
 def unfinished(spec, status, message):
