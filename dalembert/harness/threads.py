@@ -5,7 +5,9 @@ OpenBLAS and the OpenMP runtimes the engines link each start as many threads as
 the machine has cores, in every worker: with as many workers as cores that is
 cores x cores threads competing for the cores (4 on 2 cores, 4096 on 64). Each
 worker's pools are limited to ``cores // jobs`` threads (at least one), the rule
-joblib's loky workers follow; ``--jobs 1`` leaves them at the cores.
+joblib's loky workers follow; ``--jobs 1`` leaves them at the cores. On a Dask
+cluster each task's process gets its host's cores // the tasks that host's
+workers run at once (``harness.dask``). Each run's provenance records the width.
 
 Measured on this project's 2-core machine, whose run-to-run spread is some 15%
 (``python -m benchmarks.matrix --t-final 2``, one invocation each, its speed-up
