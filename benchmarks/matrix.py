@@ -15,7 +15,8 @@ on 2 workers — and prints per engine:
   adapter turning the engine's sampled states into body terms, once per run: where
   an engine gives reactions only from a dynamics evaluation, one per sample) and
   the rest (errors against the truth, invariants, the audit, serialization, timing
-  bookkeeping, each repeat's time outside the engine's stepping);
+  bookkeeping, each repeat's time outside the engine's stepping); for the shorter
+  runs, that time in ms (their fixed cost);
 * the wall time of its runs with ``--jobs 1`` and ``--jobs 2``, the speed-up, and
   where it goes: the cores each pass kept busy (CPU seconds of the workers and of
   the parent, which writes the store, per wall second) and the CPU seconds the
@@ -111,6 +112,16 @@ def _overhead_row(engine, records):
                f"{worst.cost.readback_s:.3f} s)" if worst else ""))
 
 
+def _short_row(engine, records):
+    short = [r for r in records if r.ok and r.cost.wall_s_median <= LONG_RUN_S]
+    outside = np.array([_outside(r) for r in short]) * 1e3
+    readback = np.array([r.cost.readback_s for r in short]) * 1e3
+    if not short:
+        return f"{engine:<11}{0:>6}"
+    return (f"{engine:<11}{len(short):>6}{np.median(outside):>9.1f}{outside.max():>8.1f}{np.median(readback):>11.1f}"
+            f"{np.median([r.cost.worker_s for r in short]) * 1e3:>9.1f}")
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--t-final", type=float, default=None, help="horizon of every case (s); default: each case's own")
@@ -140,6 +151,11 @@ def main(argv=None):
     print(f"{'engine':<11}{'runs>50ms':>9}" + f"{'median':>8}{'worst':>7}" * 3 + f"{'all runs':>9}  worst run")
     for engine in engines:
         print(_overhead_row(engine, records[engine]))
+    print(f"\nthe shorter runs (stepping <= {LONG_RUN_S * 1e3:.0f} ms): their fixed cost, ms of worker time outside build "
+          "and stepping per run, and of it the read-back; and a run's whole worker time")
+    print(f"{'engine':<11}{'runs':>6}{'median':>9}{'worst':>8}{'read-back':>11}{'worker':>9}")
+    for engine in engines:
+        print(_short_row(engine, records[engine]))
     print(f"\n--jobs 1 against --jobs 2, each run timed once (the same work): wall s, cores kept busy (CPU s per "
           f"wall s) and CPU s (goal: speed-up >= {SPEEDUP_GOAL})")
     print(f"{'engine':<11}{'runs':>6}{'wall 1':>8}{'busy':>6}{'CPU 1':>8}{'wall 2':>8}{'busy':>6}{'CPU 2':>8}"
