@@ -151,8 +151,8 @@ def main(argv=None):
     print(f"{'engine':<11}{'runs>50ms':>9}" + f"{'median':>8}{'worst':>7}" * 3 + f"{'all runs':>9}  worst run")
     for engine in engines:
         print(_overhead_row(engine, records[engine]))
-    print(f"\nthe shorter runs (stepping <= {LONG_RUN_S * 1e3:.0f} ms): their fixed cost, ms of worker time outside build "
-          "and stepping per run, and of it the read-back; and a run's whole worker time")
+    print(f"\nthe shorter runs (stepping <= {LONG_RUN_S * 1e3:.0f} ms): their fixed cost, ms of worker time outside "
+          "build and stepping per run, and of it the read-back; and a run's whole worker time")
     print(f"{'engine':<11}{'runs':>6}{'median':>9}{'worst':>8}{'read-back':>11}{'worker':>9}")
     for engine in engines:
         print(_short_row(engine, records[engine]))
