@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dalembert.harness.threads import VARIABLES
 from dalembert.judge import judge
 from dalembert.record import Cost, RunRecord
 
@@ -56,8 +57,6 @@ def _record(spec, status, message="", errors=None, drifts=None, tolerances=None,
 
 def _pool_width():
     """The width this process's BLAS and OpenMP pools were given (``harness.threads``), or None."""
-    from dalembert.harness.threads import VARIABLES
-
     width = os.environ.get(VARIABLES[0])
     return int(width) if width and width.isdigit() else None
 
