@@ -19,9 +19,12 @@ __all__ = ["run_matrix_dask", "execute_isolated", "tasks_per_host"]
 
 def tasks_per_host(client):
     """Tasks each host of the cluster at ``client`` runs at once: its workers' threads, summed (host -> int)."""
+    from distributed.comm import get_address_host
+
     out = {}
-    for w in client.scheduler_info()["workers"].values():
-        out[w["host"]] = out.get(w["host"], 0) + w["nthreads"]
+    for address, n in client.nthreads().items():  # every worker (scheduler_info's list depends on the client)
+        host = get_address_host(address)
+        out[host] = out.get(host, 0) + n
     return out
 
 
