@@ -50,8 +50,6 @@ class Still(ReferenceAdapter):
     that silently left out what drives the motion)."""
 
     def prepare(self, scene, times, settings):
-        from dataclasses import replace
-
         return super().prepare(replace(scene, loads=()), times, settings)
 
 

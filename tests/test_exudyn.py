@@ -171,6 +171,7 @@ def test_a_run_whose_stored_sampling_missed_samples_from_python_at_once_when_rep
 
     solves = []
     solve = module.solve
+
     def counted(mbs, sensors, settings, times, dt=None, stored=True):
         solves.append(stored)
         return solve(mbs, sensors, settings, times, dt, stored)
