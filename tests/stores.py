@@ -11,14 +11,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from dalembert.harness.execute import Timing
+from dalembert.harness.execute import QUICK
 from dalembert.harness.matrix import expand
 from dalembert.harness.pool import run_matrix
 from dalembert.record import RunRecord
 from dalembert.store import Store, trajectory_to_npz
 from dalembert.trajectory import BodyStates, Trajectory
-
-FAST = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
 
 
 def small_store(path, cases=("pivoted_rod", "free_top"), engines=("reference",), integrators=("rk4", "euler"),
@@ -28,7 +26,7 @@ def small_store(path, cases=("pivoted_rod", "free_top"), engines=("reference",),
     store = Store(path).create({"harness_version": "test", "engines": {e: "test" for e in engines}, "specs": [],
                                 "machine": {"cores": 2, "cpu": "test", "host": "test", "os": "test",
                                             "python": "test"}})
-    run_matrix(specs, store, jobs=2, timing=FAST)
+    run_matrix(specs, store, jobs=2, timing=QUICK)
     return store
 
 

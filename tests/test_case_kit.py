@@ -55,7 +55,7 @@ def test_an_out_of_tree_case_package_runs_through_dalembert(tmp_path):
                 "check_case(spherical_pendulum, horizon=0.5)"], env, tmp_path)
     out = tmp_path / "out"
     _run(["-m", "dalembert.harness.cli", "run", "--case", "spherical_pendulum", "--engine", "reference",
-          "--integrator", "rk4", "--dt", "1e-2", "--param", "t_final=0.5", "--jobs", "1", "--out", str(out)],
+          "--integrator", "rk4", "--dt", "1e-2", "--param", "t_final=0.5", "--jobs", "1", "--quick", "--out", str(out)],
          env, tmp_path)
     (row_file,) = (out / "rows").iterdir()
     row = json.loads(row_file.read_text())

@@ -97,7 +97,7 @@ def test_every_engine_gets_a_verdict_on_every_hard_case(tmp_path):
     out = tmp_path / "hard"
     selection = ["--tag", "hard", *[a for e in ENGINES for a in ("--engine", e)],
                  *[a for i in SMOKE_INTEGRATORS for a in ("--integrator", i)], "--dt", "1e-2", "--param", "t_final=1",
-                 "--no-maps"]
+                 "--no-maps", "--quick"]
     # no deadline of its own: a busy CI machine makes this slow, not wrong
     proc = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", *selection,
                            "--timeout", str(HUNG_RUN_S),

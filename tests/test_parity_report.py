@@ -29,7 +29,7 @@ def test_parity_is_the_difference_of_the_two_engines_runs(tmp_path):
     out = tmp_path / "r"
     # the matrix in a fresh process: JAX's threads, started in this one by other tests, deadlock a forked worker
     subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--case", "free_top", "--param", "t_final=1",
-                    "--engine", "mujoco", "--engine", "mjx", "--integrator", "euler", "--dt", "1e-2", "--out", str(out)],
+                    "--engine", "mujoco", "--engine", "mjx", "--integrator", "euler", "--dt", "1e-2", "--quick", "--out", str(out)],
                    check=True, capture_output=True)
     assert main(["report", str(out)]) == 0
     store = Store(out)

@@ -18,7 +18,8 @@ import pytest
 from dalembert.harness.cli import main
 from dalembert.store import Store
 
-TINY = ["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2", "--param", "t_final=0.5"]
+TINY = ["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2", "--param", "t_final=0.5",
+        "--quick"]
 
 BAD_RUNS = [  # (flags of `dalembert run`, phrase of the message)
     (["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--param", "t_final=2", "--dt", "1e-300"],
@@ -81,6 +82,8 @@ def test_flags_given_with_resume_are_refused(tmp_path, capsys):
     assert main(["run", *TINY, "--out", str(out)]) == 0
     assert main(["run", "--resume", str(out), "--dt", "1e-3", "--case", "free_top"]) == 2
     assert "--case, --dt cannot change a matrix already made" in capsys.readouterr().err
+    assert main(["run", "--resume", str(out), "--quick"]) == 2  # the manifest fixes how its runs are timed too
+    assert "--quick cannot change a matrix already made" in capsys.readouterr().err
 
 
 # ---------------------------------------------------------------- no silent wrong result
@@ -89,13 +92,13 @@ def test_a_run_that_never_moved_is_a_failure_not_ok():
     drops the follower force, so the rod stays put) is stored failed, never ok with 'errors'."""
     from broken_adapters import Still
     from dalembert.adapters import adapter_names, register_adapter
-    from dalembert.harness.execute import Timing, execute
+    from dalembert.harness.execute import QUICK, execute
     from dalembert.harness.matrix import expand
 
     if "still" not in adapter_names():
         register_adapter("still", Still)
     (spec,), _ = expand(cases=["pivoted_rod"], engines=["still"], integrators=["rk4"], dts=[1e-2])
-    record, npz = execute(spec, Timing(min_repeats=1, min_total_s=0.0, max_repeats=1))
+    record, npz = execute(spec, QUICK)
     assert record.status == "failed" and "never left its initial value" in record.message and npz is None
 
 
@@ -170,10 +173,10 @@ def test_a_run_writes_nothing_outside_its_store(tmp_path, monkeypatch):
     # MJX, which writes nothing of its own and compiles for ~6 s per integrator and precision: one of each
     engines = [a for name in sorted(BUILTIN) if name != "mjx" for a in ("--engine", name)]
     assert main(["run", "--case", "pivoted_rod", *engines, "--dt", "1e-2", "--rtol", "1e-6", "--param",
-                 "t_final=0.2", "--out", "r"]) == 0
+                 "t_final=0.2", "--quick", "--out", "r"]) == 0
     # in a fresh process: JAX's threads, started in this one by other tests, deadlock a forked worker
     subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--case", "pivoted_rod", "--engine", "mjx",
-                    "--integrator", "euler", "--dt", "1e-2", "--param", "t_final=0.2", "--out", "m"], check=True,
+                    "--integrator", "euler", "--dt", "1e-2", "--param", "t_final=0.2", "--quick", "--out", "m"], check=True,
                    capture_output=True, cwd=tmp_path)
     assert sorted(os.listdir(tmp_path)) == ["m", "r"]
 
@@ -288,7 +291,7 @@ def test_a_lost_scheduler_loses_no_work(tmp_path):
     uninterrupted local one."""
     # four short runs: each Dask task starts a Python process (~1 s), so the kill lands while some wait
     selection = ["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--integrator", "euler",
-                 "--dt", "1e-2,5e-3", "--param", "t_final=1"]
+                 "--dt", "1e-2,5e-3", "--param", "t_final=1", "--quick"]
     out = tmp_path / "dask"
     (tmp_path / "a").mkdir()
     first = _Cluster(tmp_path / "a")

@@ -29,7 +29,7 @@ def test_rk4_finite_boundary_is_the_linear_one_on_the_axisymmetric_top(tmp_path)
     assert main(["run", "--case", "free_top", "--param", "inertia=1,1,2", "--param", f"omega0=0.1,0,{W:g}",
                  "--param", "t_final=250", "--param", "sample_interval=250", "--engine", "reference",
                  "--integrator", "rk4", "--search", "dt", "--dt", "0.5,0.625", "--resolution", "1.01",
-                 "--jobs", "1", "--out", str(out)]) == 0
+                 "--jobs", "1", "--quick", "--out", str(out)]) == 0
     (b,) = boundaries(Store(out).records())
     assert b.finite.monotone and b.finite.ratio <= 1.01
     assert b.finite.failed > predicted  # below the limit every mode contracts: nothing can blow up

@@ -12,13 +12,12 @@ import pytest
 
 from dalembert.adapters import adapter_names, check_adapter, register_adapter
 from broken_adapters import Broken, NoFollower, SlowReadBack, Threads
-from dalembert.harness.execute import Timing, execute
+from dalembert.harness.execute import QUICK, Timing, execute
 from dalembert.harness.matrix import RunSpec, expand
 from dalembert.harness.pool import run_matrix
 from dalembert.record import RunRecord
 from dalembert.store import Store
 
-FAST = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
 # The kernel kills a worker when its parent dies; this only bounds how long a busy machine may
 # take to schedule that, and is far below CI's own limit.
 ORPHAN_GRACE_S = 60.0
@@ -78,7 +77,7 @@ def test_a_blow_up_is_nan_not_an_exception(engine, integrator):
 def test_failures_are_stored_not_raised(tmp_path):
     specs, _ = expand(cases=["pivoted_rod"], engines=["broken"], dts=[1e-2])
     store = Store(tmp_path).create({"specs": [s.to_json() for s in specs]})
-    run_matrix(specs, store, jobs=2, timeout=5.0, timing=FAST)
+    run_matrix(specs, store, jobs=2, timeout=5.0, timing=QUICK)
     runs = {r.integrator: r for r in store.records()}
     assert runs["raises"].status == "failed" and "exploded on purpose" in runs["raises"].message
     assert runs["nan"].status == "diverged" and "t = 1.0" in runs["nan"].message
@@ -93,7 +92,7 @@ def test_failures_are_stored_not_raised(tmp_path):
 
 def test_unsupported_effect_is_a_stored_result():
     (spec,), _ = expand(cases=["pivoted_rod"], engines=["no-follower"], integrators=["rk4"], dts=[1e-2])
-    record, npz = execute(spec, FAST)
+    record, npz = execute(spec, QUICK)
     assert record.status == "unsupported" and "load:follower_force" in record.message and npz is None
     assert record.verdict == "unsupported" and record.verdict_reason == record.message
 
@@ -116,7 +115,7 @@ def test_stored_row_and_trajectory_round_trip(tmp_path):
     (spec,), _ = expand(cases=["free_top"], engines=["reference"], integrators=["rk4"], dts=[1e-2],
                         params={"t_final": 1.0})
     store = Store(tmp_path).create({})
-    run_matrix([spec], store, jobs=1, timing=FAST)
+    run_matrix([spec], store, jobs=1, timing=QUICK)
     (row,) = store.rows()
     record = RunRecord.from_row(row)
     assert record.key == spec.key and record.status == "ok" and record.cost.repeats == 1
@@ -138,8 +137,11 @@ def _cli(*args, **kw):
 
 @pytest.mark.long
 def test_interrupted_run_resumes_to_the_same_store(tmp_path):
+    """Killed (SIGKILL) after two runs: ``--resume`` redoes nothing stored, finishes the rest with the
+    timing policy the matrix started with (``--quick``: one timed repeat), and ends with the rows of an
+    uninterrupted matrix."""
     selection = ["--case", "free_top", "--case", "pivoted_rod", "--engine", "reference", "--dt", "1e-2,5e-3",
-                 "--rtol", "1e-6", "--param", "t_final=1", "--jobs", "1"]
+                 "--rtol", "1e-6", "--param", "t_final=1", "--jobs", "1", "--quick"]
     full = tmp_path / "full"
     assert _cli("run", *selection, "--out", str(full)).wait() == 0
     cut = tmp_path / "cut"
@@ -162,6 +164,7 @@ def test_interrupted_run_resumes_to_the_same_store(tmp_path):
     for key, row in reference.items():  # deterministic numbers
         assert after[key].status == row.status
         assert after[key].errors == row.errors
+    assert {r.cost.repeats for r in after.values() if r.status == "ok"} == {1}
 
 
 def test_dask_cluster_gives_the_same_rows(tmp_path, monkeypatch):
@@ -178,11 +181,11 @@ def test_dask_cluster_gives_the_same_rows(tmp_path, monkeypatch):
     specs, _ = expand(cases=["pivoted_rod"], engines=["reference"], integrators=["rk4", "dop853"], dts=[1e-2],
                       rtols=[1e-6], params={"t_final": 1.0})
     local = Store(tmp_path / "local").create({})
-    run_matrix(specs, local, jobs=1, timing=FAST)
+    run_matrix(specs, local, jobs=1, timing=QUICK)
     remote = Store(tmp_path / "dask").create({})
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
                                   processes=True) as cluster, distributed.Client(cluster) as client:
-        run_matrix_dask(specs, remote, client, timing=FAST)
+        run_matrix_dask(specs, remote, client, timing=QUICK)
     assert [r.provenance["threads"] for r in remote.records()] == [max(1, (os.cpu_count() or 1) // 2)] * len(specs)
     # everything but where and how long it ran
     drop = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "readback_s", "build_s", "worker_s",
@@ -273,7 +276,7 @@ def test_the_store_carries_the_case_as_run(tmp_path):
     (spec,), _ = expand(cases=["pivoted_rod"], engines=["reference"], integrators=["rk4"], dts=[1e-2],
                         params={"t_final": 1.0})
     store = Store(tmp_path).create({})
-    run_matrix([spec], store, jobs=1, timing=FAST)
+    run_matrix([spec], store, jobs=1, timing=QUICK)
     case = make_case("pivoted_rod", t_final=1.0)
     stored = store.case("pivoted_rod", case.version)
     assert stored.scene == case.scene and stored.params == case.params
@@ -290,7 +293,7 @@ def test_each_worker_s_blas_pools_get_its_share_of_the_cores(tmp_path, jobs):
     specs, _ = expand(cases=["pivoted_rod"], engines=["threads"], integrators=["rk4"], dts=[1e-2, 5e-3],
                       params={"t_final": 0.1})
     store = Store(tmp_path).create({})
-    run_matrix(specs, store, jobs=jobs, timing=FAST)
+    run_matrix(specs, store, jobs=jobs, timing=QUICK)
     share = max(1, (os.cpu_count() or 1) // jobs)
     seen = [r.audit["blas_threads"] for r in store.records()]
     assert len(seen) == 2 and all(blas and set(blas) == {share} for blas in seen), (share, seen)

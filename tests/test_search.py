@@ -53,7 +53,7 @@ def test_the_search_bisects_to_the_resolution(tmp_path):
     out = tmp_path / "r"
     assert main(["run", "--case", "free_top_fast_spin", "--param", "spin=500", "--param", "t_final=0.5",
                  "--param", "sample_interval=0.1", "--engine", "reference", "--integrator", "rk4", "--search", "dt",
-                 "--dt", "1e-4,1e-1", "--resolution", "1.5", "--out", str(out)]) == 0
+                 "--dt", "1e-4,1e-1", "--resolution", "1.5", "--quick", "--out", str(out)]) == 0
     (b,) = boundaries(Store(out).records())
     assert b.stable.ratio <= 1.5 and b.finite.ratio <= 1.5 and b.stable.monotone and b.finite.monotone
     assert b.stable.passed <= b.finite.passed and b.probes == len(Store(out).records())
@@ -67,7 +67,7 @@ def test_the_report_maps_the_stored_boundaries(tmp_path):
     out = tmp_path / "r"
     assert main(["run", "--case", "free_top_fast_spin", "--param", "spin=50,500", "--param", "t_final=0.5",
                  "--param", "sample_interval=0.1", "--engine", "reference", "--integrator", "rk4", "--search", "dt",
-                 "--dt", "1e-3,1e-1", "--resolution", "2", "--out", str(out)]) == 0
+                 "--dt", "1e-3,1e-1", "--resolution", "2", "--quick", "--out", str(out)]) == 0
     assert main(["report", str(out)]) == 0
     md = (out / "report.md").read_text()
     assert "## Stability maps" in md and "against spin" in md

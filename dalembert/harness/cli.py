@@ -73,6 +73,9 @@ def _parser():
     r.add_argument("--option", action="append", default=[], metavar="KEY=VALUE", help="engine option (every run)")
     r.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     r.add_argument("--timeout", type=float, default=None, help="per-run limit in s (default 600)")
+    r.add_argument("--quick", action="store_true",
+                   help="time each run once after its warm-up (as validate does), not until its timing is steady: "
+                        "for matrices whose accuracy, not cost, is the point (short runs take a fraction of the time)")
     r.add_argument("--scheduler", metavar="ADDRESS", help="run on a Dask cluster, e.g. tcp://host:8786")
     r.add_argument("--out", metavar="DIR", help="results directory (default results/<timestamp>)")
     r.add_argument("--resume", metavar="DIR", help="finish an interrupted run directory")
@@ -359,19 +362,18 @@ def _search(store, plan, run):
 
 def cmd_run(args):
     from dalembert.harness.dask import run_matrix_dask
-    from dalembert.harness.execute import Timing
+    from dalembert.harness.execute import QUICK, Timing
     from dalembert.harness.pool import DEFAULT_TIMEOUT_S, run_matrix
     from dalembert.harness.selection import select
     from dalembert.store import Store
 
-    timing = Timing()
     if args.resume:
         given = [flag for flag, value in (("--case", args.case), ("--tag", args.tag), ("--engine", args.engine),
                                           ("--integrator", args.integrator), ("--dt", args.dt), ("--rtol", args.rtol),
                                           ("--param", args.param), ("--option", args.option), ("--out", args.out),
                                           ("--timeout", args.timeout), ("--force", args.force),
                                           ("--search", args.search), ("--resolution", args.resolution),
-                                          ("--no-maps", args.no_maps)) if value]
+                                          ("--no-maps", args.no_maps), ("--quick", args.quick)) if value]
         if given:
             return _fail(f"--resume {args.resume}: {', '.join(given)} cannot change a matrix already made (its "
                          "manifest fixes it) — drop them, or start a new matrix with --out")
@@ -383,9 +385,11 @@ def cmd_run(args):
             lock.release()
             raise
         timeout = store.manifest().get("timeout_s", DEFAULT_TIMEOUT_S)
+        timing = Timing(**store.manifest().get("timing", {}))  # the rest of the matrix is timed as its start was
         jobs = min(args.jobs or os.cpu_count(), os.cpu_count())
         client = _connect(args.scheduler, args.debug) if args.scheduler else None
     else:
+        timing = QUICK if args.quick else Timing()
         chosen = select(args, os.cpu_count() or 1)
         specs, timeout, jobs = chosen.specs, chosen.timeout, chosen.jobs
         for note in chosen.notes:

@@ -25,7 +25,7 @@ from dalembert.harness.threads import VARIABLES
 from dalembert.judge import judge
 from dalembert.record import Cost, RunRecord
 
-__all__ = ["Timing", "execute", "unfinished"]
+__all__ = ["QUICK", "Timing", "execute", "unfinished"]
 
 
 @dataclass(frozen=True)
@@ -39,6 +39,11 @@ class Timing:
     # negligible timer noise, and a third and fourth repeat of it were half the default matrix's
     # wall time (the reference's Python runs at dt = 1e-3, ~2.5 s each); its spread is stored.
     max_total_s: float = 3.0
+
+
+# One timed run after the warm-up: for matrices whose accuracy, not cost, is the point (``dalembert
+# validate``, ``dalembert run --quick``); a short run's timing is then one sample of its noise.
+QUICK = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
 
 
 def _record(spec, status, message="", errors=None, drifts=None, tolerances=None, **fields):

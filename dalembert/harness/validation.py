@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from dalembert.harness.execute import Timing
+from dalembert.harness.execute import QUICK
 from dalembert.harness.matrix import spec
 from dalembert.harness.pool import run_matrix
 from dalembert.settings import Settings
@@ -31,8 +31,7 @@ FREE_BODY_EXTRA = (
     Settings("rk4", dt=1e-3, options={"formulation": "newton-euler-matrix"}),
     Settings("rk4", dt=1e-3, options={"formulation": "kane"}),
 )
-# Accuracy is what is validated, not cost: each run is timed once.
-TIMING = Timing(min_repeats=1, min_total_s=0.0, max_repeats=1)
+TIMING = QUICK  # accuracy is what is validated, not cost: each run is timed once
 
 
 def settings_for(case):
