@@ -44,6 +44,16 @@ from dalembert.reference.loads import BodyLoads
 __all__ = ["Kane"]
 
 
+def _frozen(a):
+    a.flags.writeable = False
+    return a
+
+
+# The world's and the joints' constant terms in ``kinematics``: one allocation each, shared by every call
+# (read-only, so that sharing them cannot leak a write from one body's entry into another's).
+_EYE3, _ZERO3 = _frozen(np.eye(3)), _frozen(np.zeros(3))
+
+
 class Kane:
     """A ``System`` (see ``integrators``) for any valid tree scene.
 
@@ -82,6 +92,7 @@ class Kane:
         self.q0 = np.concatenate(q0) if q0 else np.zeros(0)
         self.v0 = np.concatenate(v0) if v0 else np.zeros(0)
         self.nv = iv
+        self._zeros = _frozen(np.zeros((3, iv)))  # (3, nv): the world's Jacobians, a joint's no-slide term
 
     # ------------------------------------------------------------ kinematics
     def kinematics(self, q, u):
@@ -91,9 +102,8 @@ class Kane:
         ``v (3,)``, ``Jv (3, nv)``, ``Jw (3, nv)``, ``a_bias (3,)``, ``alpha_bias (3,)``.
         """
         n = self.nv
-        world = dict(R=np.eye(3), p=np.zeros(3), w=np.zeros(3), v=np.zeros(3),
-                     Jv=np.zeros((3, n)), Jw=np.zeros((3, n)), a_bias=np.zeros(3), alpha_bias=np.zeros(3))
-        out = {WORLD: world}
+        zero, zeros = _ZERO3, self._zeros  # read-only: every entry below is a new array or a copy
+        out = {WORLD: dict(R=_EYE3, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero)}
         for jd in self.joints:
             j = jd["joint"]
             P = out[j.parent]
@@ -105,7 +115,7 @@ class Kane:
                 Jw = np.zeros((3, n))
                 Jw[:, jd["v"].start + 3:jd["v"].stop] = R
                 out[j.child] = dict(R=R, p=qj[:3].copy(), w=R @ uj[3:], v=uj[:3].copy(), Jv=Jv, Jw=Jw,
-                                    a_bias=np.zeros(3), alpha_bias=np.zeros(3))
+                                    a_bias=zero, alpha_bias=zero)
                 continue
             R_WJp = P["R"] @ jd["R_PJ"]
             if j.kind == "revolute":
@@ -113,15 +123,16 @@ class Kane:
             elif j.kind == "ball":
                 R_J = spatial.quat_to_matrix(qj / np.linalg.norm(qj))
             else:
-                R_J = np.eye(3)
+                R_J = _EYE3
             R_WJc = R_WJp @ R_J
             R = R_WJc @ jd["R_CJ"].T
             r_PJ = P["R"] @ jd["p_PJ"]  # parent COM -> (parent's) joint point
             r_JC = -R @ jd["p_CJ"]  # joint point -> child COM
             Jw = P["Jw"].copy()
             w, alpha_bias = P["w"].copy(), P["alpha_bias"].copy()
-            v_slide, a_slide, Jv_slide = np.zeros(3), np.zeros(3), np.zeros((3, n))
+            v_slide, a_slide, Jv_slide = zero, zero, zeros
             if j.kind == "prismatic":
+                Jv_slide = np.zeros((3, n))
                 a_W = R_WJp @ jd["axis"]
                 r_PJ = r_PJ + a_W * qj[0]  # parent COM -> the child's joint point, slid
                 v_slide = a_W * uj[0]
