@@ -30,7 +30,7 @@ from dalembert.reports.scaling import size_sweeps
 from dalembert.reports.findings import (ACCURACY_TARGETS, CLOSURE_GROWTH, DISAGREEMENT_FACTOR, ENERGY_HAZARD,
                                          ENERGY_LIKE, HAZARDS, NAMED, find, run_name, settings_text)
 from dalembert.reports.tables import MISSING, SORT_SCRIPT, Cell, Table, escape_html, escape_md, num
-from dalembert.reports.timing import timing_note
+from dalembert.reports.timing import once_note, timing_note
 from dalembert.reports.work_precision import cheapest_reaching, cost_per_sim_s, headline_quantity, series, sweep_key
 from dalembert.store import atomic_write
 
@@ -641,9 +641,9 @@ def build_report(store, out_dir=None):
              + ", ".join(f"{k} {v}" for k, v in sorted(manifest.get("engines", {}).items()))
              + f"; harness {manifest.get('harness_version')} at {manifest.get('harness_commit')}; "
              f"command: {manifest.get('command')}; {manifest.get('started')} to {manifest.get('ended')}.")
-    note = timing_note(manifest, records)
-    if note:
-        doc.para(note, cls="warning")
+    for note in (timing_note(manifest, records), once_note(manifest)):
+        if note:
+            doc.para(note, cls="warning")
     doc.html.append("<nav>" + "".join(f'<a href="#{escape_html(a)}">{escape_html(t)}</a>' for a, t in
                                       [("findings", "findings"), ("hazards", "hazards")]
                                       + [(_section_id(f), titles[f]) for f in found]) + "</nav>")

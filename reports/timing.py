@@ -14,7 +14,7 @@ import math
 
 from dalembert.reports.findings import run_name
 
-__all__ = ["loaded_runs", "timing_note", "OWN_LOAD"]
+__all__ = ["loaded_runs", "once_note", "timing_note", "OWN_LOAD"]
 
 # What a matrix adds to the load beyond its busy workers (the parent writing the store, the engines' helper
 # threads, the OS): measured on a quiet 2-core machine, seven default matrices with 2 workers (make run from fresh
@@ -60,3 +60,13 @@ def timing_note(manifest, records):
         return None
     return ("Timings shared the machine: " + "; ".join(parts) + ". Their costs are upper bounds: compare costs "
             "only where the min–max spreads in the tables do not overlap.")
+
+
+def once_note(manifest):
+    """A sentence saying that each run was timed once (``dalembert run --quick``), or None."""
+    if (manifest.get("timing") or {}).get("max_repeats") != 1:
+        return None
+    # the ~10 %: the stores' min-max spreads of one run's repeats on one machine (``compare.COST_NOTICE``)
+    return ("Each run was timed once after its warm-up (dalembert run --quick): a cost is one sample, with no "
+            "spread, and repeats of one run scatter by ~10 % on one machine: compare costs only where they "
+            "differ by more.")

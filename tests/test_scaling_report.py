@@ -25,6 +25,7 @@ def test_a_size_sweep_is_drawn_with_its_exponents(tmp_path):
     assert main(["report", str(out)]) == 0
     md = (out / "report.md").read_text()
     assert "## Scaling with the number of bodies" in md and "chain run with 2, 4, 8 bodies" in md
+    assert "timed once" not in md  # the default policy: each run's median of its repeats
     store = Store(out)
     records = store.records()
     (sweep,) = size_sweeps(records, lambda name, version: len(store.case(name, version).scene.bodies))

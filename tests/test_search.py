@@ -71,6 +71,7 @@ def test_the_report_maps_the_stored_boundaries(tmp_path):
     assert main(["report", str(out)]) == 0
     md = (out / "report.md").read_text()
     assert "## Stability maps" in md and "against spin" in md
+    assert "Each run was timed once after its warm-up (dalembert run --quick)" in md  # its costs are one sample
     found = boundaries(Store(out).records())
     scale = (lambda b: b.params["spin"]) if "spin x dt" in md else (lambda b: 1.0)
     stable = [b.stable.passed * scale(b) for b in found if b.stable.passed is not None]
