@@ -83,14 +83,21 @@ CONTINUOUS_REASON = ("Drake's continuous-time MultibodyPlant takes no constraint
 ANCHOR = "dalembert_world_anchor"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # (arrays: identity is equality)
 class LoopConstraints:
     """One loop's Drake constraints: ``loop`` (``Loop``), ``ids`` (``MultibodyConstraintId``s),
-    ``lever`` (m, the revolute's second point along the axis; 0 otherwise)."""
+    ``lever`` (m, the revolute's second point along the axis; 0 otherwise), the Drake bodies of its sides
+    ``body_a``, ``body_b`` (``ANCHOR`` for the world) and the constrained points ``points_a``,
+    ``points_b`` ((3, k) m, each side's body frame, one column per ball constraint: the read-back's rows
+    are at the points the constraints hold)."""
 
     loop: object
     ids: tuple
     lever: float
+    body_a: object
+    body_b: object
+    points_a: np.ndarray
+    points_b: np.ndarray
 
 
 def lever(loop):
@@ -121,7 +128,7 @@ def add_loops(plant, scene, bodies):
     for loop in scene.loops:
         A, B = side(loop.body_a), side(loop.body_b)
         p_AP, p_BQ = np.asarray(loop.point_a, dtype=float), np.asarray(loop.point_b, dtype=float)
-        arm = 0.0
+        arm, pairs = 0.0, [(p_AP, p_BQ)]
         if loop.kind == "distance":
             ids = (plant.AddDistanceConstraint(A, p_AP, B, p_BQ, loop.length),)  # stiffness inf, damping 0
         elif loop.kind == "ball":
@@ -131,19 +138,20 @@ def add_loops(plant, scene, bodies):
             axis = np.asarray(loop.axis, dtype=float) / np.linalg.norm(loop.axis)  # in Ja and in Jb
             a_A = spatial.quat_to_matrix(loop.quat_a) @ axis  # the axis in A's and in B's body frame
             a_B = spatial.quat_to_matrix(loop.quat_b) @ axis
-            ids = (plant.AddBallConstraint(A, p_AP, B, p_BQ),
-                   plant.AddBallConstraint(A, p_AP + arm * a_A, B, p_BQ + arm * a_B))
-        out.append(LoopConstraints(loop, ids, arm))
+            pairs.append((p_AP + arm * a_A, p_BQ + arm * a_B))
+            ids = tuple(plant.AddBallConstraint(A, p, B, q) for p, q in pairs)
+        points_a, points_b = (np.stack(side, axis=1) for side in zip(*pairs))
+        out.append(LoopConstraints(loop, ids, arm, A, B, points_a, points_b))
     return out
 
 
 def _point_jacobian(plant, context, body, p_B):
-    """``J (3, nv)``: the world velocity of the point ``p_B`` (m, body frame) of ``body`` per generalized velocity."""
+    """``J (3 k, nv)``: the world velocities of the points ``p_B`` ((3, k) m, body frame) of ``body`` per
+    generalized velocity, three rows per point (one Drake call for all of them)."""
     from pydrake.multibody.tree import JacobianWrtVariable
 
-    return plant.CalcJacobianTranslationalVelocity(context, JacobianWrtVariable.kV, body.body_frame(),
-                                                   np.asarray(p_B, dtype=float), plant.world_frame(),
-                                                   plant.world_frame())
+    return plant.CalcJacobianTranslationalVelocity(context, JacobianWrtVariable.kV, body.body_frame(), p_B,
+                                                   plant.world_frame(), plant.world_frame())
 
 
 def _rows(model, context):
@@ -151,25 +159,17 @@ def _rows(model, context):
     point Q on B relative to P on A, per ball; along the unit vector P -> Q for a distance) and the map from
     the rows' multipliers to the force ON B (N, world)."""
     plant = model.plant
-    side = lambda name: plant.GetBodyByName(ANCHOR) if name == WORLD else model.bodies[name]  # noqa: E731
     out = []
     for lc in model.loops:
-        loop = lc.loop
-        A, B = side(loop.body_a), side(loop.body_b)
-        p_AP, p_BQ = np.asarray(loop.point_a, dtype=float), np.asarray(loop.point_b, dtype=float)
-        pairs = [(p_AP, p_BQ)]
-        if loop.kind == "revolute":
-            axis = np.asarray(loop.axis, dtype=float) / np.linalg.norm(loop.axis)
-            pairs.append((p_AP + lc.lever * spatial.quat_to_matrix(loop.quat_a) @ axis,
-                          p_BQ + lc.lever * spatial.quat_to_matrix(loop.quat_b) @ axis))
-        Js = [_point_jacobian(plant, context, B, q) - _point_jacobian(plant, context, A, p) for p, q in pairs]
-        if loop.kind == "distance":
-            d = (plant.CalcPointsPositions(context, B.body_frame(), p_BQ, plant.world_frame()).ravel()
-                 - plant.CalcPointsPositions(context, A.body_frame(), p_AP, plant.world_frame()).ravel())
+        A, B = lc.body_a, lc.body_b
+        J = _point_jacobian(plant, context, B, lc.points_b) - _point_jacobian(plant, context, A, lc.points_a)
+        if lc.loop.kind == "distance":
+            d = (plant.CalcPointsPositions(context, B.body_frame(), lc.points_b, plant.world_frame()).ravel()
+                 - plant.CalcPointsPositions(context, A.body_frame(), lc.points_a, plant.world_frame()).ravel())
             u = d / np.linalg.norm(d)
-            out.append((u @ Js[0], u[:, None]))
+            out.append((u @ J, u[:, None]))
         else:
-            out.append((np.vstack(Js), np.hstack([np.eye(3)] * len(Js))))
+            out.append((J, np.tile(np.eye(3), lc.points_a.shape[1])))
     return out
 
 
