@@ -134,10 +134,6 @@ class ClosedLoops(Kane):
         kin[("loops",)] = forces  # (a tuple key: never a body name)
         return udot, kin
 
-    def multiplier_forces(self, t, q, v):
-        """Force each loop exerts ON its body b (N, world), dict loop name -> (3,)."""
-        return self._solve(t, q, v)[1][("loops",)]
-
     def self_stresses(self, q):
         """The self-stresses at configuration ``q`` (nq,) (module docstring): one dict per independent
         ``lambda0`` (an orthonormal basis of ``J``'s left null space in the solver's own rank decision),
