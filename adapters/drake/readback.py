@@ -9,7 +9,9 @@ Joint reactions come from the plant's ``reaction_forces`` output port: per
 joint, ``F_CJc_Jc``, the force the joint exerts on the child at the origin of
 the child joint frame Jc, in Jc axes; turned into world axes with ``R_WJc``.
 Loop reactions (discrete mode) from the constraints' generalized force in the step
-(``loops.loop_forces``).
+(``loops.loop_forces``), read in the same pass and context as the joints': the
+reaction port and the acceleration port both come from the plant's one cached
+discrete step at the sample's state, so each sample costs one step solve, not two.
 """
 
 from __future__ import annotations
@@ -52,30 +54,12 @@ def read_back(p, X):
             R_FM = _rpy_to_matrix(qj)
             joints[j.child] = JointStates(spatial.matrix_to_quat(R_FM), np.einsum("nji,nj->ni", R_FM, vj))
     reactions = {j.child: nan3() for j in jointed}
-    if jointed:
+    reactions.update({lc.loop.name: nan3() for lc in model.loops})  # a loop's force ON its body b
+    if reactions:
         _kinematics(p, X, bodies, jointed, reactions)
     traj_bodies = {name: BodyStates(b["p"], b["q"], b["v"], b["w"]) for name, b in bodies.items()}
     extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
-    if p["model"].loops:
-        extras.update({f"reaction_force:{name}": f for name, f in _loop_reactions(p, X).items()})
     return Trajectory(times, traj_bodies, joints, extras)
-
-
-def _loop_reactions(p, X):
-    """Per loop, the force ON its body b (N, world, (n, 3)) at every finite sample (``loops.loop_forces``)."""
-    from dalembert.adapters.drake.loops import loop_forces
-    from dalembert.closure import RANK_RTOL
-
-    model = p["model"]
-    context = model.diagram.CreateDefaultContext()
-    plant_context = model.plant.GetMyMutableContextFromRoot(context)
-    out = {lc.loop.name: np.full((len(X), 3), np.nan) for lc in model.loops}
-    for k in np.flatnonzero(np.all(np.isfinite(X), axis=1)):
-        context.SetTime(float(p["times"][k]))
-        model.plant.SetPositionsAndVelocities(plant_context, X[k])
-        for name, f in loop_forces(model, context, plant_context, RANK_RTOL).items():
-            out[name][k] = f
-    return out
 
 
 def _rpy_to_matrix(rpy):
@@ -88,8 +72,12 @@ def _rpy_to_matrix(rpy):
 
 
 def _kinematics(p, X, bodies, jointed, reactions):
-    """Poses and velocities of the bodies on revolute, prismatic, ball and weld joints, and the joints' reactions,
-    from the plant sample by sample (the loads system is evaluated for the reactions, as in a step)."""
+    """Poses and velocities of the bodies on revolute, prismatic, ball and weld joints, the joints' reactions and
+    the loops' (``loops.loop_forces``), from the plant sample by sample (the loads system is evaluated for the
+    reactions, as in a step)."""
+    from dalembert.adapters.drake.loops import loop_forces
+    from dalembert.closure import RANK_RTOL
+
     model = p["model"]
     plant = model.plant
     context = model.diagram.CreateDefaultContext()
@@ -113,5 +101,8 @@ def _kinematics(p, X, bodies, jointed, reactions):
             R_WJc = plant.EvalBodyPoseInWorld(plant_context, joint.child_body()).rotation().matrix() @ \
                 joint.frame_on_child().GetFixedPoseInBodyFrame().rotation().matrix()
             reactions[name][k] = R_WJc @ F[int(joint.index())].translational()
+        if model.loops:  # the same context: the step solved for F above is the one read here
+            for name, f in loop_forces(model, context, plant_context, RANK_RTOL).items():
+                reactions[name][k] = f
     for name in names:  # w >= 0, as spatial.matrix_to_quat gives every other engine's rotation
         bodies[name]["q"] = spatial.quat_normalize(bodies[name]["q"])
