@@ -29,6 +29,13 @@ joint point, ``r = r_PJ + d a_W``, gains the slide; the COM's partial velocity i
 the lever's transport ``w_P x r`` changes by ``w_P x (d' a_W)`` too: the bias acceleration gains
 the Coriolis term ``2 w_P x (d' a_W)`` (the centripetal ``w_P x (w_P x r)`` uses the slid lever). Joint reaction forces follow from Newton's
 law per body, from the leaves back to the root.
+
+The read-back (``trajectory``) solves the same system at every sample at once (``_solve_stacked``:
+the same terms in the same order, each with a leading sample axis), where the integrators call
+``_solve`` one state at a time: a Python pass per sample cost about one evaluation of the
+right-hand side per sample, as much as a whole run where a run takes one or two evaluations per
+sample. The two agree to roundoff (``tests/test_reference.py``); formulations whose solve is their
+own (``loops.ClosedLoops``) and scenes with spring-dampers read back sample by sample.
 """
 
 from __future__ import annotations
@@ -42,6 +49,16 @@ from dalembert.reference.configuration import Block
 from dalembert.reference.loads import BodyLoads
 
 __all__ = ["Kane"]
+
+
+def _mv(A, x):
+    """Stacked matrix-vector products: ``A`` (m, i, j), ``x`` (m, j) -> (m, i)."""
+    return (A @ x[..., None])[..., 0]
+
+
+def _mtv(A, x):
+    """Stacked transposed products: ``A`` (m, i, j), ``x`` (m, i) -> ``A^T x`` (m, j)."""
+    return (x[..., None, :] @ A)[..., 0, :]
 
 
 def _frozen(a):
@@ -157,6 +174,66 @@ class Kane:
                                 a_bias=a_bias, alpha_bias=alpha_bias)
         return out
 
+    def _kinematics_stacked(self, Q, U):
+        """``kinematics`` at m states at once, ``Q`` (m, nq), ``U`` (m, nv): the same entries, each with a
+        leading sample axis (``R (m, 3, 3)``, ``Jv (m, 3, nv)``, ...), term by term as ``kinematics``."""
+        m, n = len(Q), self.nv
+        zero, zeros, eye = np.zeros((m, 3)), np.zeros((m, 3, n)), np.broadcast_to(_EYE3, (m, 3, 3))
+        out = {WORLD: dict(R=eye, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero)}
+        for jd in self.joints:
+            j = jd["joint"]
+            P = out[j.parent]
+            qj, uj, cols = Q[:, jd["q"]], U[:, jd["v"]], jd["v"]
+            if j.kind == "free":
+                quat = qj[:, 3:]
+                R = spatial.quat_to_matrix(quat / np.linalg.norm(quat, axis=-1, keepdims=True))
+                Jv = np.zeros((m, 3, n))
+                Jv[:, :, cols.start:cols.start + 3] = _EYE3
+                Jw = np.zeros((m, 3, n))
+                Jw[:, :, cols.start + 3:cols.stop] = R
+                out[j.child] = dict(R=R, p=qj[:, :3].copy(), w=_mv(R, uj[:, 3:]), v=uj[:, :3].copy(), Jv=Jv, Jw=Jw,
+                                    a_bias=zero, alpha_bias=zero)
+                continue
+            R_WJp = P["R"] @ jd["R_PJ"]
+            if j.kind == "revolute":
+                R_J = spatial.so3_exp(jd["axis"] * qj[:, :1])
+            elif j.kind == "ball":
+                R_J = spatial.quat_to_matrix(qj / np.linalg.norm(qj, axis=-1, keepdims=True))
+            else:
+                R_J = eye
+            R_WJc = R_WJp @ R_J
+            R = R_WJc @ jd["R_CJ"].T
+            r_PJ = P["R"] @ jd["p_PJ"]
+            r_JC = -R @ jd["p_CJ"]
+            Jw = P["Jw"].copy()
+            w, alpha_bias = P["w"].copy(), P["alpha_bias"].copy()
+            v_slide, a_slide, Jv_slide = zero, zero, zeros
+            if j.kind == "prismatic":
+                Jv_slide = np.zeros((m, 3, n))
+                a_W = R_WJp @ jd["axis"]
+                r_PJ = r_PJ + a_W * qj[:, :1]
+                v_slide = a_W * uj[:, :1]
+                a_slide = 2.0 * spatial.cross(P["w"], v_slide)
+                Jv_slide[:, :, cols] = a_W[:, :, None]
+            if j.kind == "revolute":
+                s = R_WJp @ jd["axis"]
+                Jw[:, :, cols] += s[:, :, None]
+                w_rel = s * uj[:, :1]
+                w += w_rel
+                alpha_bias += spatial.cross(P["w"], w_rel)
+            elif j.kind == "ball":
+                Jw[:, :, cols] += R_WJc
+                w_rel = _mv(R_WJc, uj)
+                w += w_rel
+                alpha_bias += spatial.cross(w, w_rel)
+            Jv = P["Jv"] - spatial.skew(r_PJ) @ P["Jw"] + Jv_slide - spatial.skew(r_JC) @ Jw
+            v = P["v"] + spatial.cross(P["w"], r_PJ) + v_slide + spatial.cross(w, r_JC)
+            a_bias = (P["a_bias"] + spatial.cross(P["alpha_bias"], r_PJ) + spatial.cross(P["w"], spatial.cross(P["w"], r_PJ))
+                      + a_slide + spatial.cross(alpha_bias, r_JC) + spatial.cross(w, spatial.cross(w, r_JC)))
+            out[j.child] = dict(R=R, p=P["p"] + r_PJ + r_JC, w=w, v=v, Jv=Jv, Jw=Jw,
+                                a_bias=a_bias, alpha_bias=alpha_bias)
+        return out
+
     # -------------------------------------------------------------- dynamics
     def _solve(self, t, q, u):
         M, f, kin = self.mass_and_forces(t, q, u)
@@ -193,6 +270,23 @@ class Kane:
             f += k["Jw"].T @ (T - I_W @ k["alpha_bias"] - spatial.cross(k["w"], I_W @ k["w"]))
         return M, f, kin
 
+    def _solve_stacked(self, Q, U):
+        """``_solve`` at m states at once (``Q`` (m, nq), ``U`` (m, nv); loads and gravity only, no springs):
+        ``udot`` (m, nv) and the stacked ``kinematics`` (``_kinematics_stacked``, each body's entry with
+        ``I_W`` (m, 3, 3) and ``F`` (m, 3) as ``mass_and_forces`` gives them)."""
+        kin = self._kinematics_stacked(Q, U)
+        M, f = np.zeros((len(Q), self.nv, self.nv)), np.zeros((len(Q), self.nv))
+        for jd in self.joints:
+            k = kin[jd["joint"].child]
+            R, Jv, Jw = k["R"], k["Jv"], k["Jw"]
+            k["I_W"] = I_W = R @ jd["I_B"] @ R.swapaxes(-1, -2)
+            M += jd["m"] * Jv.swapaxes(-1, -2) @ Jv + Jw.swapaxes(-1, -2) @ I_W @ Jw
+            k["F"], T = jd["loads"].resultant(R)
+            f += _mtv(Jv, k["F"] - jd["m"] * k["a_bias"])
+            f += _mtv(Jw, T - _mv(I_W, k["alpha_bias"]) - spatial.cross(k["w"], _mv(I_W, k["w"])))
+        udot = np.linalg.solve(M, f[..., None])[..., 0] if self.nv else np.zeros((len(Q), 0))
+        return udot, kin
+
     def acceleration(self, t, q, v):
         """Generalized accelerations ``u'`` (nv,) from ``Q + Q* = 0``."""
         return self._solve(t, q, v)[0]
@@ -228,22 +322,50 @@ class Kane:
         (``_reactions``; N, world, dict name -> (3,))."""
         return self._reactions(udot, kin)
 
+    def sampled(self, t, Q, V):
+        """Each body's ``p``, ``R``, ``v``, ``w`` and the ``forces`` at the states ``(Q[i], V[i])`` at times
+        ``t[i]`` (m,): two dicts, body name -> dict of (m, ...) arrays, force name -> (m, 3). At once
+        (``_solve_stacked``) where this formulation's solve is Kane's and the scene has no springs."""
+        if type(self)._solve is not Kane._solve or self.scene.springs:  # a solve of its own: not stacked here
+            return self.sampled_one_by_one(t, Q, V)
+        udot, kin = self._solve_stacked(Q, V)
+        unbalanced = {}  # as ``_reactions``
+        for jd in self.joints:
+            k = kin[jd["joint"].child]
+            unbalanced[jd["joint"].child] = jd["m"] * (_mv(k["Jv"], udot) + k["a_bias"]) - k["F"]
+        return {jd["joint"].child: kin[jd["joint"].child] for jd in self.joints}, self.joint_forces(unbalanced)
+
+    def sampled_one_by_one(self, t, Q, V):
+        """``sampled`` from one ``_solve`` per state (the integrators' path)."""
+        m = len(t)
+        bodies = {jd["joint"].child: {k: np.empty((m, 3)) for k in "pvw"} | {"R": np.empty((m, 3, 3))}
+                  for jd in self.joints}
+        forces = {name: np.empty((m, 3)) for name in self.force_names}
+        for i in range(m):
+            udot, kin = self._solve(t[i], Q[i], V[i])  # one solve gives poses and reactions
+            for name, out in bodies.items():
+                for key, arr in out.items():
+                    arr[i] = kin[name][key]
+            for name, f in self.forces(udot, kin).items():
+                forces[name][i] = f
+        return bodies, forces
+
     def trajectory(self, t, Q, V):
         """Sampled states as a ``Trajectory``: bodies, joints, and each non-free joint's ``forces`` as
-        ``reaction_force:<name>``, all from one ``_solve`` per sample."""
+        ``reaction_force:<name>`` (``sampled``; NaN at samples whose state is not finite)."""
         n = len(t)
         bodies = {jd["joint"].child: [np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan), np.full((n, 3), np.nan),
                                       np.full((n, 3), np.nan)] for jd in self.joints}
         forces = {}
-        for i in range(n):
-            if not (np.all(np.isfinite(Q[i])) and np.all(np.isfinite(V[i]))):
-                continue
-            udot, kin = self._solve(t[i], Q[i], V[i])  # one solve gives poses and reactions
+        finite = np.flatnonzero(np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1))
+        if len(finite):
+            kin, found = self.sampled(t[finite], Q[finite], V[finite])
             for name, arrs in bodies.items():
-                k = kin[name]
-                arrs[0][i], arrs[1][i], arrs[2][i], arrs[3][i] = k["p"], k["R"], k["v"], k["w"]
-            for name, f in self.forces(udot, kin).items():
-                forces.setdefault(name, np.full((n, 3), np.nan))[i] = f
+                for arr, key in zip(arrs, "pRvw"):
+                    arr[finite] = kin[name][key]
+            for name, f in found.items():
+                forces[name] = np.full((n, 3), np.nan)
+                forces[name][finite] = f
         for arrs in bodies.values():  # to quaternions at once (NaN where a sample was not finite)
             arrs[1] = spatial.matrix_to_quat(arrs[1])
         # A free joint's attitude is the stored quaternion itself (its norm drift is data).

@@ -8,7 +8,10 @@ from dalembert.errors import trajectory_errors
 from dalembert.invariants import orthonormality_error
 from dalembert.reference import simulate
 from dalembert.reference.integrators import INTEGRATORS
+from dalembert.reference.generalized import Kane
 from dalembert.reference.newton_euler import NewtonEuler
+from dalembert.scene import Body, Joint, Scene
+from scenes import chain_case, free_body_world_loads_case
 
 ORDER_SLACK = 0.3  # measured orders within this of the theory (asymptotic regime, 2 step sizes)
 FORMULATION_AGREEMENT = 1e-12  # rad or m over 2 s: same method, different algebra -> roundoff only
@@ -19,6 +22,10 @@ DECAY_RATE_RTOL = 1e-7
 RADAU_TOL = 1e-11
 
 FREE_CASES = ["free_top", "free_top_intermediate", "particle_box"]
+# Kane's read-back at every sample at once against one state at a time: the same terms, summed by numpy's
+# stacked products and solves instead of its single ones; measured up to 6.7e-15 of each quantity's largest
+# value (heavy_top's reactions) over the scenes below -> roundoff, with a margin.
+STACKED_AGREEMENT = 1e-13
 
 
 def error(case, settings, quantity):
@@ -147,3 +154,40 @@ def test_radau_meets_the_damped_oscillators_closed_form_and_the_decay_rate_is_it
     stretch = (x0 * (r2 * np.exp(r1 * times) - r1 * np.exp(r2 * times)) / (r2 - r1)).real
     traj = simulate(scene, times, Settings("radau", rtol=1e-12, atol=1e-12))[0]
     assert np.abs(-traj.bodies["b"].position[:, 2] - rest - stretch).max() < RADAU_TOL
+
+
+def _slider_on_a_hub():
+    """A hub turning about a tilted axis and a body sliding along the hub's (1, 1, 0) direction, off both
+    COMs, under gravity: the prismatic joint's slide, Coriolis and centripetal terms."""
+    hub = Body("hub", 3.0, np.diag([0.2, 0.3, 0.4]))
+    slider = Body.box("slider", 0.5, (0.04, 0.02, 0.06))
+    return Scene("slider_on_hub", [hub, slider],
+                 [Joint("revolute", "world", "hub", (0.4,), (2.0,), axis=(0, 1, 2), parent_point=(0, 0, 0.1)),
+                  Joint("prismatic", "hub", "slider", (0.2,), (0.3,), axis=(1, 1, 0), parent_point=(0, 0.1, 0.25),
+                        child_point=(0.01, 0, 0))], (0.0, 0.0, -9.81))
+
+
+KANE_TREES = {name: (lambda name=name: make_case(name, t_final=0.5).scene) for name in
+              ["pivoted_rod", "pendulum", "chain", "heavy_top", "kovalevskaya_top", "particle_box_welded"]}
+KANE_TREES.update(chain_case=lambda: chain_case(0.5).scene, free_body_world_loads=lambda: free_body_world_loads_case(0.5).scene,
+                  slider_on_hub=_slider_on_a_hub)
+
+
+@pytest.mark.parametrize("name", KANE_TREES)
+def test_kane_reads_every_sample_at_once_as_it_reads_them_one_by_one(name, monkeypatch):
+    """The read-back's stacked solve (``Kane.sampled``) gives every body's pose and velocity and every joint's
+    reaction as ``_solve`` does one state at a time (the integrators' path), at the states of a real run."""
+    scene = KANE_TREES[name]()
+    system = Kane(scene)
+    times = np.linspace(0.0, 0.5, 26)
+    Q, V, _ = INTEGRATORS["rk4"]().run(system, times, Settings("rk4", dt=1e-3))
+    one_by_one = system.sampled_one_by_one(times, Q, V)
+    monkeypatch.setattr(system, "sampled_one_by_one", None)  # the stacked path, not the fallback
+    bodies, forces = system.sampled(times, Q, V)
+    for body, expected in one_by_one[0].items():
+        for key in "pRvw":
+            scale = max(1.0, np.abs(expected[key]).max())
+            assert np.abs(bodies[body][key] - expected[key]).max() <= STACKED_AGREEMENT * scale, (body, key)
+    assert forces.keys() == one_by_one[1].keys()
+    for joint, expected in one_by_one[1].items():
+        assert np.abs(forces[joint] - expected).max() <= STACKED_AGREEMENT * max(1.0, np.abs(expected).max()), joint
