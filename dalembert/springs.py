@@ -27,7 +27,7 @@ import numpy as np
 
 from dalembert import spatial
 
-__all__ = ["MIN_LENGTH", "SpringState", "state", "wrenches", "potential_energy", "dissipated_power"]
+__all__ = ["MIN_LENGTH", "SpringState", "state", "wrenches", "wrenches_stacked", "potential_energy", "dissipated_power"]
 
 # A spring whose points are closer than this at the initial state is refused (``Scene.validate``): the
 # direction of its force is the line between them, undefined when they coincide; 1e-9 m is far below
@@ -86,6 +86,29 @@ def wrenches(springs, states):
             if body == "world":
                 continue
             F, tau = out.get(body, (np.zeros(3), np.zeros(3)))
+            out[body] = (F + force, tau + spatial.cross(lever, force))
+    return out
+
+
+def wrenches_stacked(springs, states):
+    """``wrenches`` at m states at once: each state dict's arrays with a leading sample axis (``R`` (m, 3, 3),
+    ``p``, ``v``, ``w`` (m, 3)); dict body name -> ``(F, tau)``, each (m, 3), world, the world's share left out.
+    The same terms as ``state`` and ``wrenches`` (a zero-length spring pulls nowhere, as there)."""
+    out = {}
+    for sp in springs:
+        A, B = states[sp.body_a], states[sp.body_b]
+        rho_a = A["R"] @ np.asarray(sp.point_a, dtype=float)
+        rho_b = B["R"] @ np.asarray(sp.point_b, dtype=float)
+        d = B["p"] + rho_b - A["p"] - rho_a
+        length = np.linalg.norm(d, axis=-1, keepdims=True)
+        e = np.divide(d, length, out=np.zeros_like(d), where=length > 0.0)
+        rate = np.sum(e * (B["v"] + spatial.cross(B["w"], rho_b) - A["v"] - spatial.cross(A["w"], rho_a)),
+                      axis=-1, keepdims=True)
+        force_b = -(sp.stiffness * (length - sp.rest_length) + sp.damping * rate) * e
+        for body, force, lever in ((sp.body_a, -force_b, rho_a), (sp.body_b, force_b, rho_b)):
+            if body == "world":
+                continue
+            F, tau = out.get(body, (0.0, 0.0))
             out[body] = (F + force, tau + spatial.cross(lever, force))
     return out
 

@@ -35,7 +35,7 @@ the same terms in the same order, each with a leading sample axis), where the in
 ``_solve`` one state at a time: a Python pass per sample cost about one evaluation of the
 right-hand side per sample, as much as a whole run where a run takes one or two evaluations per
 sample. The two agree to roundoff (``tests/test_reference.py``); formulations whose solve is their
-own (``loops.ClosedLoops``) and scenes with spring-dampers read back sample by sample.
+own (``loops.ClosedLoops``) read back sample by sample.
 """
 
 from __future__ import annotations
@@ -271,17 +271,20 @@ class Kane:
         return M, f, kin
 
     def _solve_stacked(self, Q, U):
-        """``_solve`` at m states at once (``Q`` (m, nq), ``U`` (m, nv); loads and gravity only, no springs):
-        ``udot`` (m, nv) and the stacked ``kinematics`` (``_kinematics_stacked``, each body's entry with
+        """``_solve`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): ``udot`` (m, nv) and the stacked ``kinematics`` (``_kinematics_stacked``, each body's entry with
         ``I_W`` (m, 3, 3) and ``F`` (m, 3) as ``mass_and_forces`` gives them)."""
         kin = self._kinematics_stacked(Q, U)
         M, f = np.zeros((len(Q), self.nv, self.nv)), np.zeros((len(Q), self.nv))
+        spring_wrenches = springs.wrenches_stacked(self.scene.springs, kin) if self.scene.springs else {}
         for jd in self.joints:
             k = kin[jd["joint"].child]
             R, Jv, Jw = k["R"], k["Jv"], k["Jw"]
             k["I_W"] = I_W = R @ jd["I_B"] @ R.swapaxes(-1, -2)
             M += jd["m"] * Jv.swapaxes(-1, -2) @ Jv + Jw.swapaxes(-1, -2) @ I_W @ Jw
             k["F"], T = jd["loads"].resultant(R)
+            if jd["joint"].child in spring_wrenches:
+                F_s, T_s = spring_wrenches[jd["joint"].child]
+                k["F"], T = k["F"] + F_s, T + T_s
             f += _mtv(Jv, k["F"] - jd["m"] * k["a_bias"])
             f += _mtv(Jw, T - _mv(I_W, k["alpha_bias"]) - spatial.cross(k["w"], _mv(I_W, k["w"])))
         udot = np.linalg.solve(M, f[..., None])[..., 0] if self.nv else np.zeros((len(Q), 0))
@@ -325,8 +328,8 @@ class Kane:
     def sampled(self, t, Q, V):
         """Each body's ``p``, ``R``, ``v``, ``w`` and the ``forces`` at the states ``(Q[i], V[i])`` at times
         ``t[i]`` (m,): two dicts, body name -> dict of (m, ...) arrays, force name -> (m, 3). At once
-        (``_solve_stacked``) where this formulation's solve is Kane's and the scene has no springs."""
-        if type(self)._solve is not Kane._solve or self.scene.springs:  # a solve of its own: not stacked here
+        (``_solve_stacked``) where this formulation's solve is Kane's."""
+        if type(self)._solve is not Kane._solve:  # a solve of its own (``ClosedLoops``): not stacked here
             return self.sampled_one_by_one(t, Q, V)
         udot, kin = self._solve_stacked(Q, V)
         unbalanced = {}  # as ``_reactions``

@@ -10,7 +10,7 @@ from dalembert.reference import simulate
 from dalembert.reference.integrators import INTEGRATORS
 from dalembert.reference.generalized import Kane
 from dalembert.reference.newton_euler import NewtonEuler
-from dalembert.scene import Body, Joint, Scene
+from dalembert.scene import Body, Joint, Scene, Spring
 from scenes import chain_case, free_body_world_loads_case
 
 ORDER_SLACK = 0.3  # measured orders within this of the theory (asymptotic regime, 2 step sizes)
@@ -142,7 +142,7 @@ def test_radau_meets_the_damped_oscillators_closed_form_and_the_decay_rate_is_it
     overdamped and stiff at c = 400 (-0.125 and -199.875 1/s: decay rate 199.875). The stretch is
     x0 (r2 e^(r1 t) - r1 e^(r2 t)) / (r2 - r1) (complex roots for the underdamped case)."""
     from dalembert.reference.solver import decay_rate
-    from dalembert.scene import Body, Joint, Scene, Spring
+    from dalembert.scene import Body, Joint, Scene, Spring, Spring
 
     m, k, rest, x0 = 2.0, 50.0, 1.0, 0.3
     scene = Scene("oscillator", [Body.box("b", m, (0.1, 0.2, 0.3))],
@@ -158,17 +158,21 @@ def test_radau_meets_the_damped_oscillators_closed_form_and_the_decay_rate_is_it
 
 def _slider_on_a_hub():
     """A hub turning about a tilted axis and a body sliding along the hub's (1, 1, 0) direction, off both
-    COMs, under gravity: the prismatic joint's slide, Coriolis and centripetal terms."""
+    COMs, under gravity, and a spring-damper from the world to the slider: the prismatic joint's slide, Coriolis
+    and centripetal terms, and a spring with a world end."""
     hub = Body("hub", 3.0, np.diag([0.2, 0.3, 0.4]))
     slider = Body.box("slider", 0.5, (0.04, 0.02, 0.06))
     return Scene("slider_on_hub", [hub, slider],
                  [Joint("revolute", "world", "hub", (0.4,), (2.0,), axis=(0, 1, 2), parent_point=(0, 0, 0.1)),
                   Joint("prismatic", "hub", "slider", (0.2,), (0.3,), axis=(1, 1, 0), parent_point=(0, 0.1, 0.25),
-                        child_point=(0.01, 0, 0))], (0.0, 0.0, -9.81))
+                        child_point=(0.01, 0, 0))], (0.0, 0.0, -9.81),
+                 springs=[Spring("world", "slider", stiffness=40.0, damping=0.5, rest_length=0.1, point_a=(0, 0, 0.3),
+                                 point_b=(0.01, 0.02, 0))])
 
 
 KANE_TREES = {name: (lambda name=name: make_case(name, t_final=0.5).scene) for name in
-              ["pivoted_rod", "pendulum", "chain", "heavy_top", "kovalevskaya_top", "particle_box_welded"]}
+              ["pivoted_rod", "pendulum", "chain", "heavy_top", "kovalevskaya_top", "particle_box_welded",
+               "flyball_governor"]}
 KANE_TREES.update(chain_case=lambda: chain_case(0.5).scene, free_body_world_loads=lambda: free_body_world_loads_case(0.5).scene,
                   slider_on_hub=_slider_on_a_hub)
 
@@ -180,7 +184,8 @@ def test_kane_reads_every_sample_at_once_as_it_reads_them_one_by_one(name, monke
     scene = KANE_TREES[name]()
     system = Kane(scene)
     times = np.linspace(0.0, 0.5, 26)
-    Q, V, _ = INTEGRATORS["rk4"]().run(system, times, Settings("rk4", dt=1e-3))
+    Q, V, _ = INTEGRATORS["dop853"]().run(system, times, Settings("dop853", rtol=1e-8, atol=1e-10))
+    assert np.isfinite(Q).all() and np.isfinite(V).all()
     one_by_one = system.sampled_one_by_one(times, Q, V)
     monkeypatch.setattr(system, "sampled_one_by_one", None)  # the stacked path, not the fallback
     bodies, forces = system.sampled(times, Q, V)
