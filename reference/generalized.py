@@ -331,12 +331,14 @@ class Kane:
         (``_solve_stacked``) where this formulation's solve is Kane's."""
         if type(self)._solve is not Kane._solve:  # a solve of its own (``ClosedLoops``): not stacked here
             return self.sampled_one_by_one(t, Q, V)
-        udot, kin = self._solve_stacked(Q, V)
-        unbalanced = {}  # as ``_reactions``
-        for jd in self.joints:
-            k = kin[jd["joint"].child]
-            unbalanced[jd["joint"].child] = jd["m"] * (_mv(k["Jv"], udot) + k["a_bias"]) - k["F"]
-        return {jd["joint"].child: kin[jd["joint"].child] for jd in self.joints}, self.joint_forces(unbalanced)
+        with np.errstate(over="ignore", invalid="ignore"):  # the last finite samples of a blow-up: inf, NaN are data
+            udot, kin = self._solve_stacked(Q, V)
+            unbalanced = {}  # as ``_reactions``
+            for jd in self.joints:
+                k = kin[jd["joint"].child]
+                unbalanced[jd["joint"].child] = jd["m"] * (_mv(k["Jv"], udot) + k["a_bias"]) - k["F"]
+            forces = self.joint_forces(unbalanced)
+        return {jd["joint"].child: kin[jd["joint"].child] for jd in self.joints}, forces
 
     def sampled_one_by_one(self, t, Q, V):
         """``sampled`` from one ``_solve`` per state (the integrators' path)."""
