@@ -34,7 +34,7 @@ import numpy as np
 
 from dalembert import spatial
 
-__all__ = ["ROWS", "RANK_RTOL", "Rows", "ClosureSummary", "rows", "residuals", "initial_rows", "world_state", "summary", "tree_jacobians"]
+__all__ = ["ROWS", "RANK_RTOL", "Rows", "ClosureSummary", "rows", "rows_stacked", "residuals", "initial_rows", "world_state", "summary", "tree_jacobians"]
 
 # Scalar conditions per loop kind.
 ROWS = {"ball": 3, "revolute": 5, "distance": 1}
@@ -211,6 +211,49 @@ def summary(scene):
     return ClosureSummary(len(scene.loops), jac.shape[0], rank, nv - rank,
                           float(max(np.abs(r.phi).max() for r in found)),
                           float(max(np.abs(r.velocity).max() for r in found)))
+
+
+def rows_stacked(loop, A, B):
+    """``rows`` at m states at once: ``A``, ``B`` with a leading sample axis (``R`` (m, 3, 3), ``p``, ``v``,
+    ``w`` (m, 3)); a ``Rows`` whose arrays have it too (``phi`` (m, k), ``G_a`` (m, k, 6), ...). The same
+    terms as ``rows``, summed by numpy's stacked operations (equal to roundoff)."""
+    rho_a = A["R"] @ np.asarray(loop.point_a, dtype=float)
+    rho_b = B["R"] @ np.asarray(loop.point_b, dtype=float)
+    x_a, x_b = A["p"] + rho_a, B["p"] + rho_b
+    xd_a = A["v"] + spatial.cross(A["w"], rho_a)
+    xd_b = B["v"] + spatial.cross(B["w"], rho_b)
+    c_a = spatial.cross(A["w"], spatial.cross(A["w"], rho_a))
+    c_b = spatial.cross(B["w"], spatial.cross(B["w"], rho_b))
+    eye = np.broadcast_to(np.eye(3), rho_a.shape[:-1] + (3, 3))
+    P_a = np.concatenate([eye, -spatial.skew(rho_a)], axis=-1)  # (m, 3, 6): ``_point_block``
+    P_b = np.concatenate([eye, -spatial.skew(rho_b)], axis=-1)
+    dot = lambda x, y: np.sum(x * y, axis=-1, keepdims=True)  # noqa: E731  (m, 1)
+    if loop.kind == "distance":
+        d, dd = x_a - x_b, xd_a - xd_b
+        r = np.linalg.norm(d, axis=-1, keepdims=True)
+        e = d / r
+        gamma = dot(e, c_a - c_b) + (dot(dd, dd) - dot(e, dd) ** 2) / r
+        return Rows(r - loop.length, e[..., None, :] @ P_a, -(e[..., None, :] @ P_b), gamma, dot(e, dd))
+    phi, G_a, G_b, gamma = [x_a - x_b], [P_a], [-P_b], [c_a - c_b]
+    vel = [xd_a - xd_b]
+    if loop.kind == "revolute":
+        R_WJa = A["R"] @ spatial.quat_to_matrix(loop.quat_a)
+        R_WJb = B["R"] @ spatial.quat_to_matrix(loop.quat_b)
+        axis = np.asarray(loop.axis, dtype=float) / np.linalg.norm(loop.axis)
+        s_a = R_WJa @ axis
+        dw = A["w"] - B["w"]
+        zero = np.zeros_like(s_a)
+        for u in _normals(tuple(loop.axis)):
+            s_b = R_WJb @ u
+            n = spatial.cross(s_a, s_b)
+            n_dot = spatial.cross(spatial.cross(A["w"], s_a), s_b) + spatial.cross(s_a, spatial.cross(B["w"], s_b))
+            phi.append(dot(s_b, s_a))
+            G_a.append(np.concatenate([zero, n], axis=-1)[..., None, :])
+            G_b.append(np.concatenate([zero, -n], axis=-1)[..., None, :])
+            gamma.append(dot(dw, n_dot))
+            vel.append(dot(dw, n))
+    return Rows(np.concatenate(phi, axis=-1), np.concatenate(G_a, axis=-2), np.concatenate(G_b, axis=-2),
+                np.concatenate(gamma, axis=-1), np.concatenate(vel, axis=-1))
 
 
 def residuals(loop, A, B):

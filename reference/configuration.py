@@ -46,15 +46,17 @@ def qdot(blocks, q, v):
 
 
 def retract(blocks, q, dv):
-    """``q`` moved along the tangent vector ``dv`` (nv,): ``q + dv`` or ``q exp(dv)``."""
+    """``q`` (..., nq) moved along the tangent vector ``dv`` (..., nv): ``q + dv`` or ``q exp(dv)`` (leading axes:
+    many states at once, each as alone)."""
     out = q.copy()
     for b in blocks:
         if b.kind == "vector":
-            out[b.q] += dv[b.v]
+            out[..., b.q] += dv[..., b.v]
         elif b.kind == "quat":
-            out[b.q] = spatial.quat_multiply(q[b.q], spatial.quat_exp(dv[b.v]))
+            out[..., b.q] = spatial.quat_multiply(q[..., b.q], spatial.quat_exp(dv[..., b.v]))
         else:
-            out[b.q] = (q[b.q].reshape(3, 3) @ spatial.so3_exp(dv[b.v])).ravel()
+            R = q[..., b.q].reshape(q.shape[:-1] + (3, 3)) @ spatial.so3_exp(dv[..., b.v])
+            out[..., b.q] = R.reshape(q.shape[:-1] + (9,))
     return out
 
 

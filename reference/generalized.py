@@ -34,8 +34,8 @@ The read-back (``trajectory``) solves the same system at every sample at once (`
 the same terms in the same order, each with a leading sample axis), where the integrators call
 ``_solve`` one state at a time: a Python pass per sample cost about one evaluation of the
 right-hand side per sample, as much as a whole run where a run takes one or two evaluations per
-sample. The two agree to roundoff (``tests/test_reference.py``); formulations whose solve is their
-own (``loops.ClosedLoops``) read back sample by sample.
+sample. The two agree to roundoff (``tests/test_reference.py``); a formulation whose solve is its
+own (``loops.ClosedLoops``) brings its stacked twin, or reads back sample by sample.
 """
 
 from __future__ import annotations
@@ -270,23 +270,38 @@ class Kane:
             f += k["Jw"].T @ (T - I_W @ k["alpha_bias"] - spatial.cross(k["w"], I_W @ k["w"]))
         return M, f, kin
 
-    def _solve_stacked(self, Q, U):
-        """``_solve`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): ``udot`` (m, nv) and the stacked ``kinematics`` (``_kinematics_stacked``, each body's entry with
-        ``I_W`` (m, 3, 3) and ``F`` (m, 3) as ``mass_and_forces`` gives them)."""
-        kin = self._kinematics_stacked(Q, U)
-        M, f = np.zeros((len(Q), self.nv, self.nv)), np.zeros((len(Q), self.nv))
-        spring_wrenches = springs.wrenches_stacked(self.scene.springs, kin) if self.scene.springs else {}
+    def _mass_stacked(self, kin):
+        """``mass_matrix`` at m states at once (``kin``: ``_kinematics_stacked``): ``M`` (m, nv, nv); each body's
+        entry gains ``I_W`` (m, 3, 3)."""
+        M = np.zeros((len(kin[WORLD]["p"]), self.nv, self.nv))
         for jd in self.joints:
             k = kin[jd["joint"].child]
             R, Jv, Jw = k["R"], k["Jv"], k["Jw"]
             k["I_W"] = I_W = R @ jd["I_B"] @ R.swapaxes(-1, -2)
             M += jd["m"] * Jv.swapaxes(-1, -2) @ Jv + Jw.swapaxes(-1, -2) @ I_W @ Jw
-            k["F"], T = jd["loads"].resultant(R)
+        return M
+
+    def _mass_and_forces_stacked(self, Q, U):
+        """``mass_and_forces`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): ``M`` (m, nv, nv), ``f`` (m, nv)
+        and the stacked kinematics, each body's entry with ``I_W`` (m, 3, 3) and ``F`` (m, 3)."""
+        kin = self._kinematics_stacked(Q, U)
+        M, f = self._mass_stacked(kin), np.zeros((len(Q), self.nv))
+        spring_wrenches = springs.wrenches_stacked(self.scene.springs, kin) if self.scene.springs else {}
+        for jd in self.joints:
+            k = kin[jd["joint"].child]
+            I_W = k["I_W"]
+            k["F"], T = jd["loads"].resultant(k["R"])
             if jd["joint"].child in spring_wrenches:
                 F_s, T_s = spring_wrenches[jd["joint"].child]
                 k["F"], T = k["F"] + F_s, T + T_s
-            f += _mtv(Jv, k["F"] - jd["m"] * k["a_bias"])
-            f += _mtv(Jw, T - _mv(I_W, k["alpha_bias"]) - spatial.cross(k["w"], _mv(I_W, k["w"])))
+            f += _mtv(k["Jv"], k["F"] - jd["m"] * k["a_bias"])
+            f += _mtv(k["Jw"], T - _mv(I_W, k["alpha_bias"]) - spatial.cross(k["w"], _mv(I_W, k["w"])))
+        return M, f, kin
+
+    def _solve_stacked(self, Q, U):
+        """``_solve`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): ``udot`` (m, nv) and the stacked
+        kinematics (``_mass_and_forces_stacked``)."""
+        M, f, kin = self._mass_and_forces_stacked(Q, U)
         udot = np.linalg.solve(M, f[..., None])[..., 0] if self.nv else np.zeros((len(Q), 0))
         return udot, kin
 
@@ -325,19 +340,24 @@ class Kane:
         (``_reactions``; N, world, dict name -> (3,))."""
         return self._reactions(udot, kin)
 
+    def _forces_stacked(self, udot, kin):
+        """``forces`` at m states at once, from ``_solve_stacked``: force name -> (m, 3)."""
+        unbalanced = {}  # as ``_reactions``
+        for jd in self.joints:
+            k = kin[jd["joint"].child]
+            unbalanced[jd["joint"].child] = jd["m"] * (_mv(k["Jv"], udot) + k["a_bias"]) - k["F"]
+        return self.joint_forces(unbalanced)
+
     def sampled(self, t, Q, V):
         """Each body's ``p``, ``R``, ``v``, ``w`` and the ``forces`` at the states ``(Q[i], V[i])`` at times
         ``t[i]`` (m,): two dicts, body name -> dict of (m, ...) arrays, force name -> (m, 3). At once
-        (``_solve_stacked``) where this formulation's solve is Kane's."""
-        if type(self)._solve is not Kane._solve:  # a solve of its own (``ClosedLoops``): not stacked here
+        (``_solve_stacked``) where the formulation's stacked solve is the twin of its ``_solve``."""
+        owner = lambda name: next(c for c in type(self).__mro__ if name in vars(c))  # noqa: E731
+        if owner("_solve") is not owner("_solve_stacked"):  # a solve of its own without its stacked twin
             return self.sampled_one_by_one(t, Q, V)
         with np.errstate(over="ignore", invalid="ignore"):  # the last finite samples of a blow-up: inf, NaN are data
             udot, kin = self._solve_stacked(Q, V)
-            unbalanced = {}  # as ``_reactions``
-            for jd in self.joints:
-                k = kin[jd["joint"].child]
-                unbalanced[jd["joint"].child] = jd["m"] * (_mv(k["Jv"], udot) + k["a_bias"]) - k["F"]
-            forces = self.joint_forces(unbalanced)
+            forces = self._forces_stacked(udot, kin)
         return {jd["joint"].child: kin[jd["joint"].child] for jd in self.joints}, forces
 
     def sampled_one_by_one(self, t, Q, V):

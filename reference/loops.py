@@ -43,7 +43,8 @@ passes the singular position on the branch it came on (``tests/test_loops.py``).
 Reactions: a loop's multipliers act on body a as the wrench ``G_a^T lambda`` and on body b as
 ``G_b^T lambda`` (``closure.Rows``: force and moment about the COM, world); the force ON body b
 is the trajectory's ``reaction_force:<loop name>``, and the tree joints' reactions include the
-loops' forces on their bodies.
+loops' forces on their bodies. The read-back solves every sample at once (``_solve_stacked``, as
+``generalized.Kane``'s): each state projected by its own iterations, its own rank cut.
 
 Self-stresses. Redundant rows (a planar loop's out-of-plane ones, Bricard's one) leave multipliers
 ``lambda0`` with ``J^T lambda0 = 0``: loads the joints carry without moving anything, so a rigid model
@@ -59,7 +60,7 @@ import numpy as np
 
 from dalembert import closure
 from dalembert.reference import configuration as cfg
-from dalembert.reference.generalized import Kane
+from dalembert.reference.generalized import Kane, _mtv, _mv
 from dalembert.scene import WORLD
 
 __all__ = ["ClosedLoops", "PROJECTION_TOL", "PROJECTION_ITERATIONS", "reaction_modes"]
@@ -133,6 +134,82 @@ class ClosedLoops(Kane):
             i += m
         kin[("loops",)] = forces  # (a tuple key: never a body name)
         return udot, kin
+
+    def _solve_stacked(self, Q, U):
+        """``_solve`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): each state projected, then the same
+        index-1 system, its rank cut per state (``_range_stacked``); ``udot`` (m, nv) and the stacked kinematics
+        with the loop forces on their bodies and, under ``("loops",)``, each loop's on its body b (m, 3)."""
+        Q, U = self._project_stacked(Q, U)
+        M, f, kin = self._mass_and_forces_stacked(Q, U)
+        _, J, b, found = self._constraints_stacked(kin)
+        Li = _inverse_cholesky(M)
+        LiT = Li.swapaxes(-1, -2)
+        g = _mv(Li, f)
+        Ur, inv_S, Vr = self._range_stacked(J @ LiT)
+        c = _mtv(Vr, g) + _mtv(Ur, b) * inv_S
+        udot = _mv(LiT, g - _mv(Vr, c))
+        lam = -_mv(Ur, c * inv_S)
+        forces, i = {}, 0
+        for loop, r in zip(self.loops, found):
+            m = r.phi.shape[-1]
+            wa, wb = _mtv(r.G_a, lam[:, i:i + m]), _mtv(r.G_b, lam[:, i:i + m])
+            for body, wrench in ((loop.body_a, wa), (loop.body_b, wb)):
+                if body != WORLD:
+                    kin[body]["F"] = kin[body]["F"] + wrench[:, :3]
+            forces[loop.name] = wb[:, :3]
+            i += m
+        kin[("loops",)] = forces
+        return udot, kin
+
+    def _constraints_stacked(self, kin):
+        """``constraints`` at m states at once (``kin``: stacked kinematics): ``phi`` (m, k), ``J`` (m, k, nv),
+        ``b`` (m, k) and each loop's stacked ``closure.Rows``."""
+        phi, J, b, found = [], [], [], []
+        for loop in self.loops:
+            A, B = kin[loop.body_a], kin[loop.body_b]
+            r = closure.rows_stacked(loop, A, B)
+            J.append(r.G_a[..., :3] @ A["Jv"] + r.G_a[..., 3:] @ A["Jw"] + r.G_b[..., :3] @ B["Jv"]
+                     + r.G_b[..., 3:] @ B["Jw"])
+            b.append(_mv(r.G_a, np.concatenate([A["a_bias"], A["alpha_bias"]], axis=-1))
+                     + _mv(r.G_b, np.concatenate([B["a_bias"], B["alpha_bias"]], axis=-1)) + r.gamma)
+            phi.append(r.phi)
+            found.append(r)
+        return np.concatenate(phi, axis=-1), np.concatenate(J, axis=-2), np.concatenate(b, axis=-1), found
+
+    @staticmethod
+    def _range_stacked(Jt):
+        """``_range`` of m matrices ``Jt`` (m, k, nv) at once: ``U`` (m, k, r), ``1/S`` (m, r) and ``V`` (m, nv, r),
+        r = min(k, nv), with each matrix's cut singular values (``closure.RANK_RTOL``) zeroed in all three instead
+        of dropped: the same sums, less terms that are exactly zero."""
+        U, S, Vt = np.linalg.svd(Jt, full_matrices=False)
+        keep = (S > closure.RANK_RTOL * S[..., :1]) & (S[..., :1] > 0.0)
+        inv_S = np.divide(1.0, S, out=np.zeros_like(S), where=keep)
+        return U * keep[..., None, :], inv_S, Vt.swapaxes(-1, -2) * keep[..., None, :]
+
+    def _project_stacked(self, Q, U):
+        """``project`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): each state's Gauss-Newton iterations
+        stop where its own stop (``PROJECTION_TOL``, or no halving), as ``project``'s."""
+        zero = np.zeros_like(U)
+        Li = _inverse_cholesky(self._mass_stacked(self._kinematics_stacked(Q, zero)))
+        LiT = Li.swapaxes(-1, -2)
+        phi, J, _, _ = self._constraints_stacked(self._kinematics_stacked(Q, zero))
+        Q, last, going = Q.copy(), np.full(len(Q), np.inf), np.ones(len(Q), dtype=bool)
+        for _ in range(PROJECTION_ITERATIONS):
+            worst = np.max(np.abs(phi), axis=-1)
+            going &= (worst > PROJECTION_TOL) & (worst < 0.5 * last)
+            if not going.any():
+                break
+            i = np.flatnonzero(going)
+            last[i] = worst[i]
+            Ur, inv_S, Vr = self._range_stacked(J[i] @ LiT[i])
+            Q[i] = cfg.retract(self.blocks, Q[i], _mv(LiT[i], -_mv(Vr, _mtv(Ur, phi[i]) * inv_S)))
+            phi[i], J[i], _, _ = self._constraints_stacked(self._kinematics_stacked(Q[i], zero[i]))
+        Ur, inv_S, Vr = self._range_stacked(J @ LiT)
+        w = np.linalg.solve(LiT, U[..., None])[..., 0]  # L^T v
+        return Q, _mv(LiT, w - _mv(Vr, _mtv(Vr, w)))
+
+    def _forces_stacked(self, udot, kin):
+        return {**super()._forces_stacked(udot, kin), **kin[("loops",)]}
 
     def self_stresses(self, q):
         """The self-stresses at configuration ``q`` (nq,) (module docstring): one dict per independent
