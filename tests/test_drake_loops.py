@@ -40,7 +40,7 @@ GAP_PER_DT2 = 4.0
 # parallelogram too): measured 4.8e-4 / 6.4e-6 rad (ball) and 2.8e-4 / 2.8e-6 (distance) at
 # dt = 1e-2 / 1e-3, the largest joint-angle error; 3x for the machine.
 REFERENCE_ANGLE_TOL = {1e-2: 1.5e-3, 1e-3: 2e-5}
-# Loop reactions (``loops.loop_forces``: the constraints' generalized force in Drake's step, resolved on the
+# Loop reactions (``loops.LoopForces``: the constraints' generalized force in Drake's step, resolved on the
 # loop's rows), relative to the largest true reaction. They follow the step at first order, but for the
 # samples near the flat singular position (t = 0.2376 s), where the loop's Jacobian nearly loses the
 # bars' direction and SAP's near-rigid force in it is not the rigid one (measured 0.25 at dt = 1e-3 on

@@ -62,7 +62,7 @@ RIGID_ACCELERATION_RTOL = 1e-12
 # beta^2 / (4 pi^2) ~ 2.5e-4 of its Delassus diagonal (loops.py), so a fraction of the spring's pull, which the
 # loops hold statically, leaks into the motion: Theta'' is 1.6 % short (measured -10496.9 against -10666.8 rad/s^2,
 # 1.98e-2 of the largest, the same at every dt from 1e-3 to 1e-6; 9e-6 without the spring, which leaves nothing to
-# hold). The loops' reactions at t = 0 from the step (loops.loop_forces) are 2.6e-3 of the largest off (measured).
+# hold). The loops' reactions at t = 0 from the step (loops.LoopForces) are 2.6e-3 of the largest off (measured).
 SAP_ACCELERATION_RTOL = 3e-2
 SAP_MULTIPLIER_RTOL = 1e-2
 # The squeezer in discrete mode at dt = 1e-5 (3000 steps): the largest of the seven angles at t = 0.03 s from the

@@ -12,7 +12,7 @@ fixed-step mode (``dt``) and, where Drake estimates its error, error-controlled
 Loop closures (``loops``): SAP constraints of the discrete plant, so only the integrator
 ``discrete`` runs a scene with loops; every continuous integrator declares them unsupported
 (``loops.CONTINUOUS_REASON``). Their reactions are recovered from the step's generalized
-constraint force (Drake reports no constraint forces: ``loops.loop_forces``).
+constraint force (Drake reports no constraint forces: ``loops.LoopForces``).
 
 Spring-dampers (``springs``): ``LinearSpringDamper`` force elements, in both modes; a spring of rest
 length 0 is unsupported (Drake's element needs a positive free length: ``springs.ZERO_REST_REASON``).
@@ -164,7 +164,7 @@ class DrakeAdapter(Adapter):
                                   if any("world" in (lc.loop.body_a, lc.loop.body_b) for lc in model.loops) else ""),
             "loop_reactions": ("reaction_force:<loop> from the constraints' generalized force in the step "
                                "(M a + C v - tau_g - tau_loads; Drake reports no constraint forces) resolved on the "
-                               "loop's rows, minimum-norm (loops.loop_forces)"),
+                               "loop's rows, minimum-norm (loops.LoopForces)"),
         }
 
 

@@ -46,7 +46,7 @@ Drake).
 Reactions: Drake reports no constraint forces: its ``reaction_forces`` port is the tree joints'
 (whose values do include the constraints' push), its generalized contact forces and contact
 results hold contacts only (zero on the four-bar, measured), and SAP's impulses stay inside the
-plant. ``reaction_force:<loop>`` is recovered from the step instead (``loop_forces``): the
+plant. ``reaction_force:<loop>`` is recovered from the step instead (``LoopForces``): the
 generalized force the constraints applied, from Drake's own acceleration, mass matrix, bias and
 gravity terms, resolved on the loop's rows. First order in dt like the motion (4.8e-4 of the
 largest reaction at dt = 1e-3 on the four-bar), but near the flat singular position, where SAP's
@@ -71,7 +71,7 @@ import numpy as np
 from dalembert import spatial
 from dalembert.scene import WORLD
 
-__all__ = ["LOOP_KINDS", "CONTINUOUS_REASON", "ANCHOR", "LoopConstraints", "add_loops", "lever", "loop_forces"]
+__all__ = ["LOOP_KINDS", "CONTINUOUS_REASON", "ANCHOR", "LoopConstraints", "add_loops", "lever", "LoopForces"]
 
 # The loop kinds built here: all of them, in discrete mode.
 LOOP_KINDS = ("ball", "revolute", "distance")
@@ -89,7 +89,8 @@ class LoopConstraints:
     ``lever`` (m, the revolute's second point along the axis; 0 otherwise), the Drake bodies of its sides
     ``body_a``, ``body_b`` (``ANCHOR`` for the world) and the constrained points ``points_a``,
     ``points_b`` ((3, k) m, each side's body frame, one column per ball constraint: the read-back's rows
-    are at the points the constraints hold)."""
+    are at the points the constraints hold); ``force_map`` (3, 3 k): the balls' multipliers to the force ON
+    B (N, world; a distance's is the state's unit vector, ``_rows``)."""
 
     loop: object
     ids: tuple
@@ -98,6 +99,7 @@ class LoopConstraints:
     body_b: object
     points_a: np.ndarray
     points_b: np.ndarray
+    force_map: np.ndarray
 
 
 def lever(loop):
@@ -141,71 +143,97 @@ def add_loops(plant, scene, bodies):
             pairs.append((p_AP + arm * a_A, p_BQ + arm * a_B))
             ids = tuple(plant.AddBallConstraint(A, p, B, q) for p, q in pairs)
         points_a, points_b = (np.stack(side, axis=1) for side in zip(*pairs))
-        out.append(LoopConstraints(loop, ids, arm, A, B, points_a, points_b))
+        out.append(LoopConstraints(loop, ids, arm, A, B, points_a, points_b, np.tile(np.eye(3), len(pairs))))
     return out
 
 
-def _point_jacobian(plant, context, body, p_B):
+def _point_jacobian(plant, context, body, p_B, wrt):
     """``J (3 k, nv)``: the world velocities of the points ``p_B`` ((3, k) m, body frame) of ``body`` per
-    generalized velocity, three rows per point (one Drake call for all of them)."""
-    from pydrake.multibody.tree import JacobianWrtVariable
-
-    return plant.CalcJacobianTranslationalVelocity(context, JacobianWrtVariable.kV, body.body_frame(), p_B,
-                                                   plant.world_frame(), plant.world_frame())
+    generalized velocity (``wrt``: ``JacobianWrtVariable.kV``), three rows per point (one Drake call for all)."""
+    return plant.CalcJacobianTranslationalVelocity(context, wrt, body.body_frame(), p_B, plant.world_frame(),
+                                                   plant.world_frame())
 
 
 def _rows(model, context):
     """Per loop: ``(J (k, nv), D (3, k))``: the constraint rows in the generalized velocities (the velocity of
     point Q on B relative to P on A, per ball; along the unit vector P -> Q for a distance) and the map from
     the rows' multipliers to the force ON B (N, world)."""
-    plant = model.plant
+    from pydrake.multibody.tree import JacobianWrtVariable
+
+    plant, wrt = model.plant, JacobianWrtVariable.kV
     out = []
     for lc in model.loops:
         A, B = lc.body_a, lc.body_b
-        J = _point_jacobian(plant, context, B, lc.points_b) - _point_jacobian(plant, context, A, lc.points_a)
+        J = _point_jacobian(plant, context, B, lc.points_b, wrt) - _point_jacobian(plant, context, A, lc.points_a, wrt)
         if lc.loop.kind == "distance":
             d = (plant.CalcPointsPositions(context, B.body_frame(), lc.points_b, plant.world_frame()).ravel()
                  - plant.CalcPointsPositions(context, A.body_frame(), lc.points_a, plant.world_frame()).ravel())
             u = d / np.linalg.norm(d)
             out.append((u @ J, u[:, None]))
         else:
-            out.append((J, np.tile(np.eye(3), lc.points_a.shape[1])))
+            out.append((J, lc.force_map))
     return out
 
 
-def loop_forces(model, context, plant_context, rcond):
-    """The force of each loop ON its body b (N, world, dict loop name -> (3,)) in the discrete step from the
-    state in ``plant_context`` (``context``: the diagram's, for the loads).
+class LoopForces:
+    """The force of each loop ON its body b (N, world) over a run's samples: ``add`` reads the engine's terms at
+    one sample's state, ``forces`` resolves them all at once.
 
     SAP's step solves ``M (v' - v) / dt = tau(q, v) - C(q, v) v + J^T gamma / dt`` (no joint damping, no
     contact: the ``kLagged`` approximation changes contact only; ``tau`` holds gravity, the loads and the
     spring-dampers, all explicit at ``(q, v)``: ``springs``), so the constraints' generalized force is
     ``tau_c = M a + C v - tau_g - tau_springs - tau_loads`` with ``a = (v' - v) / dt`` the plant's generalized
     acceleration (its output port, evaluated from this state: ``SetUseSampledOutputPorts(False)``). The
-    loop forces ``f`` solve ``J^T f = tau_c`` in the least-squares, minimum-norm sense (singular values below
-    ``rcond`` of the largest cut, as the reference cuts its redundant rows: ``closure.RANK_RTOL``), so a
+    loop forces ``f`` solve ``J^T f = tau_c`` in the least-squares, minimum-norm sense (singular values at or
+    below ``rcond`` of the largest cut, as the reference cuts its redundant rows: ``closure.RANK_RTOL``), so a
     redundant row (the revolute's own, a planar loop's out-of-plane ones) carries no force, and a revolute's
     two points add up to its total force.
-    """
-    from pydrake.multibody.tree import MultibodyForces
 
-    plant = model.plant
-    a = plant.get_generalized_acceleration_output_port().Eval(plant_context)
-    forces = MultibodyForces(plant)
-    plant.CalcForceElementsContribution(plant_context, forces)  # gravity and the spring-dampers, at (q, v)
-    if model.loads is not None:
-        for F in model.loads.get_output_port(0).Eval(model.loads.GetMyContextFromRoot(context)):
-            body = plant.get_body(F.body_index)
-            R_WB = plant.EvalBodyPoseInWorld(plant_context, body).rotation().matrix()
-            body.AddInForce(plant_context, R_WB @ F.p_BoBq_B, F.F_Bq_W, plant.world_frame(), forces)
-    tau = plant.CalcMassMatrix(plant_context) @ a + plant.CalcBiasTerm(plant_context) \
-        - plant.CalcGeneralizedForces(plant_context, forces)
-    rows = _rows(model, plant_context)
-    J = np.vstack([np.atleast_2d(Jl) for Jl, _ in rows])
-    f = np.linalg.lstsq(J.T, tau, rcond=rcond)[0]
-    out, k = {}, 0
-    for lc, (Jl, D) in zip(model.loops, rows):
-        n = D.shape[1]
-        out[lc.loop.name] = D @ f[k:k + n]
-        k += n
-    return out
+    Parameters
+    ----------
+    model : DrakeModel (with ``loops``)
+    rcond : float — the relative singular-value cut
+    """
+
+    def __init__(self, model, rcond):
+        from pydrake.multibody.tree import MultibodyForces
+
+        self.model, self.rcond = model, rcond
+        self._applied = MultibodyForces(model.plant)  # reused: zeroed at every sample
+        self._J, self._tau, self._D = [], [], []
+
+    def add(self, context, plant_context):
+        """Read the step's terms at the state in ``plant_context`` (``context``: the diagram's, for the loads)."""
+        model, plant, forces = self.model, self.model.plant, self._applied
+        a = plant.get_generalized_acceleration_output_port().Eval(plant_context)
+        forces.SetZero()
+        plant.CalcForceElementsContribution(plant_context, forces)  # gravity and the spring-dampers, at (q, v)
+        if model.loads is not None:
+            for F in model.loads.get_output_port(0).Eval(model.loads.GetMyContextFromRoot(context)):
+                body = plant.get_body(F.body_index)
+                R_WB = plant.EvalBodyPoseInWorld(plant_context, body).rotation().matrix()
+                body.AddInForce(plant_context, R_WB @ F.p_BoBq_B, F.F_Bq_W, plant.world_frame(), forces)
+        self._tau.append(plant.CalcMassMatrix(plant_context) @ a + plant.CalcBiasTerm(plant_context)
+                         - plant.CalcGeneralizedForces(plant_context, forces))
+        rows = _rows(model, plant_context)
+        self._J.append(np.vstack([np.atleast_2d(Jl) for Jl, _ in rows]))
+        self._D.append([D for _, D in rows])
+
+    def forces(self):
+        """Per loop, its force ON body b at every sample added (dict loop name -> (m, 3)): one stacked SVD of
+        the samples' ``J^T`` for the minimum-norm least-squares solves (``np.linalg.lstsq``'s, each sample's
+        own cut)."""
+        if not self._tau:
+            return {lc.loop.name: np.zeros((0, 3)) for lc in self.model.loops}
+        Jt, tau = np.stack(self._J).swapaxes(-1, -2), np.stack(self._tau)
+        U, S, Vt = np.linalg.svd(Jt, full_matrices=False)
+        keep = S > self.rcond * S[:, :1]
+        inv_S = np.divide(1.0, S, out=np.zeros_like(S), where=keep)
+        f = np.einsum("mji,mj->mi", Vt, inv_S * np.einsum("mji,mj->mi", U, tau))  # V S^+ U^T tau
+        out, k = {}, 0
+        for i, lc in enumerate(self.model.loops):
+            n = self._D[0][i].shape[1]
+            D = np.stack([Ds[i] for Ds in self._D])
+            out[lc.loop.name] = np.einsum("mij,mj->mi", D, f[:, k:k + n])
+            k += n
+        return out

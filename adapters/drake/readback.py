@@ -9,7 +9,7 @@ Joint reactions come from the plant's ``reaction_forces`` output port: per
 joint, ``F_CJc_Jc``, the force the joint exerts on the child at the origin of
 the child joint frame Jc, in Jc axes; turned into world axes with ``R_WJc``.
 Loop reactions (discrete mode) from the constraints' generalized force in the step
-(``loops.loop_forces``), read in the same pass and context as the joints': the
+(``loops.LoopForces``), read in the same pass and context as the joints': the
 reaction port and the acceleration port both come from the plant's one cached
 discrete step at the sample's state, so each sample costs one step solve, not two.
 """
@@ -73,9 +73,9 @@ def _rpy_to_matrix(rpy):
 
 def _kinematics(p, X, bodies, jointed, reactions):
     """Poses and velocities of the bodies on revolute, prismatic, ball and weld joints, the joints' reactions and
-    the loops' (``loops.loop_forces``), from the plant sample by sample (the loads system is evaluated for the
+    the loops' (``loops.LoopForces``), from the plant sample by sample (the loads system is evaluated for the
     reactions, as in a step)."""
-    from dalembert.adapters.drake.loops import loop_forces
+    from dalembert.adapters.drake.loops import LoopForces
     from dalembert.closure import RANK_RTOL
 
     model = p["model"]
@@ -84,25 +84,31 @@ def _kinematics(p, X, bodies, jointed, reactions):
     plant_context = plant.GetMyMutableContextFromRoot(context)
     port = plant.get_reaction_forces_output_port()
     names = [j.child for j in jointed]
-    drake_bodies = [model.bodies[c] for c in names]
-    finite = np.all(np.isfinite(X), axis=1)
-    for k in np.flatnonzero(finite):
+    drake_bodies = [model.bodies[c] for c in names]  # each joint's child body
+    # per joint: its index in the port's list and R_CJc, the child joint frame in the child's body frame
+    ports = [int(model.joints[c].index()) for c in names]
+    R_CJc = [model.joints[c].frame_on_child().GetFixedPoseInBodyFrame().rotation().matrix() for c in names]
+    finite = np.flatnonzero(np.all(np.isfinite(X), axis=1))
+    loops = LoopForces(model, RANK_RTOL) if model.loops else None
+    for k in finite:
         context.SetTime(float(p["times"][k]))
         plant.SetPositionsAndVelocities(plant_context, X[k])
+        R_WB = []
         for name, body in zip(names, drake_bodies):
             X_WB = plant.EvalBodyPoseInWorld(plant_context, body)
             V_WB = plant.EvalBodySpatialVelocityInWorld(plant_context, body)
             b = bodies[name]
-            b["p"][k], b["q"][k] = X_WB.translation(), X_WB.rotation().ToQuaternion().wxyz()
+            R = X_WB.rotation()
+            b["p"][k], b["q"][k] = X_WB.translation(), R.ToQuaternion().wxyz()
             b["w"][k], b["v"][k] = V_WB.rotational(), V_WB.translational()
+            R_WB.append(R.matrix())
         F = port.Eval(plant_context)
-        for name in names:
-            joint = model.joints[name]
-            R_WJc = plant.EvalBodyPoseInWorld(plant_context, joint.child_body()).rotation().matrix() @ \
-                joint.frame_on_child().GetFixedPoseInBodyFrame().rotation().matrix()
-            reactions[name][k] = R_WJc @ F[int(joint.index())].translational()
-        if model.loops:  # the same context: the step solved for F above is the one read here
-            for name, f in loop_forces(model, context, plant_context, RANK_RTOL).items():
-                reactions[name][k] = f
+        for name, i, R, R_CJ in zip(names, ports, R_WB, R_CJc):
+            reactions[name][k] = (R @ R_CJ) @ F[i].translational()  # R_WJc f_Jc
+        if loops:  # the same context: the step solved for F above is the one read here
+            loops.add(context, plant_context)
+    if loops:
+        for name, f in loops.forces().items():
+            reactions[name][finite] = f
     for name in names:  # w >= 0, as spatial.matrix_to_quat gives every other engine's rotation
         bodies[name]["q"] = spatial.quat_normalize(bodies[name]["q"])
