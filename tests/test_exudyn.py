@@ -165,8 +165,10 @@ def test_stored_sampling_lands_on_every_sample_and_falls_back_when_late(monkeypa
 
 def test_a_run_whose_stored_sampling_missed_samples_from_python_at_once_when_repeated(monkeypatch):
     """The heavy top on Euler-parameter nodes at dt = 1e-2: Newton fails and Exudyn shrinks its steps
-    (2069 steps for 50 over 0.5 s), so its sensor schedule misses sample 18 (0.18 s) and the first run solves twice; the
-    runs after it (the harness's timed repeats) solve once, from Python, with the same samples."""
+    (2069 steps for 50 over 0.5 s, down to dt / 64). The sensor schedule's lead (``SCHEDULE_LEAD``) is shorter
+    than those steps, so Exudyn's stored sensors land on every sample in one solve. With a lead of 0.25 steps
+    they write one shrunk step early and miss sample 18 (0.18 s): the first run then solves twice, and the runs
+    after it (the harness's timed repeats) once, from Python. Every way reads the same samples."""
     import dalembert.adapters.exudyn.sampling as module
 
     solves = []
@@ -178,16 +180,20 @@ def test_a_run_whose_stored_sampling_missed_samples_from_python_at_once_when_rep
 
     monkeypatch.setattr(module, "solve", counted)
     case = make_case("heavy_top", t_final=0.5)
-    prepared = ADAPTER.prepare(case.scene, case.times, Settings("generalized-alpha", dt=1e-2,
-                                                                options={"joints": "redundant", "node": "ep"}))
+    settings = Settings("generalized-alpha", dt=1e-2, options={"joints": "redundant", "node": "ep"})
+    stored = ADAPTER.run(ADAPTER.prepare(case.scene, case.times, settings))
+    assert solves == [True] and stored.info["sampling"] == "Exudyn's stored sensors"
+    monkeypatch.setattr(module, "SCHEDULE_LEAD", 0.25)
+    prepared = ADAPTER.prepare(case.scene, case.times, settings)
     first = ADAPTER.run(prepared)
-    assert solves == [True, False]
+    assert solves == [True, True, False]
     again = ADAPTER.run(prepared)
-    assert solves == [True, False, False]
+    assert solves == [True, True, False, False]
     assert first.info["sampling"] == again.info["sampling"]
     assert "no row at sample 18" in again.info["sampling"]
-    assert first.n_steps == again.n_steps > 10 * 50  # the shrunk steps, both times
-    np.testing.assert_array_equal(first.trajectory.bodies["top"].rotation, again.trajectory.bodies["top"].rotation)
+    assert stored.n_steps == first.n_steps == again.n_steps > 10 * 50  # the shrunk steps, every time
+    for run in (first, again):
+        np.testing.assert_array_equal(stored.trajectory.bodies["top"].rotation, run.trajectory.bodies["top"].rotation)
 
 
 @pytest.mark.parametrize("integrator", ["dopri5", "ode23"])
