@@ -90,6 +90,14 @@ def _normals(axis):
     return F[:, 0].copy(), F[:, 1].copy()
 
 
+def _hinge(loop, A, B):
+    """A revolute loop's ``R_WJb`` (3, 3), its axis as body a carries it ``s_a`` (3,) (world) and the relative
+    angular velocity ``w_a - w_b`` (3,) (rad/s, world); one state or many (leading axes: ``rows_stacked``)."""
+    axis = np.asarray(loop.axis, dtype=float) / np.linalg.norm(loop.axis)
+    s_a = A["R"] @ spatial.quat_to_matrix(loop.quat_a) @ axis
+    return B["R"] @ spatial.quat_to_matrix(loop.quat_b), s_a, A["w"] - B["w"]
+
+
 def rows(loop, A, B):
     """The constraint rows of ``loop`` at body states ``A`` (of ``loop.body_a``) and ``B`` (of ``loop.body_b``).
 
@@ -121,11 +129,7 @@ def rows(loop, A, B):
     phi, G_a, G_b, gamma = [x_a - x_b], [P_a], [-P_b], [c_a - c_b]
     vel = [xd_a - xd_b]
     if loop.kind == "revolute":
-        R_WJa = A["R"] @ spatial.quat_to_matrix(loop.quat_a)
-        R_WJb = B["R"] @ spatial.quat_to_matrix(loop.quat_b)
-        axis = np.asarray(loop.axis, dtype=float) / np.linalg.norm(loop.axis)
-        s_a = R_WJa @ axis
-        dw = A["w"] - B["w"]
+        R_WJb, s_a, dw = _hinge(loop, A, B)
         for u in _normals(tuple(loop.axis)):
             s_b = R_WJb @ u
             n = spatial.cross(s_a, s_b)
@@ -237,11 +241,7 @@ def rows_stacked(loop, A, B):
     phi, G_a, G_b, gamma = [x_a - x_b], [P_a], [-P_b], [c_a - c_b]
     vel = [xd_a - xd_b]
     if loop.kind == "revolute":
-        R_WJa = A["R"] @ spatial.quat_to_matrix(loop.quat_a)
-        R_WJb = B["R"] @ spatial.quat_to_matrix(loop.quat_b)
-        axis = np.asarray(loop.axis, dtype=float) / np.linalg.norm(loop.axis)
-        s_a = R_WJa @ axis
-        dw = A["w"] - B["w"]
+        R_WJb, s_a, dw = _hinge(loop, A, B)
         zero = np.zeros_like(s_a)
         for u in _normals(tuple(loop.axis)):
             s_b = R_WJb @ u

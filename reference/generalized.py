@@ -61,6 +61,18 @@ def _mtv(A, x):
     return (x[..., None, :] @ A)[..., 0, :]
 
 
+def _child(P, R, r_PJ, r_JC, w, alpha_bias, Jw, Jv_slide, v_slide, a_slide):
+    """A child's ``kinematics`` entry from its parent's ``P``: its COM reached through the joint (``r_PJ``: parent
+    COM -> joint point, slid; ``r_JC``: joint point -> child COM), with its rotation ``R``, angular velocity
+    ``w``, angular bias ``alpha_bias`` and angular Jacobian ``Jw`` and the slide's terms. One state or many (a
+    leading sample axis on every array: ``Kane._kinematics_stacked``): the same operations either way."""
+    Jv = P["Jv"] - spatial.skew(r_PJ) @ P["Jw"] + Jv_slide - spatial.skew(r_JC) @ Jw
+    v = P["v"] + spatial.cross(P["w"], r_PJ) + v_slide + spatial.cross(w, r_JC)
+    a_bias = (P["a_bias"] + spatial.cross(P["alpha_bias"], r_PJ) + spatial.cross(P["w"], spatial.cross(P["w"], r_PJ))
+              + a_slide + spatial.cross(alpha_bias, r_JC) + spatial.cross(w, spatial.cross(w, r_JC)))
+    return dict(R=R, p=P["p"] + r_PJ + r_JC, w=w, v=v, Jv=Jv, Jw=Jw, a_bias=a_bias, alpha_bias=alpha_bias)
+
+
 def _frozen(a):
     a.flags.writeable = False
     return a
@@ -166,12 +178,7 @@ class Kane:
                 w_rel = R_WJc @ uj
                 w += w_rel
                 alpha_bias += spatial.cross(w, w_rel)
-            Jv = P["Jv"] - spatial.skew(r_PJ) @ P["Jw"] + Jv_slide - spatial.skew(r_JC) @ Jw
-            v = P["v"] + spatial.cross(P["w"], r_PJ) + v_slide + spatial.cross(w, r_JC)
-            a_bias = (P["a_bias"] + spatial.cross(P["alpha_bias"], r_PJ) + spatial.cross(P["w"], spatial.cross(P["w"], r_PJ))
-                      + a_slide + spatial.cross(alpha_bias, r_JC) + spatial.cross(w, spatial.cross(w, r_JC)))
-            out[j.child] = dict(R=R, p=P["p"] + r_PJ + r_JC, w=w, v=v, Jv=Jv, Jw=Jw,
-                                a_bias=a_bias, alpha_bias=alpha_bias)
+            out[j.child] = _child(P, R, r_PJ, r_JC, w, alpha_bias, Jw, Jv_slide, v_slide, a_slide)
         return out
 
     def _kinematics_stacked(self, Q, U):
@@ -226,12 +233,7 @@ class Kane:
                 w_rel = _mv(R_WJc, uj)
                 w += w_rel
                 alpha_bias += spatial.cross(w, w_rel)
-            Jv = P["Jv"] - spatial.skew(r_PJ) @ P["Jw"] + Jv_slide - spatial.skew(r_JC) @ Jw
-            v = P["v"] + spatial.cross(P["w"], r_PJ) + v_slide + spatial.cross(w, r_JC)
-            a_bias = (P["a_bias"] + spatial.cross(P["alpha_bias"], r_PJ) + spatial.cross(P["w"], spatial.cross(P["w"], r_PJ))
-                      + a_slide + spatial.cross(alpha_bias, r_JC) + spatial.cross(w, spatial.cross(w, r_JC)))
-            out[j.child] = dict(R=R, p=P["p"] + r_PJ + r_JC, w=w, v=v, Jv=Jv, Jw=Jw,
-                                a_bias=a_bias, alpha_bias=alpha_bias)
+            out[j.child] = _child(P, R, r_PJ, r_JC, w, alpha_bias, Jw, Jv_slide, v_slide, a_slide)
         return out
 
     # -------------------------------------------------------------- dynamics
