@@ -190,9 +190,10 @@ class ClosedLoops(Kane):
         """``project`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): each state's Gauss-Newton iterations
         stop where its own stop (``PROJECTION_TOL``, or no halving), as ``project``'s."""
         zero = np.zeros_like(U)
-        Li = _inverse_cholesky(self._mass_stacked(self._kinematics_stacked(Q, zero)))
+        kin = self._kinematics_stacked(Q, zero)  # (one pass serves the metric and the first rows, as in ``project``)
+        Li = _inverse_cholesky(self._mass_stacked(kin))
         LiT = Li.swapaxes(-1, -2)
-        phi, J, _, _ = self._constraints_stacked(self._kinematics_stacked(Q, zero))
+        phi, J, _, _ = self._constraints_stacked(kin)
         Q, last, going = Q.copy(), np.full(len(Q), np.inf), np.ones(len(Q), dtype=bool)
         for _ in range(PROJECTION_ITERATIONS):
             worst = np.max(np.abs(phi), axis=-1)
@@ -209,6 +210,7 @@ class ClosedLoops(Kane):
         return Q, _mv(LiT, w - _mv(Vr, _mtv(Vr, w)))
 
     def _forces_stacked(self, udot, kin):
+        """``forces`` at m states at once: Kane's reactions and each loop's force ON its body b, (m, 3) each."""
         return {**super()._forces_stacked(udot, kin), **kin[("loops",)]}
 
     def self_stresses(self, q):
