@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
+from dalembert.lstsq import lstsq_stacked
 
 __all__ = ["error_series", "trajectory_errors", "QUANTITIES"]
 
@@ -63,10 +64,10 @@ def _reaction_errors(traj, truth):
     if modes:
         A = np.stack([np.stack([truth.extras.get(f"reaction_mode:{k}:{j}", np.zeros_like(tf[:, 0])) for j in names],
                                axis=1) / scale for k in modes], axis=1)  # (n, K, J, 3)
-        for i in np.flatnonzero(np.all(np.isfinite(A), axis=(1, 2, 3)) & np.all(np.isfinite(E), axis=(1, 2))):
-            basis = A[i].reshape(len(modes), -1).T  # (3J, K)
-            coef = np.linalg.lstsq(basis, E[i].ravel(), rcond=None)[0]
-            E[i] -= (basis @ coef).reshape(E[i].shape)
+        rows = np.flatnonzero(np.all(np.isfinite(A), axis=(1, 2, 3)) & np.all(np.isfinite(E), axis=(1, 2)))
+        basis = A[rows].reshape(len(rows), len(modes), 3 * len(names)).swapaxes(1, 2)  # (m, 3J, K)
+        coef = lstsq_stacked(basis, E[rows].reshape(len(rows), 3 * len(names)))  # (m, K)
+        E[rows] -= np.einsum("mik,mk->mi", basis, coef).reshape(E[rows].shape)
     return np.max(np.linalg.norm(E, axis=2), axis=1)
 
 
