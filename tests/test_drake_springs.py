@@ -182,7 +182,7 @@ def test_squeezer_forces_in_drakes_model_give_the_published_initial_acceleration
     multipliers carry it."""
     from pydrake.multibody.tree import MultibodyForces
 
-    from dalembert.adapters.drake.loops import _rows
+    from dalembert.adapters.drake.loops import _Rows
 
     model = ADAPTER.prepare(squeezer.scene, squeezer.times, Settings("discrete", dt=1e-4))["model"]
     plant = model.plant
@@ -195,7 +195,7 @@ def test_squeezer_forces_in_drakes_model_give_the_published_initial_acceleration
     for F in model.loads.get_output_port(0).Eval(model.loads.GetMyContextFromRoot(context)):  # the motor
         plant.get_body(F.body_index).AddInForce(plant_context, F.p_BoBq_B, F.F_Bq_W, plant.world_frame(), forces)
     tau = plant.CalcGeneralizedForces(plant_context, forces)
-    J = np.vstack([Jl for Jl, _ in _rows(model, plant_context)])
+    J = np.vstack([Jl for Jl, _ in _Rows(model)(plant_context)])
     J = J[np.abs(J).max(axis=1) > 0.0]  # the out-of-plane rows are zero: the tree keeps the bodies in the plane
     Minv = np.linalg.inv(plant.CalcMassMatrix(plant_context))
     a_free = Minv @ tau

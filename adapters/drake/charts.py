@@ -101,6 +101,8 @@ class BallCharts:
     def update(self, force=False):
         """Re-chart every ball joint whose ``|pitch|`` exceeds ``RECHART_PITCH`` (every one if ``force``),
         carrying the context's state over; the number of joints re-charted."""
+        if not self.balls:  # (called after every sample)
+            return 0
         x = self.plant.GetPositionsAndVelocities(self.context)
         moved = 0
         for i, joint in enumerate(self.balls):

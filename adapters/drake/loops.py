@@ -69,6 +69,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dalembert import spatial
+from dalembert.lstsq import lstsq_stacked
 from dalembert.scene import WORLD
 
 __all__ = ["LOOP_KINDS", "CONTINUOUS_REASON", "ANCHOR", "LoopConstraints", "add_loops", "lever", "LoopForces"]
@@ -147,32 +148,32 @@ def add_loops(plant, scene, bodies):
     return out
 
 
-def _point_jacobian(plant, context, body, p_B, wrt):
-    """``J (3 k, nv)``: the world velocities of the points ``p_B`` ((3, k) m, body frame) of ``body`` per
-    generalized velocity (``wrt``: ``JacobianWrtVariable.kV``), three rows per point (one Drake call for all)."""
-    return plant.CalcJacobianTranslationalVelocity(context, wrt, body.body_frame(), p_B, plant.world_frame(),
-                                                   plant.world_frame())
+class _Rows:
+    """The loops' constraint rows at a state: called with a plant context, per loop ``(J (k, nv), D (3, k))``:
+    the rows in the generalized velocities (the velocity of point Q on B relative to P on A, per ball; along the
+    unit vector P -> Q for a distance) and the map from the rows' multipliers to the force ON B (N, world). The
+    frames are looked up once, at construction: a read-back calls it at every sample."""
 
+    def __init__(self, model):
+        from pydrake.multibody.tree import JacobianWrtVariable
 
-def _rows(model, context):
-    """Per loop: ``(J (k, nv), D (3, k))``: the constraint rows in the generalized velocities (the velocity of
-    point Q on B relative to P on A, per ball; along the unit vector P -> Q for a distance) and the map from
-    the rows' multipliers to the force ON B (N, world)."""
-    from pydrake.multibody.tree import JacobianWrtVariable
+        self.plant, self.wrt, self.world = model.plant, JacobianWrtVariable.kV, model.plant.world_frame()
+        self.loops = [(lc, lc.body_a.body_frame(), lc.body_b.body_frame()) for lc in model.loops]
 
-    plant, wrt = model.plant, JacobianWrtVariable.kV
-    out = []
-    for lc in model.loops:
-        A, B = lc.body_a, lc.body_b
-        J = _point_jacobian(plant, context, B, lc.points_b, wrt) - _point_jacobian(plant, context, A, lc.points_a, wrt)
-        if lc.loop.kind == "distance":
-            d = (plant.CalcPointsPositions(context, B.body_frame(), lc.points_b, plant.world_frame()).ravel()
-                 - plant.CalcPointsPositions(context, A.body_frame(), lc.points_a, plant.world_frame()).ravel())
-            u = d / np.linalg.norm(d)
-            out.append((u @ J, u[:, None]))
-        else:
-            out.append((J, lc.force_map))
-    return out
+    def __call__(self, context):
+        plant, wrt, W = self.plant, self.wrt, self.world
+        out = []
+        for lc, A, B in self.loops:  # three rows per point, one Drake call per side for all its points
+            J = (plant.CalcJacobianTranslationalVelocity(context, wrt, B, lc.points_b, W, W)
+                 - plant.CalcJacobianTranslationalVelocity(context, wrt, A, lc.points_a, W, W))
+            if lc.loop.kind == "distance":
+                d = (plant.CalcPointsPositions(context, B, lc.points_b, W).ravel()
+                     - plant.CalcPointsPositions(context, A, lc.points_a, W).ravel())
+                u = d / np.linalg.norm(d)
+                out.append(((u @ J)[None], u[:, None]))
+            else:
+                out.append((J, lc.force_map))
+        return out
 
 
 class LoopForces:
@@ -182,9 +183,9 @@ class LoopForces:
     SAP's step solves ``M (v' - v) / dt = tau(q, v) - C(q, v) v + J^T gamma / dt`` (no joint damping, no
     contact: the ``kLagged`` approximation changes contact only; ``tau`` holds gravity, the loads and the
     spring-dampers, all explicit at ``(q, v)``: ``springs``), so the constraints' generalized force is
-    ``tau_c = M a + C v - tau_g - tau_springs - tau_loads`` with ``a = (v' - v) / dt`` the plant's generalized
-    acceleration (its output port, evaluated from this state: ``SetUseSampledOutputPorts(False)``). The
-    loop forces ``f`` solve ``J^T f = tau_c`` in the least-squares, minimum-norm sense (singular values at or
+    ``tau_c = M a + C v - tau_g - tau_springs - tau_loads`` (Drake's ``CalcInverseDynamics`` with the applied
+    forces) with ``a = (v' - v) / dt`` the plant's generalized acceleration (its output port, evaluated from
+    this state: ``SetUseSampledOutputPorts(False)``). The loop forces ``f`` solve ``J^T f = tau_c`` in the least-squares, minimum-norm sense (singular values at or
     below ``rcond`` of the largest cut, as the reference cuts its redundant rows: ``closure.RANK_RTOL``), so a
     redundant row (the revolute's own, a planar loop's out-of-plane ones) carries no force, and a revolute's
     two points add up to its total force.
@@ -200,12 +201,13 @@ class LoopForces:
 
         self.model, self.rcond = model, rcond
         self._applied = MultibodyForces(model.plant)  # reused: zeroed at every sample
+        self._rows, self._acceleration = _Rows(model), model.plant.get_generalized_acceleration_output_port()
         self._J, self._tau, self._D = [], [], []
 
     def add(self, context, plant_context):
         """Read the step's terms at the state in ``plant_context`` (``context``: the diagram's, for the loads)."""
         model, plant, forces = self.model, self.model.plant, self._applied
-        a = plant.get_generalized_acceleration_output_port().Eval(plant_context)
+        a = self._acceleration.Eval(plant_context)
         forces.SetZero()
         plant.CalcForceElementsContribution(plant_context, forces)  # gravity and the spring-dampers, at (q, v)
         if model.loads is not None:
@@ -213,10 +215,9 @@ class LoopForces:
                 body = plant.get_body(F.body_index)
                 R_WB = plant.EvalBodyPoseInWorld(plant_context, body).rotation().matrix()
                 body.AddInForce(plant_context, R_WB @ F.p_BoBq_B, F.F_Bq_W, plant.world_frame(), forces)
-        self._tau.append(plant.CalcMassMatrix(plant_context) @ a + plant.CalcBiasTerm(plant_context)
-                         - plant.CalcGeneralizedForces(plant_context, forces))
-        rows = _rows(model, plant_context)
-        self._J.append(np.vstack([np.atleast_2d(Jl) for Jl, _ in rows]))
+        self._tau.append(plant.CalcInverseDynamics(plant_context, a, forces))  # M a + C v - tau_applied
+        rows = self._rows(plant_context)
+        self._J.append(np.concatenate([J for J, _ in rows]))
         self._D.append([D for _, D in rows])
 
     def forces(self):
@@ -225,11 +226,7 @@ class LoopForces:
         own cut)."""
         if not self._tau:
             return {lc.loop.name: np.zeros((0, 3)) for lc in self.model.loops}
-        Jt, tau = np.stack(self._J).swapaxes(-1, -2), np.stack(self._tau)
-        U, S, Vt = np.linalg.svd(Jt, full_matrices=False)
-        keep = S > self.rcond * S[:, :1]
-        inv_S = np.divide(1.0, S, out=np.zeros_like(S), where=keep)
-        f = np.einsum("mji,mj->mi", Vt, inv_S * np.einsum("mji,mj->mi", U, tau))  # V S^+ U^T tau
+        f = lstsq_stacked(np.stack(self._J).swapaxes(-1, -2), np.stack(self._tau), self.rcond)
         out, k = {}, 0
         for i, lc in enumerate(self.model.loops):
             n = self._D[0][i].shape[1]

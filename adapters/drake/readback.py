@@ -74,7 +74,8 @@ def _rpy_to_matrix(rpy):
 def _kinematics(p, X, bodies, jointed, reactions):
     """Poses and velocities of the bodies on revolute, prismatic, ball and weld joints, the joints' reactions and
     the loops' (``loops.LoopForces``), from the plant sample by sample (the loads system is evaluated for the
-    reactions, as in a step)."""
+    reactions, as in a step). The loop over samples only calls Drake and keeps its arrays; rotations, quaternions
+    and the reactions' world axes are computed for all samples at once after it."""
     from dalembert.adapters.drake.loops import LoopForces
     from dalembert.closure import RANK_RTOL
 
@@ -87,28 +88,33 @@ def _kinematics(p, X, bodies, jointed, reactions):
     drake_bodies = [model.bodies[c] for c in names]  # each joint's child body
     # per joint: its index in the port's list and R_CJc, the child joint frame in the child's body frame
     ports = [int(model.joints[c].index()) for c in names]
-    R_CJc = [model.joints[c].frame_on_child().GetFixedPoseInBodyFrame().rotation().matrix() for c in names]
+    R_CJc = np.reshape([model.joints[c].frame_on_child().GetFixedPoseInBodyFrame().rotation().matrix()
+                        for c in names], (-1, 3, 3))
     finite = np.flatnonzero(np.all(np.isfinite(X), axis=1))
     loops = LoopForces(model, RANK_RTOL) if model.loops else None
-    for k in finite:
+    m, nb = len(finite), len(names)
+    X_WB = np.empty((m, nb, 3, 4))  # [R_WB | p_WB] per sample and body
+    V_WB = np.empty((m, nb, 6))  # (w_WB_W, v_WB_W)
+    f_Jc = np.empty((m, nb, 3))  # the joint's force on the child at Jc, Jc axes
+    for i, k in enumerate(finite):
         context.SetTime(float(p["times"][k]))
         plant.SetPositionsAndVelocities(plant_context, X[k])
-        R_WB = []
-        for name, body in zip(names, drake_bodies):
-            X_WB = plant.EvalBodyPoseInWorld(plant_context, body)
-            V_WB = plant.EvalBodySpatialVelocityInWorld(plant_context, body)
-            b = bodies[name]
-            R = X_WB.rotation()
-            b["p"][k], b["q"][k] = X_WB.translation(), R.ToQuaternion().wxyz()
-            b["w"][k], b["v"][k] = V_WB.rotational(), V_WB.translational()
-            R_WB.append(R.matrix())
+        for b, body in enumerate(drake_bodies):
+            X_WB[i, b] = plant.EvalBodyPoseInWorld(plant_context, body).GetAsMatrix34()
+            V_WB[i, b] = plant.EvalBodySpatialVelocityInWorld(plant_context, body).get_coeffs()
         F = port.Eval(plant_context)
-        for name, i, R, R_CJ in zip(names, ports, R_WB, R_CJc):
-            reactions[name][k] = (R @ R_CJ) @ F[i].translational()  # R_WJc f_Jc
+        for b, j in enumerate(ports):
+            f_Jc[i, b] = F[j].translational()
         if loops:  # the same context: the step solved for F above is the one read here
             loops.add(context, plant_context)
+    R_WB = X_WB[..., :3]
+    f_W = ((R_WB @ R_CJc) @ f_Jc[..., None])[..., 0]  # R_WJc f_Jc
+    quats = spatial.matrix_to_quat(R_WB)  # w >= 0, as every other engine's rotation
+    for b, name in enumerate(names):
+        out = bodies[name]
+        out["p"][finite], out["q"][finite] = X_WB[:, b, :, 3], quats[:, b]
+        out["w"][finite], out["v"][finite] = V_WB[:, b, :3], V_WB[:, b, 3:]
+        reactions[name][finite] = f_W[:, b]
     if loops:
         for name, f in loops.forces().items():
             reactions[name][finite] = f
-    for name in names:  # w >= 0, as spatial.matrix_to_quat gives every other engine's rotation
-        bodies[name]["q"] = spatial.quat_normalize(bodies[name]["q"])

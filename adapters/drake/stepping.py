@@ -46,12 +46,6 @@ SCHEMES = {
 }
 
 
-def _state(p, context):
-    """The plant's state ``x = (q, v)`` (continuous or discrete) in ``context`` (the diagram's)."""
-    plant = p["model"].plant
-    return plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(context))
-
-
 def reset(p):
     """A fresh simulator at the initial state, with its integrator set up and its ball joints charted;
     ``(simulator, integrator or None, BallCharts)``."""
@@ -89,7 +83,9 @@ def simulate(p):
     simulator, integrator, charts = reset(p)
     times = p["times"]
     context = simulator.get_context()
-    x0 = charts.to_scene_chart(_state(p, context))
+    plant = p["model"].plant
+    plant_context = plant.GetMyContextFromRoot(context)  # the simulator's own, for all its steps
+    x0 = charts.to_scene_chart(plant.GetPositionsAndVelocities(plant_context))
     X = np.full((len(times), len(x0)), np.nan)
     X[0] = x0
     message = ""
@@ -104,13 +100,13 @@ def simulate(p):
         try:
             simulator.AdvanceTo(float(times[k]) - early)
         except (RuntimeError, SystemExit) as e:  # pydrake raises SystemExit for a failed internal assertion
-            x = _state(p, context)
-            if np.all(np.isfinite(x)) and "nan" not in str(e).lower():
+            x = plant.GetPositionsAndVelocities(plant_context)
+            if np.isfinite(x).all() and "nan" not in str(e).lower():
                 raise RuntimeError(f"Drake stopped at t = {context.get_time():g} s of {times[-1]:g} s: {e}") from None
             message = f"Drake at t = {context.get_time():g} s: {e}"
             break
-        x = _state(p, context)
-        if not np.all(np.isfinite(x)):
+        x = plant.GetPositionsAndVelocities(plant_context)
+        if not np.isfinite(x).all():
             message = f"non-finite state at t = {times[k]:g} s"
             break
         X[k] = charts.to_scene_chart(x)
