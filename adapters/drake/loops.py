@@ -185,10 +185,10 @@ class LoopForces:
     spring-dampers, all explicit at ``(q, v)``: ``springs``), so the constraints' generalized force is
     ``tau_c = M a + C v - tau_g - tau_springs - tau_loads`` (Drake's ``CalcInverseDynamics`` with the applied
     forces) with ``a = (v' - v) / dt`` the plant's generalized acceleration (its output port, evaluated from
-    this state: ``SetUseSampledOutputPorts(False)``). The loop forces ``f`` solve ``J^T f = tau_c`` in the least-squares, minimum-norm sense (singular values at or
-    below ``rcond`` of the largest cut, as the reference cuts its redundant rows: ``closure.RANK_RTOL``), so a
-    redundant row (the revolute's own, a planar loop's out-of-plane ones) carries no force, and a revolute's
-    two points add up to its total force.
+    this state: ``SetUseSampledOutputPorts(False)``). The loop forces ``f`` solve ``J^T f = tau_c`` in the
+    least-squares, minimum-norm sense (singular values at or below ``rcond`` of the largest cut, as the reference
+    cuts its redundant rows: ``closure.RANK_RTOL``), so a redundant row (the revolute's own, a planar loop's
+    out-of-plane ones) carries no force, and a revolute's two points add up to its total force.
 
     Parameters
     ----------
