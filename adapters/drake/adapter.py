@@ -25,6 +25,8 @@ limits, no damping. The audit reads each back from the finalized plant (type, ax
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
@@ -194,6 +196,7 @@ class DrakeAdapter(Adapter):
         }
 
 
+@functools.cache  # (installed packages do not change under a process; every run asks twice: ~1 ms a time)
 def _distribution_version():
     from importlib.metadata import version
 

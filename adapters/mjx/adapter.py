@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import functools
 import os
+from dataclasses import replace
 
 import numpy as np
 
@@ -33,6 +34,10 @@ __all__ = ["MjxAdapter"]
 
 OPTIONS = ("precision", "welds")
 STAGES = {"euler": 1, "rk4": 4, "implicitfast": 1}  # evaluations of the dynamics per step
+# The step the refusal check compiles every model with: ``mjx.put_model`` refuses features (integrator, cone,
+# solver, flags, geometry pairs, sensors), never a step, which enters the MJCF only as numbers (timestep,
+# solref), so one check serves every step of a sweep (~8 ms a check).
+REFUSAL_DT = 1e-3
 
 
 class MjxAdapter(MujocoAdapter):
@@ -50,18 +55,7 @@ class MjxAdapter(MujocoAdapter):
         """MJX's version; ImportError when MJX or JAX is missing. Neither is imported here: the
         harness asks before forking its workers, and a process that has started JAX's threads
         must not fork (JAX warns of deadlocks) — each worker imports JAX itself."""
-        from importlib.metadata import PackageNotFoundError, version
-        from importlib.util import find_spec
-
-        for module in ("jax", "mujoco.mjx"):
-            if find_spec(module) is None:
-                raise ImportError(f"No module named {module!r} (install dalembert[mjx])")
-        try:
-            return version("mujoco-mjx")
-        except PackageNotFoundError:  # MJX inside a MuJoCo that ships it
-            import mujoco
-
-            return f"mujoco {mujoco.__version__}"
+        return _version()
 
     def check(self, scene, times, settings):
         from dalembert.adapters.base import Adapter
@@ -78,7 +72,7 @@ class MjxAdapter(MujocoAdapter):
             return reason
         from dalembert.adapters.mujoco.mjcf import mjcf
 
-        return _refusal(mjcf(scene, settings))
+        return _refusal(mjcf(scene, replace(settings, dt=REFUSAL_DT)))
 
     def variants(self, scene):
         """Default matrix: both precisions (and, where the scene has welds, MuJoCo's weld variants)."""
@@ -151,7 +145,7 @@ class MjxAdapter(MujocoAdapter):
 @functools.lru_cache(maxsize=64)
 def _refusal(xml):
     """Why ``mjx.put_model`` refuses the model compiled from the MJCF ``xml``, or None; once per model
-    in a worker (every integrator and step of a case asks: ~20 ms a time)."""
+    in a worker (every integrator and step of a case asks: ~8-20 ms a time)."""
     import mujoco
 
     model = mujoco.MjModel.from_xml_string(xml)
@@ -160,3 +154,19 @@ def _refusal(xml):
     except NotImplementedError as e:
         return f"MJX cannot put this model on the device (mjx.put_model: NotImplementedError: {e})"
     return None
+
+
+@functools.cache  # (installed packages do not change under a process; every run asks twice: ~1 ms a time)
+def _version():
+    from importlib.metadata import PackageNotFoundError, version
+    from importlib.util import find_spec
+
+    for module in ("jax", "mujoco.mjx"):
+        if find_spec(module) is None:
+            raise ImportError(f"No module named {module!r} (install dalembert[mjx])")
+    try:
+        return version("mujoco-mjx")
+    except PackageNotFoundError:  # MJX inside a MuJoCo that ships it
+        import mujoco
+
+        return f"mujoco {mujoco.__version__}"
