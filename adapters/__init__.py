@@ -7,7 +7,9 @@ The contract — every adapter class:
    through the entry-point group ``dalembert.adapters``;
 2. imports its engine lazily, inside its methods, so listing and help work
    without it; ``version()`` returns the engine's version (and raises
-   ImportError when the engine is missing);
+   ImportError when the engine is missing); ``load()`` imports all of the
+   engine a run uses (default: what ``version()`` imports), which a pool's
+   worker calls before its first run, so that no run's time holds an import;
 3. declares ``effects``: the ``Scene.effects`` tags it can represent. A scene
    that needs another effect is not run: the harness stores it as
    ``unsupported`` with the reason — never a silent approximation;

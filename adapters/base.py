@@ -79,6 +79,11 @@ class Adapter:
     def version(self):
         raise NotImplementedError
 
+    def load(self):
+        """Import the engine (once per process; ImportError when it is missing): a worker loads its engines
+        before its first run, so that no run's time holds an import."""
+        self.version()
+
     def check(self, scene, times, settings):
         """Raise ValueError naming the field when ``settings`` cannot be run."""
         from dalembert.settings import knob_problems

@@ -57,6 +57,11 @@ class MjxAdapter(MujocoAdapter):
         must not fork (JAX warns of deadlocks) — each worker imports JAX itself."""
         return _version()
 
+    def load(self):
+        """MJX and JAX imported (``version`` imports neither)."""
+        self.version()
+        mjx()
+
     def check(self, scene, times, settings):
         from dalembert.adapters.base import Adapter
 

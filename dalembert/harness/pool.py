@@ -56,12 +56,20 @@ def _context():
     return ctx
 
 
-def _serve(conn, parent_pid, n_threads):
+def _serve(conn, parent_pid, n_threads, engines):
     """A worker's life: run each ``(spec, timing, truth, concurrent)`` it is sent, answer with
     ``(record, npz)``; a truth is sent once per case version (``None`` afterwards: kept here).
-    ``n_threads``: what its native thread pools may use."""
+    ``n_threads``: what its native thread pools may use; ``engines``: ``(name, "module:Class")`` of the
+    matrix's engines, loaded first (``Adapter.load``) so that the worker's first run holds no import."""
+    from dalembert.adapters import get_adapter
+
     die_with_parent(parent_pid)
-    threads.limit(n_threads)
+    threads.limit(n_threads)  # (before any engine starts its thread pools)
+    for name, path in engines:
+        try:
+            get_adapter(name, path).load()
+        except Exception:  # an engine that will not load fails each of its runs, with its message, in execute
+            pass
     truths = {}
     while True:
         try:
@@ -96,11 +104,11 @@ def _take(queue, worker, held):
 class _Worker:
     """The parent's handle on one worker: its pipe, its process, the run it is doing."""
 
-    def __init__(self, ctx, n_threads):
+    def __init__(self, ctx, n_threads, engines):
         self.conn, child = ctx.Pipe()
         # a forked worker's parent is this process; a forkserver's child's is the forkserver
         parent = os.getpid() if ctx.get_start_method() == "fork" else None
-        self.proc = ctx.Process(target=_serve, args=(child, parent, n_threads), daemon=True)
+        self.proc = ctx.Process(target=_serve, args=(child, parent, n_threads, engines), daemon=True)
         self.proc.start()
         child.close()
         self.spec, self.started, self.truths, self.group = None, 0.0, set(), None
@@ -148,11 +156,12 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
     n_threads = threads.per_worker(jobs or os.cpu_count())  # as asked (the manifest's), not as capped below
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(todo) or 1))
     ctx = _context()
+    engines = tuple(sorted({(s.engine, s.adapter) for s in todo}))
     counts = {"done": 0, "bad": 0, "total": len(todo)}
     queue = [(affinity(s), s) for s in reversed(todo)]
     idle, busy, lost = [], {}, []  # busy: connection -> worker
     try:
-        idle = [_Worker(ctx, n_threads) for _ in range(jobs if todo else 0)]
+        idle = [_Worker(ctx, n_threads, engines) for _ in range(jobs if todo else 0)]
         while queue or busy:
             while queue and idle:
                 worker = idle.pop()
@@ -166,7 +175,7 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
                 except EOFError:  # the worker died without an answer (crash, killed): replace it
                     worker.kill()
                     dead, code = worker.spec, worker.proc.exitcode
-                    idle.append(_Worker(ctx, n_threads))
+                    idle.append(_Worker(ctx, n_threads, engines))
                     if code == -signal.SIGKILL:  # killed from outside: not the run's doing, not stored
                         lost.append((dead.key, f"{dead.case} {dead.engine} {dead.settings.label()}: its worker was "
                                                "killed by SIGKILL from outside (out of memory?)"))
@@ -182,7 +191,7 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
                     worker.kill()
                     finish(store, unfinished(worker.spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"),
                            None, progress, counts)
-                    idle.append(_Worker(ctx, n_threads))
+                    idle.append(_Worker(ctx, n_threads, engines))
     finally:  # normal end, an error or Ctrl-C: no worker is left behind
         for worker in idle:
             worker.stop()
