@@ -77,3 +77,28 @@ class SlowReadBack(ReferenceAdapter):
             return read_back()
 
         return replace(out, read_back=slow)
+
+
+class Loaded(ReferenceAdapter):
+    """The reference, whose audit says whether this process loaded it (``Adapter.load``) before its first run."""
+
+    loaded = 0  # loads in this process
+    runs = 0  # runs started in this process
+
+    def load(self):
+        super().load()
+        Loaded.loaded += 1 if Loaded.runs == 0 else 0
+
+    def run(self, prepared):
+        Loaded.runs += 1
+        return super().run(prepared)
+
+    def audit(self, prepared, outcome):
+        return {**super().audit(prepared, outcome), "loaded_before_first_run": Loaded.loaded}
+
+
+class Unloadable(ReferenceAdapter):
+    """The reference, whose ``load`` raises: its runs go on (the error, where real, shows in each run)."""
+
+    def load(self):
+        raise ImportError("no module named 'unloadable_engine' (on purpose)")

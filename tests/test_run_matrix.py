@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from dalembert.adapters import adapter_names, check_adapter, register_adapter
-from broken_adapters import Broken, NoFollower, SlowReadBack, Threads
+from broken_adapters import Broken, Loaded, NoFollower, SlowReadBack, Threads, Unloadable
 from dalembert.harness.execute import QUICK, Timing, execute
 from dalembert.harness.matrix import RunSpec, expand
 from dalembert.harness.pool import run_matrix
@@ -35,7 +35,7 @@ JIT_TREE_CASE = "pivoted_rod"
 
 ENGINES = adapter_names()  # before the test-only adapters below are registered
 for _name, _cls in (("broken", Broken), ("no-follower", NoFollower), ("threads", Threads),
-                    ("slow-read-back", SlowReadBack)):
+                    ("slow-read-back", SlowReadBack), ("loaded", Loaded), ("unloadable", Unloadable)):
     if _name not in adapter_names():
         register_adapter(_name, _cls)
 
@@ -109,6 +109,18 @@ def test_the_read_back_is_timed_once_and_apart_from_the_stepping():
     assert pause <= cost.readback_s < 4 * pause
     assert cost.wall_s_max < pause
     assert cost.worker_s >= cost.build_s + cost.stepping_total_s + cost.readback_s
+
+
+def test_workers_load_their_engines_before_their_first_run(tmp_path):
+    """Each worker loads the matrix's engines (``Adapter.load``) before it runs anything, so no run's time holds an
+    engine's import; an engine whose load fails still runs (its runs carry their own errors)."""
+    specs, _ = expand(cases=["pivoted_rod"], engines=["loaded", "unloadable"], integrators=["rk4"], dts=[1e-2],
+                      params={"t_final": 0.2})
+    store = Store(tmp_path).create({})
+    run_matrix(specs, store, jobs=2, timing=QUICK)
+    records = {r.engine: r for r in store.records()}
+    assert records["loaded"].status == "ok" and records["loaded"].audit["loaded_before_first_run"] == 1
+    assert records["unloadable"].status == "ok"
 
 
 def test_stored_row_and_trajectory_round_trip(tmp_path):
