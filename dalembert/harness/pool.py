@@ -1,7 +1,8 @@
 """Running a matrix on this machine: a pool of long-lived worker processes.
 
-Each worker is forked once, with the engines already imported, and runs one
-spec at a time for as long as the matrix lasts. Every run keeps its own
+Each worker is forked once, loads the matrix's engines (``Adapter.load``: their
+imports, before any run, so that no run's time holds one), and runs one spec at a
+time for as long as the matrix lasts. Every run keeps its own
 timeout: a run that hangs past it, or a worker that dies, costs only that
 worker, which is killed and replaced; the run is stored as ``timeout`` or
 ``failed`` (an engine that crashes its process is a finding) and the rest of
