@@ -40,6 +40,7 @@ class SceneLoads(_leaf_system()):
     def __init__(self, loads, body_index):
         from pydrake.common.value import AbstractValue
         from pydrake.math import RigidTransform
+        from pydrake.multibody.math import SpatialForce
         from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 
         super().__init__()
@@ -47,23 +48,23 @@ class SceneLoads(_leaf_system()):
         self._loads = [(ld, body_index[ld.body], np.asarray(ld.point, dtype=float)) for ld in loads]
         self._follower = any(ld.frame == "body" for ld in loads)
         self.evaluations = 0  # how often Drake asked for the loads (the audit reports it)
-        self.DeclareAbstractInputPort("body_poses", AbstractValue.Make([RigidTransform()]))
+        # (the classes kept here: an import inside _calc, called at every evaluation of the dynamics, goes through
+        # pydrake's module attribute hook each time, ~10 us)
+        self._force, self._spatial = ExternallyAppliedSpatialForce, SpatialForce
+        self._poses = self.DeclareAbstractInputPort("body_poses", AbstractValue.Make([RigidTransform()]))
         self.DeclareAbstractOutputPort("spatial_forces", lambda: AbstractValue.Make([ExternallyAppliedSpatialForce()]),
                                        self._calc)
 
     def _calc(self, context, output):
-        from pydrake.multibody.math import SpatialForce
-        from pydrake.multibody.plant import ExternallyAppliedSpatialForce
-
         self.evaluations += 1
-        poses = self.get_input_port(0).Eval(context) if self._follower else None
+        poses = self._poses.Eval(context) if self._follower else None
         zero = np.zeros(3)
         forces = []
         for ld, index, point in self._loads:
             R_WB = poses[int(index)].rotation().matrix() if ld.frame == "body" else np.eye(3)
             vec_W = spatial.load_to_world(ld, R_WB)
-            f = ExternallyAppliedSpatialForce()
+            f = self._force()
             f.body_index, f.p_BoBq_B = index, point
-            f.F_Bq_W = SpatialForce(zero, vec_W) if ld.kind == "force" else SpatialForce(vec_W, zero)
+            f.F_Bq_W = self._spatial(zero, vec_W) if ld.kind == "force" else self._spatial(vec_W, zero)
             forces.append(f)
         output.set_value(forces)
