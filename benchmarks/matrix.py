@@ -103,13 +103,15 @@ def _overhead_row(engine, records):
     overall = sum(_outside(r) for r in ok) / sum(r.cost.worker_s for r in ok) if ok else float("nan")
     worst = long[int(np.argmax(outside))] if long else None
 
-    def spread(share):  # median and worst
-        return f"{np.median(share) if len(share) else np.nan:>8.1%}{share.max() if len(share) else np.nan:>7.1%}"
+    def spread(share):  # median and worst ("—": no run that long)
+        if not len(share):
+            return f"{'—':>8}{'—':>7}"
+        return f"{np.median(share):>8.1%}{share.max():>7.1%}"
 
     return (f"{engine:<11}{len(long):>9}{spread(outside)}{spread(readback)}{spread(outside - readback)}"
             f"{overall:>9.1%}  "
             + (f"{worst.case} {worst.settings_label} ({_outside(worst):.3f} of {worst.cost.worker_s:.3f} s, read-back "
-               f"{worst.cost.readback_s:.3f} s)" if worst else ""))
+               f"{worst.cost.readback_s:.3f} s)" if worst else f"no run's stepping over {LONG_RUN_S * 1e3:.0f} ms"))
 
 
 def _short_row(engine, records):
