@@ -116,8 +116,6 @@ def solve(mbs, sensors, settings, times, dt=None, stored=True):
                 steps=steps_taken(it), stalled=stalled, sampling="Exudyn's stored sensors",
                 reached=float(it.currentTime) if it is not None else float(times[max(read, 1) - 1]))
 
-@staticmethod
-
 
 def stored_samples(mbs, flat, times, tol, error):
     """The stored rows at the sample times: (values, samples read, first miss or None)."""
@@ -136,8 +134,6 @@ def stored_samples(mbs, flat, times, tol, error):
         late = (f"Exudyn's stored sensors have no row at sample {read} (t = {times[read]:.12g} s), the "
                 f"nearest at {t[rows[read]]:.12g} s" if len(t) else "Exudyn stored no sensor rows")
     return {k: v[rows[:read], 1:] for k, v in stored.items()}, read, late
-
-@staticmethod
 
 
 def solve_per_sample(solver, mbs, settings, times, tol, sampler=None):
