@@ -86,9 +86,9 @@ def solve(mbs, sensors, settings, times, dt=None, stored=True):
     tol = ON_TIME * (min_step if adaptive else dt)  # a sample is on time within this, s
     flat = [(body, key, sid) for body, group in sensors.items() for key, sid in group.items()]
     sampler = None
+    for _, _, sid in flat:  # (set either way: the system may have been solved the other way before)
+        mbs.SetSensorParameter(sid, "storeInternal", stored)
     if stored:
-        for _, _, sid in flat:
-            mbs.SetSensorParameter(sid, "storeInternal", True)
         settings.solution.sensors.writePeriod = (
             2.0 * horizon if adaptive else interval * (1.0 - SCHEDULE_LEAD * dt / horizon))
     else:
@@ -139,6 +139,8 @@ def stored_samples(mbs, flat, times, tol, error):
 def solve_per_sample(solver, mbs, settings, times, tol, sampler=None):
     """Adaptive explicit solvers: one ``SolveSteps`` per sample interval, ending on the sample."""
     solver.InitializeSolver(mbs, settings)
+    if sampler is not None:  # sample 0 once the solver has set the initial state (a system solved before
+        sampler.read(0)  # holds the last solve's end until then)
     try:
         for k in range(1, len(times)):
             solver.it.endTime = float(times[k])
@@ -197,7 +199,8 @@ class _Sampler:
     With ``tol`` (fixed-step solvers) it is the post-step user function and reads at the step
     that lands on each sample time to within ``tol`` s; a sample passed without landing stops
     the run. Without (adaptive solvers), ``read`` is called after each ``SolveSteps``. Sample 0
-    is the initial state.
+    is the initial state: read again once the solver has set it (at ``times[0]`` before the first step;
+    after ``InitializeSolver``), as a system solved before holds the last solve's end until then.
     """
 
     def __init__(self, mbs, flat, times, tol=None):
