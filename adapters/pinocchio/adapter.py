@@ -151,24 +151,23 @@ class PinocchioAdapter(Adapter):
         reactions = {j.child: np.full((n, 3), np.nan) for j in reacting}
         loop_forces = {lc.loop.name: np.full((n, 3), np.nan) for lc in pm.loop_contacts}
         finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)  # once, not per sample
+        # the constraints' multipliers and frames per sample (and their Jacobians, with loops), resolved after the
+        # sample loop for all samples at once (``minimum_norm``, ``constraint_forces``)
+        lams, R_Wc1, Js = [], [], []
         for k in np.flatnonzero(finite):
             q, v = Q[k], V[k]
             local = {}
-            if reacting or loop_forces:  # rnea with the external forces: data.f[joint] is the force through the joint
+            if reacting or loop_forces:  # rnea: data.f[joint] is the force through the joint
                 a = pm.acceleration(q, v)
-                forces = None
-                if pm.constrained:  # the constraints' forces on the joints, so the reactions include them
-                    lams = pm.constraint_multipliers(q)  # from this constraintDynamics, before rnea overwrites data
-                    for lc in pm.loop_contacts:
-                        loop_forces[lc.loop.name][k] = loops.force_on_b(pm.cdatas, lc, lams)
-                    forces = pm.constraint_forces(lams)
-                fext = pm.external_forces(q, v) if pm.has_forces else None
-                if forces is not None:
-                    fext = forces if fext is None else [f + c for f, c in zip(fext, forces)]
-                if fext is None:
-                    pin.rnea(model, data, q, v, a)
+                if pm.constrained:  # from this constraintDynamics, before rnea overwrites data
+                    lam, R, J = pm.constraint_readout(q)
+                    lams.append(lam)
+                    R_Wc1.append(R)
+                    Js.append(J)
+                if pm.has_forces:
+                    pin.rnea(model, data, q, v, a, pm.external_forces(q, v))
                 else:
-                    pin.rnea(model, data, q, v, a, _force_vector(fext))
+                    pin.rnea(model, data, q, v, a)
                 local = {j.child: data.f[pm.joint_ids[j.child]].linear.copy() for j in reacting}
             # rnea does not refresh data.oMi: rotate with this sample's forward kinematics
             pin.forwardKinematics(model, data, q, v)
@@ -181,6 +180,17 @@ class PinocchioAdapter(Adapter):
                 vel = pin.getFrameVelocity(model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
                 arrs[0][k], arrs[2][k], arrs[3][k] = X.translation, vel.linear, vel.angular
                 R_WB[name][k] = X.rotation
+        if lams:
+            lam = np.stack(lams)
+            if pm.loop_contacts:
+                lam = pm.minimum_norm(np.stack(Js), lam)
+            forces = pm.constraint_forces(lam, np.stack(R_Wc1))  # (m, constraints, 3) on joint1's side, world
+            for lc in pm.loop_contacts:
+                loop_forces[lc.loop.name][finite] = loops.force_on_b(forces, lc)
+            if reacting:  # the constraints' forces on the tree's joints (``carried_by``)
+                S = pm.carried_by([pm.joint_ids[j.child] for j in reacting])
+                for r, j in enumerate(reacting):
+                    reactions[j.child][finite] -= np.einsum("c,mci->mi", S[r], forces)
         for name, arrs in bodies.items():
             arrs[1] = spatial.matrix_to_quat(R_WB[name])
         joints = {}
@@ -273,12 +283,3 @@ class PinocchioAdapter(Adapter):
             "drift_correction": {"method": "Baumgarte (RigidConstraintModel corrector)", "Kp": Kp, "Kd": Kd},
         }
 
-
-def _force_vector(forces):
-    """A list of ``pin.Force`` as the ``pin.StdVec_Force`` ``rnea`` takes."""
-    import pinocchio as pin
-
-    out = pin.StdVec_Force()
-    for f in forces:
-        out.append(f)
-    return out

@@ -23,7 +23,7 @@ with eigenvalue ``s`` the error shrinks by ``mu / (s + mu)`` per iteration (``PR
 ``PROXIMAL_ITERATIONS``). Redundant directions get no force that moves anything (they are the null
 space of ``J^T``), so accelerations are unique; how a redundant load is split between rows (e.g.
 between the revolute's two points) is the statically indeterminate part, and only the total force
-is read back, from the minimum-norm multipliers (``PinocchioModel.constraint_multipliers``: the
+is read back, from the minimum-norm multipliers (``PinocchioModel.minimum_norm``: the
 iterations leave roundoff amplified by ``1/mu`` in the null space, which moves nothing). Near a
 singular position the vanishing direction converges slowest: the few iterations damp it, as the
 reference cuts it (``closure.RANK_RTOL``).
@@ -156,7 +156,8 @@ def loop_contacts(pm, first_index):
     return models, found
 
 
-def force_on_b(cdatas, contacts, lams):
-    """The force of one loop ON its body b (N, world, shape (3,)): ``-sum R_Wc1 lambda`` over its contacts
-    (module docstring), ``lams`` the multipliers of every constraint (``PinocchioModel.constraint_multipliers``)."""
-    return -sum(cdatas[i].oMc1.rotation @ lams[i] for i in contacts.indices)
+def force_on_b(forces, contacts):
+    """The force of one loop ON its body b (N, world), at m states: ``-sum R_Wc1 lambda`` over its contacts
+    (module docstring), ``forces (m, n_constraints, 3)`` every constraint's ``R_Wc1 lambda``
+    (``PinocchioModel.constraint_forces``) -> ``(m, 3)``."""
+    return -forces[:, list(contacts.indices)].sum(axis=1)

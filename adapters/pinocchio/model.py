@@ -211,50 +211,56 @@ class PinocchioModel:
         """True when the dynamics is ``pin.constraintDynamics`` (welds as constraints, or loops)."""
         return self.cmodels is not None
 
-    def constraint_multipliers(self, q):
-        """Each constraint's force after the last ``constraintDynamics`` at ``q``: a list over ``cmodels`` of
-        arrays, (3,) N for a 3D contact, (6,) force and moment for a 6D one, in the frame c1 of joint1's
-        placement, acting on joint1 (``loops``).
-
-        With loops, the minimum-norm multipliers with the same generalized force ``J^T lambda``: the part
-        in the null space of ``J^T`` moves nothing, and the proximal iterations grow roundoff there by
-        ``1/mu`` per iteration (measured: 4e-6 N out of the four-bar's plane, where the truth has 1e-14);
-        the reference reads back the same minimum-norm multipliers (``reference.loops``)."""
+    def constraint_readout(self, q):
+        """What the last ``constraintDynamics`` at ``q`` left for the read-back: ``lam (rows,)``, every constraint's
+        multipliers concatenated ((3,) N for a 3D contact, (6,) force and moment for a 6D one, in the frame c1 of
+        joint1's placement, acting on joint1: ``loops``); ``R_Wc1 (n_constraints, 3, 3)``, those frames in world
+        axes; and, with loops, the constraints' Jacobian ``J (rows, nv)`` at ``q`` (``minimum_norm``'s), else None."""
         import pinocchio as pin
 
-        lams = [np.array(cd.contact_force.linear if cm.type == pin.ContactType.CONTACT_3D
-                         else cd.contact_force.vector) for cm, cd in zip(self.cmodels, self.cdatas)]
-        if not self.loop_contacts:
-            return lams
-        pin.computeJointJacobians(self.model, self.data, q)
-        J = pin.getConstraintsJacobian(self.model, self.data, self.cmodels, self.cdatas)
+        lam = np.concatenate([cd.contact_force.linear if cm.type == pin.ContactType.CONTACT_3D
+                              else cd.contact_force.vector for cm, cd in zip(self.cmodels, self.cdatas)])
+        R_Wc1 = np.array([cd.oMc1.rotation for cd in self.cdatas])
+        J = None
+        if self.loop_contacts:
+            pin.computeJointJacobians(self.model, self.data, q)
+            J = pin.getConstraintsJacobian(self.model, self.data, self.cmodels, self.cdatas)
+        return lam, R_Wc1, J
+
+    def minimum_norm(self, J, lam):
+        """The minimum-norm multipliers with the same generalized force ``J^T lambda``, at m states at once:
+        ``J (m, rows, nv)``, ``lam (m, rows)`` (``constraint_readout``'s) -> ``(m, rows)``.
+
+        With loops, the part in the null space of ``J^T`` moves nothing, and the proximal iterations grow roundoff
+        there by ``1/mu`` per iteration (measured: 4e-6 N out of the four-bar's plane, where the truth has 1e-14);
+        the reference reads back the same minimum-norm multipliers (``reference.loops``): ``lam`` projected on the
+        range of ``J``, each state's singular values at or below ``closure.RANK_RTOL`` of its largest cut."""
         U, S, _ = np.linalg.svd(J, full_matrices=False)
-        U = U[:, S > closure.RANK_RTOL * S[0]] if len(S) and S[0] > 0.0 else U[:, :0]
-        lam = np.concatenate(lams)
-        lam = U @ (U.T @ lam)
-        return np.split(lam, np.cumsum([len(x) for x in lams])[:-1])
+        U = U * ((S > closure.RANK_RTOL * S[:, :1]) & (S[:, :1] > 0.0))[:, None, :]
+        return np.einsum("mik,mk->mi", U, np.einsum("mik,mi->mk", U, lam))
 
-    def constraint_forces(self, lams):
-        """Per joint (list over ``model.njoints`` of ``pin.Force``, each joint's LOCAL frame about its
-        origin) the forces of the constraints, multipliers ``lams`` (``constraint_multipliers``): what
-        ``rnea`` takes as external forces so that the tree joints' reactions include them. A
-        constraint's force acts on joint1 in its frame c1 and, reversed, on joint2 (``loops``)."""
+    def constraint_forces(self, lam, R_Wc1):
+        """Each constraint's force on joint1's side (N, world), ``R_Wc1 lambda`` (a 6D one's force part), at m
+        states: ``lam (m, rows)``, ``R_Wc1 (m, n_constraints, 3, 3)`` -> ``(m, n_constraints, 3)``; joint2's side
+        gets its opposite (``loops``)."""
         import pinocchio as pin
 
-        data = self.data
-        out = [pin.Force.Zero() for _ in range(self.model.njoints)]
-        for cm, cd, lam in zip(self.cmodels, self.cdatas, lams):
-            if cm.type == pin.ContactType.CONTACT_6D:
-                F1 = cd.oMc1.act(pin.Force(lam))  # spatial, world, about the origin
-                F2 = -F1
-            else:
-                f_W = cd.oMc1.rotation @ lam
-                F1 = pin.Force(f_W, spatial.cross(cd.oMc1.translation, f_W))
-                F2 = pin.Force(-f_W, spatial.cross(cd.oMc2.translation, -f_W))
-            for jid, F in ((cm.joint1_id, F1), (cm.joint2_id, F2)):
-                if jid > 0:
-                    out[jid] = out[jid] + data.oMi[jid].actInv(F)
-        return out
+        starts = np.cumsum([0] + [3 if cm.type == pin.ContactType.CONTACT_3D else 6 for cm in self.cmodels])[:-1]
+        return np.einsum("mcij,mcj->mci", R_Wc1, np.stack([lam[:, i:i + 3] for i in starts], axis=1))
+
+    def carried_by(self, joint_ids):
+        """``S (len(joint_ids), n_constraints)``: +1 where a constraint's joint1 lies in the joint's subtree, -1
+        where its joint2 does (0 where both or neither): a tree joint's reaction force (world, on its child) holds
+        ``-S @ f`` of the constraints' forces ``f`` (``constraint_forces``) beyond ``rnea``'s without them, as
+        ``rnea`` subtracts external forces on a subtree from the force through the joint above it (the force's
+        linear part is the same wherever it acts)."""
+        supports = [set(self.model.supports[j]) for j in range(self.model.njoints)]
+
+        def below(j, jid):
+            return jid > 0 and j in supports[jid]
+
+        return np.array([[below(j, cm.joint1_id) - below(j, cm.joint2_id) for cm in self.cmodels]
+                         for j in joint_ids], dtype=float).reshape(len(joint_ids), len(self.cmodels))
 
     # ---------------------------------------------------------------- loads
     def _prepare_loads(self):
