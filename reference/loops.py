@@ -59,6 +59,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import closure
+from dalembert.lstsq import svd_cut
 from dalembert.reference import configuration as cfg
 from dalembert.reference.generalized import Kane, _mtv, _mv
 from dalembert.scene import WORLD
@@ -137,7 +138,7 @@ class ClosedLoops(Kane):
 
     def _solve_stacked(self, Q, U):
         """``_solve`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): each state projected, then the same
-        index-1 system, its rank cut per state (``_range_stacked``); ``udot`` (m, nv) and the stacked kinematics
+        index-1 system, its rank cut per state (``lstsq.svd_cut``); ``udot`` (m, nv) and the stacked kinematics
         with the loop forces on their bodies and, under ``("loops",)``, each loop's on its body b (m, 3)."""
         Q, U = self._project_stacked(Q, U)
         M, f, kin = self._mass_and_forces_stacked(Q, U)
@@ -145,7 +146,7 @@ class ClosedLoops(Kane):
         Li = _inverse_cholesky(M)
         LiT = Li.swapaxes(-1, -2)
         g = _mv(Li, f)
-        Ur, inv_S, Vr = self._range_stacked(J @ LiT)
+        Ur, inv_S, Vr = svd_cut(J @ LiT, closure.RANK_RTOL)
         c = _mtv(Vr, g) + _mtv(Ur, b) * inv_S
         udot = _mv(LiT, g - _mv(Vr, c))
         lam = -_mv(Ur, c * inv_S)
@@ -176,16 +177,6 @@ class ClosedLoops(Kane):
             found.append(r)
         return np.concatenate(phi, axis=-1), np.concatenate(J, axis=-2), np.concatenate(b, axis=-1), found
 
-    @staticmethod
-    def _range_stacked(Jt):
-        """``_range`` of m matrices ``Jt`` (m, k, nv) at once: ``U`` (m, k, r), ``1/S`` (m, r) and ``V`` (m, nv, r),
-        r = min(k, nv), with each matrix's cut singular values (``closure.RANK_RTOL``) zeroed in all three instead
-        of dropped: the same sums, less terms that are exactly zero."""
-        U, S, Vt = np.linalg.svd(Jt, full_matrices=False)
-        keep = (S > closure.RANK_RTOL * S[..., :1]) & (S[..., :1] > 0.0)
-        inv_S = np.divide(1.0, S, out=np.zeros_like(S), where=keep)
-        return U * keep[..., None, :], inv_S, Vt.swapaxes(-1, -2) * keep[..., None, :]
-
     def _project_stacked(self, Q, U):
         """``project`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): each state's Gauss-Newton iterations
         stop where its own stop (``PROJECTION_TOL``, or no halving), as ``project``'s."""
@@ -202,10 +193,10 @@ class ClosedLoops(Kane):
                 break
             i = np.flatnonzero(going)
             last[i] = worst[i]
-            Ur, inv_S, Vr = self._range_stacked(J[i] @ LiT[i])
+            Ur, inv_S, Vr = svd_cut(J[i] @ LiT[i], closure.RANK_RTOL)
             Q[i] = cfg.retract(self.blocks, Q[i], _mv(LiT[i], -_mv(Vr, _mtv(Ur, phi[i]) * inv_S)))
             phi[i], J[i], _, _ = self._constraints_stacked(self._kinematics_stacked(Q[i], zero[i]))
-        Ur, inv_S, Vr = self._range_stacked(J @ LiT)
+        Ur, inv_S, Vr = svd_cut(J @ LiT, closure.RANK_RTOL)
         w = np.linalg.solve(LiT, U[..., None])[..., 0]  # L^T v
         return Q, _mv(LiT, w - _mv(Vr, _mtv(Vr, w)))
 

@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import closure, spatial
+from dalembert.lstsq import svd_cut
 from dalembert.adapters.pinocchio import springs
 from dalembert.scene import AXIS_KINDS, WORLD
 
@@ -235,8 +236,7 @@ class PinocchioModel:
         there by ``1/mu`` per iteration (measured: 4e-6 N out of the four-bar's plane, where the truth has 1e-14);
         the reference reads back the same minimum-norm multipliers (``reference.loops``): ``lam`` projected on the
         range of ``J``, each state's singular values at or below ``closure.RANK_RTOL`` of its largest cut."""
-        U, S, _ = np.linalg.svd(J, full_matrices=False)
-        U = U * ((S > closure.RANK_RTOL * S[:, :1]) & (S[:, :1] > 0.0))[:, None, :]
+        U = svd_cut(J, closure.RANK_RTOL)[0]
         return np.einsum("mik,mk->mi", U, np.einsum("mik,mi->mk", U, lam))
 
     def constraint_forces(self, lam, R_Wc1):
