@@ -1,16 +1,19 @@
-# Two commands for a newcomer (see README): `make run` and `make test`.
-# Both create .venv and install the project into it first.
+# Two commands for a newcomer (see README): `make run` and `make test`; `make setup` only installs.
+# Each creates .venv and installs the project into it first, at the versions in constraints.txt
+# (the ones the suite was last run green with; `make lock` regenerates it, `make drift` shows and
+# tests what the newest resolution would change).
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+CONSTRAINTS := constraints.txt
 
-.PHONY: run test setup clean
+.PHONY: run test setup lock drift clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml $(CONSTRAINTS)
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[test,all]"  # all: the optional engines (Drake, MJX)
+	$(BIN)/python -m pip install --quiet --upgrade pip -c $(CONSTRAINTS)
+	$(BIN)/python -m pip install --quiet -e ".[test,all]" -c $(CONSTRAINTS)  # all: the optional engines (Drake, MJX)
 	$(BIN)/python -m dalembert.adapters.pinocchio.native  # compile the Pinocchio stepper once (~2 min)
 	touch $(STAMP)
 
@@ -29,5 +32,15 @@ run: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -P -m pytest -n 2 -q  # -P: the checkout is not on sys.path, only the installed package
 
+# constraints.txt anew from the newest resolution of pyproject.toml (run the suite after it: what
+# it pins is what every newcomer gets).
+lock:
+	bash .ci/resolve lock
+
+# The newest resolution against constraints.txt: the packages that would change and, where any
+# would, the suite run on the newest (in .venv-newest); exits non-zero when that suite fails.
+drift:
+	bash .ci/resolve drift
+
 clean:
-	rm -rf $(VENV) results
+	rm -rf $(VENV) .venv-newest .venv-lock results
