@@ -8,7 +8,7 @@ verdict, judged once when it ran (``dalembert.judge``), is stored with it.
 name is spelled; every reader (report, compare, export, tests) goes through them.
 A row is strict JSON: non-finite numbers are stored as null (the status says why).
 
-Columns (``SCHEMA_VERSION`` 2):
+Columns (``SCHEMA_VERSION`` 3):
 
 ==============  ==================================================================
 identity        ``key``, ``schema_version``, ``case``, ``case_version``, ``params``
@@ -19,7 +19,8 @@ identity        ``key``, ``schema_version``, ``case``, ``case_version``, ``param
 outcome         ``status``, ``message``, ``t_final`` (s), ``t_diverged`` (s),
                 ``traceback``
 cost            ``build_s``, ``wall_s_median``, ``wall_s_min``, ``wall_s_max`` (stepping
-                alone), ``repeats``, ``n_steps``, ``n_rhs``, ``overhead_s``, ``readback_s``,
+                alone), ``wall_s_repeats`` (JSON: every timed repeat's stepping time, s, in the
+                order run, so a later ``compare`` can test significance), ``repeats``, ``n_steps``, ``n_rhs``, ``overhead_s``, ``readback_s``,
                 ``stepping_total_s``, ``worker_s`` (all s), ``concurrent`` (runs in
                 flight), ``load_start``, ``load_end`` (1-minute load average)
 errors          ``err_<quantity>_max``, ``err_<quantity>_final`` (``dalembert.errors.QUANTITIES``)
@@ -37,6 +38,8 @@ files           ``trajectory`` (path relative to the store)
 Schema 1 (stores written before the schema was versioned) has the same columns
 without ``schema_version``, ``verdict``, ``verdict_reason`` and ``provenance``;
 ``from_row`` reads it with an empty verdict, so ``compare`` works across the change.
+Schemas 1 and 2 have no ``wall_s_repeats``: ``from_row`` reads them with none (an empty tuple), the
+median, min and max being all they kept.
 """
 
 from __future__ import annotations
@@ -48,8 +51,8 @@ from dataclasses import asdict, dataclass, field, fields, replace
 __all__ = ["SCHEMA_VERSION", "READABLE_SCHEMAS", "STATUSES", "BAD_STATUSES", "CHECKS", "Cost", "RunRecord",
            "SchemaError"]
 
-SCHEMA_VERSION = 2
-READABLE_SCHEMAS = (1, 2)
+SCHEMA_VERSION = 3
+READABLE_SCHEMAS = (1, 2, 3)
 
 # ok: finished; unsupported: the engine cannot represent the scene (reason in
 # message); diverged: NaN/inf or blow-up (time in message); failed: an error;
@@ -76,6 +79,8 @@ class Cost:
     ----------
     build_s : building the engine model
     wall_s_median, wall_s_min, wall_s_max : stepping wall time over the timed repeats
+    wall_s_repeats : tuple of float — every timed repeat's stepping wall time, in the order run (empty
+        in stores of schema 1 and 2, which kept only the three figures above)
     repeats : timed repeats (after one untimed warm-up)
     n_steps, n_rhs : steps and right-hand-side evaluations of one run
     overhead_s : median time per timed repeat of ``Adapter.run`` outside its stepping (the
@@ -95,6 +100,7 @@ class Cost:
     wall_s_median: float = _NAN
     wall_s_min: float = _NAN
     wall_s_max: float = _NAN
+    wall_s_repeats: tuple = ()
     repeats: int = 0
     n_steps: int = 0
     n_rhs: int = 0
@@ -214,7 +220,7 @@ class RunRecord:
                   for k, v in self.params.items()},
                "status": self.status, "message": self.message, "t_final": self.t_final,
                "t_diverged": self.t_diverged, "traceback": self.traceback}
-        row.update(asdict(self.cost))
+        row.update(asdict(self.cost), wall_s_repeats=json.dumps([_strict(w) for w in self.cost.wall_s_repeats]))
         for q, (mx, final) in self.errors.items():
             row[f"err_{q}_max"], row[f"err_{q}_final"] = mx, final
         row.update({f"drift_{n}": v for n, v in self.drifts.items()})
@@ -253,8 +259,7 @@ class RunRecord:
             params={k: tuple(v) if isinstance(v, list) else v for k, v in json.loads(row.get("params") or "{}").items()},
             status=row["status"], message=row.get("message") or "", engine_version=row.get("engine_version") or "",
             t_final=_num(row.get("t_final")), t_diverged=_opt(row.get("t_diverged")),
-            cost=Cost(**{f.name: int(row[f.name] or 0) if f.name in _COUNTS else _num(row[f.name])
-                         for f in fields(Cost) if f.name in row}),
+            cost=Cost(**{f.name: _cost_field(f.name, row[f.name]) for f in fields(Cost) if f.name in row}),
             errors=errors, drifts=drifts, drift_rates=rates, growths=growths,
             checks={c: _num(row[c]) for c in CHECKS if row.get(c) is not None},
             beyond=tuple((row.get("beyond_tolerance") or "").split()), verdict=row.get("verdict") or "",
@@ -266,6 +271,15 @@ class RunRecord:
             trajectory=row.get("trajectory") if isinstance(row.get("trajectory"), str) else "",
             traceback=row.get("traceback") if isinstance(row.get("traceback"), str) else "",
             schema_version=schema)
+
+
+def _cost_field(name, value):
+    """A stored ``Cost`` field back: counts as int, the repeats' JSON list as a tuple of floats."""
+    if name in _COUNTS:
+        return int(value or 0)
+    if name == "wall_s_repeats":
+        return tuple(_num(w) for w in json.loads(value)) if isinstance(value, str) else ()
+    return _num(value)
 
 
 def _strict(v):

@@ -200,7 +200,7 @@ def test_dask_cluster_gives_the_same_rows(tmp_path, monkeypatch):
         run_matrix_dask(specs, remote, client, timing=QUICK)
     assert [r.provenance["threads"] for r in remote.records()] == [max(1, (os.cpu_count() or 1) // 2)] * len(specs)
     # everything but where and how long it ran
-    drop = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "readback_s", "build_s", "worker_s",
+    drop = {"wall_s_median", "wall_s_min", "wall_s_max", "wall_s_repeats", "overhead_s", "readback_s", "build_s", "worker_s",
             "stepping_total_s", "provenance", "load_start", "load_end"}
     strip = lambda rows: [{k: v for k, v in r.items() if k not in drop} for r in rows]  # noqa: E731
     assert strip(local.rows()) == strip(remote.rows())
@@ -267,7 +267,7 @@ def test_resume_refuses_a_case_that_changed(tmp_path, capsys):
                  "--param", "t_final=0.5", "--out", str(out)]) == 0
     store = Store(out)
     assert {"schema_version", "verdict", "verdict_reason"} <= set(store.table().columns)
-    assert store.schema_version() == store.rows()[0]["schema_version"] == 2
+    assert store.schema_version() == store.rows()[0]["schema_version"] == 3
     manifest = store.manifest()
     manifest["specs"][0]["case_version"] = "0123456789ab"  # as if the case's code had changed since
     store.write_manifest(manifest)

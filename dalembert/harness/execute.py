@@ -4,8 +4,8 @@ Timing (per run): the model is built once (not timed), run once to warm up
 (not timed), then run until at least ``Timing.min_repeats`` runs and
 ``Timing.min_total_s`` seconds of stepping are reached (at most
 ``Timing.max_repeats``, and no more once warm-up plus repeats pass
-``Timing.max_total_s``: a run of a second or more is timed once or twice); the
-median, min and max stepping wall time are stored.
+``Timing.max_total_s``: a run of a second or more is timed once or twice); every
+repeat's stepping wall time is stored, with their median, min and max.
 
 The run is judged here, once (``dalembert.judge``), and its verdict is part of
 its record.
@@ -118,7 +118,7 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
         if not traj.is_finite():
             t_bad = traj.first_nonfinite_time()
             cost = Cost(build_s=build_s, wall_s_median=first.wall_s, wall_s_min=first.wall_s,
-                        wall_s_max=first.wall_s, repeats=1, n_steps=first.n_steps, n_rhs=first.n_rhs,
+                        wall_s_max=first.wall_s, wall_s_repeats=(first.wall_s,), repeats=1, n_steps=first.n_steps, n_rhs=first.n_rhs,
                         readback_s=readback_s, concurrent=concurrent, load_start=load_start, load_end=_load())
             why = first.info.get("message", "")  # the engine's own account, where it gives one
             return _record(spec, "diverged", f"non-finite state from t = {t_bad} s" + (f" ({why})" if why else ""),
@@ -143,7 +143,7 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
         summary = invariants.summary(case.scene, traj, case.conserved, case.invariants, truth)
         npz = trajectory_to_npz(traj)
         cost = Cost(build_s=build_s, wall_s_median=float(np.median(walls)), wall_s_min=float(np.min(walls)),
-                    wall_s_max=float(np.max(walls)), repeats=len(walls), n_steps=first.n_steps, n_rhs=first.n_rhs,
+                    wall_s_max=float(np.max(walls)), wall_s_repeats=tuple(float(w) for w in walls), repeats=len(walls), n_steps=first.n_steps, n_rhs=first.n_rhs,
                     overhead_s=float(np.median(np.array(totals) - np.array(walls))), readback_s=readback_s,
                     stepping_total_s=float(first.wall_s + sum(walls)), worker_s=time.perf_counter() - started,
                     concurrent=concurrent, load_start=load_start, load_end=_load())

@@ -1,0 +1,32 @@
+"""A run's record keeps every timed repeat (schema 3), and reads the stores that kept only three figures."""
+
+import json
+
+import numpy as np
+
+from dalembert.harness.api import load
+from dalembert.harness.cli import main
+from dalembert.record import Cost, RunRecord
+
+
+def test_every_timed_repeat_is_stored_and_its_figures_are_theirs(tmp_path):
+    out = tmp_path / "r"
+    assert main(["run", "--case", "pendulum", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2",
+                 "--param", "t_final=0.5", "--jobs", "1", "--out", str(out)]) == 0
+    (record,) = load(out).records()
+    walls = np.array(record.cost.wall_s_repeats)
+    assert record.ok and len(walls) == record.cost.repeats >= 3  # execute.Timing.min_repeats
+    assert (walls > 0).all()
+    assert record.cost.wall_s_median == np.median(walls)
+    assert (record.cost.wall_s_min, record.cost.wall_s_max) == (walls.min(), walls.max())
+
+
+def test_repeats_survive_the_row_and_older_schemas_read_without_them():
+    record = RunRecord(key="k", case="c", case_version="v", engine="e", integrator="rk4", dt=1e-3, status="ok",
+                       cost=Cost(wall_s_median=0.2, wall_s_min=0.1, wall_s_max=0.3, wall_s_repeats=(0.3, 0.1, 0.2),
+                                 repeats=3))
+    row = json.loads(json.dumps(record.to_row()))  # strict JSON, as stored
+    assert RunRecord.from_row(row).cost == record.cost
+    old = {k: v for k, v in row.items() if k != "wall_s_repeats"} | {"schema_version": 2}
+    back = RunRecord.from_row(old)
+    assert back.cost.wall_s_repeats == () and back.cost.wall_s_median == 0.2 and back.schema_version == 2
