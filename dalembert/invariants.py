@@ -19,6 +19,7 @@ from dalembert.scene import WORLD
 
 __all__ = [
     "CONSERVED",
+    "Conserved",
     "kinetic_energy",
     "potential_energy",
     "spring_lengths",
@@ -312,15 +313,43 @@ def pairwise_distance_change(scene, traj):
     return worst
 
 
-# name -> (series, how its drift is scaled)
-CONSERVED = {
-    "energy": "relative to max(|E(0)|, max kinetic energy)",
-    "energy_balance": "relative to the max kinetic energy: E - W(loads) + D(dampers) is constant",
-    "linear_momentum": "absolute (kg m/s) when it is zero, else relative to max |p|",
-    "angular_momentum": "relative to max |L| (about the world origin)",
-    "angular_momentum_com": "relative to max |L| (spin about the COMs)",
-    "pairwise_distance": "absolute, m",
-}
+@dataclass(frozen=True)
+class Conserved:
+    """A built-in conserved quantity, labelled as a case's declared ones are (``dalembert.case.Invariant``),
+    so a reader takes its unit from here and never parses prose.
+
+    Attributes
+    ----------
+    name : str — the key of its drift (``RunRecord.drifts``, column ``drift_<name>``)
+    description : str — what is conserved, with its frame and reference point
+    unit : str — unit of the quantity itself
+    drift_unit : str — unit of its stored drift: "relative" (dimensionless), a unit where the drift is
+        absolute, or "absolute when zero, else relative"
+    scaled_by : str — what the drift is measured against (``_measured`` computes it)
+    """
+
+    name: str
+    description: str
+    unit: str
+    drift_unit: str
+    scaled_by: str
+
+
+# name -> its label; ``_measured`` computes each series and scale.
+CONSERVED = {c.name: c for c in (
+    Conserved("energy", "total mechanical energy: kinetic + gravitational + stored in springs", "J", "relative",
+              "max(|E(0)|, max kinetic energy)"),
+    Conserved("energy_balance", "E - W(loads) + D(dampers): energy with the loads' work and the dampers' "
+              "dissipation accounted", "J", "relative", "the max kinetic energy"),
+    Conserved("linear_momentum", "total linear momentum, world axes", "kg m/s", "absolute when zero, else relative",
+              "max |p|, or 1 kg m/s when it is zero"),
+    Conserved("angular_momentum", "total angular momentum about the world origin, world axes", "kg m^2/s",
+              "relative", "max |L|"),
+    Conserved("angular_momentum_com", "the bodies' spin about their own centres of mass, summed, world axes",
+              "kg m^2/s", "relative", "max |L|"),
+    Conserved("pairwise_distance", "distances between the particles of rigidly joined bodies", "m", "m",
+              "1 m (absolute)"),
+)}
 
 
 # The conserved vectors, by name (world axes, shape (n, 3)).

@@ -93,3 +93,17 @@ def test_angular_momentum_about_a_point_counts_each_bodys_orbit_once():
     expected = sum(body.mass * np.cross(x[body.name][0] - o, v[body.name][0]) + body.inertia_matrix @ w[body.name][0]
                    for body in (a, b))
     np.testing.assert_allclose(invariants.angular_momentum_about(scene, traj, o)[0], expected, rtol=1e-15, atol=1e-15)
+
+
+def test_every_built_in_conserved_quantity_is_a_labelled_record():
+    """Built-in quantities carry name, description, unit and drift unit as records (as a case's declared
+    ones do), so nothing reads a unit out of prose; every one is computed by ``drift``."""
+    from dalembert.invariants import CONSERVED, Conserved
+
+    assert set(CONSERVED) == {"energy", "energy_balance", "linear_momentum", "angular_momentum",
+                              "angular_momentum_com", "pairwise_distance"}
+    for name, c in CONSERVED.items():
+        assert isinstance(c, Conserved) and c.name == name and c.description and c.unit and c.scaled_by
+    # an absolute drift is in the quantity's own unit; the others are relative (or relative unless zero)
+    assert {c.drift_unit for c in CONSERVED.values()} == {"relative", "m", "absolute when zero, else relative"}
+    assert CONSERVED["pairwise_distance"].drift_unit == CONSERVED["pairwise_distance"].unit
