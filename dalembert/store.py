@@ -48,7 +48,7 @@ from dalembert.case import CaseRecord
 from dalembert.record import SCHEMA_VERSION, RunRecord, SchemaError
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
-__all__ = ["Store", "StoreError", "StoreLock", "atomic_write", "trajectory_to_npz", "trajectory_from_npz", "machine_info", "harness_commit"]
+__all__ = ["Store", "StoreError", "StoreLock", "atomic_write", "trajectory_to_npz", "trajectory_from_npz", "machine_info", "library_versions", "harness_commit"]
 
 
 def _umask():
@@ -135,6 +135,14 @@ def harness_commit():
         return (commit + ("-dirty" if dirty else "")) or "unknown"
     except (OSError, subprocess.SubprocessError):
         return "unknown"
+
+
+def library_versions():
+    """The numerical libraries every engine's numbers pass through (``{"numpy": ..., "scipy": ...}``): the
+    reference and every read-back compute with them, so a store records them beside the engines' versions."""
+    import scipy
+
+    return {"numpy": np.__version__, "scipy": scipy.__version__}
 
 
 def machine_info():

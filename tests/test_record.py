@@ -30,3 +30,13 @@ def test_repeats_survive_the_row_and_older_schemas_read_without_them():
     old = {k: v for k, v in row.items() if k != "wall_s_repeats"} | {"schema_version": 2}
     back = RunRecord.from_row(old)
     assert back.cost.wall_s_repeats == () and back.cost.wall_s_median == 0.2 and back.schema_version == 2
+
+
+def test_the_manifest_records_numpy_and_scipy(tmp_path):
+    import numpy
+    import scipy
+
+    out = tmp_path / "r"
+    assert main(["run", "--case", "pendulum", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2",
+                 "--param", "t_final=0.1", "--quick", "--jobs", "1", "--out", str(out)]) == 0
+    assert load(out).manifest()["libraries"] == {"numpy": numpy.__version__, "scipy": scipy.__version__}

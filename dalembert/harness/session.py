@@ -32,11 +32,12 @@ def manifest(specs, command, timeout, timing, jobs, scheduler=None):
     """The manifest of a new matrix of ``specs``: harness, machine, engines, command, timing, load."""
     import dalembert
     from dalembert.adapters import get_adapter
-    from dalembert.store import harness_commit, machine_info, now
+    from dalembert.store import harness_commit, library_versions, machine_info, now
 
     return {
         "harness_version": dalembert.__version__, "harness_commit": harness_commit(), "machine": machine_info(),
         "engines": {e: get_adapter(e).version() for e in sorted({s.engine for s in specs})},
+        "libraries": library_versions(),
         "command": command, "started": now(), "ended": None, "timeout_s": timeout, "timing": vars(timing),
         "jobs": jobs, "threads_per_worker": None if scheduler else threads.per_worker(jobs), "scheduler": scheduler,
         "load_average": {"start": load_average(), "end": None},
