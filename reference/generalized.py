@@ -61,6 +61,34 @@ def _mtv(A, x):
     return (x[..., None, :] @ A)[..., 0, :]
 
 
+# Kane's terms below are written once for one state and for a stack of states (a leading sample axis
+# on every array). The few operations whose numpy call differs with the shape go through these, each
+# keeping the call either path made before, so both give the bits they always gave.
+def _dot(A, x):
+    """``A x``: ``A`` (i, j), ``x`` (j,) -> (i,); or stacked (m, i, j), (m, j) -> (m, i)."""
+    return A @ x if A.ndim == 2 else _mv(A, x)
+
+
+def _tdot(A, x):
+    """``A^T x``: ``A`` (i, j), ``x`` (i,) -> (j,); or stacked (m, i, j), (m, i) -> (m, j)."""
+    return A.T @ x if A.ndim == 2 else _mtv(A, x)
+
+
+def _unit(x):
+    """``x`` over its norm along the last axis: (k,) or (m, k)."""
+    return x / np.linalg.norm(x) if x.ndim == 1 else x / np.linalg.norm(x, axis=-1, keepdims=True)
+
+
+def _T(A):
+    """The transpose of the last two axes: ``A.T`` of a matrix, each matrix's of a stack."""
+    return A.swapaxes(-1, -2)
+
+
+def _linear_solve(M, f):
+    """``M^-1 f``: ``M`` (n, n), ``f`` (n,); or stacked (m, n, n), (m, n)."""
+    return np.linalg.solve(M, f) if f.ndim == 1 else np.linalg.solve(M, f[..., None])[..., 0]
+
+
 def _child(P, R, r_PJ, r_JC, w, alpha_bias, Jw, Jv_slide, v_slide, a_slide):
     """A child's ``kinematics`` entry from its parent's ``P``: its COM reached through the joint (``r_PJ``: parent
     COM -> joint point, slid; ``r_JC``: joint point -> child COM), with its rotation ``R``, angular velocity
@@ -127,32 +155,36 @@ class Kane:
     def kinematics(self, q, u):
         """Pose, velocity, Jacobians and bias accelerations of every body, world axes.
 
-        Returns a dict per body name with ``R (3,3)``, ``p (3,)``, ``w (3,)``,
-        ``v (3,)``, ``Jv (3, nv)``, ``Jw (3, nv)``, ``a_bias (3,)``, ``alpha_bias (3,)``.
+        ``q`` (nq,), ``u`` (nv,) for one state, or ``(m, nq)``, ``(m, nv)`` for m states at once: every entry
+        then has a leading sample axis. Returns a dict per body name with ``R (3,3)``, ``p (3,)``,
+        ``w (3,)``, ``v (3,)``, ``Jv (3, nv)``, ``Jw (3, nv)``, ``a_bias (3,)``, ``alpha_bias (3,)``.
         """
-        n = self.nv
-        zero, zeros = _ZERO3, self._zeros  # read-only: every entry below is a new array or a copy
-        out = {WORLD: dict(R=_EYE3, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero)}
+        lead, n = q.shape[:-1], self.nv
+        if lead:
+            zero, zeros, eye = np.zeros(lead + (3,)), np.zeros(lead + (3, n)), np.broadcast_to(_EYE3, lead + (3, 3))
+        else:  # read-only and shared: every entry below is a new array or a copy
+            zero, zeros, eye = _ZERO3, self._zeros, _EYE3
+        out = {WORLD: dict(R=eye, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero)}
         for jd in self.joints:
             j = jd["joint"]
             P = out[j.parent]
-            qj, uj = q[jd["q"]], u[jd["v"]]
+            qj, uj, cols = q[..., jd["q"]], u[..., jd["v"]], jd["v"]
             if j.kind == "free":
-                R = spatial.quat_to_matrix(qj[3:] / np.linalg.norm(qj[3:]))
-                Jv = np.zeros((3, n))
-                Jv[:, jd["v"].start:jd["v"].start + 3] = np.eye(3)
-                Jw = np.zeros((3, n))
-                Jw[:, jd["v"].start + 3:jd["v"].stop] = R
-                out[j.child] = dict(R=R, p=qj[:3].copy(), w=R @ uj[3:], v=uj[:3].copy(), Jv=Jv, Jw=Jw,
-                                    a_bias=zero, alpha_bias=zero)
+                R = spatial.quat_to_matrix(_unit(qj[..., 3:]))
+                Jv = np.zeros(lead + (3, n))
+                Jv[..., cols.start:cols.start + 3] = _EYE3
+                Jw = np.zeros(lead + (3, n))
+                Jw[..., cols.start + 3:cols.stop] = R
+                out[j.child] = dict(R=R, p=qj[..., :3].copy(), w=_dot(R, uj[..., 3:]), v=uj[..., :3].copy(), Jv=Jv,
+                                    Jw=Jw, a_bias=zero, alpha_bias=zero)
                 continue
             R_WJp = P["R"] @ jd["R_PJ"]
             if j.kind == "revolute":
-                R_J = spatial.so3_exp(jd["axis"] * qj[0])
+                R_J = spatial.so3_exp(jd["axis"] * qj[..., :1])
             elif j.kind == "ball":
-                R_J = spatial.quat_to_matrix(qj / np.linalg.norm(qj))
+                R_J = spatial.quat_to_matrix(_unit(qj))
             else:
-                R_J = _EYE3
+                R_J = eye
             R_WJc = R_WJp @ R_J
             R = R_WJc @ jd["R_CJ"].T
             r_PJ = P["R"] @ jd["p_PJ"]  # parent COM -> (parent's) joint point
@@ -161,151 +193,79 @@ class Kane:
             w, alpha_bias = P["w"].copy(), P["alpha_bias"].copy()
             v_slide, a_slide, Jv_slide = zero, zero, zeros
             if j.kind == "prismatic":
-                Jv_slide = np.zeros((3, n))
+                Jv_slide = np.zeros(lead + (3, n))
                 a_W = R_WJp @ jd["axis"]
-                r_PJ = r_PJ + a_W * qj[0]  # parent COM -> the child's joint point, slid
-                v_slide = a_W * uj[0]
+                r_PJ = r_PJ + a_W * qj[..., :1]  # parent COM -> the child's joint point, slid
+                v_slide = a_W * uj[..., :1]
                 a_slide = 2.0 * spatial.cross(P["w"], v_slide)  # Coriolis: the axis turns with the parent
-                Jv_slide[:, jd["v"]] = a_W[:, None]
+                Jv_slide[..., cols] = a_W[..., None]
             if j.kind == "revolute":
                 s = R_WJp @ jd["axis"]
-                Jw[:, jd["v"]] += s[:, None]
-                w_rel = s * uj[0]
+                Jw[..., cols] += s[..., None]
+                w_rel = s * uj[..., :1]
                 w += w_rel
                 alpha_bias += spatial.cross(P["w"], w_rel)
             elif j.kind == "ball":
-                Jw[:, jd["v"]] += R_WJc
-                w_rel = R_WJc @ uj
+                Jw[..., cols] += R_WJc
+                w_rel = _dot(R_WJc, uj)
                 w += w_rel
                 alpha_bias += spatial.cross(w, w_rel)
             out[j.child] = _child(P, R, r_PJ, r_JC, w, alpha_bias, Jw, Jv_slide, v_slide, a_slide)
         return out
 
     def _kinematics_stacked(self, Q, U):
-        """``kinematics`` at m states at once, ``Q`` (m, nq), ``U`` (m, nv): the same entries, each with a
-        leading sample axis (``R (m, 3, 3)``, ``Jv (m, 3, nv)``, ...), term by term as ``kinematics``."""
-        m, n = len(Q), self.nv
-        zero, zeros, eye = np.zeros((m, 3)), np.zeros((m, 3, n)), np.broadcast_to(_EYE3, (m, 3, 3))
-        out = {WORLD: dict(R=eye, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero)}
-        for jd in self.joints:
-            j = jd["joint"]
-            P = out[j.parent]
-            qj, uj, cols = Q[:, jd["q"]], U[:, jd["v"]], jd["v"]
-            if j.kind == "free":
-                quat = qj[:, 3:]
-                R = spatial.quat_to_matrix(quat / np.linalg.norm(quat, axis=-1, keepdims=True))
-                Jv = np.zeros((m, 3, n))
-                Jv[:, :, cols.start:cols.start + 3] = _EYE3
-                Jw = np.zeros((m, 3, n))
-                Jw[:, :, cols.start + 3:cols.stop] = R
-                out[j.child] = dict(R=R, p=qj[:, :3].copy(), w=_mv(R, uj[:, 3:]), v=uj[:, :3].copy(), Jv=Jv, Jw=Jw,
-                                    a_bias=zero, alpha_bias=zero)
-                continue
-            R_WJp = P["R"] @ jd["R_PJ"]
-            if j.kind == "revolute":
-                R_J = spatial.so3_exp(jd["axis"] * qj[:, :1])
-            elif j.kind == "ball":
-                R_J = spatial.quat_to_matrix(qj / np.linalg.norm(qj, axis=-1, keepdims=True))
-            else:
-                R_J = eye
-            R_WJc = R_WJp @ R_J
-            R = R_WJc @ jd["R_CJ"].T
-            r_PJ = P["R"] @ jd["p_PJ"]
-            r_JC = -R @ jd["p_CJ"]
-            Jw = P["Jw"].copy()
-            w, alpha_bias = P["w"].copy(), P["alpha_bias"].copy()
-            v_slide, a_slide, Jv_slide = zero, zero, zeros
-            if j.kind == "prismatic":
-                Jv_slide = np.zeros((m, 3, n))
-                a_W = R_WJp @ jd["axis"]
-                r_PJ = r_PJ + a_W * qj[:, :1]
-                v_slide = a_W * uj[:, :1]
-                a_slide = 2.0 * spatial.cross(P["w"], v_slide)
-                Jv_slide[:, :, cols] = a_W[:, :, None]
-            if j.kind == "revolute":
-                s = R_WJp @ jd["axis"]
-                Jw[:, :, cols] += s[:, :, None]
-                w_rel = s * uj[:, :1]
-                w += w_rel
-                alpha_bias += spatial.cross(P["w"], w_rel)
-            elif j.kind == "ball":
-                Jw[:, :, cols] += R_WJc
-                w_rel = _mv(R_WJc, uj)
-                w += w_rel
-                alpha_bias += spatial.cross(w, w_rel)
-            out[j.child] = _child(P, R, r_PJ, r_JC, w, alpha_bias, Jw, Jv_slide, v_slide, a_slide)
-        return out
+        """``kinematics`` at m states at once, ``Q`` (m, nq), ``U`` (m, nv) (the name the loops' stacked read-back
+        calls)."""
+        return self.kinematics(Q, U)
 
     # -------------------------------------------------------------- dynamics
     def _solve(self, t, q, u):
         M, f, kin = self.mass_and_forces(t, q, u)
-        udot = np.linalg.solve(M, f) if self.nv else np.zeros(0)
-        return udot, kin
+        return (_linear_solve(M, f) if self.nv else np.zeros(f.shape)), kin
 
     def mass_matrix(self, kin):
-        """Kane's mass matrix ``M`` (nv, nv) at the configuration of ``kin`` (``kinematics``; each body's
-        entry gains ``I_W``, its inertia about the COM in world axes, kg m^2)."""
-        M = np.zeros((self.nv, self.nv))
+        """Kane's mass matrix ``M`` (nv, nv), or (m, nv, nv), at the configuration(s) of ``kin``
+        (``kinematics``; each body's entry gains ``I_W``, its inertia about the COM in world axes, kg m^2)."""
+        M = np.zeros(kin[WORLD]["p"].shape[:-1] + (self.nv, self.nv))
         for jd in self.joints:
             k = kin[jd["joint"].child]
-            R = k["R"]
-            k["I_W"] = I_W = R @ jd["I_B"] @ R.T
-            M += jd["m"] * k["Jv"].T @ k["Jv"] + k["Jw"].T @ I_W @ k["Jw"]
+            R, Jv, Jw = k["R"], k["Jv"], k["Jw"]
+            k["I_W"] = I_W = R @ jd["I_B"] @ _T(R)
+            M += jd["m"] * _T(Jv) @ Jv + _T(Jw) @ I_W @ Jw
         return M
 
     def mass_and_forces(self, t, q, u):
         """Kane's ``M u' = f``: ``M`` (nv, nv), ``f`` (nv,) and the ``kinematics`` (each body's
-        entry gains ``F``, the resultant of its loads, springs and gravity, N, world)."""
+        entry gains ``F``, the resultant of its loads, springs and gravity, N, world); at m states at once
+        (``q`` (m, nq), ``u`` (m, nv)), ``M`` (m, nv, nv), ``f`` (m, nv), ``F`` (m, 3)."""
         kin = self.kinematics(q, u)
-        M = self.mass_matrix(kin)
-        f = np.zeros(self.nv)
-        spring_wrenches = springs.wrenches(self.scene.springs, kin) if self.scene.springs else {}
+        M, f = self.mass_matrix(kin), np.zeros(q.shape[:-1] + (self.nv,))
+        wrenches = springs.wrenches if q.ndim == 1 else springs.wrenches_stacked
+        spring_wrenches = wrenches(self.scene.springs, kin) if self.scene.springs else {}
         for jd in self.joints:
             k = kin[jd["joint"].child]
-            m, R, I_W = jd["m"], k["R"], k["I_W"]
-            F, T = jd["loads"].resultant(R)
+            m, I_W = jd["m"], k["I_W"]
+            F, T = jd["loads"].resultant(k["R"])
             if jd["joint"].child in spring_wrenches:
                 F_s, T_s = spring_wrenches[jd["joint"].child]
                 F, T = F + F_s, T + T_s
             k["F"] = F
-            f += k["Jv"].T @ (F - m * k["a_bias"])  # generalized active + inertia forces
-            f += k["Jw"].T @ (T - I_W @ k["alpha_bias"] - spatial.cross(k["w"], I_W @ k["w"]))
+            f += _tdot(k["Jv"], F - m * k["a_bias"])  # generalized active + inertia forces
+            f += _tdot(k["Jw"], T - _dot(I_W, k["alpha_bias"]) - spatial.cross(k["w"], _dot(I_W, k["w"])))
         return M, f, kin
-
-    def _mass_stacked(self, kin):
-        """``mass_matrix`` at m states at once (``kin``: ``_kinematics_stacked``): ``M`` (m, nv, nv); each body's
-        entry gains ``I_W`` (m, 3, 3)."""
-        M = np.zeros((len(kin[WORLD]["p"]), self.nv, self.nv))
-        for jd in self.joints:
-            k = kin[jd["joint"].child]
-            R, Jv, Jw = k["R"], k["Jv"], k["Jw"]
-            k["I_W"] = I_W = R @ jd["I_B"] @ R.swapaxes(-1, -2)
-            M += jd["m"] * Jv.swapaxes(-1, -2) @ Jv + Jw.swapaxes(-1, -2) @ I_W @ Jw
-        return M
 
     def _mass_and_forces_stacked(self, Q, U):
-        """``mass_and_forces`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): ``M`` (m, nv, nv), ``f`` (m, nv)
-        and the stacked kinematics, each body's entry with ``I_W`` (m, 3, 3) and ``F`` (m, 3)."""
-        kin = self._kinematics_stacked(Q, U)
-        M, f = self._mass_stacked(kin), np.zeros((len(Q), self.nv))
-        spring_wrenches = springs.wrenches_stacked(self.scene.springs, kin) if self.scene.springs else {}
-        for jd in self.joints:
-            k = kin[jd["joint"].child]
-            I_W = k["I_W"]
-            k["F"], T = jd["loads"].resultant(k["R"])
-            if jd["joint"].child in spring_wrenches:
-                F_s, T_s = spring_wrenches[jd["joint"].child]
-                k["F"], T = k["F"] + F_s, T + T_s
-            f += _mtv(k["Jv"], k["F"] - jd["m"] * k["a_bias"])
-            f += _mtv(k["Jw"], T - _mv(I_W, k["alpha_bias"]) - spatial.cross(k["w"], _mv(I_W, k["w"])))
-        return M, f, kin
+        """``mass_and_forces`` at m states at once (the name the loops' stacked solve calls)."""
+        return self.mass_and_forces(None, Q, U)
+
+    def _mass_stacked(self, kin):
+        """``mass_matrix`` of stacked kinematics (the name the loops' stacked projection calls)."""
+        return self.mass_matrix(kin)
 
     def _solve_stacked(self, Q, U):
         """``_solve`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): ``udot`` (m, nv) and the stacked
-        kinematics (``_mass_and_forces_stacked``)."""
-        M, f, kin = self._mass_and_forces_stacked(Q, U)
-        udot = np.linalg.solve(M, f[..., None])[..., 0] if self.nv else np.zeros((len(Q), 0))
-        return udot, kin
+        kinematics; a formulation whose ``_solve`` is its own brings its own twin (``sampled``)."""
+        return self._solve(None, Q, U)
 
     def acceleration(self, t, q, v):
         """Generalized accelerations ``u'`` (nv,) from ``Q + Q* = 0``."""
@@ -322,7 +282,7 @@ class Kane:
         unbalanced = {}
         for jd in self.joints:
             k = kin[jd["joint"].child]
-            unbalanced[jd["joint"].child] = jd["m"] * (k["Jv"] @ udot + k["a_bias"]) - k["F"]
+            unbalanced[jd["joint"].child] = jd["m"] * (_dot(k["Jv"], udot) + k["a_bias"]) - k["F"]
         return self.joint_forces(unbalanced)
 
     def joint_forces(self, unbalanced):
@@ -339,16 +299,12 @@ class Kane:
     # ------------------------------------------------------------ read-back
     def forces(self, udot, kin):
         """The forces read back at one state, from its ``_solve``: each joint's ON its child
-        (``_reactions``; N, world, dict name -> (3,))."""
+        (``_reactions``; N, world, dict name -> (3,)); at m states, from ``_solve_stacked``, name -> (m, 3)."""
         return self._reactions(udot, kin)
 
     def _forces_stacked(self, udot, kin):
-        """``forces`` at m states at once, from ``_solve_stacked``: force name -> (m, 3)."""
-        unbalanced = {}  # as ``_reactions``
-        for jd in self.joints:
-            k = kin[jd["joint"].child]
-            unbalanced[jd["joint"].child] = jd["m"] * (_mv(k["Jv"], udot) + k["a_bias"]) - k["F"]
-        return self.joint_forces(unbalanced)
+        """``forces`` at m states at once (a formulation with forces of its own adds them to its twin)."""
+        return self.forces(udot, kin)
 
     def sampled(self, t, Q, V):
         """Each body's ``p``, ``R``, ``v``, ``w`` and the ``forces`` at the states ``(Q[i], V[i])`` at times
