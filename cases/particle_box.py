@@ -28,7 +28,7 @@ DISTANCE_TOL = Tolerance(1e-10, "m; a rigid body keeps every pairwise distance â
 
 @case(tags=("canonical", "free", "gravity", "particles"),
       units=dict(spacing="m", mass="kg", gravity="m/s^2", omega0="rad/s", t_final="s", sample_interval="s"),
-      positive=("spacing", "mass"))
+      positive=("spacing", "mass", "sample_interval"))
 def particle_box(spacing=(1.0, 2.0, 3.0), mass=10.0, gravity=9.8, omega0=(0.0, 1.0, 1.0), t_final=20.0,
                  sample_interval=0.01):
     """27 equal point masses, total ``mass``, on the lattice ``(a i, b j, c k)``,
@@ -85,7 +85,8 @@ WELDED_MOMENTUM_TOL = Tolerance(1e-6, "relative, spin about the COM; as WELDED_E
 
 @case(tags=("hard", "free", "gravity", "particles", "constraints"),
       units=dict(spacing="m", mass="kg", gravity="m/s^2", omega0="rad/s", t_final="s", radius="m",
-                 sample_interval="s"), positive=("spacing", "mass", "radius"))
+                 sample_interval="s"),
+      positive=("spacing", "mass", "radius", "sample_interval"))
 def particle_box_welded(spacing=(1.0, 2.0, 3.0), mass=10.0, gravity=9.8, omega0=(0.0, 1.0, 1.0), t_final=2.0,
                         radius=0.05, sample_interval=0.01):
     """The particle box as 27 separate bodies: the centre particle free, the 26

@@ -14,7 +14,10 @@ unknown ``conserved`` or tolerance names (with a did-you-mean), a tolerance
 without a reason, a conserved quantity without a bound, a declared
 ``Invariant`` whose name clashes with a built-in one, and, when the factory is
 registered, a factory without a ``t_final`` parameter or a parameter without a
-default. ``docs/cases.md`` walks through writing a case.
+default. Each parameter's domain (``positive``, ``counts``; finite and within
+``params.MAX_MAGNITUDE`` for every numeric one) is declared once in ``@case`` and
+checked every time the case is made, before the factory runs (``dalembert.params``).
+``docs/cases.md`` walks through writing a case.
 
 ``load_cases()`` loads every package registered in the entry-point group
 ``dalembert.cases``: the built-in ``dalembert.cases`` and any third party's.
@@ -34,6 +37,7 @@ import numpy as np
 
 from dalembert.errors import QUANTITIES
 from dalembert.invariants import CONSERVED, loop_residual
+from dalembert.params import domain_problems
 from dalembert.registry import Registry, suggest
 from dalembert.scene import Scene, SceneError
 
@@ -423,14 +427,16 @@ def _canonical(obj):
 
 @dataclass(frozen=True)
 class CaseFactory:
-    """A registered case family: the factory, its tags, parameter units, and the parameters that
-    must be positive (every component of a vector one)."""
+    """A registered case family: the factory, its tags, parameter units, and its parameters' domains
+    (``dalembert.params``): those that must be positive (every component of a vector one) and those
+    that count things (whole numbers >= 1). Calling it checks the parameters, then makes the case."""
 
     name: str
     func: Callable
     tags: tuple
     units: dict
     positive: tuple = ()
+    counts: tuple = ()
 
     @property
     def params(self):
@@ -449,17 +455,8 @@ class CaseFactory:
         if unknown:
             raise SceneError(f"case {self.name!r}", [
                 f"parameter {k!r}: unknown{suggest(k, known)}" for k in unknown])
-        problems = []
-        for key, value in params.items():
-            default = known[key]
-            if isinstance(default, tuple) and (not isinstance(value, (tuple, list)) or len(value) != len(default)):
-                problems.append(f"parameter {key!r}: expected {len(default)} numbers like {default!r}, got {value!r}")
         merged = {**known, **params}
-        for key in self.positive:
-            value = merged[key]
-            if not all(math.isfinite(v) and v > 0.0 for v in (value if isinstance(value, (tuple, list)) else (value,))):
-                unit = f" ({self.units[key]})" if key in self.units else ""
-                problems.append(f"parameter {key!r}: must be positive{unit}, got {value!r}")
+        problems = domain_problems(self.name, known, params, self.positive, self.counts, self.units)
         if problems:
             raise SceneError(f"case {self.name!r}", problems)
         made = self.func(**params)
@@ -473,14 +470,19 @@ class CaseFactory:
                     made.invariants, dict(self.units))
 
 
-def case(tags=(), units=None, positive=()):
+def case(tags=(), units=None, positive=(), counts=()):
     """Register a case factory under its function name.
 
     Every parameter must have a default (a case runs without arguments), and one of
     them is ``t_final`` (s): the contract tests and ``--param t_final=...`` shorten a
-    case through it. ``positive`` names the parameters that must be positive and finite
-    (lengths, masses, radii: a zero-length rod would run "ok" with every error exactly 0),
-    checked before the factory runs. Raises ``SceneError`` naming the case and the parameter.
+    case through it. Each parameter's domain is declared here, once, and checked every time
+    the case is made, before the factory runs (``dalembert.params.domain_problems``):
+    ``positive`` names the parameters that must be positive (lengths, masses, radii, inertias,
+    sample intervals: a zero-length rod would run "ok" with every error exactly 0), ``counts``
+    those that are whole numbers >= 1 (links, bodies); every numeric parameter must be finite
+    and within ``params.MAX_MAGNITUDE``, and ``t_final`` positive. Raises ``SceneError`` naming
+    the case and the parameter ("case.param: what is wrong — the fix"); a declaration the
+    defaults themselves break is refused at registration.
     """
 
     def register(func):
@@ -490,11 +492,19 @@ def case(tags=(), units=None, positive=()):
         if "t_final" not in sig.parameters:
             problems.append("t_final: the factory has no t_final parameter — add t_final=<horizon, s> and pass it to "
                             "Case (the contract tests and --param t_final=... shorten a case through it)")
-        problems += [f"positive: {k!r} is not a parameter of it" for k in sorted(set(positive) - set(sig.parameters))]
+        for label, names in (("positive", positive), ("counts", counts)):
+            problems += [f"{label}: {k!r} is not a parameter of it" for k in sorted(set(names) - set(sig.parameters))]
+        problems += [f"positive, counts: {k!r} is in both — a count is a whole number >= 1, declare it in counts"
+                     for k in sorted(set(positive) & set(counts))]
+        if problems:
+            raise SceneError(f"case {func.__name__!r}", problems)
+        defaults = {p.name: p.default for p in sig.parameters.values()}
+        problems = [f"default: {p}" for p in domain_problems(func.__name__, defaults, defaults, positive, counts,
+                                                             units)]
         if problems:
             raise SceneError(f"case {func.__name__!r}", problems)
         CASES.register(func.__name__, CaseFactory(func.__name__, func, tuple(tags), dict(units or {}),
-                                                  tuple(positive)))
+                                                  tuple(positive), tuple(counts)))
         return func
 
     return register
