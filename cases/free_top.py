@@ -1,4 +1,4 @@
-"""The torque-free asymmetric top (Euler's equations; seed 002, eqs. 27-29)."""
+"""The torque-free asymmetric top (Euler's equations: Landau & Lifshitz, Mechanics, sections 36-37)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""The falling particle box: the worked example of seed 002."""
+"""The falling particle box: 27 equal point masses on a 3 x 3 x 3 lattice, rigidly joined, spinning while
+they fall under gravity (torque-free about the centre of mass, which falls on a parabola)."""
 
 from __future__ import annotations
 
@@ -35,7 +36,8 @@ def particle_box(spacing=(1.0, 2.0, 3.0), mass=10.0, gravity=9.8, omega0=(0.0, 1
     ``i, j, k`` in {0, 0.5, 1}, rigidly joined, spinning at ``omega0`` (body
     frame, axes along the lattice) while the COM falls from rest at the origin.
 
-    Principal moments 65/3, 50/3, 25/3 kg m^2 for the defaults (seed 002).
+    Principal moments 65/3, 50/3, 25/3 kg m^2 for the defaults (the inertia tensor of the lattice,
+    ``dalembert.scene.mass_properties``; tests/test_closed_forms.py).
     """
     a = np.asarray(spacing, dtype=float)
     grid = np.array(list(itertools.product((0.0, 0.5, 1.0), repeat=3))) * a

@@ -1,4 +1,5 @@
-"""A planar rod pivoted at one end, driven by a follower force at its tip (seed 000)."""
+"""A planar rod pivoted at one end, driven by a follower force at its tip (d'Alembert's principle for a rigid rod:
+its moment of inertia about the pivot times phi'' equals the force's moment, l F)."""
 
 from __future__ import annotations
 

@@ -78,7 +78,8 @@ QUAT_NORM_TOL = 1e-9
 INERTIA_REL_TOL = 1e-12
 # A free body's smallest principal moment below this fraction of the largest is
 # treated as singular: the rotation about that axis is then undetermined
-# (seed 002, "degenerate case": all particles on one line).
+# (all particles on one line: the rotator of Landau & Lifshitz, Mechanics, section 32, whose
+# moment about that line is zero).
 SINGULAR_INERTIA_RATIO = 1e-14
 # An initial state whose loop closures are violated by more than this (m for points, the sine of
 # the tilt for axes; m/s and rad/s for their rates) is refused: initial coordinates solved in
@@ -106,7 +107,8 @@ def _vec(x, n=None):
 def mass_properties(masses, positions):
     """Total mass, centre of mass and inertia about it of a set of point masses.
 
-    The inertia operator of seed 002, eq. 13: ``A = sum_i m_i (|u_i|^2 1 - u_i u_i^T)``
+    The inertia tensor (Landau & Lifshitz, Mechanics, section 32; any rigid-body text):
+    ``A = sum_i m_i (|u_i|^2 1 - u_i u_i^T)``
     with ``u_i`` the position relative to the centre of mass.
 
     Parameters
@@ -682,7 +684,7 @@ def _body_problems(b, is_free):
     elif moments[0] <= SINGULAR_INERTIA_RATIO * moments[-1]:
         if is_free:
             add(f"{where}.inertia: singular (principal moments {moments.tolist()}): all mass lies on "
-                "one line — the degenerate case of seed 002 — so the spin about that line is "
+                "one line — a rotator (Landau & Lifshitz, Mechanics, section 32) — so the spin about that line is "
                 "undetermined; a free body needs three positive principal moments (give the body a "
                 "thickness)")
         else:
