@@ -1,6 +1,6 @@
 """Every quaternion and frame conversion in dalembert, and nowhere else.
 
-Conventions (DESIGN.md):
+Conventions (docs/DESIGN.md):
 
 * Quaternions are scalar first, ``(w, x, y, z)``, and rotate body vectors into
   the world: ``v_W = R(q_WB) v_B``.
