@@ -7,14 +7,16 @@ A case factory declares its parameters' domains once, in ``@case`` (``dalembert.
 ``MAX_MAGNITUDE`` (every component of a vector one), and ``t_final`` is always positive: a case
 runs without arguments, and every factory has it (``dalembert.case.case``). The checks run
 before the factory, so a zero-length rod is refused with its parameter's name instead of running
-"ok" with every error exactly 0.
+"ok" with every error exactly 0. ``parse_param`` reads ``--param KEY=VALUE``, typed after the default.
 """
 
 from __future__ import annotations
 
 import numbers
 
-__all__ = ["MAX_MAGNITUDE", "MIN_POSITIVE", "ALWAYS_POSITIVE", "domain_problems"]
+from dalembert.registry import suggest
+
+__all__ = ["MAX_MAGNITUDE", "MIN_POSITIVE", "ALWAYS_POSITIVE", "domain_problems", "parse_param"]
 
 # Every quantity a case derives from its parameters (an inertia m l^2 / 12, an energy I w^2 / 2, a
 # period 2 pi sqrt(l / g)) is a product of powers of a few of them, at most six factors: with every
@@ -96,3 +98,32 @@ def domain_problems(case_name, defaults, values, positive=(), counts=(), units=N
                             "quantities (inertias, energies: products of its parameters) underflow to zero — give "
                             f"a value of at least {MIN_POSITIVE:g} (or change its unit)")
     return problems
+
+
+def parse_param(factory, text):
+    """Parse ``KEY=VALUE`` for ``factory``, typed after the parameter's default.
+
+    Vectors are comma-separated numbers (``omega0=0,1,1``).
+    """
+    if "=" not in text:
+        raise ValueError(f"--param {text!r}: write KEY=VALUE")
+    key, value = text.split("=", 1)
+    defaults = factory.params
+    if key not in defaults:
+        raise ValueError(f"--param {key!r}: case {factory.name!r} has no such parameter{suggest(key, defaults)}")
+    default = defaults[key]
+    try:
+        if isinstance(default, bool):
+            if value.lower() not in ("true", "false", "1", "0"):
+                raise ValueError
+            return key, value.lower() in ("true", "1")
+        if isinstance(default, int):
+            return key, int(value)
+        if isinstance(default, float):
+            return key, float(value)
+        if isinstance(default, tuple):
+            return key, tuple(float(v) for v in value.split(","))
+        return key, value
+    except ValueError:
+        raise ValueError(f"--param {key}={value!r}: expected {type(default).__name__} "
+                         f"like {default!r}") from None
