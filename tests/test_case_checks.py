@@ -195,3 +195,20 @@ def test_a_domain_the_defaults_break_or_a_name_not_a_parameter_is_refused_at_reg
     ps = err.value.problems
     assert any(p.startswith("default: bad_default.mass: must be positive") for p in ps), ps
     assert any(p.startswith("default: bad_default.n: must be a whole number >= 1") for p in ps), ps
+
+
+def test_a_factory_that_returns_no_case_or_one_named_otherwise_is_refused():
+    from dalembert.case import CaseFactory
+
+    def mine(t_final=1.0):
+        return _case()
+
+    def not_a_case(t_final=1.0):
+        return {"name": "not_a_case"}
+
+    made = CaseFactory("mine", mine, ("test",), {"t_final": "s"})()
+    assert made.tags == ("test",) and made.params == {"t_final": 1.0} and made.units == {"t_final": "s"}
+    with pytest.raises(SceneError, match="factory: returned dict, not a Case"):
+        CaseFactory("not_a_case", not_a_case, (), {})()
+    with pytest.raises(SceneError, match="name: the factory made a case named 'mine'"):
+        CaseFactory("other", mine, (), {})()
