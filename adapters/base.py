@@ -4,7 +4,7 @@ The contract every adapter meets is the numbered checklist in
 ``dalembert.adapters`` (its package docstring).
 
 Frames. An engine carries each body in a frame of its own, E, which need not
-be the scene's body frame B (origin at the COM, DESIGN.md). Every adapter names
+be the scene's body frame B (origin at the COM, docs/DESIGN.md). Every adapter names
 the pose of B in E ``X_EB`` (monogram notation, ``dalembert.spatial``), held as
 ``(p_EB, R_EB)`` with ``x_E = p_EB + R_EB x_B`` (a ``pin.SE3`` in Pinocchio);
 where E is B, ``X_EB`` is the identity. E is

@@ -14,7 +14,7 @@ class ReferenceAdapter(Adapter):
     """dalembert's own Newton-Euler / Kane solver (``reference``).
 
     Options: ``formulation`` = ``newton-euler`` (free bodies; default there),
-    ``newton-euler-matrix`` (the seed's rotation-matrix state), ``kane``
+    ``newton-euler-matrix`` (the attitude as a rotation matrix, ``R' = R [w]x``), ``kane``
     (any tree; default for jointed scenes) or ``planar`` (serial revolute chains
     with parallel axes under gravity: Lagrange's equations in absolute angles).
     """

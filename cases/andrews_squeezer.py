@@ -212,7 +212,8 @@ def squeezer_scene(parameters=None, angles=None, name="andrews_squeezer"):
     return Scene(name, bodies, joints, (0.0, 0.0, 0.0), loads=[motor], loops=loops, springs=[spring])
 
 
-@case(tags=("variant", "jointed", "loops", "spring", "motor", "published", "iftomm"), units=UNITS)
+@case(tags=("variant", "jointed", "loops", "spring", "motor", "published", "iftomm"), units=UNITS,
+      positive=("sample_interval",))
 def andrews_squeezer(t_final=0.03, sample_interval=1e-3):
     """Andrews' squeezing mechanism (IFToMM A03; the Test Set's "andrews"): seven bodies, three loops
     closing at one point, a spring and a constant motor torque, from rest at the Test Set's consistent

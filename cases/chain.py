@@ -57,7 +57,8 @@ ENERGY_TOL = Tolerance(1e-8, "relative to max(|E(0)|, the largest kinetic energy
                              "1.5e-9, euler at 1e-4: 1.7e-4")
 
 
-@case(tags=("canonical", "jointed", "gravity", "chain", "scaling"), units=UNITS)
+@case(tags=("canonical", "jointed", "gravity", "chain", "scaling"), units=UNITS, counts=("n",),
+      positive=("length", "mass", "radius", "gravity", "sample_interval"))
 def chain(n=2, length=1.0, mass=1.0, radius=0.01, gravity=9.81, angle0=0.5, bend0=0.5, t_final=10.0,
           sample_interval=0.01):
     """``n`` uniform rods in a revolute chain under gravity, released at rest with the first
@@ -90,7 +91,8 @@ CHAOTIC_REACTION_TOL = Tolerance(1e-5, "relative to the largest joint reaction")
 CHAOTIC_ENERGY_TOL = Tolerance(1e-7, "relative; energy is not sensitive to the chaos, only to the integrator")
 
 
-@case(tags=("hard", "jointed", "gravity", "chain", "chaotic"), units=UNITS)
+@case(tags=("hard", "jointed", "gravity", "chain", "chaotic"), units=UNITS, counts=("n",),
+      positive=("length", "mass", "radius", "gravity", "sample_interval"))
 def chain_chaotic(n=2, length=1.0, mass=1.0, radius=0.01, gravity=9.81, angle0=np.pi / 2, bend0=0.0,
                   t_final=10.0, sample_interval=0.01):
     """The double pendulum released from the horizontal, both rods in line: chaotic. Over its

@@ -1,4 +1,4 @@
-"""The torque-free asymmetric top (Euler's equations; seed 002, eqs. 27-29)."""
+"""The torque-free asymmetric top (Euler's equations: Landau & Lifshitz, Mechanics, sections 36-37)."""
 
 from __future__ import annotations
 
@@ -58,14 +58,16 @@ def _top_case(name, inertia, omega0, t_final, sample_interval, orientation=ORIEN
     )
 
 
-@case(tags=("canonical", "free", "torque-free"), units=UNITS, positive=("inertia",))
+@case(tags=("canonical", "free", "torque-free"), units=UNITS,
+      positive=("inertia", "sample_interval"))
 def free_top(inertia=(1.0, 2.0, 3.0), omega0=(0.1, 0.0, 5.0), t_final=20.0, sample_interval=0.01):
     """Torque-free asymmetric top (unit mass, principal moments ``inertia``),
     a stable spin near the axis of largest moment; ``omega0`` in the body frame."""
     return _top_case("free_top", inertia, omega0, t_final, sample_interval)
 
 
-@case(tags=("canonical", "free", "torque-free", "intermediate-axis"), units=UNITS, positive=("inertia",))
+@case(tags=("canonical", "free", "torque-free", "intermediate-axis"), units=UNITS,
+      positive=("inertia", "sample_interval"))
 def free_top_intermediate(inertia=(1.0, 2.0, 3.0), omega0=(1e-3, 5.0, 1e-3), t_final=20.0, sample_interval=0.01):
     """The same top spinning 1e-3 rad/s off the intermediate axis: unstable, it flips."""
     return _top_case("free_top_intermediate", inertia, omega0, t_final, sample_interval,
@@ -125,28 +127,31 @@ def _hard_top(name, inertia, omega0, t_final, sample_interval):
 
 
 @case(tags=("hard", "free", "torque-free", "intermediate-axis", "fast-spin"),
-      units=dict(UNITS, spin="rad/s", offset="rad/s"))
+      units=dict(UNITS, spin="rad/s", offset="rad/s"), positive=("inertia", "sample_interval"))
 def free_top_fast_spin(inertia=(1.0, 2.0, 3.0), spin=50.0, offset=1e-3, t_final=20.0, sample_interval=0.01):
     """A fast spin ``spin`` rad/s about an axis ``offset`` rad/s off the intermediate
     axis: frequent flips (try spin=500, t_final=200 for the hardest variant)."""
     return _hard_top("free_top_fast_spin", inertia, (offset, spin, offset), t_final, sample_interval)
 
 
-@case(tags=("hard", "free", "torque-free", "long-horizon"), units=UNITS)
+@case(tags=("hard", "free", "torque-free", "long-horizon"), units=UNITS,
+      positive=("inertia", "sample_interval"))
 def free_top_long_horizon(inertia=(1.0, 2.0, 3.0), omega0=(0.3, 0.2, 62.8), t_final=1000.0, sample_interval=0.1):
     """A generic asymmetric spin over 10^4 rotation periods (~0.1 s each): energy
     drift bounded for geometric integrators, secular for others (drift_rate)."""
     return _hard_top("free_top_long_horizon", inertia, omega0, t_final, sample_interval)
 
 
-@case(tags=("hard", "free", "torque-free", "near-degenerate"), units=UNITS)
+@case(tags=("hard", "free", "torque-free", "near-degenerate"), units=UNITS,
+      positive=("inertia", "sample_interval"))
 def free_top_near_symmetric(inertia=(1.0, 1.0 + 1e-6, 2.0), omega0=(0.3, 0.2, 5.0), t_final=20.0,
                             sample_interval=0.01):
     """Two principal moments 1e-6 apart: nearly axisymmetric."""
     return _hard_top("free_top_near_symmetric", inertia, omega0, t_final, sample_interval)
 
 
-@case(tags=("hard", "free", "torque-free", "near-degenerate"), units=UNITS)
+@case(tags=("hard", "free", "torque-free", "near-degenerate"), units=UNITS,
+      positive=("inertia", "sample_interval"))
 def free_top_slender(inertia=(1e-4, 1.0, 1.0), omega0=(5.0, 0.1, 0.2), t_final=20.0, sample_interval=0.01):
     """A slender body (moments 1e-4, 1, 1) spinning about its long axis while tumbling."""
     return _hard_top("free_top_slender", inertia, omega0, t_final, sample_interval)
@@ -160,7 +165,8 @@ def separatrix_omega(inertia, spin, gap):
     return (float(np.sqrt(gap * I2**2 * spin**2 / a)), float(spin), float(np.sqrt(gap * I2**2 * spin**2 / a)))
 
 
-@case(tags=("hard", "free", "torque-free", "separatrix"), units=dict(UNITS, spin="rad/s", gap="1"))
+@case(tags=("hard", "free", "torque-free", "separatrix"), units=dict(UNITS, spin="rad/s", gap="1"),
+      positive=("inertia", "gap", "sample_interval"))
 def free_top_separatrix(inertia=(1.0, 2.0, 3.0), spin=5.0, gap=1e-9, t_final=20.0, sample_interval=0.01):
     """Energy and momentum with ``2 E I2 / |L|^2 = 1 - gap``: a hair from the separatrix."""
     return _hard_top("free_top_separatrix", inertia, separatrix_omega(inertia, spin, gap), t_final, sample_interval)

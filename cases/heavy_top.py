@@ -72,7 +72,8 @@ SPIN_TOL = Tolerance(1e-6, "relative to the initial angular speed; exact: for a 
                            "axes, which the reference's integrators keep to 1e-15 at any step")
 
 
-@case(tags=("canonical", "jointed", "gravity", "ball"), units=UNITS)
+@case(tags=("canonical", "jointed", "gravity", "ball"), units=UNITS,
+      positive=("mass", "inertia", "com_distance", "gravity", "sample_interval"))
 def heavy_top(mass=15.0, inertia=(0.234375, 0.46875, 0.234375), com_distance=1.0, gravity=9.81, tilt=0.0,
               omega0=(0.0, 150.0, -4.61538), t_final=0.2, sample_interval=0.01):
     """The heavy-top benchmark of Terze, Mueller & Zlatar (Multibody System Dynamics 38, 2016),
@@ -108,7 +109,8 @@ NUTATING_MOMENTUM_TOL = Tolerance(1e-6, "relative to sqrt(I m g l) = 47 kg m^2/s
                                         "(reference rk4 at dt = 1e-3: 1.1e-8)")
 
 
-@case(tags=("variant", "jointed", "gravity", "ball", "nutating"), units=UNITS)
+@case(tags=("variant", "jointed", "gravity", "ball", "nutating"), units=UNITS,
+      positive=("mass", "inertia", "com_distance", "gravity", "sample_interval"))
 def heavy_top_nutating(mass=15.0, inertia=(0.234375, 0.46875, 0.234375), com_distance=1.0, gravity=9.81,
                        tilt=0.5, omega0=(0.0, 20.0, 0.0), t_final=10.0, sample_interval=0.01):
     """The same top spun slowly (20 rad/s about its axis, no precession) from 29 degrees above the

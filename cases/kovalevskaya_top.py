@@ -38,7 +38,8 @@ def kovalevskaya_integral(p, q, r, gamma, eps):
     return (p * p - q * q - eps * gamma[:, 0]) ** 2 + (2.0 * p * q - eps * gamma[:, 1]) ** 2
 
 
-@case(tags=("hard", "jointed", "gravity", "ball", "integrable", "long-horizon"), units=UNITS)
+@case(tags=("hard", "jointed", "gravity", "ball", "integrable", "long-horizon"), units=UNITS,
+      positive=("mass", "moment", "com_offset", "gravity", "sample_interval"))
 def kovalevskaya_top(mass=1.0, moment=1.0, com_offset=0.5, gravity=9.81, tilt=0.7, omega0=(0.5, 1.0, 3.0),
                      t_final=100.0, sample_interval=0.1):
     """A body on a fixed point with principal moments (2C, 2C, C) about it (``moment`` = C) and its

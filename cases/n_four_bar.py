@@ -162,7 +162,7 @@ def b0(traj, length=1.0):
 
 
 @case(tags=("variant", "jointed", "gravity", "loop", "singular", "published", "iftomm", "scaling"), units=UNITS,
-      positive=("length", "mass", "radius", "gravity", "sample_interval"))
+      counts=("n",), positive=("length", "mass", "radius", "gravity", "sample_interval"))
 def n_four_bar(n=2, length=1.0, mass=1.0, radius=0.01, gravity=9.81, vx0=1.0, t_final=1.0, sample_interval=0.01):
     """IFToMM A02: ``n`` parallelogram four-bars in a row (``n + 1`` rockers, ``n`` couplers, every link a rod of
     ``length``, ``mass`` and ``radius``) under ``gravity`` along -y, started with the rockers vertical and B0 moving

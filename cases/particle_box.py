@@ -1,4 +1,5 @@
-"""The falling particle box: the worked example of seed 002."""
+"""The falling particle box: 27 equal point masses on a 3 x 3 x 3 lattice, rigidly joined, spinning while
+they fall under gravity (torque-free about the centre of mass, which falls on a parabola)."""
 
 from __future__ import annotations
 
@@ -28,14 +29,15 @@ DISTANCE_TOL = Tolerance(1e-10, "m; a rigid body keeps every pairwise distance â
 
 @case(tags=("canonical", "free", "gravity", "particles"),
       units=dict(spacing="m", mass="kg", gravity="m/s^2", omega0="rad/s", t_final="s", sample_interval="s"),
-      positive=("spacing", "mass"))
+      positive=("spacing", "mass", "sample_interval"))
 def particle_box(spacing=(1.0, 2.0, 3.0), mass=10.0, gravity=9.8, omega0=(0.0, 1.0, 1.0), t_final=20.0,
                  sample_interval=0.01):
     """27 equal point masses, total ``mass``, on the lattice ``(a i, b j, c k)``,
     ``i, j, k`` in {0, 0.5, 1}, rigidly joined, spinning at ``omega0`` (body
     frame, axes along the lattice) while the COM falls from rest at the origin.
 
-    Principal moments 65/3, 50/3, 25/3 kg m^2 for the defaults (seed 002).
+    Principal moments 65/3, 50/3, 25/3 kg m^2 for the defaults (the inertia tensor of the lattice,
+    ``dalembert.scene.mass_properties``; tests/test_closed_forms.py).
     """
     a = np.asarray(spacing, dtype=float)
     grid = np.array(list(itertools.product((0.0, 0.5, 1.0), repeat=3))) * a
@@ -85,7 +87,8 @@ WELDED_MOMENTUM_TOL = Tolerance(1e-6, "relative, spin about the COM; as WELDED_E
 
 @case(tags=("hard", "free", "gravity", "particles", "constraints"),
       units=dict(spacing="m", mass="kg", gravity="m/s^2", omega0="rad/s", t_final="s", radius="m",
-                 sample_interval="s"), positive=("spacing", "mass", "radius"))
+                 sample_interval="s"),
+      positive=("spacing", "mass", "radius", "sample_interval"))
 def particle_box_welded(spacing=(1.0, 2.0, 3.0), mass=10.0, gravity=9.8, omega0=(0.0, 1.0, 1.0), t_final=2.0,
                         radius=0.05, sample_interval=0.01):
     """The particle box as 27 separate bodies: the centre particle free, the 26

@@ -68,7 +68,8 @@ def _pendulum_case(name, body, com_distance, down, axis, gravity, theta0, rate0,
                 conserved=("energy",), tolerances=tolerances)
 
 
-@case(tags=("canonical", "jointed", "gravity"), units=UNITS)
+@case(tags=("canonical", "jointed", "gravity"), units=UNITS,
+      positive=("length", "mass", "radius", "gravity", "sample_interval"))
 def pendulum(length=1.0, mass=1.0, radius=0.01, gravity=9.81, theta0=1.0, rate0=0.0, t_final=10.0,
              sample_interval=0.01):
     """Uniform rod pivoted at one end, swinging under gravity from ``theta0`` (rad from the
@@ -99,7 +100,8 @@ def pendulum(length=1.0, mass=1.0, radius=0.01, gravity=9.81, theta0=1.0, rate0=
 A01_SPHERE_RADIUS = 1e-3  # m: the lumped mass as a 1 mm solid ball (inertia 2/5 m r^2 = 4e-7 kg m^2)
 
 
-@case(tags=("variant", "jointed", "gravity", "benchmark-library"), units=UNITS)
+@case(tags=("variant", "jointed", "gravity", "benchmark-library"), units=UNITS,
+      positive=("length", "mass", "radius", "gravity", "sample_interval"))
 def pendulum_a01(length=1.0, mass=1.0, radius=A01_SPHERE_RADIUS, gravity=9.81, theta0=np.pi / 2, rate0=0.0,
                  t_final=10.0, sample_interval=0.01):
     """The IFToMM library's simple pendulum A01 in its own frame (gravity along -y, swinging in the

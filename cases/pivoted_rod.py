@@ -1,4 +1,5 @@
-"""A planar rod pivoted at one end, driven by a follower force at its tip (seed 000)."""
+"""A planar rod pivoted at one end, driven by a follower force at its tip (d'Alembert's principle for a rigid rod:
+its moment of inertia about the pivot times phi'' equals the force's moment, l F)."""
 
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ REACTION_TOL = Tolerance(1e-7, "relative to the largest reaction (m l w^2/2 ~ 72
 
 @case(tags=("canonical", "jointed", "follower-force"),
       units=dict(length="m", mass="kg", force="N", t_final="s", radius="m", sample_interval="s"),
-      positive=("length", "mass", "radius"))
+      positive=("length", "mass", "radius", "sample_interval"))
 def pivoted_rod(length=1.0, mass=1.0, force=2.0, t_final=2.0, radius=0.01, sample_interval=0.01):
     """Uniform rod pivoted at one end (revolute about z), a follower force of
     constant size perpendicular to the rod at its tip, no gravity.
@@ -73,7 +74,7 @@ VIOLENT_ENERGY_TOL = Tolerance(1e-6, "relative; the energy balance of a rod spun
 
 @case(tags=("hard", "jointed", "follower-force", "fast-spin"),
       units=dict(length="m", mass="kg", force="N", t_final="s", radius="m", sample_interval="s"),
-      positive=("length", "mass", "radius"))
+      positive=("length", "mass", "radius", "sample_interval"))
 def pivoted_rod_violent(length=1.0, mass=1.0, force=100.0, t_final=10.0, radius=0.01, sample_interval=0.01):
     """The pivoted rod driven 50x harder for 10 s: its rate reaches ~3000 rad/s and
     the pivot reaction ~m l w^2 / 2 = 4.5e6 N."""

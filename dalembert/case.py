@@ -1,4 +1,8 @@
-"""Validation cases: ``Case``, ``Tolerance`` and the registry filled by ``@case``.
+"""Validation cases: ``Case`` (a named, versioned problem) and ``CaseRecord`` (a case as a store keeps it).
+
+The one import path of a case author: it re-exports ``Tolerance``, ``Invariant`` and the loop-closure
+invariants (``dalembert.tolerance``), the registry, ``@case``, ``load_cases`` and ``make_case``
+(``dalembert.case_registry``) and ``parse_param`` (``dalembert.params``).
 
 A case is made by a factory function decorated ``@case(tags=..., units=...)``;
 its keyword parameters (all with defaults) give variants for free::
@@ -14,170 +18,34 @@ unknown ``conserved`` or tolerance names (with a did-you-mean), a tolerance
 without a reason, a conserved quantity without a bound, a declared
 ``Invariant`` whose name clashes with a built-in one, and, when the factory is
 registered, a factory without a ``t_final`` parameter or a parameter without a
-default. ``docs/cases.md`` walks through writing a case.
-
-``load_cases()`` loads every package registered in the entry-point group
-``dalembert.cases``: the built-in ``dalembert.cases`` and any third party's.
+default. Each parameter's domain (``positive``, ``counts``; finite and within
+``params.MAX_MAGNITUDE`` for every numeric one) is declared once in ``@case`` and
+checked every time the case is made, before the factory runs (``dalembert.params``).
+``docs/cases.md`` walks through writing a case.
 """
 
 from __future__ import annotations
 
 import hashlib
-import inspect
 import json
 import math
-import re
 from dataclasses import asdict, dataclass, field, is_dataclass
 from typing import Callable
 
 import numpy as np
 
+from dalembert.case_registry import CASES, OUT_OF_DEFAULT, CaseFactory, case, in_default_matrix, load_cases, make_case
 from dalembert.errors import QUANTITIES
-from dalembert.invariants import CONSERVED, loop_residual
-from dalembert.registry import Registry, suggest
+from dalembert.invariants import CONSERVED
+from dalembert.params import parse_param
+from dalembert.registry import suggest
 from dalembert.scene import Scene, SceneError
+from dalembert.tolerance import (LOOP_RESIDUALS, Invariant, InvariantLabel, Tolerance, invariant_problems,
+                                 loop_closure_invariants)
 
 __all__ = ["Tolerance", "Invariant", "InvariantLabel", "Case", "CaseRecord", "CaseFactory", "case", "make_case",
            "load_cases", "CASES", "parse_param", "OUT_OF_DEFAULT", "in_default_matrix", "LOOP_RESIDUALS",
            "loop_closure_invariants"]
-
-CASES = Registry("case")
-# Tags that keep a case out of the default matrix (``dalembert run`` with no selection, ``dalembert
-# validate``): ``hard`` (long, fast, chaotic: run them with ``--tag hard``) and ``variant`` (presets
-# and variants of a canonical case, e.g. a published benchmark's set-up: run them by name or with
-# ``--tag variant``).
-OUT_OF_DEFAULT = ("hard", "variant")
-
-
-def in_default_matrix(factory):
-    """Whether the case family ``factory`` (a ``CaseFactory``) runs in the default matrix."""
-    return not set(OUT_OF_DEFAULT) & set(factory.tags)
-
-
-@dataclass(frozen=True)
-class Tolerance:
-    """A bound with its reason: ``value`` in the unit of the quantity it bounds."""
-
-    value: float
-    reason: str
-
-
-# A declared invariant's name becomes the column ``drift_<name>`` of a stored run
-# (``dalembert.record``): an identifier, and not ``rate_...`` (``drift_rate_<name>`` columns).
-_INVARIANT_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
-
-
-@dataclass(frozen=True)
-class InvariantLabel:
-    """What a results store keeps of a declared ``Invariant``: its label, no code.
-
-    Attributes
-    ----------
-    name : str — the key of its drift (``RunRecord.drifts``, column ``drift_<name>``)
-    description : str — what is conserved, with its frame and reference point
-    unit : str — unit of the quantity (and of ``scale``)
-    scale : float — the drift is ``max_t |x(t) - x(0)| / scale`` (dimensionless)
-    """
-
-    name: str
-    description: str
-    unit: str
-    scale: float
-
-
-@dataclass(frozen=True, eq=False)
-class Invariant:
-    """A conserved quantity a case declares for itself: a named scalar function of the
-    scene and a trajectory, computed by the harness from every run (never taken from an
-    engine) and stored and judged like the built-in ones (``dalembert.invariants.CONSERVED``).
-
-    Attributes
-    ----------
-    name : str — lowercase identifier, not a built-in conserved quantity or error name; its drift
-        is stored under it (``RunRecord.drifts[name]``, column ``drift_<name>``)
-    description : str — what is conserved, with its frame and reference point
-        (e.g. "angular momentum about the pivot, world z component")
-    unit : str — unit of ``series`` (e.g. "kg m^2/s")
-    scale : float — positive, in ``unit``: the typical size of the quantity; the drift is
-        ``max_t |x(t) - x(0)| / scale``
-    tolerance : Tolerance — bound on that drift (dimensionless), with its reason; the case's
-        ``tolerances[name]``
-    series : callable ``(scene, traj) -> ndarray (n,)`` — the quantity at each sample of ``traj``
-        (a ``dalembert.trajectory.Trajectory``), in ``unit``
-    """
-
-    name: str
-    description: str
-    unit: str
-    scale: float
-    tolerance: Tolerance
-    series: Callable
-
-    def drift_series(self, scene, traj):
-        """``|x(t) - x(0)| / scale`` at each sample, ndarray (n,), dimensionless."""
-        x = np.asarray(self.series(scene, traj), dtype=float)
-        if x.shape != traj.t.shape:
-            raise ValueError(f"invariant {self.name!r}: series returned shape {x.shape}, expected {traj.t.shape} "
-                             "(one value per sample)")
-        return np.abs(x - x[0]) / self.scale
-
-    def drift(self, scene, traj):
-        """The largest ``drift_series`` over the trajectory (NaN when a value is not finite)."""
-        d = self.drift_series(scene, traj)
-        return float(np.max(d)) if np.all(np.isfinite(d)) else float("nan")
-
-    @property
-    def label(self):
-        """The ``InvariantLabel`` a store keeps."""
-        return InvariantLabel(self.name, self.description, self.unit, float(self.scale))
-
-
-# The declared invariants of a case that closes loops, by level: their drifts are the worst closure
-# residuals over a run (``RunRecord.drifts``), and reports look them up by these names.
-LOOP_RESIDUALS = {"position": "loop_residual_position", "velocity": "loop_residual_velocity"}
-
-
-def loop_closure_invariants(where, length, speed, tolerance):
-    """The two ``Invariant`` of a scene's loop closures (``invariants.loop_residual``), position and
-    velocity level, scaled by the mechanism's ``length`` (m) and its fastest point's ``speed`` (m/s),
-    each bounded by ``tolerance``; ``where`` names the closures (e.g. "the coupler-rocker revolute at C")."""
-    def one(level, scale, unit, per_s):
-        return Invariant(LOOP_RESIDUALS[level], f"largest loop-closure residual at {level} level ({where}; {unit}, "
-                         f"or the sine of an axis' tilt{per_s})", unit, scale, tolerance,
-                         lambda scene, traj: loop_residual(scene, traj, level))
-
-    return one("position", length, "m", ""), one("velocity", speed, "m/s", ", per s")
-
-
-def _invariant_problems(invariants):
-    problems, seen = [], set()
-    for i, inv in enumerate(invariants):
-        where = f"invariants[{i}]"
-        if not isinstance(inv, Invariant):
-            problems.append(f"{where}: expected an Invariant(name, description, unit, scale, tolerance, series), "
-                            f"got {type(inv).__name__}")
-            continue
-        where = f"{where} ({inv.name!r})"
-        if not (isinstance(inv.name, str) and _INVARIANT_NAME.match(inv.name)) or inv.name.startswith("rate_"):
-            problems.append(f"{where}.name: must be a lowercase identifier (letters, digits, _) not starting with "
-                            "'rate_' — it names the stored column drift_<name>")
-        elif inv.name in CONSERVED or inv.name in QUANTITIES:
-            problems.append(f"{where}.name: {inv.name!r} is a built-in name — list it in conserved, or rename yours")
-        elif inv.name in seen:
-            problems.append(f"{where}.name: declared twice — give every invariant its own name")
-        seen.add(inv.name)
-        if not (isinstance(inv.scale, (int, float)) and math.isfinite(inv.scale) and inv.scale > 0.0):
-            problems.append(f"{where}.scale: must be a positive number in {inv.unit!r}, got {inv.scale!r} — the "
-                            "typical size of the quantity, which makes its drift relative")
-        if not (isinstance(inv.description, str) and inv.description.strip()):
-            problems.append(f"{where}.description: empty — say what is conserved, with its frame and point")
-        if not (isinstance(inv.unit, str) and inv.unit.strip()):
-            problems.append(f"{where}.unit: empty — give the unit of the series (\"1\" if dimensionless)")
-        if not isinstance(inv.tolerance, Tolerance):
-            problems.append(f"{where}.tolerance: must be a Tolerance(value, reason)")
-        if not callable(inv.series):
-            problems.append(f"{where}.series: must be a function (scene, traj) -> ndarray (n,)")
-    return problems
 
 
 def _dissipation_problems(conserved, springs):
@@ -293,7 +161,7 @@ class Case:
             if name not in CONSERVED:
                 problems.append(f"conserved[{i}]: unknown {name!r}{suggest(name, CONSERVED)} — or declare a quantity "
                                 "of your own in invariants=(Invariant(...),)")
-        problems += _invariant_problems(self.invariants)
+        problems += invariant_problems(self.invariants)
         problems += _dissipation_problems(self.conserved, getattr(self.scene, "springs", ()))
         tolerances = dict(self.tolerances)
         for inv in self.invariants:
@@ -311,6 +179,17 @@ class Case:
     def times(self):
         """Sample times as ndarray (n,), s."""
         return np.array(self.sample_times)
+
+    def in_family(self, name, tags, params, units):
+        """This case as the registered family ``name`` made it (``case_registry.CaseFactory``): its tags joined
+        with the family's, with every parameter of the factory (``params``, defaults included) and their
+        ``units``. Raises ``SceneError`` when the factory named its case otherwise."""
+        if self.name != name:
+            raise SceneError(f"case {name!r}", [f"name: the factory made a case named {self.name!r} — name the "
+                                                "case after its factory (the registry finds it by that name)"])
+        return Case(self.name, self.scene, self.t_final, self.sample_times, self.exact, self.conserved,
+                    self.tolerances, tuple(sorted(set(self.tags) | set(tags))), dict(params), self.floor_fn,
+                    self.invariants, dict(units))
 
     @property
     def version(self):
@@ -419,137 +298,3 @@ def _canonical(obj):
     if isinstance(obj, float):
         return repr(obj)  # round-trip exact
     return obj
-
-
-@dataclass(frozen=True)
-class CaseFactory:
-    """A registered case family: the factory, its tags, parameter units, and the parameters that
-    must be positive (every component of a vector one)."""
-
-    name: str
-    func: Callable
-    tags: tuple
-    units: dict
-    positive: tuple = ()
-
-    @property
-    def params(self):
-        """Keyword parameters and their defaults, as a dict."""
-        return {p.name: p.default for p in inspect.signature(self.func).parameters.values()}
-
-    @property
-    def summary(self):
-        """First paragraph of the factory's docstring, on one line."""
-        doc = inspect.getdoc(self.func) or ""
-        return " ".join(doc.split("\n\n")[0].split())
-
-    def __call__(self, **params):
-        known = self.params
-        unknown = sorted(set(params) - set(known))
-        if unknown:
-            raise SceneError(f"case {self.name!r}", [
-                f"parameter {k!r}: unknown{suggest(k, known)}" for k in unknown])
-        problems = []
-        for key, value in params.items():
-            default = known[key]
-            if isinstance(default, tuple) and (not isinstance(value, (tuple, list)) or len(value) != len(default)):
-                problems.append(f"parameter {key!r}: expected {len(default)} numbers like {default!r}, got {value!r}")
-        merged = {**known, **params}
-        for key in self.positive:
-            value = merged[key]
-            if not all(math.isfinite(v) and v > 0.0 for v in (value if isinstance(value, (tuple, list)) else (value,))):
-                unit = f" ({self.units[key]})" if key in self.units else ""
-                problems.append(f"parameter {key!r}: must be positive{unit}, got {value!r}")
-        if problems:
-            raise SceneError(f"case {self.name!r}", problems)
-        made = self.func(**params)
-        if not isinstance(made, Case):
-            raise SceneError(f"case {self.name!r}", [f"factory: returned {type(made).__name__}, not a Case"])
-        if made.name != self.name:
-            raise SceneError(f"case {self.name!r}", [f"name: the factory made a case named {made.name!r} — name the "
-                                                     "case after its factory (the registry finds it by that name)"])
-        return Case(made.name, made.scene, made.t_final, made.sample_times, made.exact, made.conserved,
-                    made.tolerances, tuple(sorted(set(made.tags) | set(self.tags))), merged, made.floor_fn,
-                    made.invariants, dict(self.units))
-
-
-def case(tags=(), units=None, positive=()):
-    """Register a case factory under its function name.
-
-    Every parameter must have a default (a case runs without arguments), and one of
-    them is ``t_final`` (s): the contract tests and ``--param t_final=...`` shorten a
-    case through it. ``positive`` names the parameters that must be positive and finite
-    (lengths, masses, radii: a zero-length rod would run "ok" with every error exactly 0),
-    checked before the factory runs. Raises ``SceneError`` naming the case and the parameter.
-    """
-
-    def register(func):
-        sig = inspect.signature(func)
-        problems = [f"parameter {p.name!r}: has no default — every parameter needs one (a case runs without "
-                    "arguments)" for p in sig.parameters.values() if p.default is inspect.Parameter.empty]
-        if "t_final" not in sig.parameters:
-            problems.append("t_final: the factory has no t_final parameter — add t_final=<horizon, s> and pass it to "
-                            "Case (the contract tests and --param t_final=... shorten a case through it)")
-        problems += [f"positive: {k!r} is not a parameter of it" for k in sorted(set(positive) - set(sig.parameters))]
-        if problems:
-            raise SceneError(f"case {func.__name__!r}", problems)
-        CASES.register(func.__name__, CaseFactory(func.__name__, func, tuple(tags), dict(units or {}),
-                                                  tuple(positive)))
-        return func
-
-    return register
-
-
-_LOADED = False
-
-
-def load_cases():
-    """Load every case package registered in the entry-point group ``dalembert.cases``
-    (the built-in ``dalembert.cases`` is one of them) and return the registry."""
-    global _LOADED
-    if _LOADED:
-        return CASES
-    from importlib.metadata import entry_points
-
-    for ep in entry_points(group="dalembert.cases"):
-        try:
-            ep.load()
-        except Exception as e:
-            raise ImportError(f"cases entry point {ep.name!r} ({ep.value}) failed to load: "
-                              f"{type(e).__name__}: {e} — fix or uninstall the package that declares it") from e
-    _LOADED = True
-    return CASES
-
-
-def make_case(name, **params):
-    """Build the registered case ``name`` with keyword ``params`` overriding defaults."""
-    return load_cases()[name](**params)
-
-
-def parse_param(factory, text):
-    """Parse ``KEY=VALUE`` for ``factory``, typed after the parameter's default.
-
-    Vectors are comma-separated numbers (``omega0=0,1,1``).
-    """
-    if "=" not in text:
-        raise ValueError(f"--param {text!r}: write KEY=VALUE")
-    key, value = text.split("=", 1)
-    defaults = factory.params
-    if key not in defaults:
-        raise ValueError(f"--param {key!r}: case {factory.name!r} has no such parameter{suggest(key, defaults)}")
-    default = defaults[key]
-    try:
-        if isinstance(default, bool):
-            if value.lower() not in ("true", "false", "1", "0"):
-                raise ValueError
-            return key, value.lower() in ("true", "1")
-        if isinstance(default, int):
-            return key, int(value)
-        if isinstance(default, float):
-            return key, float(value)
-        if isinstance(default, tuple):
-            return key, tuple(float(v) for v in value.split(","))
-        return key, value
-    except ValueError:
-        raise ValueError(f"--param {key}={value!r}: expected {type(default).__name__} "
-                         f"like {default!r}") from None

@@ -3,7 +3,8 @@
 Specs are frozen dataclasses holding plain tuples (arrays live only in
 ``Trajectory``). A ``Scene`` validates itself on construction: every problem is
 collected and reported at once, each naming its field and the fix, before
-anything runs.
+anything runs (the checks: ``dalembert.scene_checks``; the kinds and effect tags:
+``dalembert.kinds``; both re-exported here).
 
 Frames: the body frame B of every body has its origin at the centre of mass;
 ``Body.inertia`` is the tensor about the COM expressed in B. A joint connects a
@@ -23,77 +24,19 @@ its adapter builds them.
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from dalembert import spatial
-from dalembert.registry import suggest
+from dalembert import closure
+from dalembert.kinds import (AXIS_KINDS, EFFECTS, JOINT_KINDS, LOAD_FRAMES, LOAD_KINDS, LOOP_EFFECTS, LOOP_KINDS,
+                             SPRING_EFFECT, SPRING_EFFECTS, WORLD)
+from dalembert.scene_checks import (INERTIA_REL_TOL, LOOP_CLOSURE_TOL, QUAT_NORM_TOL, SINGULAR_INERTIA_RATIO,
+                                    SceneError, scene_problems)
 
-__all__ = ["WORLD", "JOINT_KINDS", "AXIS_KINDS", "LOOP_KINDS", "EFFECTS", "LOOP_EFFECTS", "SPRING_EFFECTS",
-           "Body", "Joint", "Loop",
-           "Load", "Spring", "Scene", "SceneError", "mass_properties", "LOOP_CLOSURE_TOL"]
-
-WORLD = "world"
-
-# Per joint kind: (size of q0, size of v0). Coordinates:
-#   free     q = (x, y, z, qw, qx, qy, qz): COM position (m) and attitude q_WB of
-#            the child in world; v = (vx, vy, vz, wx, wy, wz): COM velocity in
-#            world (m/s) and angular velocity w_WB_B in the child body frame (rad/s).
-#   revolute q = (angle,) (rad) about `axis` in the joint frame; v = (rate,) (rad/s).
-#   prismatic q = (displacement,) (m) of the child joint frame along the unit `axis` of the
-#            parent joint frame (the two frames keep their relative attitude, identity; at
-#            q = 0 they coincide); v = (rate,) (m/s).
-#   ball     q = quaternion of the child joint frame in the parent joint frame;
-#            v = relative angular velocity in the child joint frame (rad/s).
-#   weld     no coordinates.
-JOINT_KINDS = {"free": (7, 6), "revolute": (1, 1), "prismatic": (1, 1), "ball": (4, 3), "weld": (0, 0)}
-# The kinds that take an ``axis`` (in the joint frame, any non-zero length).
-AXIS_KINDS = ("revolute", "prismatic")
-LOAD_KINDS = ("force", "torque")
-LOAD_FRAMES = ("world", "body")
-# Loop closures (``Loop``), per kind: the constraint rows in ``dalembert.closure.ROWS``.
-#   ball      the two joint points coincide;
-#   revolute  a ball whose frames also share the axis ``axis`` (given in the joint frames);
-#   distance  the two points stay ``length`` apart (a massless rod with ball ends).
-LOOP_KINDS = ("ball", "revolute", "distance")
-# Every effect tag a tree scene can call for (``Scene.effects`` draws from these): what an
-# adapter declares with ``effects = EFFECTS``.
-EFFECTS = frozenset({"gravity"} | {f"joint:{k}" for k in JOINT_KINDS}
-                    | {f"load:{w}_{k}" for w in ("follower", "world") for k in LOAD_KINDS})
-# The tags of loop closures, apart: an adapter that closes loops declares them explicitly
-# (``EFFECTS | LOOP_EFFECTS``), so one that builds trees only declares them unsupported.
-LOOP_EFFECTS = frozenset(f"loop:{k}" for k in LOOP_KINDS)
-# The tag of linear spring-dampers (``Spring``), apart for the same reason: an adapter that builds them
-# declares ``EFFECTS | SPRING_EFFECTS``; every other one declares them unsupported.
-SPRING_EFFECT = "spring_damper"
-SPRING_EFFECTS = frozenset({SPRING_EFFECT})
-
-# |q| may differ from 1 by this much (roundoff in user-typed decimals is ~1e-16;
-# anything larger is a real mistake, not roundoff).
-QUAT_NORM_TOL = 1e-9
-# Inertia symmetry and the triangle inequality are checked to this relative
-# tolerance: tensors computed from point masses carry roundoff of a few ulps.
-INERTIA_REL_TOL = 1e-12
-# A free body's smallest principal moment below this fraction of the largest is
-# treated as singular: the rotation about that axis is then undetermined
-# (seed 002, "degenerate case": all particles on one line).
-SINGULAR_INERTIA_RATIO = 1e-14
-# An initial state whose loop closures are violated by more than this (m for points, the sine of
-# the tilt for axes; m/s and rad/s for their rates) is refused: initial coordinates solved in
-# double precision close a loop to ~1e-15, and anything beyond 1e-9 is a state the solver would
-# have to move (the case's initial state would not be the one simulated).
-LOOP_CLOSURE_TOL = 1e-9
-
-
-class SceneError(ValueError):
-    """A scene or case is invalid; ``problems`` lists every issue found."""
-
-    def __init__(self, where, problems):
-        self.problems = list(problems)
-        lines = "\n".join(f"  - {p}" for p in self.problems)
-        super().__init__(f"{where}: {len(self.problems)} problem(s)\n{lines}")
+__all__ = ["WORLD", "JOINT_KINDS", "AXIS_KINDS", "LOOP_KINDS", "LOAD_KINDS", "LOAD_FRAMES", "EFFECTS", "LOOP_EFFECTS",
+           "SPRING_EFFECT", "SPRING_EFFECTS", "Body", "Joint", "Loop", "Load", "Spring", "Scene", "SceneError",
+           "mass_properties", "QUAT_NORM_TOL", "INERTIA_REL_TOL", "SINGULAR_INERTIA_RATIO", "LOOP_CLOSURE_TOL"]
 
 
 def _vec(x, n=None):
@@ -106,7 +49,8 @@ def _vec(x, n=None):
 def mass_properties(masses, positions):
     """Total mass, centre of mass and inertia about it of a set of point masses.
 
-    The inertia operator of seed 002, eq. 13: ``A = sum_i m_i (|u_i|^2 1 - u_i u_i^T)``
+    The inertia tensor (Landau & Lifshitz, Mechanics, section 32; any rigid-body text):
+    ``A = sum_i m_i (|u_i|^2 1 - u_i u_i^T)``
     with ``u_i`` the position relative to the centre of mass.
 
     Parameters
@@ -435,284 +379,12 @@ class Scene:
         residuals at the initial state (``dalembert.closure.ClosureSummary``; ``str()`` says it in a
         line). Redundant rows (rank below rows) are reported here, not refused: a mechanism moves
         despite them (the reference takes least-squares multipliers)."""
-        from dalembert import closure
-
         return closure.summary(self)
 
     # -------------------------------------------------------------- checks
     def validate(self):
-        """Raise ``SceneError`` listing every problem, or return ``self``."""
-        problems = []
-        add = problems.append
-        names = [b.name for b in self.bodies]
-        if not self.bodies:
-            add("bodies: empty — add at least one Body")
-        for dup in sorted({n for n in names if names.count(n) > 1}):
-            add(f"bodies: name {dup!r} used twice — give every body a unique name")
-        if WORLD in names:
-            add(f"bodies: {WORLD!r} is reserved for the fixed world frame — rename the body")
-        if len(self.gravity) != 3 or not all(math.isfinite(g) for g in self.gravity):
-            add(f"gravity: must be 3 finite numbers (m/s^2, world frame), got {self.gravity} — "
-                "use (0, 0, 0) for none")
-        free_bodies = {j.child for j in self.joints if j.kind == "free"}
-        for b in self.bodies:
-            problems += _body_problems(b, b.name in free_bodies)
-        problems += self._joint_problems(set(names))
-        for i, ld in enumerate(self.loads):
-            problems += _load_problems(i, ld, set(names))
-        for i, lp in enumerate(self.loops):
-            problems += _loop_problems(i, lp, set(names))
-        loop_names = [lp.name for lp in self.loops]
-        for dup in sorted({n for n in loop_names if loop_names.count(n) > 1}):
-            add(f"loops: name {dup!r} used twice — give each loop a unique name=")
-        for clash in sorted(set(loop_names) & set(names)):
-            add(f"loops: name {clash!r} is a body's (its joint's reactions are keyed by it) — rename the loop")
-        for i, sp in enumerate(self.springs):
-            problems += _spring_problems(i, sp, set(names))
-        spring_names = [sp.name for sp in self.springs]
-        for dup in sorted({n for n in spring_names if spring_names.count(n) > 1}):
-            add(f"springs: name {dup!r} used twice — give each spring a unique name=")
-        if self.loops and not problems:  # the closure needs valid names, joints and numbers
-            problems += self._closure_problems()
-        if self.springs and not problems:  # the initial lengths need valid names, joints and numbers
-            problems += self._spring_length_problems()
+        """Raise ``SceneError`` listing every problem (``dalembert.scene_checks``), or return ``self``."""
+        problems = scene_problems(self)
         if problems:
             raise SceneError(f"scene {self.name!r}", problems)
         return self
-
-    def _joint_problems(self, names):
-        problems = []
-        add = problems.append
-        parents = {}
-        for i, j in enumerate(self.joints):
-            where = f"joints[{i}] ({j.kind} {j.parent!r} -> {j.child!r})"
-            if j.kind not in JOINT_KINDS:
-                add(f"{where}.kind: unknown {j.kind!r} — use one of {sorted(JOINT_KINDS)}")
-                continue
-            if j.child not in names:
-                add(f"{where}.child: no body named {j.child!r}{_did_you_mean(j.child, names)}")
-            if j.parent != WORLD and j.parent not in names:
-                add(f"{where}.parent: no body named {j.parent!r}{_did_you_mean(j.parent, names | {WORLD})}")
-            if j.parent == j.child:
-                add(f"{where}: a body cannot be its own parent")
-            if j.child in parents:
-                add(f"bodies[{j.child!r}]: has two parents ({parents[j.child]!r} and {j.parent!r}) — "
-                    "a scene is a tree: one joint per body")
-            parents.setdefault(j.child, j.parent)
-            nq, nv = JOINT_KINDS[j.kind]
-            if len(j.q0) != nq:
-                add(f"{where}.q0: {j.kind} needs {nq} numbers, got {len(j.q0)}")
-            if len(j.v0) != nv:
-                add(f"{where}.v0: {j.kind} needs {nv} numbers, got {len(j.v0)}")
-            for field_name in ("q0", "v0", "parent_point", "child_point", "parent_quat", "child_quat"):
-                if not all(math.isfinite(v) for v in getattr(j, field_name)):
-                    add(f"{where}.{field_name}: contains NaN or inf")
-            for field_name, n in (("parent_point", 3), ("child_point", 3), ("parent_quat", 4), ("child_quat", 4)):
-                if len(getattr(j, field_name)) != n:
-                    add(f"{where}.{field_name}: needs {n} numbers")
-            quats = [("parent_quat", j.parent_quat), ("child_quat", j.child_quat)]
-            if j.kind == "free" and len(j.q0) == 7:
-                quats.append(("q0[3:7] (attitude)", j.q0[3:]))
-            if j.kind == "ball" and len(j.q0) == 4:
-                quats.append(("q0 (relative attitude)", j.q0))
-            for label, q in quats:
-                if len(q) == 4 and all(math.isfinite(v) for v in q):
-                    norm = math.sqrt(sum(v * v for v in q))
-                    if abs(norm - 1.0) > QUAT_NORM_TOL:
-                        add(f"{where}.{label}: quaternion norm is {norm:.12g}, not 1 — "
-                            "normalize it (scalar first: w, x, y, z)")
-            if j.kind == "free":
-                if j.parent != WORLD:
-                    add(f"{where}.parent: a free joint connects a body to {WORLD!r}, got {j.parent!r}")
-                frames = (j.parent_point, j.child_point, j.parent_quat, j.child_quat)
-                if frames != ((0.0,) * 3, (0.0,) * 3, (1.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)):
-                    add(f"{where}: a free joint's q0 is the COM pose itself — leave the joint frames at identity")
-            if j.kind in AXIS_KINDS:
-                what = "rotation axis" if j.kind == "revolute" else "sliding direction"
-                if j.axis is None or len(j.axis) != 3:
-                    add(f"{where}.axis: a {j.kind} joint needs a 3-vector axis (its {what}, in the joint frame)")
-                elif not all(math.isfinite(v) for v in j.axis):
-                    add(f"{where}.axis: contains NaN or inf")
-                elif math.sqrt(sum(v * v for v in j.axis)) == 0.0:
-                    add(f"{where}.axis: zero length — give the {what}")
-            elif j.axis is not None:
-                add(f"{where}.axis: only {' and '.join(AXIS_KINDS)} joints take an axis")
-        for b in sorted(names - set(parents)):
-            add(f"bodies[{b!r}]: has no joint — give it one (a free body: Joint('free', 'world', {b!r}, ...))")
-        # Cycles: follow parents up from every body; a path that never reaches the
-        # world loops (only reachable when the parent names are all known).
-        for start in sorted(parents):
-            seen, node = set(), start
-            while node in parents and node not in seen:
-                seen.add(node)
-                node = parents[node]
-            if node in seen:
-                add(f"joints: cycle through {sorted(seen)!r} — joints must form a tree rooted at {WORLD!r}")
-                break
-        return problems
-
-
-    def _closure_problems(self):
-        from dalembert import closure
-
-        problems = []
-        add = problems.append
-        for i, (lp, r) in enumerate(zip(self.loops, closure.initial_rows(self))):
-            where = f"loops[{i}] ({lp.kind} {lp.body_a!r} -> {lp.body_b!r})"
-            for level, res, unit in (("position", r.phi, "m or the sine of a tilt"),
-                                     ("velocity", r.velocity, "m/s or rad/s")):
-                worst = float(np.max(np.abs(res))) if np.all(np.isfinite(res)) else float("nan")
-                if not worst <= LOOP_CLOSURE_TOL:
-                    add(f"{where}: the initial state violates the closure at {level} level by {worst:.3g} "
-                        f"({unit}; row residuals {np.round(res, 12).tolist()}), above LOOP_CLOSURE_TOL = "
-                        f"{LOOP_CLOSURE_TOL:g} — choose the tree joints' {'q0' if level == 'position' else 'v0'} "
-                        "so that the loop closes")
-        return problems
-
-    def _spring_length_problems(self):
-        from dalembert import closure, springs
-
-        states = {**spatial.initial_body_states(self), WORLD: closure.world_state()}
-        problems = []
-        for i, sp in enumerate(self.springs):
-            length = springs.state(sp, states[sp.body_a], states[sp.body_b]).length
-            if not length > springs.MIN_LENGTH:
-                problems.append(f"{_spring_where(i, sp)}: its points are {length:.3g} m apart at the initial state, "
-                                f"below MIN_LENGTH = {springs.MIN_LENGTH:g} m (the force's direction, along the line "
-                                "between them, is undefined) — move point_a or point_b, or the bodies")
-        return problems
-
-
-def _spring_where(i, sp):
-    return f"springs[{i}] ({sp.name!r}: {sp.body_a!r} -> {sp.body_b!r})"
-
-
-def _end_problems(where, element, names):
-    """The problems naming ``element``'s two ends (``body_a``, ``body_b``: bodies of the scene or the world)."""
-    return [f"{where}.{field_name}: no body named {b!r}{_did_you_mean(b, names | {WORLD})}"
-            for field_name in ("body_a", "body_b") for b in [getattr(element, field_name)]
-            if b != WORLD and b not in names]
-
-
-def _numbers_problems(where, field_name, v, n, note=""):
-    """The problem with ``v``, which must hold ``n`` finite numbers (``note``: what they are), as a list."""
-    if len(v) != n:
-        return [f"{where}.{field_name}: needs {n} numbers{note}, got {len(v)}"]
-    if not _finite(v):
-        return [f"{where}.{field_name}: contains NaN or inf"]
-    return []
-
-
-def _spring_problems(i, sp, names):
-    where = _spring_where(i, sp)
-    problems = []
-    add = problems.append
-    problems += _end_problems(where, sp, names)
-    if sp.body_a == sp.body_b:
-        add(f"{where}: joins a body to itself — a spring joins two different bodies (or a body and {WORLD!r})")
-    for field_name in ("point_a", "point_b"):
-        problems += _numbers_problems(where, field_name, getattr(sp, field_name), 3, " (m, in the body's frame)")
-    for field_name, unit in (("stiffness", "N/m"), ("damping", "N s/m"), ("rest_length", "m")):
-        v = getattr(sp, field_name)
-        if not (math.isfinite(v) and v >= 0.0):
-            add(f"{where}.{field_name}: must be finite and >= 0 ({unit}), got {v!r}")
-    if sp.stiffness == 0.0 and sp.damping == 0.0:
-        add(f"{where}: stiffness and damping are both zero, so it exerts no force — give one of them, or drop the spring")
-    return problems
-
-
-def _loop_problems(i, lp, names):
-    where = f"loops[{i}] ({lp.kind} {lp.body_a!r} -> {lp.body_b!r})"
-    problems = []
-    add = problems.append
-    if lp.kind not in LOOP_KINDS:
-        add(f"{where}.kind: unknown {lp.kind!r} — use one of {list(LOOP_KINDS)}")
-    problems += _end_problems(where, lp, names)
-    if lp.body_a == lp.body_b:
-        add(f"{where}: closes a body on itself — a loop joins two different bodies (or a body and {WORLD!r})")
-    for field_name, n in (("point_a", 3), ("point_b", 3), ("quat_a", 4), ("quat_b", 4)):
-        v = getattr(lp, field_name)
-        shape = _numbers_problems(where, field_name, v, n)
-        problems += shape
-        if not shape and n == 4 and abs(math.sqrt(sum(x * x for x in v)) - 1.0) > QUAT_NORM_TOL:
-            add(f"{where}.{field_name}: quaternion norm is {math.sqrt(sum(x * x for x in v)):.12g}, not 1 — "
-                "normalize it (scalar first: w, x, y, z)")
-    if lp.kind == "revolute":
-        if lp.axis is None or len(lp.axis) != 3:
-            add(f"{where}.axis: a revolute loop needs a 3-vector axis (in the joint frames)")
-        elif not _finite(lp.axis) or math.sqrt(sum(v * v for v in lp.axis)) == 0.0:
-            add(f"{where}.axis: must be finite and non-zero — give the rotation axis direction")
-    elif lp.axis is not None:
-        add(f"{where}.axis: only revolute loops take an axis")
-    if lp.kind == "distance":
-        if lp.length is None or not (math.isfinite(lp.length) and lp.length > 0.0):
-            add(f"{where}.length: a distance loop needs a positive finite length (m), got {lp.length!r} — "
-                "for coincident points use a ball loop")
-    elif lp.length is not None:
-        add(f"{where}.length: only distance loops take a length")
-    return problems
-
-
-def _finite(x):
-    return all(math.isfinite(v) for v in np.ravel(x))
-
-
-def _body_problems(b, is_free):
-    where = f"bodies[{b.name!r}]"
-    problems = []
-    add = problems.append
-    if not (math.isfinite(b.mass) and b.mass > 0.0):
-        add(f"{where}.mass: must be positive and finite, got {b.mass!r} — give the mass in kg")
-    I = np.asarray(b.inertia, dtype=float)
-    if I.shape != (3, 3):
-        add(f"{where}.inertia: must be 3x3 (kg m^2 about the COM, body frame), got shape {I.shape}")
-        return problems
-    if not _finite(I):
-        add(f"{where}.inertia: contains NaN or inf")
-        return problems
-    scale = max(np.abs(I).max(), np.finfo(float).tiny)
-    if np.abs(I - I.T).max() > INERTIA_REL_TOL * scale:
-        add(f"{where}.inertia: not symmetric (max |I - I^T| = {np.abs(I - I.T).max():.3g}) — "
-            "an inertia tensor is symmetric")
-        return problems
-    moments = np.linalg.eigvalsh(I)
-    if moments[0] < 0.0 or moments[-1] <= 0.0:
-        add(f"{where}.inertia: not positive definite (principal moments {moments.tolist()}) — "
-            "principal moments must be positive")
-    elif moments[0] <= SINGULAR_INERTIA_RATIO * moments[-1]:
-        if is_free:
-            add(f"{where}.inertia: singular (principal moments {moments.tolist()}): all mass lies on "
-                "one line — the degenerate case of seed 002 — so the spin about that line is "
-                "undetermined; a free body needs three positive principal moments (give the body a "
-                "thickness)")
-        else:
-            add(f"{where}.inertia: not positive definite (principal moments {moments.tolist()}) — "
-                "give the body a finite thickness")
-    elif moments[0] + moments[1] < moments[2] * (1.0 - INERTIA_REL_TOL):
-        add(f"{where}.inertia: principal moments {moments.tolist()} violate the triangle inequality "
-            "I1 + I2 >= I3 — no mass distribution has them")
-    for k, (m, u) in enumerate(b.particles):
-        if not (math.isfinite(m) and m > 0.0) or len(u) != 3 or not _finite(u):
-            add(f"{where}.particles[{k}]: needs a positive finite mass and 3 finite coordinates")
-    return problems
-
-
-def _load_problems(i, ld, names):
-    where = f"loads[{i}] ({ld.kind} on {ld.body!r})"
-    problems = []
-    add = problems.append
-    if ld.body not in names:
-        add(f"{where}.body: no body named {ld.body!r}{_did_you_mean(ld.body, names)}")
-    if ld.kind not in LOAD_KINDS:
-        add(f"{where}.kind: unknown {ld.kind!r} — use one of {list(LOAD_KINDS)}")
-    if ld.frame not in LOAD_FRAMES:
-        add(f"{where}.frame: unknown {ld.frame!r} — use 'body' (a follower load) or 'world'")
-    for field_name in ("vector", "point"):
-        problems += _numbers_problems(where, field_name, getattr(ld, field_name), 3)
-    if ld.kind == "torque" and any(ld.point):
-        add(f"{where}.point: a torque has no point of application — leave point at (0, 0, 0)")
-    return problems
-
-
-def _did_you_mean(name, candidates):
-    return suggest(name, candidates)

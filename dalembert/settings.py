@@ -18,6 +18,10 @@ MAX_COUNTABLE_STEPS = 2.0**53
 # Below 100 unit roundoffs a relative tolerance asks more than double precision can deliver;
 # scipy.integrate's solvers raise such an rtol to this themselves (with a warning).
 RTOL_MIN = 100.0 * np.finfo(float).eps
+# A relative tolerance of 1 or more lets each step err by as much as the state itself: it asks no
+# accuracy at all, so an adaptive solver takes steps as long as its stability allows and a run "meets" it
+# by construction. Refused, like a tolerance below RTOL_MIN.
+RTOL_MAX = 1.0
 
 
 class FrozenOptions(dict):
@@ -74,6 +78,9 @@ class Settings:
                 problems.append(f"{name}: must be a positive finite number, got {v!r}")
             else:
                 object.__setattr__(self, name, float(v))
+        if isinstance(self.rtol, float) and self.rtol >= RTOL_MAX:
+            problems.append(f"rtol: {self.rtol!r} asks no accuracy (a relative error of {RTOL_MAX:g} or more is as "
+                            "large as the state itself) — use rtol < 1, e.g. 1e-6")
         if problems:
             raise SettingsError("; ".join(problems))
 

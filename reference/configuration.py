@@ -6,7 +6,7 @@ velocity coordinates in ``v``:
 * ``vector``: ``q`` in R^n, ``v = dq/dt`` (positions, joint angles);
 * ``quat``: a unit quaternion ``q_AB`` (4), ``v = w_AB_B`` (3) in the moving frame;
 * ``rotmat``: a rotation matrix ``R_AB`` stored row-major (9), ``v = w_AB_B`` (3)
-  — the seed's own state (seed 002: ``Q' = Q Omega``).
+  — the attitude's kinematics ``R' = R [w]x`` (w in the moving frame; any rigid-body text).
 
 Two ways to move along a velocity, which is what separates integrators:
 ``qdot`` (the embedded ODE, used by vector-space methods: unit norm and

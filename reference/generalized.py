@@ -1,8 +1,9 @@
 """d'Alembert's principle in generalized coordinates (Kane's form) for trees of
 rigid bodies with free, revolute, prismatic, ball and weld joints.
 
-Seed 003: with partial velocities ``dV_i/du_j`` (of each body's centre of mass)
-and partial angular velocities ``dw_i/du_j``, the generalized active forces
+Kane & Levinson, *Dynamics: Theory and Applications* (1985), chapters 4 and 6: with partial
+velocities ``dV_i/du_j`` (of each body's centre of mass) and partial angular velocities
+``dw_i/du_j``, the generalized active forces
 
     Q_j  = sum_i F_i . dV_i/du_j + T_i . dw_i/du_j
 

@@ -106,8 +106,8 @@ class SymplecticEuler(_FixedStep):
 
 @integrator("rk4")
 class ClassicalRK4(_FixedStep):
-    """Classical fourth-order Runge-Kutta on the embedded coordinates — the
-    seed's method (seed 002). Quaternion norm / orthonormality drift as O(h^4)."""
+    """Classical fourth-order Runge-Kutta on the embedded coordinates (quaternion or
+    rotation matrix as plain numbers). Quaternion norm / orthonormality drift as O(h^4)."""
 
     stages = 4
 

@@ -1,4 +1,4 @@
-"""Newton-Euler equations for free rigid bodies (seed 002, eqs. 07-09).
+"""Newton-Euler equations for free rigid bodies (Landau & Lifshitz, Mechanics, sections 34 and 36).
 
 For each body, with the centre of mass R in world and the attitude Q = R_WB::
 
@@ -8,7 +8,7 @@ For each body, with the centre of mass R in world and the attitude Q = R_WB::
 with F and tau the resultant of the loads, gravity and spring-dampers (``dalembert.springs``) on the body.
     Q' = Q Omega,  Omega = skew(w)             (kinematics)
 
-The attitude is either a unit quaternion (default) or the seed's own rotation
+The attitude is either a unit quaternion (default) or a rotation
 matrix (``attitude="matrix"``: 18 unknowns per body, whose orthonormality drift
 under a vector-space integrator is one of the things the harness shows).
 Only the terms the scene has are computed (no gravity unless declared).

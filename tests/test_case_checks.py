@@ -1,7 +1,10 @@
 """What a case declares is checked when it is made, before anything runs; a declared invariant is
 computed, stored and judged like the built-in ones."""
 
+import dataclasses
+import functools
 import json
+import re
 
 import numpy as np
 import pytest
@@ -122,3 +125,90 @@ def test_variants_and_hard_cases_stay_out_of_the_default_matrix():
     default = {n for n, f in CASES.items() if in_default_matrix(f)}
     assert {"pendulum", "heavy_top", "chain"} <= default
     assert not {"pendulum_a01", "heavy_top_nutating", "chain_chaotic", "kovalevskaya_top"} & default
+
+
+# Physically meaningless parameters (issue 42): each once ran to a stored "ok" (or to NaN and numpy
+# warnings); every one is refused when the case is made, naming the case and the parameter.
+MEANINGLESS = [
+    ("chain", dict(length=0.0), "chain.length: must be positive (m), got 0.0"),
+    ("pendulum", dict(radius=-0.01), "pendulum.radius: must be positive (m), got -0.01"),
+    ("pivoted_rod", dict(length=1e-300), "pivoted_rod.length: 1e-300 (m) is below 1e-50"),
+    ("free_top", dict(omega0=(1e200, 0.0, 0.0)), "free_top.omega0: (1e+200, 0.0, 0.0) (rad/s) is beyond 1e+50"),
+    ("free_top", dict(omega0=(float("nan"), 0.0, 0.0)), "free_top.omega0: must be finite (rad/s)"),
+    ("heavy_top", dict(inertia=(0.2, -0.4, 0.2)), "heavy_top.inertia: must be positive (kg m^2) in every component"),
+    ("chain", dict(n=0), "chain.n: must be a whole number >= 1 (links), got 0"),
+    ("n_four_bar", dict(n=2.5), "n_four_bar.n: must be a whole number >= 1"),
+    ("pendulum", dict(gravity=float("inf")), "pendulum.gravity: must be finite (m/s^2)"),
+    ("pendulum", dict(theta0="1"), "pendulum.theta0: must be a number (rad)"),
+    ("pendulum", dict(t_final=-1.0), "pendulum.t_final: must be positive (s)"),
+    ("particle_box", dict(spacing=(1.0, 2.0)), "particle_box.spacing: expected 3 numbers"),
+]
+
+
+@pytest.mark.parametrize("name,params,phrase", MEANINGLESS, ids=[f"{n}-{sorted(p)[0]}" for n, p, _ in MEANINGLESS])
+def test_a_meaningless_parameter_is_refused_naming_it(name, params, phrase):
+    from dalembert.case import load_cases
+
+    factory = load_cases()[name]
+
+    @functools.wraps(factory.func)  # (its signature: the parameters and their defaults)
+    def never(**_):
+        raise AssertionError("the factory ran")
+
+    with pytest.raises(SceneError) as err:
+        make_case(name, **params)
+    assert str(err.value).startswith(f"case {name!r}:")
+    (p,) = err.value.problems
+    assert p.startswith(phrase) and " — " in p, p
+    # refused before the factory runs: the same family with a factory that must not be called
+    with pytest.raises(SceneError, match=re.escape(phrase)):
+        dataclasses.replace(factory, func=never)(**params)
+
+
+def test_every_registered_case_declares_its_lengths_masses_and_counts_positive():
+    """The domains are declared, not guessed: a parameter named like a length, mass, radius or count
+    in a registered case is declared positive (or a count), and its defaults lie in the domain."""
+    from dalembert.case import CASES, load_cases
+
+    load_cases()
+    physical = {"length", "mass", "radius", "inertia", "spacing", "section", "moment", "com_distance", "com_offset",
+                "sample_interval"}
+    for name, factory in CASES.items():
+        for key in set(factory.params) & physical:
+            assert key in factory.positive, f"{name}.{key}: not declared positive"
+        if "n" in factory.params:
+            assert "n" in factory.counts, f"{name}.n: not declared a count"
+        factory()  # the defaults lie in the domains (checked at registration too)
+
+
+def test_a_domain_the_defaults_break_or_a_name_not_a_parameter_is_refused_at_registration():
+    with pytest.raises(SceneError) as err:
+        @case(tags=("test",), positive=("mass", "lenght"), counts=("n",))
+        def bad_domain(mass=0.0, n=1.5, t_final=1.0):
+            return _case()
+    text = str(err.value)
+    assert "positive: 'lenght' is not a parameter of it" in text
+    with pytest.raises(SceneError) as err:
+        @case(tags=("test",), positive=("mass",), counts=("n",))
+        def bad_default(mass=0.0, n=1.5, t_final=1.0):
+            return _case()
+    ps = err.value.problems
+    assert any(p.startswith("default: bad_default.mass: must be positive") for p in ps), ps
+    assert any(p.startswith("default: bad_default.n: must be a whole number >= 1") for p in ps), ps
+
+
+def test_a_factory_that_returns_no_case_or_one_named_otherwise_is_refused():
+    from dalembert.case import CaseFactory
+
+    def mine(t_final=1.0):
+        return _case()
+
+    def not_a_case(t_final=1.0):
+        return {"name": "not_a_case"}
+
+    made = CaseFactory("mine", mine, ("test",), {"t_final": "s"})()
+    assert made.tags == ("test",) and made.params == {"t_final": 1.0} and made.units == {"t_final": "s"}
+    with pytest.raises(SceneError, match="factory: returned dict, not a Case"):
+        CaseFactory("not_a_case", not_a_case, (), {})()
+    with pytest.raises(SceneError, match="name: the factory made a case named 'mine'"):
+        CaseFactory("other", mine, (), {})()

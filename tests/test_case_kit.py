@@ -53,6 +53,12 @@ def test_an_out_of_tree_case_package_runs_through_dalembert(tmp_path):
     assert "spherical_pendulum" in listed and "pendulum " in listed
     _run(["-c", "from dalembert.testing import check_case; from my_cases import spherical_pendulum; "
                 "check_case(spherical_pendulum, horizon=0.5)"], env, tmp_path)
+    refused = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--case", "spherical_pendulum",
+                              "--param", "length=0", "--out", str(tmp_path / "refused")],
+                             capture_output=True, text=True, env=env, cwd=tmp_path, timeout=600)
+    assert refused.returncode == 2 and "spherical_pendulum.length: must be positive (m)" in refused.stderr, \
+        refused.stderr  # its declared domain (positive=), checked when the case is made
+    assert not (tmp_path / "refused").exists()
     out = tmp_path / "out"
     _run(["-m", "dalembert.harness.cli", "run", "--case", "spherical_pendulum", "--engine", "reference",
           "--integrator", "rk4", "--dt", "1e-2", "--param", "t_final=0.5", "--jobs", "1", "--quick", "--out", str(out)],

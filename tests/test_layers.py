@@ -1,6 +1,6 @@
 """The package's shape holds by construction: one import name, layers that only import downward.
 
-Layers (DESIGN.md): the core (``dalembert/*.py``) imports none of the others;
+Layers (docs/DESIGN.md): the core (``dalembert/*.py``) imports none of the others;
 ``dalembert.reference`` only the core; ``dalembert.cases`` the core and the
 reference; ``dalembert.adapters`` the core and the reference (the reference
 engine's adapter wraps the reference solver); ``dalembert.reports`` only the

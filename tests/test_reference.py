@@ -68,12 +68,12 @@ def test_newton_euler_and_kane_agree(name):
     assert np.max(spatial.rotation_angle(ne.quaternion, kane.quaternion)) < FORMULATION_AGREEMENT
     assert np.max(np.abs(ne.position - kane.position)) < FORMULATION_AGREEMENT * 1e3  # box falls ~20 m
     assert np.max(np.abs(ne.angular_velocity - kane.angular_velocity)) < FORMULATION_AGREEMENT
-    # the seed's matrix state: same motion to the method's own error
+    # the rotation-matrix state: same motion to the method's own error
     assert np.max(spatial.rotation_angle(ne.quaternion, mat.quaternion)) < 1e-9
 
 
 def test_matrix_state_drifts_off_the_group_unless_integrated_on_it():
-    """Seed 002's Q' = Q Omega integrated by RK4 loses orthonormality; RKMK4
+    """The rotation matrix's R' = R [w]x integrated by RK4 loses orthonormality; RKMK4
     (exponential update) keeps it to roundoff."""
     case = make_case("free_top_intermediate", t_final=10.0)
     drift = {}

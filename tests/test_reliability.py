@@ -24,9 +24,9 @@ TINY = ["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "-
 BAD_RUNS = [  # (flags of `dalembert run`, phrase of the message)
     (["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--param", "t_final=2", "--dt", "1e-300"],
      "more than 1e+08"),
-    (["--case", "pivoted_rod", "--param", "length=0"], "'length': must be positive (m), got 0.0"),
-    (["--case", "pivoted_rod", "--param", "radius=-0.01"], "'radius': must be positive"),
-    (["--case", "particle_box", "--param", "spacing=1,0,3"], "'spacing': must be positive"),
+    (["--case", "pivoted_rod", "--param", "length=0"], "pivoted_rod.length: must be positive (m), got 0.0"),
+    (["--case", "pivoted_rod", "--param", "radius=-0.01"], "pivoted_rod.radius: must be positive"),
+    (["--case", "particle_box", "--param", "spacing=1,0,3"], "particle_box.spacing: must be positive"),
     (["--case", "free_top", "--param", "length=5"], "--param length: no selected case has this parameter"),
     (["--case", "pivoted_rod", "--param", "lenght=2"], "did you mean 'length'"),
     (["--param", "t_final=1", "--param", "t_final=2"], "--param t_final: given twice"),

@@ -21,7 +21,7 @@ the stored verdict. The trajectory table's are ``dalembert.reports.export``'s.
 Why ``dalembert.harness.api`` and not ``dalembert.api``: running a selection
 needs the cases, the engines' adapters and the worker pool, which sit above the
 core; ``dalembert`` itself is the core, which imports none of them (the layers in
-DESIGN.md; ``tests/test_layers.py`` walks every import, function-level ones
+docs/DESIGN.md; ``tests/test_layers.py`` walks every import, function-level ones
 included, so not even a lazy re-export from ``dalembert/__init__.py`` would
 hold). The harness is the layer that joins them all, as the command line does,
 so the API is one module of it: importing it costs what importing the command

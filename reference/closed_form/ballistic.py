@@ -3,7 +3,7 @@
 Source: Newton's second law for the centre of mass, ``M R'' = sum_i F_i``: the
 centre of mass moves as a particle of the total mass under the total external
 force (H. Goldstein, C. Poole, J. Safko, *Classical Mechanics*, 3rd ed., section
-1.2; seed 002, eq. 07). Under uniform gravity the total force is ``M g`` (each of
+1.2; Landau & Lifshitz, *Mechanics*, section 34). Under uniform gravity the total force is ``M g`` (each of
 the N particles carries ``(M/N) g``), so ``R'' = g`` — not ``g/N``, which giving
 one particle's force to the whole mass would make it — and
 

@@ -14,8 +14,8 @@ Source: L. D. Landau & E. M. Lifshitz, *Mechanics*, 3rd ed. (1976), section 37
 Euler angles relative to the constant angular momentum ``M`` along the
 invariable axis: ``M_B = M (sin th sin psi, sin th cos psi, cos th)`` and
 ``phi' = M (I1 w1^2 + I2 w2^2) / (I1^2 w1^2 + I2^2 w2^2)`` (eqs. 37.12-37.13).
-This is also the setting of seed 002 (Euler's equations 27-29 and the two
-conservation laws): the energy ``2E = sum_i I_i w_i^2`` (the rotational kinetic
+Euler's equations in principal axes conserve two quantities (L&L sections 36-37;
+Goldstein, *Classical Mechanics*, ch. 5): the energy ``2E = sum_i I_i w_i^2`` (the rotational kinetic
 energy is ``1/2 (I w) . w``, Landau & Lifshitz section 32, not ``1/2 w . w``) and
 ``M^2 = sum_i I_i^2 w_i^2`` (multiply the i-th of ``I_i w_i' = (I_j - I_k) w_j w_k``
 by ``I_i w_i`` and sum: the right-hand sides cancel).

@@ -1,9 +1,10 @@
 """Planar rod pivoted at one end, driven by a follower force at its tip.
 
-Source: seed 000 (d'Alembert's principle for the pivoted rod): with the tip
+Source: d'Alembert's principle (Kane & Levinson, *Dynamics: Theory and Applications*,
+1985; Goldstein, *Classical Mechanics*, section 1.4) for the pivoted rod: with the tip
 force perpendicular to the rod and of constant size F (a follower force),
 ``phi'' I_O = l F``, where ``I_O`` is the moment of inertia about the pivot
-(``m l^2 / 3`` for the seed's thin rod). Hence
+(``m l^2 / 3`` for a thin rod). Hence
 
     phi(t) = phi0 + w0 t + (l F / (2 I_O)) t^2      (= 3F/(2ml) t^2 for a thin rod at rest)
 

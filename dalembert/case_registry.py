@@ -1,0 +1,142 @@
+"""The case registry: ``CASES``, filled by ``@case`` with ``CaseFactory``s, the entry points that load
+case packages (``load_cases``), and ``make_case``.
+
+A case is made by a factory function decorated ``@case(tags=..., units=..., positive=..., counts=...)``;
+its keyword parameters (all with defaults) give variants for free. Each parameter's domain is declared
+there once and checked whenever the case is made, before the factory runs (``dalembert.params``).
+``load_cases()`` loads every package registered in the entry-point group ``dalembert.cases``: the
+built-in ``dalembert.cases`` and any third party's. ``dalembert.case`` re-exports every name.
+"""
+
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass
+from typing import Callable
+
+from dalembert.params import domain_problems
+from dalembert.registry import Registry, suggest
+from dalembert.scene import SceneError
+
+__all__ = ["CASES", "OUT_OF_DEFAULT", "in_default_matrix", "CaseFactory", "case", "load_cases", "make_case"]
+
+CASES = Registry("case")
+# Tags that keep a case out of the default matrix (``dalembert run`` with no selection, ``dalembert
+# validate``): ``hard`` (long, fast, chaotic: run them with ``--tag hard``) and ``variant`` (presets
+# and variants of a canonical case, e.g. a published benchmark's set-up: run them by name or with
+# ``--tag variant``).
+OUT_OF_DEFAULT = ("hard", "variant")
+
+
+def in_default_matrix(factory):
+    """Whether the case family ``factory`` (a ``CaseFactory``) runs in the default matrix."""
+    return not set(OUT_OF_DEFAULT) & set(factory.tags)
+
+
+@dataclass(frozen=True)
+class CaseFactory:
+    """A registered case family: the factory, its tags, parameter units, and its parameters' domains
+    (``dalembert.params``): those that must be positive (every component of a vector one) and those
+    that count things (whole numbers >= 1). Calling it checks the parameters, then makes the case."""
+
+    name: str
+    func: Callable
+    tags: tuple
+    units: dict
+    positive: tuple = ()
+    counts: tuple = ()
+
+    @property
+    def params(self):
+        """Keyword parameters and their defaults, as a dict."""
+        return {p.name: p.default for p in inspect.signature(self.func).parameters.values()}
+
+    @property
+    def summary(self):
+        """First paragraph of the factory's docstring, on one line."""
+        doc = inspect.getdoc(self.func) or ""
+        return " ".join(doc.split("\n\n")[0].split())
+
+    def __call__(self, **params):
+        known = self.params
+        unknown = sorted(set(params) - set(known))
+        if unknown:
+            raise SceneError(f"case {self.name!r}", [
+                f"parameter {k!r}: unknown{suggest(k, known)}" for k in unknown])
+        merged = {**known, **params}
+        problems = domain_problems(self.name, known, params, self.positive, self.counts, self.units)
+        if problems:
+            raise SceneError(f"case {self.name!r}", problems)
+        made = self.func(**params)
+        # a Case (dalembert.case), told which family made it; known by its method, so that this module
+        # need not import dalembert.case, which re-exports it
+        in_family = getattr(made, "in_family", None)
+        if not callable(in_family):
+            raise SceneError(f"case {self.name!r}", [f"factory: returned {type(made).__name__}, not a Case"])
+        return in_family(self.name, self.tags, merged, self.units)
+
+
+def case(tags=(), units=None, positive=(), counts=()):
+    """Register a case factory under its function name.
+
+    Every parameter must have a default (a case runs without arguments), and one of
+    them is ``t_final`` (s): the contract tests and ``--param t_final=...`` shorten a
+    case through it. Each parameter's domain is declared here, once, and checked every time
+    the case is made, before the factory runs (``dalembert.params.domain_problems``):
+    ``positive`` names the parameters that must be positive (lengths, masses, radii, inertias,
+    sample intervals: a zero-length rod would run "ok" with every error exactly 0), ``counts``
+    those that are whole numbers >= 1 (links, bodies); every numeric parameter must be finite
+    and within ``params.MAX_MAGNITUDE``, and ``t_final`` positive. Raises ``SceneError`` naming
+    the case and the parameter ("case.param: what is wrong — the fix"); a declaration the
+    defaults themselves break is refused at registration.
+    """
+
+    def register(func):
+        sig = inspect.signature(func)
+        problems = [f"parameter {p.name!r}: has no default — every parameter needs one (a case runs without "
+                    "arguments)" for p in sig.parameters.values() if p.default is inspect.Parameter.empty]
+        if "t_final" not in sig.parameters:
+            problems.append("t_final: the factory has no t_final parameter — add t_final=<horizon, s> and pass it to "
+                            "Case (the contract tests and --param t_final=... shorten a case through it)")
+        for label, names in (("positive", positive), ("counts", counts)):
+            problems += [f"{label}: {k!r} is not a parameter of it" for k in sorted(set(names) - set(sig.parameters))]
+        problems += [f"positive, counts: {k!r} is in both — a count is a whole number >= 1, declare it in counts"
+                     for k in sorted(set(positive) & set(counts))]
+        if problems:
+            raise SceneError(f"case {func.__name__!r}", problems)
+        defaults = {p.name: p.default for p in sig.parameters.values()}
+        problems = [f"default: {p}" for p in domain_problems(func.__name__, defaults, defaults, positive, counts,
+                                                             units)]
+        if problems:
+            raise SceneError(f"case {func.__name__!r}", problems)
+        CASES.register(func.__name__, CaseFactory(func.__name__, func, tuple(tags), dict(units or {}),
+                                                  tuple(positive), tuple(counts)))
+        return func
+
+    return register
+
+
+_LOADED = False
+
+
+def load_cases():
+    """Load every case package registered in the entry-point group ``dalembert.cases``
+    (the built-in ``dalembert.cases`` is one of them) and return the registry."""
+    global _LOADED
+    if _LOADED:
+        return CASES
+    from importlib.metadata import entry_points
+
+    for ep in entry_points(group="dalembert.cases"):
+        try:
+            ep.load()
+        except Exception as e:
+            raise ImportError(f"cases entry point {ep.name!r} ({ep.value}) failed to load: "
+                              f"{type(e).__name__}: {e} — fix or uninstall the package that declares it") from e
+    _LOADED = True
+    return CASES
+
+
+def make_case(name, **params):
+    """Build the registered case ``name`` with keyword ``params`` overriding defaults."""
+    return load_cases()[name](**params)

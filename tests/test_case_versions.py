@@ -1,0 +1,60 @@
+"""Every built-in case's version hash at its default parameters, pinned.
+
+A case's version (``Case.version``) is the content hash of everything that defines the problem and
+judges a run: scene, horizon, sample times, parameters, tolerance values, conserved quantities,
+declared invariants. A store keeps runs under it, and a run of another version is another problem.
+Comparing a newly made case with another newly made one cannot see a change to a case's content;
+this literal can: when a case's hash changes, its stored results become another version.
+
+A change here must be deliberate. Regenerate the literal with::
+
+    python -c "from dalembert.case import load_cases; print({n: f().version for n, f in sorted(load_cases().items())})"
+
+and say in the commit which case changed and why its stored results become another version.
+A new built-in case gets its line here.
+"""
+
+import pytest
+
+from dalembert.case import CASES, load_cases
+
+load_cases()
+
+VERSIONS = {
+    "andrews_squeezer": "a3b07d6b2529",
+    "bricard": "7c2b8c4a437c",
+    "chain": "8049d7d884a4",
+    "chain_chaotic": "e4af1066c068",
+    "flyball_governor": "e0b1e67b12c0",
+    "four_bar": "72650d65149f",
+    "free_top": "b0b4cb11c390",
+    "free_top_fast_spin": "733f4896d60b",
+    "free_top_intermediate": "96851d9b1bff",
+    "free_top_long_horizon": "572ee138239e",
+    "free_top_near_symmetric": "3ff8dc4fd472",
+    "free_top_separatrix": "b54fd48c5fdd",
+    "free_top_slender": "7748b0ac3603",
+    "heavy_top": "70fe3e2d1085",
+    "heavy_top_nutating": "45ed74d4cc47",
+    "kovalevskaya_top": "a3b0fd533941",
+    "n_four_bar": "22988d08d2e1",
+    "particle_box": "c8b418657722",
+    "particle_box_welded": "9059341be142",
+    "pendulum": "e47c4306ecf5",
+    "pendulum_a01": "2c05611bb412",
+    "pivoted_rod": "da2a01182e34",
+    "pivoted_rod_violent": "ede03c9c63ec",
+}
+
+
+def test_every_built_in_case_is_pinned():
+    built_in = {n for n, f in CASES.items() if f.func.__module__.startswith("dalembert.cases.")}
+    assert built_in == set(VERSIONS), (f"not pinned: {sorted(built_in - set(VERSIONS))}; "
+                                       f"pinned but gone: {sorted(set(VERSIONS) - built_in)}")
+
+
+@pytest.mark.parametrize("name", sorted(VERSIONS))
+def test_the_version_at_the_defaults_is_as_pinned(name):
+    assert CASES[name]().version == VERSIONS[name], (
+        f"{name}: its content changed, so its stored results are of another version — if that is meant, "
+        "update VERSIONS (see the module docstring) and say why in the commit")
