@@ -19,11 +19,13 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
+from dalembert.reports.formatting import value_text  # noqa: E402
+
 plt.rcParams.update({"svg.fonttype": "none", "font.size": 9, "axes.grid": True, "grid.alpha": 0.3,
                      "legend.fontsize": 7, "axes.titlesize": 10})
 
 __all__ = ["engine_colours", "pareto_summary", "work_precision", "stability", "time_grid", "diverged_runs",
-           "stability_map", "map_costs", "scaling", "MAX_POINTS"]
+           "diverged_figure", "stability_map", "map_costs", "scaling", "MAX_POINTS"]
 
 MAX_POINTS = 400  # per time-series line: figures stay small; the data stay in the store
 PANEL_W, PANEL_H = 3.3, 2.8  # inches per small-multiple panel: four fit across the page
@@ -36,6 +38,7 @@ OPTION_STYLES = ("-", "--", ":", "-.")
 LEGEND_W = 2.2  # inches beside a panel for its own legend (stability maps)
 FLOOR_STYLE = dict(color="k", ls=":", lw=1.2)
 TOLERANCE_STYLE = dict(color="#c0392b", ls="--", lw=1.0)
+DIVERGED_MARGIN = 2.0  # factor of room below the smallest and above the largest error of the diverged runs
 
 
 def _svg(fig):
@@ -283,35 +286,50 @@ def time_grid(rows, engines, sweep_colours):
     return _svg(fig)
 
 
-def diverged_runs(panels, ylabel):
+def diverged_figure(panels, ylabel):
     """Runs that diverged: their error until it stopped being finite, the divergence time marked;
-    a panel per engine, one above the other, the runs named beside it.
+    a panel per engine, one above the other, the runs named beside it. Returns the matplotlib figure
+    (``diverged_runs`` gives its SVG).
+
+    The y axis is logarithmic and spans every run's finite, non-zero errors, from the smallest to
+    the largest: a run that blew up to 1e30 and one that diverged from 1e-3 both show whole. (A
+    symlog axis would spend a linear band near zero on values never drawn; clipping, even marked,
+    hides the shape of the runs cut off; an error of exactly zero, the exact start, has no place on
+    either and is left out.)
 
     Parameters
     ----------
-    panels : dict engine -> list of (label, t, y, t_diverged or None)
+    panels : dict engine -> list of (label, t, y, t_diverged or None) — ``t`` (n,) s, ``y`` (n,) the
+        error in the unit of ``ylabel``, NaN or inf once the run stopped being finite
+    ylabel : str — the error and its unit
     """
     fig, axes = plt.subplots(len(panels), 1, figsize=(9.5, 2.9 * len(panels)), squeeze=False, layout="constrained")
     for ax, (engine, runs) in zip(axes[:, 0], sorted(panels.items())):
-        finite = []
+        drawn = []
         for k, (label, t, y, t_div) in enumerate(runs):
             colour = INTEGRATOR_PALETTE[k % len(INTEGRATOR_PALETTE)]
-            tt, yy = _thin(t, y)
+            tt, yy = _thin(np.asarray(t), np.abs(np.asarray(y, dtype=float)))
             yy = np.where(np.isfinite(yy) & (yy > 0), yy, np.nan)
-            finite.append(yy[np.isfinite(yy)])
-            ax.semilogy(tt, yy, lw=1, color=colour, label=label + (f" (t = {t_div:.3g} s)" if t_div is not None else ""))
+            drawn.append(yy[np.isfinite(yy)])
+            ax.semilogy(tt, yy, lw=1, color=colour,
+                        label=label + (f" (t = {value_text(t_div, 's')})" if t_div is not None else ""))
             if t_div is not None:
                 ax.axvline(t_div, color=colour, ls=":", lw=1)
                 ax.plot([t_div], [1], "x", color=colour, ms=7, mew=2, transform=ax.get_xaxis_transform(),
                         clip_on=False)
-        values = np.concatenate(finite) if finite else np.array([])
-        if values.size:  # start where the errors are, not at the roundoff of the first samples
-            ax.set_ylim(bottom=max(np.percentile(values, 5), values.max() * 1e-12))
+        values = np.concatenate(drawn) if drawn else np.array([])
+        if values.size:  # every run whole, a little room above and below (log axis: factors)
+            ax.set_ylim(values.min() / DIVERGED_MARGIN, values.max() * DIVERGED_MARGIN)
         ax.set_title(f"{engine}: runs that diverged (x: when)", loc="left")
         ax.set_xlabel("t (s)")
         ax.set_ylabel(ylabel)
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    return _svg(fig)
+    return fig
+
+
+def diverged_runs(panels, ylabel):
+    """``diverged_figure`` as SVG text."""
+    return _svg(diverged_figure(panels, ylabel))
 
 
 # ---------------------------------------------------------------------------------------------- stability maps

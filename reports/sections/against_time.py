@@ -9,7 +9,7 @@ from dalembert.reports import figures, time_series
 from dalembert.reports.findings import settings_text
 from dalembert.reports.loops import RESIDUALS
 from dalembert.reports.page import Part
-from dalembert.reports.sections.common import conserved_label, drift_unit
+from dalembert.reports.sections.common import drift_unit
 from dalembert.reports.work_precision import sweep_key
 
 __all__ = ["against_time", "DECADES"]
@@ -47,10 +47,9 @@ def _representatives(part, store, f, name, truth, reps):
             if s:
                 label = " ".join(x for x in (r.sweep_label, r.integrator, r.options_label) if x)
                 rows[0]["series"].setdefault(e, []).append((label, r.sweep_label, *s))
-    declared = []
     for cname in f.case.conserved:
         tol = f.case.tolerances.get(cname)
-        row = dict(ylabel=f"{cname} drift ({drift_unit(cname, f.case)})", log=True, series={},
+        row = dict(ylabel=f"{cname} drift ({drift_unit(cname)})", log=True, series={},
                    bound=tol.value if tol else None)
         for e, rs in reps.items():
             for r in rs:
@@ -59,8 +58,6 @@ def _representatives(part, store, f, name, truth, reps):
                                                             *time_series.drift_series(store, r, f.case, cname)))
         if row["series"]:
             rows.append(row)
-            if conserved_label(cname, f.case) != cname:
-                declared.append(conserved_label(cname, f.case))
     for level, rname in (RESIDUALS.items() if f.case.scene.loops else ()):
         tol = f.case.tolerances.get(rname)
         row = dict(ylabel=f"loop closure, {level} ({'m' if level == 'position' else 'm/s'})", log=True,
@@ -78,8 +75,7 @@ def _representatives(part, store, f, name, truth, reps):
     part.figure(figures.time_grid(rows, list(reps), colours),
                 f"{name}: each engine's most accurate run at each step size and tolerance (colour), its "
                 f"{f.quantity} error and the drift of each conserved quantity against time (log scales where "
-                "they span decades); dashed: the case's tolerance on each."
-                + (f" Declared quantities: {'; '.join(declared)}." if declared else ""),
+                "they span decades); dashed: the case's tolerance on each.",
                 f"{name}-time")
 
 

@@ -10,7 +10,7 @@ from dalembert.reports.findings import settings_text
 from dalembert.reports.formatting import params_text, value_text
 from dalembert.reports.tables import Cell, escape_html
 
-__all__ = ["Report", "run_link", "section_id", "title", "grid_row", "drift_unit", "declared", "conserved_label"]
+__all__ = ["Report", "run_link", "section_id", "title", "grid_row", "drift_unit", "declared", "drifts_of"]
 
 
 @dataclass(frozen=True)
@@ -82,7 +82,7 @@ def drift_unit(name, case=None):
     return "absolute when zero, else relative"
 
 
-def conserved_label(name, case):
-    """How a conserved quantity is named where it is shown: a declared one with its description."""
-    inv = declared(case, name)
-    return f"{name} ({inv.description}, {inv.unit})" if inv is not None else name
+def drifts_of(case):
+    """The names of every drift a run of ``case`` stores: its built-in conserved quantities, then the
+    ones it declares (``case.invariants``; their series are code, so only their drifts are in the store)."""
+    return list(case.conserved) + [inv.name for inv in case.invariants if inv.name not in case.conserved]

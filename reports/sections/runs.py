@@ -1,5 +1,6 @@
 """Every run of one case in a sortable table: settings, status, cost and its spread, each error,
-each conserved quantity's drift, what is beyond the tolerance, and the stored verdict."""
+each conserved quantity's drift (the case's declared ones too, relative to their scale in their
+unit), what is beyond the tolerance, and the stored verdict."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from dalembert.errors import QUANTITIES
 from dalembert.reports.findings import settings_text
 from dalembert.reports.formatting import value_text
 from dalembert.reports.page import Part
-from dalembert.reports.sections.common import drift_unit
+from dalembert.reports.sections.common import drift_unit, drifts_of
 from dalembert.reports.tables import MISSING, Cell, Table, num
 from dalembert.reports.work_precision import cost_per_sim_s, sweep_key
 
@@ -22,7 +23,7 @@ def every_run(rep, f):
     runs = sorted(f.runs, key=lambda r: (r.engine, r.integrator, r.options_label, sweep_key(r)))
     errs = [q for q in QUANTITIES if any(not math.isnan(r.max_error(q)) for r in runs)]
     errs.sort(key=lambda q: q != f.quantity)  # the headline error first
-    drifts = [n for n in f.case.conserved if any(not math.isnan(r.drifts.get(n, math.nan)) for r in runs)]
+    drifts = [n for n in drifts_of(f.case) if any(not math.isnan(r.drifts.get(n, math.nan)) for r in runs)]
     head = (["engine", "settings", "status", "cost (s/s)", "cost min–max (s/s)"]
             + [f"{q} ({QUANTITIES[q]})" for q in errs] + [f"{n} drift ({drift_unit(n, f.case)})" for n in drifts]
             + ["beyond tolerance", "verdict"])
