@@ -38,7 +38,10 @@ OPTION_STYLES = ("-", "--", ":", "-.")
 LEGEND_W = 2.2  # inches beside a panel for its own legend (stability maps)
 FLOOR_STYLE = dict(color="k", ls=":", lw=1.2)
 TOLERANCE_STYLE = dict(color="#c0392b", ls="--", lw=1.0)
-DIVERGED_MARGIN = 2.0  # factor of room below the smallest and above the largest error of the diverged runs
+DIVERGED_MARGIN = 2.0  # factor of room below the lowest and above the largest error on the diverged runs' axis
+# Per diverged run, the share of its samples (%) that may lie below the axis: its start at roundoff (1e-16 at
+# the first samples) before the error grows, which would otherwise squeeze every run into the top decades.
+DIVERGED_LOW_PERCENTILE = 5.0
 
 
 def _svg(fig):
@@ -291,11 +294,13 @@ def diverged_figure(panels, ylabel):
     a panel per engine, one above the other, the runs named beside it. Returns the matplotlib figure
     (``diverged_runs`` gives its SVG).
 
-    The y axis is logarithmic and spans every run's finite, non-zero errors, from the smallest to
-    the largest: a run that blew up to 1e30 and one that diverged from 1e-3 both show whole. (A
-    symlog axis would spend a linear band near zero on values never drawn; clipping, even marked,
-    hides the shape of the runs cut off; an error of exactly zero, the exact start, has no place on
-    either and is left out.)
+    The y axis is logarithmic and spans every run: from the lowest of the runs' low ends (each run's
+    ``DIVERGED_LOW_PERCENTILE`` percentile: below it only its roundoff start, which its line enters
+    from) to the largest error of any run. A run that blew up to 1e30 and one that diverged from 1e-3
+    both show; the axis is never set from one run's size alone (it was: the largest error over 1e12,
+    which hid every smaller run). Not symlog: the errors are positive and span decades, and a linear
+    band near zero would hold nothing; not clipped with markers: a marker hides the run's shape. An
+    error of exactly zero (the exact start) has no place on a log axis and is left out.
 
     Parameters
     ----------
@@ -317,9 +322,10 @@ def diverged_figure(panels, ylabel):
                 ax.axvline(t_div, color=colour, ls=":", lw=1)
                 ax.plot([t_div], [1], "x", color=colour, ms=7, mew=2, transform=ax.get_xaxis_transform(),
                         clip_on=False)
-        values = np.concatenate(drawn) if drawn else np.array([])
-        if values.size:  # every run whole, a little room above and below (log axis: factors)
-            ax.set_ylim(values.min() / DIVERGED_MARGIN, values.max() * DIVERGED_MARGIN)
+        drawn = [v for v in drawn if v.size]
+        if drawn:  # from the lowest run's growth (not its roundoff start) to the largest error, with room
+            ax.set_ylim(min(np.percentile(v, DIVERGED_LOW_PERCENTILE) for v in drawn) / DIVERGED_MARGIN,
+                        max(v.max() for v in drawn) * DIVERGED_MARGIN)
         ax.set_title(f"{engine}: runs that diverged (x: when)", loc="left")
         ax.set_xlabel("t (s)")
         ax.set_ylabel(ylabel)

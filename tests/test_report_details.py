@@ -33,10 +33,12 @@ def test_value_text_prints_times_and_parameters_without_float_noise():
 
 
 def test_diverged_plot_covers_every_diverged_run():
-    """Two runs of an engine, one blowing up to 1e30 and one diverging from errors near 1e-3: the axis
-    spans both whole (an axis clipped to the larger one's last twelve decades would hide the other)."""
+    """Two runs of an engine, one blowing up to 1e25 and one diverging from errors near 1e-3: the axis
+    spans both (an axis clipped to the larger one's last twelve decades would hide the other), each
+    from its low end (``DIVERGED_LOW_PERCENTILE``: below it only a run's start at roundoff) to its largest error."""
     t = np.linspace(0.0, 1.0, 101)
     big = np.where(t < 0.9, 1e-6 * np.exp(t * 80.0), np.nan)  # 1e-6 .. ~1e25, then not finite
+    big[0] = 1e-16  # its first sample at roundoff
     small = np.where(t < 0.5, 1e-3 + t * 1e-2, np.inf)
     early = np.where(t < 0.2, 1e-12 * (1.0 + t), np.nan)  # another engine, tiny errors
     panels = {"alpha": [("rk4 dt=0.1", t, big, 0.9), ("euler dt=0.1", t, small, 0.5)],
@@ -49,8 +51,10 @@ def test_diverged_plot_covers_every_diverged_run():
         assert axes[engine].get_yscale() == "log"
         for label, _, y, _ in runs:
             shown = y[np.isfinite(y) & (y > 0)]
-            assert lo <= shown.min() and shown.max() <= hi, f"{engine} {label}: {shown.min():.3g}..{shown.max():.3g} " \
-                                                             f"outside the axis {lo:.3g}..{hi:.3g}"
+            low = np.percentile(shown, figures.DIVERGED_LOW_PERCENTILE)
+            assert lo <= low and shown.max() <= hi, \
+                f"{engine} {label}: {low:.3g}..{shown.max():.3g} outside the axis {lo:.3g}..{hi:.3g}"
+    assert axes["alpha"].get_ylim()[0] > 1e-16  # the roundoff start does not set the axis
     assert "(t = 0.9 s)" in [t.get_text() for t in axes["alpha"].get_legend().get_texts()][0]
     import matplotlib.pyplot as plt
 
