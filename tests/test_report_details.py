@@ -139,3 +139,18 @@ def test_sweep_rows_in_value_order(sweep_store):
     headings = [float(h) for h in re.findall(r"^## free_top \(t_final=([0-9.e-]+);", md, flags=re.M)]
     assert headings == shown
     assert not FLOAT_NOISE.search(md), FLOAT_NOISE.search(md).group(0)
+
+
+def test_each_case_record_is_read_once(sweep_store, monkeypatch, tmp_path):
+    """The sections share the store's case records: building the report reads each case file once."""
+    reads = []
+    read = Store._read_case
+
+    def counted(self, name, version):
+        reads.append((name, version))
+        return read(self, name, version)
+
+    monkeypatch.setattr(Store, "_read_case", counted)
+    build_report(Store.open(sweep_store.path), tmp_path)
+    stored = {(r.case, r.case_version) for r in sweep_store.records()}
+    assert sorted(reads) == sorted(stored), reads
