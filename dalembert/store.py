@@ -196,6 +196,7 @@ class Store:
         self.traj_dir = os.path.join(self.path, "trajectories")
         self.cases_dir = os.path.join(self.path, "cases")
         self.truth_dir = os.path.join(self.path, "truth")
+        self._cases = {}  # (name, version) -> CaseRecord, read once (``case``)
 
     # -------------------------------------------------------------- create, open
     def create(self, manifest):
@@ -343,6 +344,7 @@ class Store:
         """Store a case as run (``CaseRecord``) and its truth at its sample times, once per version."""
         os.makedirs(self.cases_dir, exist_ok=True)
         os.makedirs(self.truth_dir, exist_ok=True)
+        self._cases.pop((record.name, record.version), None)
         atomic_write(self._case_file(self.truth_dir, record.name, record.version, "npz"), trajectory_to_npz(truth))
         atomic_write(self._case_file(self.cases_dir, record.name, record.version, "json"),
                      json.dumps(record.to_json(), indent=1, sort_keys=True, allow_nan=False))
@@ -351,7 +353,13 @@ class Store:
         return os.path.exists(self._case_file(self.cases_dir, name, version, "json"))
 
     def case(self, name, version):
-        """The ``CaseRecord`` of case ``name`` at ``version``; ``StoreError`` when the store has none."""
+        """The ``CaseRecord`` of case ``name`` at ``version``, read once per ``Store`` (a case version is
+        written once, and a record is frozen); ``StoreError`` when the store has none."""
+        if (name, version) not in self._cases:
+            self._cases[name, version] = self._read_case(name, version)
+        return self._cases[name, version]
+
+    def _read_case(self, name, version):
         path = self._case_file(self.cases_dir, name, version, "json")
         if not os.path.exists(path):
             raise StoreError(f"{self.path}: no record of case {name!r} version {version} (cases/) — "

@@ -19,11 +19,13 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
+from dalembert.reports.formatting import value_text  # noqa: E402
+
 plt.rcParams.update({"svg.fonttype": "none", "font.size": 9, "axes.grid": True, "grid.alpha": 0.3,
                      "legend.fontsize": 7, "axes.titlesize": 10})
 
 __all__ = ["engine_colours", "pareto_summary", "work_precision", "stability", "time_grid", "diverged_runs",
-           "stability_map", "map_costs", "scaling", "MAX_POINTS"]
+           "diverged_figure", "stability_map", "map_costs", "scaling", "MAX_POINTS"]
 
 MAX_POINTS = 400  # per time-series line: figures stay small; the data stay in the store
 PANEL_W, PANEL_H = 3.3, 2.8  # inches per small-multiple panel: four fit across the page
@@ -36,6 +38,10 @@ OPTION_STYLES = ("-", "--", ":", "-.")
 LEGEND_W = 2.2  # inches beside a panel for its own legend (stability maps)
 FLOOR_STYLE = dict(color="k", ls=":", lw=1.2)
 TOLERANCE_STYLE = dict(color="#c0392b", ls="--", lw=1.0)
+DIVERGED_MARGIN = 2.0  # factor of room below the lowest and above the largest error on the diverged runs' axis
+# Per diverged run, the share of its samples (%) that may lie below the axis: its start at roundoff (1e-16 at
+# the first samples) before the error grows, which would otherwise squeeze every run into the top decades.
+DIVERGED_LOW_PERCENTILE = 5.0
 
 
 def _svg(fig):
@@ -283,35 +289,53 @@ def time_grid(rows, engines, sweep_colours):
     return _svg(fig)
 
 
-def diverged_runs(panels, ylabel):
+def diverged_figure(panels, ylabel):
     """Runs that diverged: their error until it stopped being finite, the divergence time marked;
-    a panel per engine, one above the other, the runs named beside it.
+    a panel per engine, one above the other, the runs named beside it. Returns the matplotlib figure
+    (``diverged_runs`` gives its SVG).
+
+    The y axis is logarithmic and spans every run: from the lowest of the runs' low ends (each run's
+    ``DIVERGED_LOW_PERCENTILE`` percentile: below it only its roundoff start, which its line enters
+    from) to the largest error of any run. A run that blew up to 1e30 and one that diverged from 1e-3
+    both show; the axis is never set from one run's size alone (it was: the largest error over 1e12,
+    which hid every smaller run). Not symlog: the errors are positive and span decades, and a linear
+    band near zero would hold nothing; not clipped with markers: a marker hides the run's shape. An
+    error of exactly zero (the exact start) has no place on a log axis and is left out.
 
     Parameters
     ----------
-    panels : dict engine -> list of (label, t, y, t_diverged or None)
+    panels : dict engine -> list of (label, t, y, t_diverged or None) — ``t`` (n,) s, ``y`` (n,) the
+        error in the unit of ``ylabel``, NaN or inf once the run stopped being finite
+    ylabel : str — the error and its unit
     """
     fig, axes = plt.subplots(len(panels), 1, figsize=(9.5, 2.9 * len(panels)), squeeze=False, layout="constrained")
     for ax, (engine, runs) in zip(axes[:, 0], sorted(panels.items())):
-        finite = []
+        drawn = []
         for k, (label, t, y, t_div) in enumerate(runs):
             colour = INTEGRATOR_PALETTE[k % len(INTEGRATOR_PALETTE)]
-            tt, yy = _thin(t, y)
+            tt, yy = _thin(np.asarray(t), np.abs(np.asarray(y, dtype=float)))
             yy = np.where(np.isfinite(yy) & (yy > 0), yy, np.nan)
-            finite.append(yy[np.isfinite(yy)])
-            ax.semilogy(tt, yy, lw=1, color=colour, label=label + (f" (t = {t_div:.3g} s)" if t_div is not None else ""))
+            drawn.append(yy[np.isfinite(yy)])
+            ax.semilogy(tt, yy, lw=1, color=colour,
+                        label=label + (f" (t = {value_text(t_div, 's')})" if t_div is not None else ""))
             if t_div is not None:
                 ax.axvline(t_div, color=colour, ls=":", lw=1)
                 ax.plot([t_div], [1], "x", color=colour, ms=7, mew=2, transform=ax.get_xaxis_transform(),
                         clip_on=False)
-        values = np.concatenate(finite) if finite else np.array([])
-        if values.size:  # start where the errors are, not at the roundoff of the first samples
-            ax.set_ylim(bottom=max(np.percentile(values, 5), values.max() * 1e-12))
+        drawn = [v for v in drawn if v.size]
+        if drawn:  # from the lowest run's growth (not its roundoff start) to the largest error, with room
+            ax.set_ylim(min(np.percentile(v, DIVERGED_LOW_PERCENTILE) for v in drawn) / DIVERGED_MARGIN,
+                        max(v.max() for v in drawn) * DIVERGED_MARGIN)
         ax.set_title(f"{engine}: runs that diverged (x: when)", loc="left")
         ax.set_xlabel("t (s)")
         ax.set_ylabel(ylabel)
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    return _svg(fig)
+    return fig
+
+
+def diverged_runs(panels, ylabel):
+    """``diverged_figure`` as SVG text."""
+    return _svg(diverged_figure(panels, ylabel))
 
 
 # ---------------------------------------------------------------------------------------------- stability maps

@@ -39,6 +39,7 @@ from dalembert.case import LOOP_RESIDUALS
 from dalembert.errors import QUANTITIES
 from dalembert.invariants import loop_residual
 from dalembert.record import BAD_STATUSES
+from dalembert.reports.formatting import value_text
 from dalembert.reports.work_precision import (cheapest_reaching, headline_quantity, pareto_front, points,
                                               sweep_key)
 
@@ -224,11 +225,13 @@ def _diverged(e, case):
 
     def line(r):
         if r.t_diverged is not None:
-            return f"{settings_text(r)} at t = {r.t_diverged:.3g} s"
+            return f"{settings_text(r)} at t = {value_text(r.t_diverged, 's')}"
         return f"{settings_text(r)} ({r.verdict_reason or r.message})"
 
-    when = (f" between t = {min(times):.3g} s and {max(times):.3g} s" if len(times) > 1 and len(bad) > NAMED else "")
-    return [_hazard("diverged", e, bad, f"{_runs_word(len(bad))} diverged{when} (horizon {case.t_final:g} s)",
+    when = (f" between t = {value_text(min(times), 's')} and {value_text(max(times), 's')}"
+            if len(times) > 1 and len(bad) > NAMED else "")
+    return [_hazard("diverged", e, bad,
+                    f"{_runs_word(len(bad))} diverged{when} (horizon {value_text(case.t_final, 's')})",
                     line, min(bad, key=lambda r: r.t_diverged if r.t_diverged is not None else math.inf))]
 
 
@@ -263,7 +266,8 @@ def _energy(e, case):
         return f"{settings_text(r)} (up to {100 * r.drifts[name]:.3g} %{trend})"
 
     return [_hazard("energy", e, bad, f"{_runs_word(len(bad))} {_verb(len(bad), 'changes', 'change')} the {what} by "
-                                      f"more than {100 * ENERGY_HAZARD:g} % over the {case.t_final:g} s horizon",
+                                      f"more than {100 * ENERGY_HAZARD:g} % over the "
+                                      f"{value_text(case.t_final, 's')} horizon",
                     line, max(bad, key=lambda r: r.drifts[name]))]
 
 
@@ -301,8 +305,8 @@ def _closure(e, case, store):
     worst = max(bad, key=lambda r: max(ratio for _, ratio in found[r.key][1]))
     return [_hazard("closure", e, bad, f"{_runs_word(len(bad))} {_verb(len(bad), 'leaves', 'leave')} the loop-closure "
                                        f"bound and {_verb(len(bad), 'is', 'are')} still opening the loop at the end of the "
-                                       f"{case.t_final:g} s horizon (largest residual over its last quarter against "
-                                       "its first half)", line, worst)]
+                                       f"{value_text(case.t_final, 's')} horizon (largest residual over its last "
+                                       "quarter against its first half)", line, worst)]
 
 
 def _reactions(e, case, quantity):
@@ -432,7 +436,7 @@ def _sentences(f):
         return ["No run measured an error against the truth."]
     unit = f.unit
     tol = f.tolerance
-    out = [f"Headline error: {f.quantity} ({unit}), the max over the {f.case.t_final:g} s horizon"
+    out = [f"Headline error: {f.quantity} ({unit}), the max over the {value_text(f.case.t_final, 's')} horizon"
            + (f"; the case's tolerance is {tol:g} {unit}." if tol else ".")]
     ranked = sorted((e for e in f.engines if e.best), key=lambda e: e.best.error)
     if ranked:

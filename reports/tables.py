@@ -7,7 +7,7 @@ built here from escaped parts (links to a run's row).
 
 Columns whose value is the same in every row say nothing about the rows:
 ``Table.split_constant`` moves them into a sentence ("in every row: ...").
-Clicking a header sorts the HTML table (``SORT_SCRIPT``: a few lines inline,
+Clicking a header sorts the HTML table (``static/report.js``, inlined by the page writer,
 nothing loaded from the network); numbers sort by value, not by their text.
 """
 
@@ -18,7 +18,7 @@ import math
 import re
 from dataclasses import dataclass
 
-__all__ = ["MISSING", "Cell", "Table", "num", "escape_html", "escape_md", "SORT_SCRIPT"]
+__all__ = ["MISSING", "Cell", "Table", "num", "escape_html", "escape_md"]
 
 
 def escape_html(text):
@@ -138,28 +138,3 @@ def _td(c):
         attrs += ' class="w"'
     return f"<td{attrs}>{c.html if c.html is not None else escape_html(c.text)}</td>"
 
-
-# Click a header to sort by it (again: the other way). Numbers (data-v) sort by value and before
-# text; a missing value (data-v="") sorts last. No library, nothing fetched.
-SORT_SCRIPT = """<script>
-document.querySelectorAll('table.sortable th').forEach(function (th) {
-  th.addEventListener('click', function () {
-    var body = th.closest('table').tBodies[0], rows = Array.prototype.slice.call(body.rows);
-    var dir = th.getAttribute('data-dir') === 'asc' ? -1 : 1;
-    th.setAttribute('data-dir', dir > 0 ? 'asc' : 'desc');
-    function key(r) {
-      var c = r.cells[th.cellIndex], v = c.getAttribute('data-v');
-      if (v === '') return [2, 0];
-      if (v === null) v = c.textContent;
-      var n = Number(v);
-      return isNaN(n) || v === '' ? [1, v] : [0, n];
-    }
-    rows.sort(function (a, b) {
-      var x = key(a), y = key(b);
-      if (x[0] !== y[0]) return x[0] - y[0];
-      return (x[1] < y[1] ? -1 : x[1] > y[1] ? 1 : 0) * dir;
-    });
-    rows.forEach(function (r) { body.appendChild(r); });
-  });
-});
-</script>"""

@@ -1,0 +1,47 @@
+"""Every run of one case in a sortable table: settings, status, cost and its spread, each error,
+each conserved quantity's drift (the case's declared ones too, relative to their scale in their
+unit), what is beyond the tolerance, and the stored verdict."""
+
+from __future__ import annotations
+
+import math
+
+from dalembert.errors import QUANTITIES
+from dalembert.reports.findings import settings_text
+from dalembert.reports.formatting import value_text
+from dalembert.reports.page import Part
+from dalembert.reports.sections.common import drift_unit, drifts_of
+from dalembert.reports.tables import MISSING, Cell, Table, num
+from dalembert.reports.work_precision import cost_per_sim_s, sweep_key
+
+__all__ = ["every_run"]
+
+
+def every_run(rep, f):
+    """Case version ``f``'s table of runs, folded (a ``Part``); each row's id is ``run-<key>``."""
+    part = Part()
+    runs = sorted(f.runs, key=lambda r: (r.engine, r.integrator, r.options_label, sweep_key(r)))
+    errs = [q for q in QUANTITIES if any(not math.isnan(r.max_error(q)) for r in runs)]
+    errs.sort(key=lambda q: q != f.quantity)  # the headline error first
+    drifts = [n for n in drifts_of(f.case) if any(not math.isnan(r.drifts.get(n, math.nan)) for r in runs)]
+    head = (["engine", "settings", "status", "cost (s/s)", "cost min–max (s/s)"]
+            + [f"{q} ({QUANTITIES[q]})" for q in errs] + [f"{n} drift ({drift_unit(n, f.case)})" for n in drifts]
+            + ["beyond tolerance", "verdict"])
+    rows = []
+    for r in runs:
+        status = Cell(r.status, title=r.message) if r.ok or not r.message else Cell(
+            f"{r.status}" + (f" t={value_text(r.t_diverged, 's')}" if r.t_diverged is not None else ""),
+            title=r.message)
+        horizon = r.t_final if math.isfinite(r.t_final) and r.t_final > 0 else math.nan
+        spread = (Cell(f"{r.cost.wall_s_min / horizon:.2g}–{r.cost.wall_s_max / horizon:.2g}",
+                       r.cost.wall_s_max / horizon - r.cost.wall_s_min / horizon,
+                       title=f"{r.cost.repeats} timed repeats; {r.cost.concurrent} runs in flight")
+                  if math.isfinite(r.cost.wall_s_min) else Cell(MISSING, math.nan))
+        rows.append([Cell(r.engine), Cell(settings_text(r), wrap=True), status, num(cost_per_sim_s(r), "{:.2g}"),
+                     spread] + [num(r.max_error(q)) for q in errs] + [num(r.drifts.get(n)) for n in drifts]
+                    + [Cell(", ".join(r.beyond) if r.ok else MISSING, wrap=True),
+                       Cell(r.verdict, title=r.verdict_reason)])
+    part.heading("Every run", 3)
+    part.table(Table(head, rows, row_ids=[f"run-{r.key}" for r in runs], row_classes=[r.verdict for r in runs]),
+               collapsed=f"all {len(runs)} runs of {f.case.name}: click to open; click a header to sort")
+    return part
