@@ -306,6 +306,41 @@ def test_a_worker_stopped_from_outside_ends_its_run_without_failing_it(sig, tmp_
     assert _strip(store.rows()) == _strip(Store(clean).rows())
 
 
+def _late_worker(sent):
+    sent.wait()  # the parent's SIGTERM is sent before this worker sets its signals
+    from dalembert.harness.lifetime import die_with_parent
+
+    die_with_parent()  # ends here when the SIGTERM was held for it
+    os._exit(0)
+
+
+def test_a_sigterm_before_a_worker_is_ready_ends_it_quietly():
+    """A worker forked (``sigterm_held``) from a process whose SIGTERM handler raises KeyboardInterrupt (the
+    command line's) and sent SIGTERM before it has set its own signals: the signal waits for
+    ``die_with_parent``, and the worker dies of it (exit code -SIGTERM); unheld, it meets the parent's handler (a
+    KeyboardInterrupt traceback, exit code 1) or is lost in the fork (the worker goes on: exit code 0)."""
+    import multiprocessing as mp
+
+    from dalembert.harness.lifetime import sigterm_held
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    ctx = mp.get_context("fork")
+    sent = ctx.Event()
+    before = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        with sigterm_held():
+            proc = ctx.Process(target=_late_worker, args=(sent,))
+            proc.start()
+    finally:
+        signal.signal(signal.SIGTERM, before)
+    proc.terminate()  # SIGTERM
+    sent.set()
+    proc.join()
+    assert proc.exitcode == -signal.SIGTERM
+
+
 # `dalembert run` with its store's disk full from the second run's row on (the parent writes the store: a
 # write there raises ENOSPC as a full disk's would)
 FULL_DISK = """

@@ -1,4 +1,4 @@
-"""Worker processes never outlive the process that started them.
+"""Worker processes never outlive the process that started them, and end quietly on SIGTERM.
 
 A worker calls ``die_with_parent`` first thing: on Linux the kernel sends it
 SIGKILL the moment its parent dies (``prctl(PR_SET_PDEATHSIG)``), whatever
@@ -34,7 +34,7 @@ WATCH_INTERVAL_S = 0.5
 
 
 def die_with_parent(parent_pid=None):
-    """End this process when its parent dies.
+    """End this process when its parent dies; ignore SIGINT, end at once on SIGTERM (module docstring).
 
     ``parent_pid``: the parent as the caller knows it (a forked worker's is the matrix
     process), so that a parent already dead before this call is noticed; None when the
