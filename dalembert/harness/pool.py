@@ -220,12 +220,14 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
                 spec = _take(queue, worker, {w.group for w in busy.values()})
                 worker.submit(spec, timing, truths[(spec.case, spec.case_version)], len(busy) + 1)
                 busy[worker.conn] = worker
+            # each worker stays in ``busy`` or ``idle`` until it is gone: a Ctrl-C at any point finds it
             for conn in wait(list(busy), timeout=POLL_S):
-                worker = busy.pop(conn)
+                worker = busy[conn]
                 try:
                     record, npz = conn.recv()
                 except EOFError:  # the worker died without an answer (crash, stopped): replace it
                     worker.kill()
+                    del busy[conn]
                     dead, code = worker.spec, worker.proc.exitcode
                     idle.append(_Worker(ctx, n_threads, engines))
                     stopped = stopped_from_outside(dead, code)
@@ -235,12 +237,12 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
                         finish(store, unfinished(dead, "failed", f"worker process died (exit code {code})"), None,
                                progress, counts)
                     continue
-                idle.append(worker)  # (first: a store that cannot take the run must not leave its worker behind)
+                idle.append(busy.pop(conn))  # (before a store that cannot take its run ends the matrix)
                 finish(store, record, npz, progress, counts)
             for conn, worker in list(busy.items()):
                 if time.monotonic() - worker.started > timeout:
-                    busy.pop(conn)
                     worker.kill()
+                    del busy[conn]
                     finish(store, unfinished(worker.spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"),
                            None, progress, counts)
                     idle.append(_Worker(ctx, n_threads, engines))
