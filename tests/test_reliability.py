@@ -203,11 +203,16 @@ SLOW = ["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "-
 
 
 def _busy_workers(proc, n=2):
+    """The ``n`` workers of the ``dalembert run`` ``proc`` once they are all started: its forked children (the
+    parent's command line), not a short-lived program it runs (a library looking for a shared library)."""
     import psutil
 
     parent, workers = psutil.Process(proc.pid), []
     while len(workers) < n and proc.poll() is None:
-        workers = parent.children()
+        try:
+            workers = [c for c in parent.children() if c.cmdline() == parent.cmdline()]
+        except psutil.NoSuchProcess:  # a child that ended while being read
+            workers = []
         time.sleep(0.1)
     return workers
 
@@ -228,10 +233,12 @@ def test_a_second_writer_is_refused_naming_the_first(tmp_path):
         first.wait()
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
-def test_stopping_the_parent_ends_cleanly_and_says_how_to_resume(sig, tmp_path):
-    """SIGTERM, or Ctrl-C (SIGINT to the whole process group, as a terminal sends it): exit 130,
-    every finished run stored, no worker left, no traceback, the --resume command printed."""
+@pytest.mark.parametrize("sig,group", [(signal.SIGTERM, False), (signal.SIGINT, True), (signal.SIGTERM, True)],
+                         ids=["SIGTERM", "Ctrl-C", "group SIGTERM"])
+def test_stopping_the_parent_ends_cleanly_and_says_how_to_resume(sig, group, tmp_path):
+    """SIGTERM, Ctrl-C (SIGINT to the whole process group, as a terminal sends it), or SIGTERM to the
+    whole group (`kill -TERM -<pgid>`, a service manager's stop): exit 130, every finished run stored,
+    no worker left, no traceback (a worker's included), the --resume command printed."""
     import psutil
 
     out = tmp_path / "r"
@@ -241,15 +248,166 @@ def test_stopping_the_parent_ends_cleanly_and_says_how_to_resume(sig, tmp_path):
                 preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     workers = _busy_workers(proc)
     assert len(workers) == 2
-    if sig == signal.SIGINT:
-        os.killpg(proc.pid, signal.SIGINT)
+    if group:
+        os.killpg(proc.pid, sig)
     else:
-        proc.send_signal(signal.SIGTERM)
+        proc.send_signal(sig)
     _, err = proc.communicate()
-    assert proc.returncode == 130 and f"dalembert run --resume {out}" in err and "Traceback" not in err, err
+    assert proc.returncode == 130 and f"dalembert run --resume {out}" in err, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
     gone, alive = psutil.wait_procs(workers, timeout=60)
     assert not alive
     Store(out).writer().release()  # the lock was released: --resume can take it
+
+
+# ---------------------------------------------------------------- faults of a worker, a full disk
+# Two runs of the reference on one worker (~1.3 s of CPU each on this machine's cores, the first ~0.04 s of a
+# worker's CPU being its start): a worker is mid-run once it has used MID_RUN_CPU_S.
+STOPPABLE = ["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-3,2e-3", "--param",
+             "t_final=10", "--quick", "--jobs", "1"]
+MID_RUN_CPU_S = 0.2
+
+
+def _strip(rows):
+    """Rows less where and how long each run ran (``TIMING_FIELDS``)."""
+    return [{k: v for k, v in r.items() if k not in TIMING_FIELDS} for r in rows]
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
+def test_a_worker_stopped_from_outside_ends_its_run_without_failing_it(sig, tmp_path):
+    """SIGTERM (an operator, a shutdown) or SIGKILL (the out-of-memory killer) to one worker mid-run: that
+    run is not stored (it did not fail, it was not run), the parent names it and exits 4 with the --resume
+    command, the rest of the matrix is stored; --resume runs it, and the store then holds the rows of an
+    uninterrupted matrix."""
+    import psutil
+
+    from dalembert.harness.matrix import RunSpec
+
+    out = tmp_path / "r"
+    proc = _cli("run", *STOPPABLE, "--out", str(out))
+    (worker,) = _busy_workers(proc, 1)
+    while proc.poll() is None and sum(worker.cpu_times()[:2]) < MID_RUN_CPU_S:
+        time.sleep(0.02)
+    worker.send_signal(sig)
+    _, err = proc.communicate()
+    store = Store(out)
+    (missing,) = [RunSpec.from_json(s) for s in store.manifest()["specs"] if RunSpec.from_json(s).key
+                  not in store.done_keys()]
+    said = f"{missing.case} {missing.engine} {missing.settings.label()}: its worker was stopped by {sig.name}"
+    assert proc.returncode == 4 and said in err and f"dalembert run --resume {out}" in err, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert [r.status for r in store.records()] == ["ok"]  # the other run; nothing stored as failed
+    resumed = _cli("run", "--resume", str(out))
+    _, err = resumed.communicate()
+    assert resumed.returncode == 0, err
+    clean = tmp_path / "clean"
+    assert main(["run", *STOPPABLE, "--out", str(clean)]) == 0
+    assert _strip(store.rows()) == _strip(Store(clean).rows())
+
+
+def _late_worker(sent):
+    sent.wait()  # the parent's SIGTERM is sent before this worker sets its signals
+    from dalembert.harness.lifetime import die_with_parent
+
+    die_with_parent()  # ends here when the SIGTERM was held for it
+    os._exit(0)
+
+
+def test_a_sigterm_before_a_worker_is_ready_ends_it_quietly():
+    """A worker forked (``sigterm_held``) from a process whose SIGTERM handler raises KeyboardInterrupt (the
+    command line's) and sent SIGTERM before it has set its own signals: the signal waits for
+    ``die_with_parent``, and the worker dies of it (exit code -SIGTERM); unheld, it meets the parent's handler (a
+    KeyboardInterrupt traceback, exit code 1) or is lost in the fork (the worker goes on: exit code 0)."""
+    import multiprocessing as mp
+
+    from dalembert.harness.lifetime import sigterm_held
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    ctx = mp.get_context("fork")
+    sent = ctx.Event()
+    before = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        with sigterm_held():
+            proc = ctx.Process(target=_late_worker, args=(sent,))
+            proc.start()
+    finally:
+        signal.signal(signal.SIGTERM, before)
+    proc.terminate()  # SIGTERM
+    sent.set()
+    proc.join()
+    assert proc.exitcode == -signal.SIGTERM
+
+
+# `dalembert run` with its store's disk full from the second run's row on (the parent writes the store: a
+# write there raises ENOSPC as a full disk's would)
+FULL_DISK = """
+import errno, os, sys
+import dalembert.store
+from dalembert.harness.cli import main
+
+write, rows = dalembert.store.atomic_write, []
+def full(path, data):
+    if os.sep + "rows" + os.sep in path:
+        rows.append(path)
+        if len(rows) > 1:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    return write(path, data)
+dalembert.store.atomic_write = full
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_a_full_disk_is_one_error_naming_the_store(tmp_path):
+    """The store's disk fills mid-matrix: one error naming the store and the fix (exit 2), no traceback
+    from the parent or any worker, the run stored before kept; --resume, the disk freed, finishes it."""
+    out = tmp_path / "r"
+    matrix = [*TINY, "--integrator", "euler", "--integrator", "rkmk4", "--jobs", "2", "--out", str(out)]
+    proc = subprocess.run([sys.executable, "-c", FULL_DISK, "run", *matrix], capture_output=True, text=True)
+    err = proc.stderr
+    assert proc.returncode == 2 and f"dalembert: error: {out}: cannot store run free_top reference" in err, err
+    assert "No space left on device" in err and f"dalembert run --resume {out}" in err, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err and err.count("dalembert: error") == 1, err
+    assert len(Store(out).done_keys()) == 1
+    assert main(["run", "--resume", str(out)]) == 0
+    assert [r.status for r in Store(out).records()] == ["ok"] * 3
+
+
+def test_a_dask_task_whose_process_is_stopped_is_lost_not_failed(tmp_path):
+    """A Dask task's run process stopped by SIGTERM: the task raises ``WorkerStopped`` naming the run (the
+    run is lost to the infrastructure, not stored as failed), as a local worker's."""
+    import threading
+
+    import psutil
+
+    from dalembert.harness.dask import WorkerStopped, execute_isolated
+    from dalembert.harness.execute import QUICK
+    from dalembert.harness.matrix import expand
+
+    (spec,), _ = expand(cases=["free_top"], engines=["reference"], integrators=["rk4"], dts=[1e-4])
+    result = {}
+
+    def task():
+        try:
+            result["value"] = execute_isolated(spec.to_json(), vars(QUICK), None, 600.0)
+        except BaseException as e:  # noqa: BLE001 - what the task raised is the subject
+            result["value"] = e
+
+    thread = threading.Thread(target=task)
+    thread.start()
+    me = psutil.Process()
+    children = []
+    while not children and thread.is_alive():
+        children = [c for c in me.children() if "dalembert.harness.worker" in c.cmdline()]
+        time.sleep(0.05)
+    (child,) = children
+    child.send_signal(signal.SIGTERM)
+    thread.join()
+    stopped = result["value"]
+    assert isinstance(stopped, WorkerStopped), stopped
+    assert str(stopped).startswith("free_top reference rk4 dt=0.0001: its worker was stopped by SIGTERM"), stopped
 
 
 # ---------------------------------------------------------------- the cluster fails
@@ -320,8 +478,7 @@ def test_a_lost_scheduler_loses_no_work(tmp_path):
     assert resumed.returncode == 0, err
     local = tmp_path / "local"
     assert main(["run", *selection, "--out", str(local)]) == 0
-    strip = lambda rows: [{k: v for k, v in r.items() if k not in TIMING_FIELDS} for r in rows]  # noqa: E731
-    assert strip(Store(out).rows()) == strip(Store(local).rows())
+    assert _strip(Store(out).rows()) == _strip(Store(local).rows())
 
 
 @pytest.mark.parametrize("flags,phrase", [(["--cost-threshold", "-1"], "--cost-threshold: a growth factor"),

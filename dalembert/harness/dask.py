@@ -1,4 +1,9 @@
-"""Running a matrix on a Dask cluster: the same runs, records and store as the local pool."""
+"""Running a matrix on a Dask cluster: the same runs, records and store as the local pool.
+
+Each run is a Dask task that runs it in a fresh Python process; that process stopped from
+outside (SIGTERM, SIGKILL: ``pool.STOPPED_FROM_OUTSIDE``) ends the run without failing it, as a
+local worker's: the task raises ``WorkerStopped``, the run is not stored, ``--resume`` runs it.
+"""
 
 from __future__ import annotations
 
@@ -11,10 +16,14 @@ from dataclasses import asdict
 from dalembert.harness import threads
 from dalembert.harness.execute import Timing, unfinished
 from dalembert.harness.matrix import RunSpec
-from dalembert.harness.pool import DEFAULT_TIMEOUT_S, finish
+from dalembert.harness.pool import DEFAULT_TIMEOUT_S, finish, stopped_from_outside, write_table
 from dalembert.harness.truths import prepare_cases
 
-__all__ = ["run_matrix_dask", "execute_isolated", "tasks_per_host"]
+__all__ = ["run_matrix_dask", "execute_isolated", "tasks_per_host", "WorkerStopped"]
+
+
+class WorkerStopped(RuntimeError):
+    """A run's process was stopped from outside: the run was not run (not its failure); the message names it."""
 
 
 def tasks_per_host(client):
@@ -59,6 +68,9 @@ def execute_isolated(spec_json, timing_json, truth_npz, timeout, hosts=None):
                               timeout=timeout, env=env)
     except subprocess.TimeoutExpired:
         return unfinished(spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"), None
+    stopped = stopped_from_outside(spec, proc.returncode)
+    if stopped:
+        raise WorkerStopped(stopped)
     if proc.returncode != 0:
         return unfinished(spec, "failed", f"worker exited with {proc.returncode}: {proc.stderr.decode()[-500:]}"), None
     return pickle.loads(proc.stdout)
@@ -69,7 +81,8 @@ def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=T
 
     A run whose task the cluster lost (the scheduler gone, a worker lost) is the infrastructure's
     failure: it is not stored, and is returned in ``[(key, reason)]`` for ``--resume`` to run again.
-    (A run's own failure never reaches here as an exception: ``execute_isolated`` returns it.)
+    (A run's own failure never reaches here as an exception: ``execute_isolated`` returns it; a run whose process
+    was stopped from outside, ``WorkerStopped``, is lost too, named by its message.)
     """
     from distributed import Client, as_completed
 
@@ -85,16 +98,23 @@ def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=T
     lost = []
     try:
         for fut in as_completed(futures):
+            spec = futures[fut]
             try:
                 record, npz = fut.result()
+            except WorkerStopped as e:
+                lost.append((spec.key, str(e)))
+                continue
             except Exception as e:  # noqa: BLE001 - whatever the cluster raises, the run was not run
-                spec = futures[fut]
                 lost.append((spec.key, f"{spec.case} {spec.engine} {spec.settings.label()}: the cluster lost its task "
                                        f"({type(e).__name__}: {e})"))
                 continue
             finish(store, record, npz, progress, counts)
+    except BaseException:  # the error under way is the one told (``pool.write_table``)
+        write_table(store, failing=True)
+        raise
+    else:
+        write_table(store)
     finally:
-        store.write_table()
         if client is not scheduler:
             client.close()
     return lost

@@ -6,12 +6,15 @@ time for as long as the matrix lasts. Every run keeps its own
 timeout: a run that hangs past it, or a worker that dies, costs only that
 worker, which is killed and replaced; the run is stored as ``timeout`` or
 ``failed`` (an engine that crashes its process is a finding) and the rest of
-the matrix goes on. A worker killed from outside by SIGKILL (the system's
-out-of-memory killer, an operator) is the infrastructure's failure, not the
-run's: that run is not stored, and ``--resume`` runs it again. Every finished run is written to
-the store at once. Workers die with the process that started them
-(``dalembert.harness.lifetime``), and each one's BLAS and OpenMP thread pools are sized to its share of
-the cores (``dalembert.harness.threads``).
+the matrix goes on. A worker stopped from outside, by SIGKILL (the system's
+out-of-memory killer, an operator) or SIGTERM (an operator, a shutdown), ends its
+run, which is not the run's failure: that run is not stored, the parent names it
+among the runs lost to the infrastructure, and ``--resume`` runs it again. Every
+finished run is written to the store at once; a store that cannot be written (its
+disk full) ends the matrix with one error naming the store (``StoreWriteError``),
+every run stored before it kept. Workers die with the process that started them
+and end quietly on SIGTERM (``dalembert.harness.lifetime``), and each one's BLAS and
+OpenMP thread pools are sized to its share of the cores (``dalembert.harness.threads``).
 
 Affinity: a worker that becomes free takes, before anything else, a run of the same group as its last
 (``affinity``: case, engine, integrator and options — the runs of a step or tolerance sweep), and
@@ -23,6 +26,7 @@ The matrix's runs and records are the same; only who runs which, and when, chang
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing as mp
 import os
 import signal
@@ -32,17 +36,35 @@ from multiprocessing.connection import wait
 
 from dalembert.harness import threads
 from dalembert.harness.execute import Timing, execute, unfinished
-from dalembert.harness.lifetime import die_with_parent
+from dalembert.harness.lifetime import die_with_parent, sigterm_held
 from dalembert.harness.truths import prepare_cases
 from dalembert.record import BAD_STATUSES
 
-__all__ = ["run_matrix", "DEFAULT_TIMEOUT_S", "finish", "affinity"]
+__all__ = ["run_matrix", "DEFAULT_TIMEOUT_S", "finish", "write_table", "affinity", "StoreWriteError",
+           "STOPPED_FROM_OUTSIDE", "stopped_from_outside"]
 
 DEFAULT_TIMEOUT_S = 600.0
 # How long the parent waits for a worker's next message before checking the timeouts again.
 POLL_S = 0.05
 # How long a worker may take to leave when the matrix is done before it is killed.
 SHUTDOWN_S = 5.0
+# The signals that end a worker from outside (exit code -signal): the end of its run, not a failure of it.
+STOPPED_FROM_OUTSIDE = {signal.SIGKILL: "(out of memory?)", signal.SIGTERM: "(an operator, a shutdown?)"}
+
+
+class StoreWriteError(OSError):
+    """The store could not be written (its disk full, read-only): the message names the store, the run and the fix;
+    ``errno`` is the system's."""
+
+
+def stopped_from_outside(spec, code):
+    """Why ``spec``'s run was not run when its worker process ended with exit code ``code`` (``-signal``), if a
+    signal in ``STOPPED_FROM_OUTSIDE`` ended it; else None (a crash: the run's failure)."""
+    if code is None or -code not in STOPPED_FROM_OUTSIDE:
+        return None
+    sig = signal.Signals(-code)
+    return (f"{spec.case} {spec.engine} {spec.settings.label()}: its worker was stopped by {sig.name} from outside "
+            f"{STOPPED_FROM_OUTSIDE[sig]}")
 
 
 def _context():
@@ -108,15 +130,22 @@ class _Worker:
     def __init__(self, ctx, n_threads, engines):
         self.conn, child = ctx.Pipe()
         # a forked worker's parent is this process; a forkserver's child's is the forkserver
-        parent = os.getpid() if ctx.get_start_method() == "fork" else None
+        forked = ctx.get_start_method() == "fork"
+        parent = os.getpid() if forked else None
         self.proc = ctx.Process(target=_serve, args=(child, parent, n_threads, engines), daemon=True)
-        self.proc.start()
+        # a fork copies this process's SIGTERM handler (the command line's raises KeyboardInterrupt): held
+        # until the worker has its own (``lifetime``); a forkserver's children start from its default
+        with sigterm_held() if forked else contextlib.nullcontext():
+            self.proc.start()
         child.close()
         self.spec, self.started, self.truths, self.group = None, 0.0, set(), None
 
     def submit(self, spec, timing, truth, concurrent):
         key = (spec.case, spec.case_version)
-        self.conn.send((spec, timing, None if key in self.truths else truth, concurrent))
+        try:
+            self.conn.send((spec, timing, None if key in self.truths else truth, concurrent))
+        except OSError:  # it died before it got the run (stopped, crashed): its end reaches ``wait`` as any death
+            pass
         self.truths.add(key)
         self.spec, self.started, self.group = spec, time.monotonic(), affinity(spec)
 
@@ -138,13 +167,34 @@ class _Worker:
 
 
 def finish(store, record, npz, progress, counts):
-    """Store one finished run and report progress."""
-    store.write_record(record, npz)
+    """Store one finished run and report progress; ``StoreWriteError`` when the store cannot take it."""
+    try:
+        store.write_record(record, npz)
+    except OSError as e:
+        raise _unwritable(store, e, f"run {record.case} {record.engine} {record.settings_label}") from None
     counts["done"] += 1
     if record.status in BAD_STATUSES:
         counts["bad"] += 1
     if progress:
         progress(counts["done"], counts["total"], counts["bad"], record)
+
+
+def write_table(store, failing=False):
+    """Rebuild the store's table of runs at the end of a matrix. ``failing``: the matrix is ending on an
+    error, which says more than a table that cannot be written (it is rebuilt from the rows by the next end)."""
+    try:
+        store.write_table()
+    except OSError as e:
+        if not failing:
+            raise _unwritable(store, e, "its table of runs (runs.parquet)") from None
+
+
+def _unwritable(store, e, what):
+    """The ``StoreWriteError`` for ``e``, raised while writing ``what`` into ``store``."""
+    err = StoreWriteError(f"{store.path}: cannot store {what} ({e.strerror or e}) — make room or fix the store's disk, "
+                          f"then finish with: dalembert run --resume {store.path} (every run stored before is kept)")
+    err.errno = e.errno
+    return err
 
 
 def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None):
@@ -162,41 +212,52 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
     queue = [(affinity(s), s) for s in reversed(todo)]
     idle, busy, lost = [], {}, []  # busy: connection -> worker
     try:
-        idle = [_Worker(ctx, n_threads, engines) for _ in range(jobs if todo else 0)]
+        for _ in range(jobs if todo else 0):  # one by one: a Ctrl-C meanwhile still finds the ones started
+            idle.append(_Worker(ctx, n_threads, engines))
         while queue or busy:
             while queue and idle:
                 worker = idle.pop()
                 spec = _take(queue, worker, {w.group for w in busy.values()})
                 worker.submit(spec, timing, truths[(spec.case, spec.case_version)], len(busy) + 1)
                 busy[worker.conn] = worker
+            # each worker stays in ``busy`` or ``idle`` until it is gone: a Ctrl-C at any point finds it
             for conn in wait(list(busy), timeout=POLL_S):
-                worker = busy.pop(conn)
+                worker = busy[conn]
                 try:
                     record, npz = conn.recv()
-                except EOFError:  # the worker died without an answer (crash, killed): replace it
+                except EOFError:  # the worker died without an answer (crash, stopped): replace it
                     worker.kill()
+                    del busy[conn]
                     dead, code = worker.spec, worker.proc.exitcode
                     idle.append(_Worker(ctx, n_threads, engines))
-                    if code == -signal.SIGKILL:  # killed from outside: not the run's doing, not stored
-                        lost.append((dead.key, f"{dead.case} {dead.engine} {dead.settings.label()}: its worker was "
-                                               "killed by SIGKILL from outside (out of memory?)"))
+                    stopped = stopped_from_outside(dead, code)
+                    if stopped:  # not the run's doing: not stored, --resume runs it
+                        lost.append((dead.key, stopped))
                     else:
                         finish(store, unfinished(dead, "failed", f"worker process died (exit code {code})"), None,
                                progress, counts)
                     continue
+                idle.append(busy.pop(conn))  # (before a store that cannot take its run ends the matrix)
                 finish(store, record, npz, progress, counts)
-                idle.append(worker)
             for conn, worker in list(busy.items()):
                 if time.monotonic() - worker.started > timeout:
-                    busy.pop(conn)
                     worker.kill()
+                    del busy[conn]
                     finish(store, unfinished(worker.spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"),
                            None, progress, counts)
                     idle.append(_Worker(ctx, n_threads, engines))
-    finally:  # normal end, an error or Ctrl-C: no worker is left behind
-        for worker in idle:
-            worker.stop()
-        for worker in busy.values():
-            worker.kill()
-        store.write_table()
+    except BaseException:  # an error or Ctrl-C: no worker is left behind, the error under way is the one told
+        _close(idle, busy)
+        write_table(store, failing=True)
+        raise
+    _close(idle, busy)
+    write_table(store)
     return lost
+
+
+def _close(idle, busy):
+    """End every worker: the idle ones leave, the busy ones (their runs unfinished, not stored) are killed."""
+    for worker in idle:
+        worker.stop()
+    for worker in busy.values():
+        worker.kill()
