@@ -4,8 +4,8 @@ A section writes into a ``Part`` (headings, paragraphs, lists, tables, figures, 
 text), each element once, rendered to both formats at once. ``write_page`` joins the
 parts in order, numbers the figures across the whole page (``report_files/NN-name.svg``
 beside the Markdown; the same SVG inline in the HTML) and writes ``report.html`` and
-``report.md``. The page's CSS and JavaScript are package data (``static/report.css``,
-``static/report.js``) inlined into the HTML: nothing is loaded from the network.
+``report.md``. The page's CSS and JavaScript are package data (``report.css``,
+``report.js``) inlined into the HTML: nothing is loaded from the network.
 """
 
 from __future__ import annotations
@@ -89,8 +89,8 @@ class Part:
 
 
 def static_text(name):
-    """The text of one of the page's package data files (``static/<name>``), without its final newline."""
-    return resources.files("dalembert.reports").joinpath("static", name).read_text(encoding="utf-8").rstrip("\n")
+    """The text of one of the page's package data files (``<name>`` beside this module), without its final newline."""
+    return resources.files("dalembert.reports").joinpath(name).read_text(encoding="utf-8").rstrip("\n")
 
 
 def write_page(parts, out_dir, title="dalembert report", files="report_files"):

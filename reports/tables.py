@@ -7,7 +7,7 @@ built here from escaped parts (links to a run's row).
 
 Columns whose value is the same in every row say nothing about the rows:
 ``Table.split_constant`` moves them into a sentence ("in every row: ...").
-Clicking a header sorts the HTML table (``static/report.js``, inlined by the page writer,
+Clicking a header sorts the HTML table (``report.js``, inlined by the page writer,
 nothing loaded from the network); numbers sort by value, not by their text.
 """
 

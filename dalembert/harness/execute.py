@@ -121,7 +121,7 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
                         wall_s_max=first.wall_s, wall_s_repeats=(first.wall_s,), repeats=1, n_steps=first.n_steps, n_rhs=first.n_rhs,
                         readback_s=readback_s, concurrent=concurrent, load_start=load_start, load_end=_load())
             why = first.info.get("message", "")  # the engine's own account, where it gives one
-            return _record(spec, "diverged", f"non-finite state from t = {t_bad} s" + (f" ({why})" if why else ""),
+            return _record(spec, "diverged", f"non-finite state from t = {t_bad:.10g} s" + (f" ({why})" if why else ""),
                            t_diverged=t_bad, cost=cost,
                            **found), trajectory_to_npz(traj)
         truth = truth if truth is not None else _truth(case)

@@ -69,17 +69,14 @@ def declared(case, name):
 
 
 def drift_unit(name, case=None):
-    """The unit of a stored drift: from how ``invariants.CONSERVED`` scales a built-in one; a declared
-    one is relative to its scale (in its unit)."""
+    """The unit of a stored drift: a built-in one's ``invariants.CONSERVED`` label; a declared one is
+    relative to its scale (in its unit)."""
     inv = declared(case, name) if case is not None else None
     if inv is not None:
         return f"relative to {value_text(inv.scale, inv.unit)}"
-    how = CONSERVED.get(name, "")
-    if how.startswith("relative"):
-        return "relative"
-    if how.startswith("absolute, "):
-        return how[len("absolute, "):]
-    return "absolute when zero, else relative"
+    # a built-in one's label says it (``invariants.Conserved``); a name neither declares is read as the
+    # store wrote it before the labels: absolute when zero, else relative
+    return CONSERVED[name].drift_unit if name in CONSERVED else "absolute when zero, else relative"
 
 
 def drifts_of(case):
