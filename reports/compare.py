@@ -17,6 +17,9 @@ the two runs' measured spreads do not overlap (the fastest repeat after is slowe
 than the slowest before) and the median grew by more than ``COST_NOTICE``; it is
 a regression only when asked (``cost_threshold``) and the median grew by more
 than that factor as well.
+
+Text for the terminal (``to_text``) has the store's control characters escaped
+(``dalembert.terminal.printable``); JSON and CSV keep the names as stored.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from dalembert.errors import QUANTITIES
 from dalembert.record import BAD_STATUSES
 from dalembert.reports.findings import settings_text
 from dalembert.reports.work_precision import headline_quantity
+from dalembert.terminal import printable
 
 __all__ = ["ERROR_FLOOR", "COST_NOTICE", "Change", "Comparison", "compare_stores", "to_text", "to_json",
            "csv_rows", "MACHINE_FIELDS"]
@@ -226,7 +230,8 @@ def _lines(c, only_changed, threshold):
 
 def to_text(cmp, only_changed=False):
     """The comparison as asv prints one: before, after, ratio, what, which run; then the runs in
-    one store only; then a one-line count."""
+    one store only; then a one-line count. Every line's control characters escaped (``printable``):
+    it is for a terminal."""
     out = [f"before: {cmp.paths[0]}", f"after:  {cmp.paths[1]}"] if cmp.paths else []
     out += [f"warning: {w}" for w in cmp.warnings]
     body = [line for c in cmp.changes for line in _lines(c, only_changed, cmp.threshold)]
@@ -246,7 +251,7 @@ def to_text(cmp, only_changed=False):
     out += ["", f"{len(cmp.changes)} runs in both: {s['worse']} worse, {s['better']} better, {s['status']} changed "
                 f"status, {s['same']} unchanged; {len(cmp.only_in_a)} only in A, {len(cmp.only_in_b)} only in B, "
                 f"{len(cmp.not_compared)} not compared" + (" — REGRESSION" if cmp.regressed else "")]
-    return "\n".join(out) + "\n"
+    return "\n".join(printable(line, newlines=False) for line in out) + "\n"
 
 
 def _identity(r):
