@@ -32,7 +32,7 @@ from dalembert.reports.findings import (ACCURACY_TARGETS, CLOSURE_GROWTH, DISAGR
 from dalembert.reports.tables import MISSING, SORT_SCRIPT, Cell, Table, escape_html, escape_md, num
 from dalembert.reports.timing import once_note, timing_note
 from dalembert.reports.work_precision import cheapest_reaching, cost_per_sim_s, headline_quantity, series, sweep_key
-from dalembert.store import atomic_write
+from dalembert.store import atomic_write, file_name
 
 __all__ = ["build_report"]
 
@@ -84,7 +84,7 @@ class _Doc:
 
     def figure(self, svg, caption, name):
         self.n_fig += 1
-        fname = f"{self.n_fig:02d}-{name}.svg"
+        fname = file_name(f"{self.n_fig:02d}-{name}.svg", "figure name", self.files_dir)  # a case name made it
         atomic_write(os.path.join(self.files_dir, fname), svg)
         self.html.append(f'<figure class="plot" id="fig-{escape_html(name)}">{svg}'
                          f"<figcaption>{escape_html(caption)}</figcaption></figure>")
