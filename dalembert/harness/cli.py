@@ -54,7 +54,7 @@ def _parser():
     t.add_argument("case")
     t.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
                    help="override a case parameter (vectors as comma-separated numbers); repeatable")
-    t.add_argument("--csv", required=True, metavar="FILE", help="output file")
+    t.add_argument("--csv", required=True, metavar="FILE", help="output file (- for standard output)")
 
     e = sub.add_parser("engines", help="list engines, what they support and their integrators",
                        epilog="example:\n  dalembert engines", formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -122,8 +122,8 @@ def _parser():
     x.add_argument("--all", action="store_true", help="every run that matches (all runs when nothing else is "
                                                       "given), into one file; without it exactly one must match")
     out = x.add_mutually_exclusive_group(required=True)
-    out.add_argument("--csv", metavar="FILE", help="CSV, 17 significant digits")
-    out.add_argument("--parquet", metavar="FILE", help="Parquet")
+    out.add_argument("--csv", metavar="FILE", help="CSV, 17 significant digits (- for standard output)")
+    out.add_argument("--parquet", metavar="FILE", help="Parquet (- for standard output)")
 
     cp = sub.add_parser("compare", help="compare two results directories; non-zero exit on a regression",
                         epilog="examples:\n  dalembert compare results/before results/after --threshold 2\n"
