@@ -95,8 +95,11 @@ def atomic_write(path, data):
 # The names a store holds that become path components: of a run spec in the manifest, of a row.
 SPEC_NAMES = ("case", "engine", "integrator", "case_version")
 ROW_NAMES = ("key", "case", "case_version", "engine", "integrator")
-# "\\" too: a separator on Windows, where a store may be copied; no name dalembert makes has one.
-_SEPARATORS = ("/", "\\", "\0")
+
+
+def _is_file_name(name):
+    return (isinstance(name, str) and name not in ("", ".", "..") and "/" not in name and "\\" not in name
+            and "\0" not in name)
 
 
 def file_name(name, what, where, fix="the store was edited or damaged; rerun the matrix in a new directory"):
@@ -116,10 +119,11 @@ def file_name(name, what, where, fix="the store was edited or damaged; rerun the
     Returns
     -------
     str
-        ``name``, unchanged: a non-empty string with no path separator (``/``, ``\\``), no NUL,
-        and neither ``.`` nor ``..``.
+        ``name``, unchanged: a non-empty string with no path separator (``/``; ``\\`` too, Windows'
+        separator: a store may be copied there, and no name dalembert makes has one), no NUL, and
+        neither ``.`` nor ``..``.
     """
-    if isinstance(name, str) and name and name not in (".", "..") and not any(c in name for c in _SEPARATORS):
+    if _is_file_name(name):
         return name
     raise StoreError(f"{where}: {what} {name!r} is not a file name — {fix}")
 
@@ -269,8 +273,8 @@ class Store:
                 lists.append((f"searches[{i}].first", first if isinstance(first, list) else []))
             for field, listed in lists:
                 for k, spec in enumerate(listed):
-                    for name in SPEC_NAMES:
-                        if isinstance(spec, dict) and name in spec:
+                    for name in SPEC_NAMES if isinstance(spec, dict) else ():
+                        if name in spec and not _is_file_name(spec[name]):  # (the message made only then)
                             file_name(spec[name], f"{field}[{k}].{name}", path)
         return manifest
 

@@ -640,8 +640,8 @@ def main(argv=None):
     except Exception as e:  # a bug of dalembert's, not the user's
         if args.debug:
             raise
-        print(f"dalembert: internal error: {type(e).__name__}: {e} — rerun with --debug for the traceback and "
-              "report it", file=sys.stderr)
+        print(f"dalembert: internal error: {type(e).__name__}: {printable(e)} — rerun with --debug for the traceback "
+              "and report it", file=sys.stderr)
         return 3
 
 
