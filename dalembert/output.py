@@ -107,7 +107,8 @@ def write(path, data, flag):
         return
     created = not os.path.lexists(path)
     try:
-        with open(path, "wb" if isinstance(data, bytes) else "w") as fh:
+        # newline="": the text is written as it was made (a CSV's \r\n stays \r\n on every OS)
+        with open(path, "wb") if isinstance(data, bytes) else open(path, "w", newline="") as fh:
             fh.write(data)
     except OSError as e:
         if created and os.path.isfile(path) and not os.path.islink(path):

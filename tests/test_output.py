@@ -89,8 +89,8 @@ def test_a_file_that_cannot_be_written_is_not_left_half_made(tmp_path, monkeypat
         def write(self, data):
             raise OSError(28, "No space left on device")
 
-    def opened(path, mode):
-        open(path, mode).close()  # the file is made, as open() makes it, then every write fails
+    def opened(path, mode, **kwargs):
+        open(path, mode, **kwargs).close()  # the file is made, as open() makes it, then every write fails
         return Full()
 
     monkeypatch.setattr(output, "open", opened, raising=False)
