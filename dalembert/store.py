@@ -23,10 +23,19 @@ per joint ``joint.<name>.q`` (n,nq) and ``joint.<name>.v`` (n,nv); extras as
 ``extra.<name>`` (e.g. ``extra.reaction_force:rod`` (n,3), N, world).
 
 Every write goes to a temporary file in the same directory, then ``os.replace``:
-a reader or an interrupted run never sees half a file. ``resume`` runs only the
-specs without a row file. The schema version (``dalembert.record.SCHEMA_VERSION``)
+a reader or an interrupted run never sees half a file. (Files the user names
+outside a store are written in place: ``dalembert.output``.) ``resume`` runs only
+the specs without a row file. The schema version (``dalembert.record.SCHEMA_VERSION``)
 is in the manifest and in every row; a store of another schema is refused with
 a message that says so.
+
+Names the store holds become path components: a run's key (``rows/``,
+``trajectories/``), a case's name and version (``cases/``, ``truth/``, the
+report's figures). ``file_name`` checks each where it is read (the manifest's
+specs, every row, every case record) and where a path is made of it, so a store
+whose files were edited to name a path outside it (``x/../../outside``) is
+refused, naming the file the name came from, before anything is read or written
+outside it.
 """
 
 from __future__ import annotations
@@ -48,7 +57,7 @@ from dalembert.case import CaseRecord
 from dalembert.record import SCHEMA_VERSION, RunRecord, SchemaError
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
-__all__ = ["Store", "StoreError", "StoreLock", "atomic_write", "trajectory_to_npz", "trajectory_from_npz", "machine_info", "library_versions", "harness_commit"]
+__all__ = ["Store", "StoreError", "StoreLock", "atomic_write", "file_name", "trajectory_to_npz", "trajectory_from_npz", "machine_info", "library_versions", "harness_commit"]
 
 
 def _umask():
@@ -81,6 +90,42 @@ def atomic_write(path, data):
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+# The names a store holds that become path components: of a run spec in the manifest, of a row.
+SPEC_NAMES = ("case", "engine", "integrator", "case_version")
+ROW_NAMES = ("key", "case", "case_version", "engine", "integrator")
+
+
+def _is_file_name(name):
+    return (isinstance(name, str) and name not in ("", ".", "..") and "/" not in name and "\\" not in name
+            and "\0" not in name)
+
+
+def file_name(name, what, where, fix="the store was edited or damaged; rerun the matrix in a new directory"):
+    """``name`` when it can be one component of a path inside a store, else ``StoreError``.
+
+    Parameters
+    ----------
+    name : str
+        A name the store holds that becomes (part of) a file name: a run key, a case name or version.
+    what : str
+        What the name is (``key``, ``specs[3].integrator``), for the message.
+    where : str
+        The file the name came from (or the directory it would go to), for the message.
+    fix : str
+        What the user can do, after "—" in the message.
+
+    Returns
+    -------
+    str
+        ``name``, unchanged: a non-empty string with no path separator (``/``; ``\\`` too, Windows'
+        separator: a store may be copied there, and no name dalembert makes has one), no NUL, and
+        neither ``.`` nor ``..``.
+    """
+    if _is_file_name(name):
+        return name
+    raise StoreError(f"{where}: {what} {name!r} is not a file name — {fix}")
 
 
 def trajectory_to_npz(traj):
@@ -225,8 +270,22 @@ class Store:
         atomic_write(os.path.join(self.path, "manifest.json"), json.dumps(manifest, indent=2, sort_keys=True))
 
     def manifest(self):
-        return self._json(os.path.join(self.path, "manifest.json"), "its manifest",
-                          "it is damaged: a store cannot be resumed or reported without it")
+        """The manifest, its specs' names checked (``file_name``): they become the runs' file names."""
+        path = os.path.join(self.path, "manifest.json")
+        manifest = self._json(path, "its manifest", "it is damaged: a store cannot be resumed or reported without it")
+        if isinstance(manifest, dict):
+            specs = manifest.get("specs")
+            lists = [("specs", specs if isinstance(specs, list) else [])]
+            searches = manifest.get("searches")
+            for i, plan in enumerate(searches if isinstance(searches, list) else []):
+                first = plan.get("first") if isinstance(plan, dict) else None
+                lists.append((f"searches[{i}].first", first if isinstance(first, list) else []))
+            for field, listed in lists:
+                for k, spec in enumerate(listed):
+                    for name in SPEC_NAMES if isinstance(spec, dict) else ():
+                        if name in spec and not _is_file_name(spec[name]):  # (the message made only then)
+                            file_name(spec[name], f"{field}[{k}].{name}", path)
+        return manifest
 
     def _json(self, path, what, fix):
         """The JSON in ``path``; ``StoreError`` naming the file, ``what`` it is and the ``fix``."""
@@ -276,6 +335,7 @@ class Store:
     # -------------------------------------------------------------- runs
     def write_record(self, record, trajectory_npz=None):
         """Store one finished run: its trajectory (if any), then its row (the commit point)."""
+        file_name(record.key, "run key", self.rows_dir, "a run spec named outside the store; nothing was written")
         if trajectory_npz is not None:
             atomic_write(os.path.join(self.traj_dir, f"{record.key}.npz"), trajectory_npz)
             record = record.with_trajectory(f"trajectories/{record.key}.npz")
@@ -290,8 +350,15 @@ class Store:
     def rows(self):
         """Every stored row as written (a dict of columns), sorted by key. Only ``rows/*.json`` are
         rows (other files there are ignored); a damaged one is a ``StoreError`` naming it."""
-        return [self._json(os.path.join(self.rows_dir, f"{key}.json"), "a stored run", self._redo(key))
-                for key in sorted(self.done_keys())]
+        out = []
+        for key in sorted(self.done_keys()):
+            path = os.path.join(self.rows_dir, f"{key}.json")
+            row = self._json(path, "a stored run", self._redo(key))
+            for name in ROW_NAMES:  # what becomes a path (a trajectory, a case record, a report's figure)
+                if isinstance(row, dict) and isinstance(row.get(name), str):  # not a str: records() refuses it
+                    file_name(row[name], name, path, "the store was edited or damaged; " + self._redo(key))
+            out.append(row)
+        return out
 
     def _redo(self, key, delete="it"):
         """The fix for a damaged file of run ``key``: redo the run."""
@@ -327,7 +394,7 @@ class Store:
 
     def trajectory(self, key):
         """The stored trajectory of run ``key``; ``StoreError`` naming the file when it is missing or damaged."""
-        path = os.path.join(self.traj_dir, f"{key}.npz")
+        path = os.path.join(self.traj_dir, f"{file_name(key, 'run key', self.traj_dir)}.npz")
         try:
             return trajectory_from_npz(path)
         except FileNotFoundError:
@@ -338,7 +405,8 @@ class Store:
 
     # -------------------------------------------------------------- cases and truths
     def _case_file(self, directory, name, version, ext):
-        return os.path.join(directory, f"{name}__{version}.{ext}")
+        return os.path.join(directory, f"{file_name(name, 'case', directory)}__"
+                                       f"{file_name(version, 'case version', directory)}.{ext}")
 
     def write_case(self, record, truth):
         """Store a case as run (``CaseRecord``) and its truth at its sample times, once per version."""
@@ -366,10 +434,13 @@ class Store:
                              "the store is incomplete; rerun the matrix")
         data = self._json(path, "a case record", "the store is damaged; rerun the matrix")
         try:
-            return CaseRecord.from_json(data)
+            record = CaseRecord.from_json(data)
         except (KeyError, TypeError, ValueError) as e:
             raise StoreError(f"{path}: not a case record dalembert wrote ({type(e).__name__}: {e}) — the store is "
                              "damaged; rerun the matrix") from None
+        file_name(record.name, "name", path)  # the report names its figures by it
+        file_name(record.version, "version", path)
+        return record
 
     def truth(self, name, version):
         """The case's stored truth trajectory, or None."""

@@ -128,16 +128,23 @@ class Trajectory:
 
 
 def write_csv(traj, path):
-    """Write ``traj`` as CSV (``CSV_COLUMNS``), rows time-major then by body name."""
+    """Write ``traj`` as CSV (``CSV_COLUMNS``), rows time-major then by body name, to ``path``
+    (a file name, or an open text file: ``dalembert truth`` writes it where the user said)."""
+    if hasattr(path, "write"):
+        return _write_csv(traj, path)
     with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(CSV_COLUMNS)
-        names = sorted(traj.bodies)
-        for i, t in enumerate(traj.t):
-            for name in names:
-                b = traj.bodies[name]
-                nums = [t, *b.position[i], *b.quaternion[i], *b.velocity[i], *b.angular_velocity[i]]
-                w.writerow([repr(float(nums[0])), name] + [repr(float(x)) for x in nums[1:]])
+        _write_csv(traj, fh)
+
+
+def _write_csv(traj, fh):
+    w = csv.writer(fh)
+    w.writerow(CSV_COLUMNS)
+    names = sorted(traj.bodies)
+    for i, t in enumerate(traj.t):
+        for name in names:
+            b = traj.bodies[name]
+            nums = [t, *b.position[i], *b.quaternion[i], *b.velocity[i], *b.angular_velocity[i]]
+            w.writerow([repr(float(nums[0])), name] + [repr(float(x)) for x in nums[1:]])
 
 
 def read_csv(path):

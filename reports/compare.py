@@ -16,7 +16,13 @@ Cost is the stepping wall time. Timings are noisy, so a cost is slower only when
 the two runs' measured spreads do not overlap (the fastest repeat after is slower
 than the slowest before) and the median grew by more than ``COST_NOTICE``; it is
 a regression only when asked (``cost_threshold``) and the median grew by more
-than that factor as well.
+than that factor as well. A store timed once per run (``dalembert run --quick``:
+its manifest's ``timing``) has single samples, with no spread to judge against:
+its costs are shown, with a warning, and never called slower or faster
+(``cost_change`` "unjudged").
+
+Text for the terminal (``to_text``) has the store's control characters escaped
+(``dalembert.terminal.printable``); JSON and CSV keep the names as stored.
 """
 
 from __future__ import annotations
@@ -28,7 +34,9 @@ from dataclasses import dataclass, field
 from dalembert.errors import QUANTITIES
 from dalembert.record import BAD_STATUSES
 from dalembert.reports.findings import settings_text
+from dalembert.reports.timing import once_note
 from dalembert.reports.work_precision import headline_quantity
+from dalembert.terminal import printable
 
 __all__ = ["ERROR_FLOOR", "COST_NOTICE", "Change", "Comparison", "compare_stores", "to_text", "to_json",
            "csv_rows", "MACHINE_FIELDS"]
@@ -67,7 +75,8 @@ class Change:
     notes : tuple of str — what changed, in words
     errors : dict quantity -> (before, after, ratio) — max errors (ratio NaN when either is missing)
     cost_ratio : float — median stepping time after / before
-    cost_change : str — "slower", "faster" or "same" (judged against both spreads)
+    cost_change : str — "slower", "faster" or "same" (judged against both spreads); "unjudged" when
+        either store timed each run once (single samples: no spread to judge against)
     """
 
     a: object
@@ -109,12 +118,15 @@ def _ratio(before, after):
     return max(after, ERROR_FLOOR) / max(before, ERROR_FLOOR)
 
 
-def _cost(a, b, cost_threshold):
-    """(ratio of medians, slower/faster/same, regression?) judged against both runs' spreads."""
+def _cost(a, b, cost_threshold, judged=True):
+    """(ratio of medians, slower/faster/same, regression?) judged against both runs' spreads;
+    "unjudged" (never a regression) when not ``judged``: single samples have no spread."""
     ca, cb = a.cost, b.cost
     ratio = cb.wall_s_median / ca.wall_s_median if ca.wall_s_median and math.isfinite(ca.wall_s_median) else math.nan
     if not math.isfinite(ratio):
         return ratio, "same", False
+    if not judged:
+        return ratio, "unjudged", False
     if cb.wall_s_min > ca.wall_s_max and ratio > COST_NOTICE:
         return ratio, "slower", cost_threshold is not None and ratio > cost_threshold
     if cb.wall_s_max < ca.wall_s_min and ratio < 1.0 / COST_NOTICE:
@@ -122,10 +134,10 @@ def _cost(a, b, cost_threshold):
     return ratio, "same", False
 
 
-def _change(a, b, threshold, cost_threshold):
+def _change(a, b, threshold, cost_threshold, costs_judged=True):
     errors = {q: (a.max_error(q), b.max_error(q), _ratio(a.max_error(q), b.max_error(q)))
               for q in QUANTITIES if q in a.errors or q in b.errors}
-    cost_ratio, cost_change, cost_regressed = (_cost(a, b, cost_threshold) if a.ok and b.ok
+    cost_ratio, cost_change, cost_regressed = (_cost(a, b, cost_threshold, costs_judged) if a.ok and b.ok
                                                else (math.nan, "same", False))
     if a.status != b.status:
         regression = a.ok and b.status in BAD_STATUSES
@@ -137,7 +149,7 @@ def _change(a, b, threshold, cost_threshold):
     notes = [f"{q} x{errors[q][2]:.3g}" for q in worse + better]
     if a.verdict and b.verdict and a.verdict != b.verdict:
         notes.append(f"verdict {a.verdict} -> {b.verdict}")
-    if cost_change != "same":
+    if cost_change in ("slower", "faster"):
         notes.append(f"cost x{cost_ratio:.3g} ({cost_change}, beyond both spreads)")
     blew_up = b.verdict == "diverged" and a.verdict not in ("diverged", "")
     regression = bool(worse) or cost_regressed or blew_up
@@ -165,9 +177,22 @@ def _differences(ma, mb, records_a, records_b):
     return out
 
 
+def _timed_once(manifests):
+    """A warning when either store timed each run once (``dalembert run --quick``), else None."""
+    once = [side for side, m in zip(("A (before)", "B (after)"), manifests) if once_note(m)]
+    if not once:
+        return None
+    # the ~10 %: COST_NOTICE's scatter of one run's repeats on one machine
+    return (f"{' and '.join(once)} {'were' if len(once) > 1 else 'was'} timed once per run (dalembert run --quick): "
+            "each cost is a single sample, with no spread, and repeats of one run scatter by ~10 % on one machine, "
+            "more on a loaded one — costs are shown, not judged (no cost is called slower or faster)")
+
+
 def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_versions=False):
     """Compare ``store_a`` (before) with ``store_b`` (after); a ``Comparison``."""
     ra, rb = store_a.records(), store_b.records()
+    manifests = store_a.manifest(), store_b.manifest()
+    once = _timed_once(manifests)
     a, b = {_key(r): r for r in ra}, {_key(r): r for r in rb}
     changes, not_compared = [], []
     for key in sorted(set(a) & set(b), key=str):
@@ -175,13 +200,13 @@ def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_
         if x.case_version != y.case_version and not across_versions:
             not_compared.append((x, y, f"case version differs ({x.case_version} vs {y.case_version})"))
             continue
-        changes.append(_change(x, y, threshold, cost_threshold))
+        changes.append(_change(x, y, threshold, cost_threshold, costs_judged=once is None))
     changes.sort(key=lambda c: (not c.regression, CHANGES.index(c.change), c.label))
     only_a = tuple(sorted((a[k] for k in set(a) - set(b)), key=label))
     only_b = tuple(sorted((b[k] for k in set(b) - set(a)), key=label))
     stats = {c: sum(1 for x in changes if x.change == c) for c in CHANGES}
     return Comparison(tuple(changes), only_a, only_b, tuple(not_compared),
-                      tuple(_differences(store_a.manifest(), store_b.manifest(), ra, rb)),
+                      tuple(_differences(*manifests, ra, rb) + ([once] if once else [])),
                       (store_a.path, store_b.path), threshold, cost_threshold, stats)
 
 
@@ -214,10 +239,11 @@ def _lines(c, only_changed, threshold):
                        f"{q + ' (' + QUANTITIES[q] + ')':<24} {c.label}")
     ca, cb = c.a.cost, c.b.cost
     mark = {"slower": "+", "faster": "-"}.get(c.cost_change, " ")
+    spread = ("one sample each: not judged" if c.cost_change == "unjudged" else f"min–max {_fmt(ca.wall_s_min)}–"
+              f"{_fmt(ca.wall_s_max)} -> {_fmt(cb.wall_s_min)}–{_fmt(cb.wall_s_max)}")
     if not (only_changed and mark == " "):
         out.append(f"{mark} {_fmt(ca.wall_s_median):>10} {_fmt(cb.wall_s_median):>10} {c.cost_ratio:>8.3g}  "
-                   f"{'cost (s)':<24} {c.label}  [min–max {_fmt(ca.wall_s_min)}–{_fmt(ca.wall_s_max)} -> "
-                   f"{_fmt(cb.wall_s_min)}–{_fmt(cb.wall_s_max)}]")
+                   f"{'cost (s)':<24} {c.label}  [{spread}]")
     if c.a.verdict != c.b.verdict and c.a.verdict and c.b.verdict:
         out.append(f"{'+' if c.b.verdict == 'diverged' else '!'} {'':>10} {'':>10} {'':>8}  {'verdict':<24} "
                    f"{c.label}: {c.a.verdict} -> {c.b.verdict}")
@@ -226,7 +252,8 @@ def _lines(c, only_changed, threshold):
 
 def to_text(cmp, only_changed=False):
     """The comparison as asv prints one: before, after, ratio, what, which run; then the runs in
-    one store only; then a one-line count."""
+    one store only (not with ``only_changed``: they are no run's change); then a one-line
+    count. Every line's control characters escaped (``printable``): it is for a terminal."""
     out = [f"before: {cmp.paths[0]}", f"after:  {cmp.paths[1]}"] if cmp.paths else []
     out += [f"warning: {w}" for w in cmp.warnings]
     body = [line for c in cmp.changes for line in _lines(c, only_changed, cmp.threshold)]
@@ -237,16 +264,16 @@ def to_text(cmp, only_changed=False):
                 "verdict changed)"]
         out += body
     for title, runs in (("only in A (before)", cmp.only_in_a), ("only in B (after)", cmp.only_in_b)):
-        if runs:
+        if runs and not only_changed:
             out += ["", f"{title}: {len(runs)}"] + [f"  {label(r)}" for r in runs]
-    if cmp.not_compared:
+    if cmp.not_compared:  # kept with only_changed: a case that changed version may hide a regression
         out += ["", f"not compared: {len(cmp.not_compared)}"] + [f"  {label(y)}: {why}" for _, y, why in
                                                                  cmp.not_compared]
     s = cmp.stats
     out += ["", f"{len(cmp.changes)} runs in both: {s['worse']} worse, {s['better']} better, {s['status']} changed "
                 f"status, {s['same']} unchanged; {len(cmp.only_in_a)} only in A, {len(cmp.only_in_b)} only in B, "
                 f"{len(cmp.not_compared)} not compared" + (" — REGRESSION" if cmp.regressed else "")]
-    return "\n".join(out) + "\n"
+    return "\n".join(printable(line, newlines=False) for line in out) + "\n"
 
 
 def _identity(r):

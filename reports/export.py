@@ -21,6 +21,7 @@ reaction_force     ``fx fy fz``: the force the joint exerts on its child, world 
 
 Columns an item does not have are empty (NaN). CSV is written with 17
 significant digits (every double round-trips); Parquet keeps the doubles as they are.
+The file is the user's: written in place (``dalembert.output``), ``-`` for standard output.
 """
 
 from __future__ import annotations
@@ -31,10 +32,10 @@ import json
 import numpy as np
 import pandas as pd
 
-from dalembert.store import atomic_write
+from dalembert import output
 from dalembert.trajectory import CSV_COLUMNS
 
-__all__ = ["BODY_COLUMNS", "IDENTITY", "select", "trajectory_frame", "frame", "write"]
+__all__ = ["BODY_COLUMNS", "FORMATS", "IDENTITY", "select", "trajectory_frame", "frame", "write"]
 
 BODY_COLUMNS = CSV_COLUMNS[2:]  # x ... wz (CSV_COLUMNS starts with t, body)
 IDENTITY = ("key", "case", "case_version", "params", "engine", "integrator", "dt", "rtol", "atol", "options", "status")
@@ -99,11 +100,21 @@ def frame(store, records):
     return out
 
 
-def write(df, path):
-    """Write ``df`` to ``path``: Parquet when it ends in ``.parquet``, else CSV at 17 significant digits."""
-    if str(path).endswith(".parquet"):
+FORMATS = ("csv", "parquet")
+
+
+def write(df, path, fmt=None):
+    """Write ``df`` to ``path`` in place (``dalembert.output.write``; ``-`` is standard output).
+
+    ``fmt``: ``"csv"`` (17 significant digits) or ``"parquet"``; by default Parquet when ``path``
+    ends in ``.parquet``, else CSV. An ``OutputError`` naming ``--<fmt>`` when it cannot be written."""
+    fmt = fmt or ("parquet" if str(path).endswith(".parquet") else "csv")
+    if fmt not in FORMATS:
+        raise ValueError(f"fmt: {fmt!r} is not one of {', '.join(FORMATS)} — pick one")
+    if fmt == "parquet":
         buf = io.BytesIO()
         df.to_parquet(buf, index=False)
-        atomic_write(path, buf.getvalue())
+        data = buf.getvalue()
     else:
-        atomic_write(path, df.to_csv(index=False, float_format="%.17g"))
+        data = df.to_csv(index=False, float_format="%.17g")
+    output.write(path, data, f"--{fmt}")

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from importlib import resources
 
 from dalembert.reports.tables import escape_html, escape_md
-from dalembert.store import atomic_write
+from dalembert.store import atomic_write, file_name
 
 __all__ = ["Part", "write_page", "static_text"]
 
@@ -102,7 +102,8 @@ def write_page(parts, out_dir, title="dalembert report", files="report_files"):
     for part in parts:
         for x in part.html:
             if isinstance(x, _Figure):
-                names[id(x)] = f"{len(names) + 1:02d}-{x.name}.svg"
+                # a case's name is part of the figure's: checked before it becomes a path
+                names[id(x)] = file_name(f"{len(names) + 1:02d}-{x.name}.svg", "figure name", files_dir)
                 atomic_write(os.path.join(files_dir, names[id(x)]), x.svg)
 
     def html(x):

@@ -65,9 +65,13 @@ def test_options_are_in_the_labels_and_runs_in_one_store_are_apart(store, tmp_pa
     cmp = compare_stores(store, other)
     assert len(cmp.only_in_a) == 1 and len(cmp.only_in_b) == 1 and len(cmp.changes) == 3
     assert "node=ep" in to_json(cmp)["only_in_b"][0]["label"]
-    assert main(["compare", store.path, other.path, "--only-changed"]) == 0  # nothing got worse
+    assert main(["compare", store.path, other.path]) == 0  # nothing got worse
     out = capsys.readouterr().out
     assert "only in A (before): 1" in out and "only in B (after): 1" in out and "node=ep" in out
+    assert "1 only in A, 1 only in B" in out
+    assert main(["compare", store.path, other.path, "--only-changed"]) == 0
+    out = capsys.readouterr().out  # only changes: the runs in one store are counted, not listed
+    assert "only in A (before)" not in out and "only in B (after)" not in out and "node=ep" not in out
     assert "1 only in A, 1 only in B" in out
 
 
@@ -141,3 +145,40 @@ def test_a_schema_1_store_compares_with_a_current_one(store, tmp_path, capsys):
     assert main(["compare", old.path, store.path]) == 0
     captured = capsys.readouterr()
     assert "schemas 1 and 3" in captured.err and "4 runs in both: 0 worse" in captured.out
+
+
+def test_quick_stores_costs_are_single_samples_shown_not_judged(store, tmp_path, capsys):
+    """Two stores timed once per run (``run --quick``: the manifest's timing): a cost that doubled is
+    one sample against one, no spread to judge it by, so it is shown with a warning and never called
+    slower, nor a regression even when a cost threshold is given."""
+    from dalembert.harness.execute import QUICK
+
+    def quick(s):
+        manifest = s.manifest()
+        manifest["timing"] = vars(QUICK)
+        s.write_manifest(manifest)
+        return s
+
+    def once(factor):
+        def change(r):
+            m = r.cost.wall_s_median * factor
+            return replace(r, cost=replace(r.cost, wall_s_median=m, wall_s_min=m, wall_s_max=m, repeats=1))
+        return change
+
+    before, after = quick(_copy(store, tmp_path / "before")), quick(_copy(store, tmp_path / "after"))
+    tamper(before, once(1.0))
+    tamper(after, once(2.0))
+    cmp = compare_stores(before, after, cost_threshold=1.5)
+    (c,) = [c for c in cmp.changes if c.a.key == sorted(before.done_keys())[0]]
+    assert c.cost_ratio == pytest.approx(2.0) and c.cost_change == "unjudged" and c.change == "same"
+    assert not cmp.regressed and cmp.stats["worse"] == 0 and cmp.stats["better"] == 0
+    assert any("A (before) and B (after) were timed once per run" in w for w in cmp.warnings)
+    assert main(["compare", before.path, after.path, "--cost-threshold", "1.5"]) == 0
+    out = capsys.readouterr().out
+    assert "warning: A (before) and B (after) were timed once per run (dalembert run --quick)" in out
+    assert "one sample each: not judged" in out and "0 worse, 0 better" in out
+    plain = _copy(store, tmp_path / "plain")  # the same samples in a store timed as by default: judged
+    tamper(plain, once(1.0))
+    slower = _copy(plain, tmp_path / "slower")
+    tamper(slower, once(2.0))
+    assert compare_stores(plain, slower, cost_threshold=1.5).regressed

@@ -16,6 +16,7 @@ from dalembert.record import BAD_STATUSES
 from dalembert.registry import UnknownNameError
 from dalembert.scene import SceneError
 from dalembert.store import atomic_write
+from dalembert.terminal import printable
 
 EPILOG = """examples:
   dalembert cases --verbose
@@ -53,7 +54,7 @@ def _parser():
     t.add_argument("case")
     t.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
                    help="override a case parameter (vectors as comma-separated numbers); repeatable")
-    t.add_argument("--csv", required=True, metavar="FILE", help="output file")
+    t.add_argument("--csv", required=True, metavar="FILE", help="output file (- for standard output)")
 
     e = sub.add_parser("engines", help="list engines, what they support and their integrators",
                        epilog="example:\n  dalembert engines", formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -121,8 +122,8 @@ def _parser():
     x.add_argument("--all", action="store_true", help="every run that matches (all runs when nothing else is "
                                                       "given), into one file; without it exactly one must match")
     out = x.add_mutually_exclusive_group(required=True)
-    out.add_argument("--csv", metavar="FILE", help="CSV, 17 significant digits")
-    out.add_argument("--parquet", metavar="FILE", help="Parquet")
+    out.add_argument("--csv", metavar="FILE", help="CSV, 17 significant digits (- for standard output)")
+    out.add_argument("--parquet", metavar="FILE", help="Parquet (- for standard output)")
 
     cp = sub.add_parser("compare", help="compare two results directories; non-zero exit on a regression",
                         epilog="examples:\n  dalembert compare results/before results/after --threshold 2\n"
@@ -164,7 +165,7 @@ def _parser():
 
 
 def _fail(msg):
-    print(f"dalembert: error: {msg}", file=sys.stderr)
+    print(f"dalembert: error: {printable(msg)}", file=sys.stderr)
     return 2
 
 
@@ -181,6 +182,9 @@ def cmd_cases(args):
 
 
 def cmd_truth(args):
+    import io
+
+    from dalembert import output
     from dalembert.case import load_cases, parse_param
     from dalembert.trajectory import write_csv
 
@@ -190,13 +194,14 @@ def cmd_truth(args):
         case = factory(**params)
     except (UnknownNameError, ValueError, SceneError) as e:
         return _fail(str(e))
-    out_dir = os.path.dirname(os.path.abspath(args.csv))
-    if not os.access(out_dir, os.W_OK):
-        return _fail(f"--csv: cannot write to {out_dir!r}")
+    output.check(args.csv, "--csv")
     from dalembert.reference import truth
 
-    write_csv(truth(case), args.csv)
-    print(f"wrote {args.csv}: {case.name} (version {case.version}), {len(case.sample_times)} samples")
+    text = io.StringIO()
+    write_csv(truth(case), text)
+    output.write(args.csv, text.getvalue(), "--csv")
+    print(f"wrote {printable(output.shown(args.csv))}: {case.name} (version {case.version}), "
+          f"{len(case.sample_times)} samples", file=sys.stderr if args.csv == output.STDOUT else sys.stdout)
     return 0
 
 
@@ -250,13 +255,14 @@ def _progress_printer(stream=None):
         elapsed = time.monotonic() - start
         eta = elapsed / done * (total - done) if done else float("nan")
         status = f"[{done}/{total}] failures {bad}  elapsed {elapsed:.0f} s  eta {eta:.0f} s"
+        run = printable(f"{record.case} {record.engine} {record.settings_label}", newlines=False)  # a store's names
         if tty:
-            stream.write(f"\r{status}  {record.case} {record.engine} {record.settings_label} {record.status}\033[K")
+            stream.write(f"\r{status}  {run} {record.status}\033[K")
             if done == total:
                 stream.write("\n")
         else:
-            stream.write(f"{status}  {record.case} {record.engine} {record.settings_label}: {record.status}"
-                         f"{' — ' + record.message if record.message else ''}\n")
+            stream.write(f"{status}  {run}: {record.status}"
+                         f"{' — ' + printable(record.message) if record.message else ''}\n")
         stream.flush()
 
     return show
@@ -404,7 +410,8 @@ def cmd_run(args):
         store, lock = session.start(args.out or session.default_out(), manifest)
     with lock:
         if lock.stale:
-            print(f"dalembert: note: the last writer of {store.path} ended without releasing it ({lock.stale}); "
+            print(f"dalembert: note: the last writer of {store.path} ended without releasing it "
+                  f"({printable(lock.stale)}); "
                   "what it stored is kept", file=sys.stderr)
         print(f"dalembert: {len(specs)} runs, {len(specs) - len(store.done_keys())} to do -> {store.path}",
               file=sys.stderr)
@@ -458,22 +465,25 @@ def cmd_report(args):
     except ValueError as e:
         return _fail(str(e))
     for path in build_report(store):
-        print(f"wrote {path}")
+        print(f"wrote {printable(path)}")
     return 0
 
 
 def cmd_export(args):
+    from dalembert import output
     from dalembert.reports.export import frame, select, write
     from dalembert.reports.findings import run_name
 
+    fmt = "csv" if args.csv is not None else "parquet"
+    path = args.csv if args.csv is not None else args.parquet
     try:
         store = _open(args.run_dir)
         options = dict(_key_value("--option", text) for text in args.option)
+        output.check(path, f"--{fmt}")
     except ValueError as e:
         return _fail(str(e))
     records = store.records()
     chosen = select(records, set(args.key), args.case, args.engine, args.integrator, args.dt, args.rtol, options)
-    path = args.csv or args.parquet
     if not args.all and len(chosen) != 1:
         listed = chosen or records
         return _fail(f"{len(chosen)} stored runs match (need exactly one: add --dt, --rtol, --option or --key, or "
@@ -483,13 +493,11 @@ def cmd_export(args):
     if not args.all and not chosen[0].trajectory:
         return _fail(f"that run has no trajectory (status {chosen[0].status}: {chosen[0].message})")
     df = frame(store, chosen)
-    out_dir = os.path.dirname(os.path.abspath(path))
-    if not os.access(out_dir, os.W_OK):
-        return _fail(f"--{'csv' if args.csv else 'parquet'}: cannot write to {out_dir!r}")
-    write(df, path)
+    write(df, path, fmt)
     with_traj = sum(1 for r in chosen if r.trajectory)
-    print(f"wrote {path}: {with_traj} run(s), {len(df)} rows"
-          + (f" ({len(chosen) - with_traj} matching run(s) left no trajectory)" if with_traj < len(chosen) else ""))
+    print(f"wrote {printable(output.shown(path))}: {with_traj} run(s), {len(df)} rows"
+          + (f" ({len(chosen) - with_traj} matching run(s) left no trajectory)" if with_traj < len(chosen) else ""),
+          file=sys.stderr if path == output.STDOUT else sys.stdout)
     return 0
 
 
@@ -506,11 +514,15 @@ def cmd_compare(args):
     import io
     import json
 
+    from dalembert import output
     from dalembert.record import READABLE_SCHEMAS
     from dalembert.reports.compare import CSV_COLUMNS, compare_stores, csv_rows, to_json, to_text
 
     try:
         stores = [_open(d, READABLE_SCHEMAS) for d in (args.run_a, args.run_b)]
+        for flag, path in (("--json", args.json), ("--csv", args.csv)):
+            if path is not None:
+                output.check(path, flag)
     except ValueError as e:
         return _fail(str(e))
     for flag, value in (("--threshold", args.threshold), ("--cost-threshold", args.cost_threshold)):
@@ -522,23 +534,21 @@ def cmd_compare(args):
               "engine and settings", file=sys.stderr)
     cmp = compare_stores(*stores, threshold=args.threshold, cost_threshold=args.cost_threshold,
                          across_versions=args.across_versions)
-    outputs = {}
-    if args.json:
-        outputs[args.json] = json.dumps(to_json(cmp), indent=1, allow_nan=False) + "\n"
-    if args.csv:
+    outputs = []  # (flag, path, text)
+    if args.json is not None:
+        outputs.append(("--json", args.json, json.dumps(to_json(cmp), indent=1, allow_nan=False) + "\n"))
+    if args.csv is not None:
         buf = io.StringIO()
         writer = csv.DictWriter(buf, CSV_COLUMNS, lineterminator="\n")
         writer.writeheader()
         writer.writerows({k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()} for row in csv_rows(cmp))
-        outputs[args.csv] = buf.getvalue()
-    if "-" not in outputs:
+        outputs.append(("--csv", args.csv, buf.getvalue()))
+    if all(path != output.STDOUT for _, path, _ in outputs):
         sys.stdout.write(to_text(cmp, args.only_changed))
-    for path, text in outputs.items():
-        if path == "-":
-            sys.stdout.write(text)
-        else:
-            atomic_write(path, text)
-            print(f"wrote {path}", file=sys.stderr)
+    for flag, path, text in outputs:
+        output.write(path, text, flag)
+        if path != output.STDOUT:
+            print(f"wrote {printable(path)}", file=sys.stderr)
     return 1 if cmp.regressed else 0
 
 
@@ -630,8 +640,8 @@ def main(argv=None):
     except Exception as e:  # a bug of dalembert's, not the user's
         if args.debug:
             raise
-        print(f"dalembert: internal error: {type(e).__name__}: {e} — rerun with --debug for the traceback and "
-              "report it", file=sys.stderr)
+        print(f"dalembert: internal error: {type(e).__name__}: {printable(e)} — rerun with --debug for the traceback "
+              "and report it", file=sys.stderr)
         return 3
 
 
