@@ -39,7 +39,8 @@ __all__ = ["build_report"]
 DECADES = 100.0  # a time plot's values spanning more than this factor (two decades) get a log axis
 HAZARD_TITLES = {"diverged": "Diverged", "failed": "Stopped early", "energy": "Energy not kept",
                  "closure": "Loops still opening", "reactions": "Motion right, reactions wrong",
-                 "tolerance": "Finite but beyond the tolerance", "disagreement": "Engines disagree",
+                 "tolerance": "Finite but beyond the tolerance", "inert": "A tolerance changed nothing",
+                 "disagreement": "Engines disagree",
                  "unsupported": "Not supported (not run, not drawn)"}
 
 
