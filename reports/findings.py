@@ -22,8 +22,8 @@ reached), and the hazards a user must know before trusting a setting:
 * ``inert`` — runs of one engine, integrator, options and step at different tolerances
   whose stored errors are all the same, bit for bit (every quantity, its largest and its
   final value): the tolerance changed nothing (e.g. the sample interval capped every step,
-  and the error at that step already met each tolerance), so the runs measure the cap,
-  not the tolerance;
+  and the error at that step already met each tolerance; or the method is exact on the
+  motion, its steps growing at the controller's largest rate whatever the tolerance);
 * ``disagreement`` — engines that, with the same integrator and the same step
   or tolerance, differ by more than ``DISAGREEMENT_FACTOR`` in the headline error
   beyond the case's tolerance, or where one finishes within it and another does not.
@@ -392,8 +392,8 @@ def _inert(e, quantity):
 
     runs = [r for rs in same for r in rs]
     text = (f"{e.engine}: a tolerance changed nothing: {'; '.join(group_text(rs) for rs in same)} — every stored "
-            "error the same, bit for bit: these runs measure the steps something else set (such as the sample "
-            "interval), not their tolerance, and are compared with no other engine.")
+            "error the same, bit for bit: the tolerance did not decide their steps (something else did, such as the "
+            "sample interval), so they say nothing of what it buys, and are compared with no other engine.")
     details = tuple(f"{settings_text(r)} (the same errors as {_list([settings_text(x) for x in rs if x is not r])})"
                     for rs in same for r in rs)
     return [Hazard("inert", e.engine, tuple(runs), text, details)]
