@@ -383,7 +383,9 @@ def _inert(e, quantity):
 
     def group_text(rs):
         r = rs[0]
-        tols = _list([f"{x.rtol:g}" + (f" (atol {x.atol:g})" if x.atol not in (None, x.rtol) else "") for x in rs])
+        atols = len({x.atol for x in rs}) > 1  # named only where they differ
+        tols = _list([f"{x.rtol:g}" + (f" (atol {'default' if x.atol is None else f'{x.atol:g}'})" if atols else "")
+                      for x in rs])
         steps = {x.cost.n_steps for x in rs}
         what = [f"{quantity} {r.max_error(quantity):.2e} {unit}".rstrip()] if quantity in r.errors else []
         what += [f"{next(iter(steps))} steps"] if len(steps) == 1 else []
