@@ -383,7 +383,7 @@ def _inert(e, quantity):
 
     def group_text(rs):
         r = rs[0]
-        atols = len({x.atol for x in rs}) > 1  # named only where they differ
+        atols = any(x.atol != x.rtol for x in rs)  # named unless each equals its rtol (the matrix's default)
         tols = _list([f"{x.rtol:g}" + (f" (atol {'default' if x.atol is None else f'{x.atol:g}'})" if atols else "")
                       for x in rs])
         steps = {x.cost.n_steps for x in rs}
