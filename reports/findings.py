@@ -28,7 +28,7 @@ reached), and the hazards a user must know before trusting a setting:
   or tolerance, differ by more than ``DISAGREEMENT_FACTOR`` in the headline error
   beyond the case's tolerance, or where one finishes within it and another does not.
   Only comparable runs are compared: a run whose tolerance changed nothing (``inert``)
-  is left out (its error is its sample interval's, not its tolerance's), and so is any run
+  is left out (its error says nothing of its tolerance), and so is any run
   whose settings do not mean what the others' do (``_comparable``);
 * ``unsupported`` — integrators an engine cannot run on the case, with its reason.
 
