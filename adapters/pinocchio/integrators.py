@@ -98,8 +98,8 @@ def adaptive(pm, method, q0, v0, times, rtol, atol):
     alone (a solver restarted at every sample took the sample interval as its step wherever that already
     met the tolerance, so rtol 1e-6 and 1e-9 gave one trajectory, bit for bit). After each accepted step
     the chart is re-centred on the step's end: ``q_c <- integrate(q_c, delta)``, ``delta <- 0`` and the
-    solver's first-same-as-last derivative ``f = (dexp^-1(q_c, delta, v), a)`` becomes ``(v, a)`` (``a``
-    depends on the configuration only, which the move leaves unchanged), so the next step starts from the
+    solver's first-same-as-last derivative ``f = (dexp^-1(q_c, delta, v), a)`` becomes ``(v, a)`` (``a`` is
+    ``acc(q, v)``, and the move changes neither ``q`` nor ``v``), so the next step starts from the
     same state and derivative, in the new chart, with the step size the controller chose. The samples
     passed by a step are read from its dense output in the step's own chart, before the move.
     """
@@ -133,7 +133,8 @@ def adaptive(pm, method, q0, v0, times, rtol, atol):
                 y = solver.y if times[j] == solver.t else dense(times[j])
                 Q[j], V[j] = pin.integrate(model, centre[0], y[:nv]), y[nv:]
             k = passed
-            # re-centre the chart on the step's end (docstring): same state, same derivative
+            # re-centre the chart on the step's end (docstring): same state, same derivative. scipy's Runge-Kutta
+            # solvers take each step from their attributes y and f (scipy/integrate/_ivp/rk.py, RungeKutta._step_impl)
             centre[0] = pin.integrate(model, centre[0], solver.y[:nv])
             v = solver.y[nv:].copy()
             solver.y = np.concatenate([np.zeros(nv), v])
