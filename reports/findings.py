@@ -19,9 +19,17 @@ reached), and the hazards a user must know before trusting a setting:
   ``dalembert.errors``): the loads a user would read off a trustworthy-looking run are wrong;
 * ``tolerance`` — runs that stay finite but leave the case's tolerance (and of
   those, the ones whose conserved quantities hold: only the truth shows them);
+* ``inert`` — runs of one engine, integrator, options and step at different tolerances
+  whose stored errors are all the same, bit for bit (every quantity, its largest and its
+  final value): the tolerance changed nothing (e.g. the sample interval capped every step,
+  and the error at that step already met each tolerance; or the method is exact on the
+  motion, its steps growing at the controller's largest rate whatever the tolerance);
 * ``disagreement`` — engines that, with the same integrator and the same step
   or tolerance, differ by more than ``DISAGREEMENT_FACTOR`` in the headline error
-  beyond the case's tolerance, or where one finishes within it and another does not;
+  beyond the case's tolerance, or where one finishes within it and another does not.
+  Only comparable runs are compared: a run whose tolerance changed nothing (``inert``)
+  is left out (its error says nothing of its tolerance), and so is any run
+  whose settings do not mean what the others' do (``_comparable``);
 * ``unsupported`` — integrators an engine cannot run on the case, with its reason.
 
 Every sentence names the runs it is about (engine and settings) and quotes
@@ -63,7 +71,8 @@ DISAGREEMENT_FACTOR = 10.0
 # spike, Drake discrete x2.2, MuJoCo discrete x3.0 (its soft residual follows the growing constraint load).
 CLOSURE_GROWTH = 3.0
 # Hazard kinds, in the order the report lists them.
-HAZARDS = ("diverged", "failed", "energy", "closure", "reactions", "tolerance", "disagreement", "unsupported")
+HAZARDS = ("diverged", "failed", "energy", "closure", "reactions", "tolerance", "inert", "disagreement",
+           "unsupported")
 ENERGY_LIKE = ("energy", "energy_balance")
 
 
@@ -160,8 +169,9 @@ def _case_findings(case, runs, store=None):
     hazards = []
     for e in engines:
         hazards += (_diverged(e, case) + _failed(e) + _energy(e, case) + _closure(e, case, store)
-                    + _reactions(e, case, quantity) + _beyond(e, case))
-    hazards += _disagreements(runs, quantity, case)
+                    + _reactions(e, case, quantity) + _beyond(e, case) + _inert(e, quantity))
+    inert = {r.key for h in hazards if h.kind == "inert" for r in h.runs}
+    hazards += _disagreements([r for r in runs if r.key not in inert], quantity, case)
     for e in engines:
         hazards += _unsupported(e)
     hazards.sort(key=lambda h: HAZARDS.index(h.kind))
@@ -360,6 +370,48 @@ def _beyond(e, case):
     return [_hazard("tolerance", e, bad, lead, line, tail=tail)]
 
 
+def _inert(e, quantity):
+    """Runs of one integrator, options and step at two or more tolerances whose stored errors are identical."""
+    groups = {}
+    for r in e.runs:
+        if (r.ok and r.rtol is not None and r.errors
+                and all(math.isfinite(v) for pair in r.errors.values() for v in pair)):
+            signature = tuple(sorted((q, tuple(pair)) for q, pair in r.errors.items()))
+            groups.setdefault((r.integrator, r.options_label, r.dt, signature), []).append(r)
+    same = [sorted(rs, key=lambda r: (-r.rtol, -(r.atol or 0.0))) for rs in groups.values()
+            if len({(r.rtol, r.atol) for r in rs}) > 1]
+    if not same:
+        return []
+    same.sort(key=lambda rs: (rs[0].integrator, rs[0].options_label))
+    unit = QUANTITIES.get(quantity, "")
+
+    def group_text(rs):
+        r = rs[0]
+        atols = any(x.atol != x.rtol for x in rs)  # named unless each equals its rtol (the matrix's default)
+        tols = _list([f"{x.rtol:g}" + (f" (atol {'default' if x.atol is None else f'{x.atol:g}'})" if atols else "")
+                      for x in rs])
+        steps = {x.cost.n_steps for x in rs}
+        what = [f"{quantity} {r.max_error(quantity):.2e} {unit}".rstrip()] if quantity in r.errors else []
+        what += [f"{next(iter(steps))} steps"] if len(steps) == 1 else []
+        options = f" with {r.options_label}" if r.options_label else ""
+        return f"{r.integrator}{options} at rtol {tols}" + (f" ({', '.join(what)} each)" if what else "")
+
+    runs = [r for rs in same for r in rs]
+    text = (f"{e.engine}: a tolerance changed nothing: {'; '.join(group_text(rs) for rs in same)} — every stored "
+            "error the same, bit for bit: the tolerance did not decide their steps (something else did, such as the "
+            "sample interval), so they say nothing of what it buys, and are compared with no other engine.")
+    details = tuple(f"{settings_text(r)} (the same errors as {_list([settings_text(x) for x in rs if x is not r])})"
+                    for rs in same for r in rs)
+    return [Hazard("inert", e.engine, tuple(runs), text, details)]
+
+
+def _comparable(r):
+    """Whether ``r``'s settings mean the same in every engine: a fixed step always does; an adaptive run's only
+    with both tolerances given, as each engine fills in a missing one with its own default (Pinocchio's
+    scipy solvers 1e-8, the reference's DOP853 1e-12, Exudyn atol = rtol, Drake no atol at all)."""
+    return r.dt is not None or (r.rtol is not None and r.atol is not None)
+
+
 def _representative(runs):
     """An engine's run at one setting: its default variant (no options) if it ran one, else its
     most accurate variant."""
@@ -368,13 +420,19 @@ def _representative(runs):
 
 
 def _disagreements(runs, quantity, case):
+    """Engines that disagree at one setting, among comparable runs: ``runs`` less those whose tolerance changed
+    nothing (``_inert``, left out by the caller). A setting is an integrator name and its step or tolerances
+    (rtol and atol): one name means one method in every engine that offers it (``dop853``: scipy's DOP853, in
+    the reference and in Pinocchio; ``rk4``: the classical RK4; ``euler``: semi-implicit Euler), and an engine's
+    own variants of it are compared through its default one (``_representative``). Runs whose settings do
+    not mean the same in every engine are left out too (``_comparable``)."""
     if quantity is None:
         return []
     unit = QUANTITIES[quantity]
     tol = case.tolerances.get(quantity)
     groups = {}
     for r in runs:
-        if r.status != "unsupported":
+        if r.status != "unsupported" and _comparable(r):
             groups.setdefault((r.integrator, r.dt, r.rtol, r.atol), {}).setdefault(r.engine, []).append(r)
     out = []
     for (integrator, dt, rtol, _), by_engine in sorted(groups.items(), key=lambda kv: (kv[0][0], kv[0][1] is None,
@@ -464,7 +522,8 @@ def _sentences(f):
     words = {"diverged": "runs diverged", "failed": "runs stopped early",
              "energy": f"runs change the energy by more than {100 * ENERGY_HAZARD:g} %",
              "closure": "runs still opening their loops", "reactions": "runs with the motion right and the reactions wrong",
-             "tolerance": "finished runs leave the tolerance", "disagreement": "settings where engines disagree"}
+             "tolerance": "finished runs leave the tolerance", "inert": "runs whose tolerance changed nothing",
+             "disagreement": "settings where engines disagree"}
     if counts.get("disagreement") == 1:
         words["disagreement"] = "setting where engines disagree"
     if counts:

@@ -101,6 +101,65 @@ def test_one_engine_within_tolerance_and_another_diverged_disagree(store):
     assert "at rk4 dt=0.005, reference stays within the orientation tolerance while gamma diverged" in h.text
 
 
+def _adaptive(store, key, rtol, scale=1.0, steps=None, **changes):
+    """An adaptive run beside the seed's, its errors the seed's times ``scale`` (1: the same, bit for bit). (``key``
+    sorts after the seed's, which stays ``base``, the template of every added run.)"""
+    assert key > base(store).key
+    first = base(store)
+    errors = {q: (mx * scale, fin * scale) for q, (mx, fin) in first.errors.items()}
+    cost = replace(first.cost, n_steps=steps if steps is not None else first.cost.n_steps)
+    return add_run(store, key, **{"integrator": "dop853", "dt": None, "rtol": rtol, "atol": rtol, "errors": errors,
+                                  "cost": cost, **changes})
+
+
+def test_two_tolerances_with_the_same_errors_are_named(store):
+    _adaptive(store, "loose", 1e-6, steps=1032)
+    _adaptive(store, "tight", 1e-9, steps=1032)
+    _adaptive(store, "other", 1e-9, options={"welds": "constraint"})  # another variant: alone at its tolerance
+    (h,) = _hazards(store, "inert")
+    assert h.engine == "reference" and {r.key for r in h.runs} == {"loose", "tight"}
+    err = base(store).max_error("orientation")
+    assert f"a tolerance changed nothing: dop853 at rtol 1e-06 and 1e-09 (orientation {err:.2e} rad, 1032 steps each)" \
+        in h.text
+    assert _reported(store, h.text)
+    assert "A tolerance changed nothing" in open(os.path.join(store.path, "report.md")).read()
+
+
+def test_two_tolerances_with_different_errors_are_no_hazard(store):
+    _adaptive(store, "loose", 1e-6)
+    _adaptive(store, "tight", 1e-9, scale=1.0 - 1e-12)  # the smallest change is a change
+    assert _hazards(store, "inert") == []
+
+
+def test_engines_are_not_compared_where_a_tolerance_changed_nothing(store):
+    """The issue's artefact: an engine restarted at every sample, its error at rtol 1e-6 its sample interval's,
+    against one whose tolerance reached its steps; 1e6-fold apart, and no disagreement between them."""
+    tol = store.case(base(store).case, base(store).case_version).tolerances["orientation"].value
+    far = tol * DISAGREEMENT_FACTOR * 10 / base(store).max_error("orientation")
+    _adaptive(store, "x-ref-loose", 1e-6, scale=far, within_tolerance=False, beyond=("orientation",))
+    _adaptive(store, "x-ref-tight", 1e-9)
+    _adaptive(store, "x-capped-loose", 1e-6, scale=1e-3, engine="capped")
+    _adaptive(store, "x-capped-tight", 1e-9, scale=1e-3, engine="capped")
+    assert {r.key for (h,) in [_hazards(store, "inert")] for r in h.runs} == {"x-capped-loose", "x-capped-tight"}
+    assert _hazards(store, "disagreement") == []
+    _adaptive(store, "x-capped-tight", 1e-9, scale=2e-3, engine="capped")  # its tolerance now reaches it
+    (h,) = _hazards(store, "disagreement")
+    assert "at dop853 rtol=1e-06" in h.text and {r.key for r in h.runs} == {"x-ref-loose", "x-capped-loose"}
+
+
+def test_adaptive_runs_with_an_engine_s_own_atol_are_not_compared(store):
+    """An atol left to the engine means its own default (the reference's 1e-12, Pinocchio's 1e-8)."""
+    tol = store.case(base(store).case, base(store).case_version).tolerances["orientation"].value
+    far = tol * DISAGREEMENT_FACTOR * 10 / base(store).max_error("orientation")
+    _adaptive(store, "x-a", 1e-6, atol=None, scale=far, within_tolerance=False, beyond=("orientation",))
+    _adaptive(store, "x-b", 1e-6, atol=None, engine="beta")
+    assert _hazards(store, "disagreement") == []
+    _adaptive(store, "x-a", 1e-6, scale=far, within_tolerance=False, beyond=("orientation",))
+    _adaptive(store, "x-b", 1e-6, engine="beta")
+    (h,) = _hazards(store, "disagreement")
+    assert {r.key for r in h.runs} == {"x-a", "x-b"}
+
+
 def test_an_unsupported_integrator_is_listed_once_with_its_reason(store):
     for key, rtol in (("u1", 1e-6), ("u2", 1e-9)):
         add_run(store, key, integrator="dop853", dt=None, rtol=rtol, atol=rtol, status="unsupported",

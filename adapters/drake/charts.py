@@ -18,8 +18,8 @@ differential-geometry code moves a chart on SO(3):
 * the state is carried over exactly: ``R_F'M' = R_a^T R_FM R_b``,
   ``w_F'M'_F' = R_a^T w_FM_F`` (``BallRpyJoint``'s ``v`` is ``w_FM_F``).
 
-A chart is set at t = 0 and again after any sample at which ``|pitch|``
-exceeds ``RECHART_PITCH``. Samples are always recorded in the scene's own
+A chart is set at t = 0 and again after any sample (error-controlled runs:
+any step) at which ``|pitch|`` exceeds ``RECHART_PITCH``. Samples are always recorded in the scene's own
 chart (F, M), so the read-back and the plant's default context never see a
 moved frame. Between re-charts Drake integrates its own equations unchanged;
 a re-chart is a change of coordinates between two steps, not a change of the
@@ -97,6 +97,11 @@ class BallCharts:
             x[sq] = _matrix_to_rpy(R_a @ _rpy_to_matrix(x[sq]) @ R_b.T)
             x[sv] = R_a @ x[sv]
         return x
+
+    def due(self, positions):
+        """Whether a ball joint's ``|pitch|`` exceeds ``RECHART_PITCH`` in the plant's ``positions (nq,)``: ``update``
+        would move its chart."""
+        return any(abs(positions[joint.position_start() + 1]) > RECHART_PITCH for joint in self.balls)
 
     def update(self, force=False):
         """Re-chart every ball joint whose ``|pitch|`` exceeds ``RECHART_PITCH`` (every one if ``force``),

@@ -8,7 +8,16 @@ from Python (``_Sampler``).
 The adaptive solvers are driven sample by sample (``solve_per_sample``:
 ``MainSolverExplicit.SolveSteps`` with the end time set to the next sample,
 which Exudyn's step control lands on exactly), so their steps never exceed the
-sample interval: without dense output, sampling at fixed times caps the step.
+sample interval: Exudyn has no dense output, and sampling at fixed times caps the
+step. The solver is not restarted at a sample: its step-size control carries over
+(measured, dopri5 at rtol 1e-12 on the pendulum: the first attempt after each 0.01-s
+sample is the controller's ~4e-3 s, not the 0.01-s initial step; 12 rejected attempts
+over 100 samples). Where the error of a step of the sample interval already meets a
+tolerance, that tolerance changes nothing (measured over 1 s at 0.01-s samples: dopri5
+on the pendulum takes 100 steps, 5.82e-11 rad, at every rtol from 1e-4 to 1e-8, and 112
+steps at 1e-9; on the torque-free top 100 steps, 4.48e-12 rad, from 1e-4 to 1e-10): the
+runs are the cap's, and the report says so (``reports.findings``: "a tolerance changed
+nothing").
 ``_Guard`` stops an adaptive solve that would retry one step without end.
 Steps are counted as Exudyn takes them (``steps_taken``), so steps Exudyn
 shrinks on Newton failure are counted.

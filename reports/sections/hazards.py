@@ -10,8 +10,8 @@ __all__ = ["hazards", "HAZARD_TITLES"]
 
 HAZARD_TITLES = {"diverged": "Diverged", "failed": "Stopped early", "energy": "Energy not kept",
                  "closure": "Loops still opening", "reactions": "Motion right, reactions wrong",
-                 "tolerance": "Finite but beyond the tolerance", "disagreement": "Engines disagree",
-                 "unsupported": "Not supported (not run, not drawn)"}
+                 "tolerance": "Finite but beyond the tolerance", "inert": "A tolerance changed nothing",
+                 "disagreement": "Engines disagree", "unsupported": "Not supported (not run, not drawn)"}
 
 
 def hazards(rep):
