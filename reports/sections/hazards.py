@@ -21,7 +21,9 @@ def hazards(rep):
     part.para("What to know before trusting a setting: every run named is in its case's table of runs. Energy is "
               f"judged against {100 * ENERGY_HAZARD:g} % of its scale over the horizon, disagreement at a factor "
               f"{DISAGREEMENT_FACTOR:g} between engines with the same integrator and step, beyond the case's "
-              f"tolerance; a loop is still opening when its closure residual is beyond the case's bound and its "
+              "tolerance (an adaptive run only where both rtol and atol were given and its tolerance changed its "
+              "result); a tolerance changed nothing when two tolerances of one integrator gave the same "
+              f"trajectory; a loop is still opening when its closure residual is beyond the case's bound and its "
               f"largest value over the horizon's last quarter is more than {CLOSURE_GROWTH:g} times that over its "
               "first half.")
     for f in rep.found:
