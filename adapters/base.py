@@ -31,7 +31,7 @@ from typing import Callable
 from dalembert.registry import suggest
 from dalembert.scene import SPRING_EFFECT
 
-__all__ = ["Adapter", "IntegratorSpec", "Outcome", "option_choice"]
+__all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome"]
 
 
 @dataclass(frozen=True)
@@ -41,6 +41,62 @@ class IntegratorSpec:
     fixed_step: bool
     options: tuple = ()
     description: str = ""
+
+
+@dataclass(frozen=True)
+class Option:
+    """One engine option and the values it takes, declared once on the adapter (``Adapter.options``, name ->
+    ``Option``) and checked by ``Adapter.check`` before anything runs.
+
+    Attributes
+    ----------
+    choices : tuple of str — the values it takes (empty: a number, bounded by ``minimum``/``maximum``)
+    default : object — the value a run takes when the option is not given (None: the engine's own, or one that
+        depends on the scene, as ``description`` says)
+    description : str — what it chooses, one line (``dalembert engines --verbose``)
+    minimum, maximum : float or None — a number's closed bounds
+    exclusive_minimum : float or None — a number's open lower bound (``> exclusive_minimum``)
+    only : tuple of str — the integrators that take it (empty: every integrator whose ``IntegratorSpec.options``
+        names it)
+    """
+
+    choices: tuple = ()
+    default: object = None
+    description: str = ""
+    minimum: float | None = None
+    maximum: float | None = None
+    exclusive_minimum: float | None = None
+    only: tuple = ()
+
+    def allowed(self):
+        """The values it takes, in words: ``"tree, equality"`` or ``"a number in [0, 1]"``."""
+        if self.choices:
+            return ", ".join(str(c) for c in self.choices)
+        if self.exclusive_minimum is not None:
+            return f"a number > {self.exclusive_minimum:g}" + (f", <= {self.maximum:g}" if self.maximum is not None else "")
+        if self.minimum is not None or self.maximum is not None:
+            return f"a number in [{'-inf' if self.minimum is None else f'{self.minimum:g}'}, " \
+                   f"{'inf' if self.maximum is None else f'{self.maximum:g}'}]"
+        return "a number"
+
+    def problem(self, name, value, integrator):
+        """What is wrong with ``value`` for option ``name`` under ``integrator``, in the project's words, or None."""
+        if self.only and integrator not in self.only:
+            return f"options.{name}: only {', '.join(self.only)} takes it — drop it, or use {' or '.join(self.only)}"
+        if self.choices:
+            if value not in self.choices:
+                return f"options.{name}: unknown {value!r} — use one of {self.allowed()}"
+            return None
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            return f"options.{name}: expected a number, got {value!r} — give {self.allowed()}"
+        if ((self.minimum is not None and not number >= self.minimum)
+                or (self.maximum is not None and not number <= self.maximum)
+                or (self.exclusive_minimum is not None and not number > self.exclusive_minimum)
+                or number != number):
+            return f"options.{name}: {number!r} is out of range — give {self.allowed()}"
+        return None
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,6 +131,8 @@ class Adapter:
     name = ""
     effects = frozenset()
     integrators = {}
+    # name -> Option: every option an integrator's ``IntegratorSpec.options`` names, and the values it takes
+    options = {}
 
     def version(self):
         raise NotImplementedError
@@ -93,8 +151,17 @@ class Adapter:
                              f"{suggest(settings.integrator, self.integrators)}")
         spec = self.integrators[settings.integrator]
         problems = knob_problems(settings, f"{self.name} {settings.integrator!r}", spec.fixed_step, spec.options, times)
+        for key, value in settings.options.items():
+            if key in spec.options and key in self.options:
+                problem = self.options[key].problem(key, value, settings.integrator)
+                if problem:
+                    problems.append(problem)
         if problems:
             raise ValueError("; ".join(problems))
+
+    def option(self, settings, key):
+        """The value of option ``key`` a run with ``settings`` takes: the given one, else the declared default."""
+        return settings.options.get(key, self.options[key].default)
 
     def unsupported(self, scene, settings):
         """The reason this engine cannot represent ``scene``, or None."""
@@ -123,11 +190,3 @@ class Adapter:
     def audit(self, prepared, outcome):
         return {}
 
-
-def option_choice(settings, key, choices):
-    """The value of engine option ``key`` (``choices[0]`` when absent); a ValueError naming the
-    option and its choices when it is not one of them."""
-    value = settings.options.get(key, choices[0])
-    if value not in choices:
-        raise ValueError(f"options.{key}: unknown {value!r} — use one of {list(choices)}")
-    return value

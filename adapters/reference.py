@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
+from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome
 from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
 
 __all__ = ["ReferenceAdapter"]
@@ -22,6 +22,12 @@ class ReferenceAdapter(Adapter):
     name = "reference"
     # loops: Kane's tree plus multipliers (reference.loops); prismatic joints: Kane's (reference.generalized)
     effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS
+    # the names of ``reference.solver.FORMULATIONS`` (not imported here: listing engines imports no solver;
+    # tests/test_adapter_contract.py checks that the two agree)
+    options = {
+        "formulation": Option(("newton-euler", "newton-euler-matrix", "kane", "planar"), None,
+                              "how the equations are written (default: newton-euler for free bodies, kane otherwise)"),
+    }
     integrators = {
         "dop853": IntegratorSpec(False, ("formulation",), "scipy DOP853, adaptive 8th order"),
         "rk4": IntegratorSpec(True, ("formulation",), "classical RK4 on embedded coordinates"),

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
-from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
+from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome
 from dalembert.adapters.exudyn import sampling
 from dalembert.adapters.exudyn.loops import loop_axes
 from dalembert.adapters.exudyn.model import CONSTRAINED_AXES, JOINTS, NODES, TREE_JOINTS, build, rigid_bodies
@@ -69,6 +69,18 @@ class ExudynAdapter(Adapter):
     name = "exudyn"
     # ball joints and welds only with joints=redundant, loops only with implicit solvers (see ``unsupported``)
     effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS
+    options = {
+        "node": Option(tuple(NODES), "rotvec-lg", "rigid-body node: rotation vector (Lie group), Euler parameters "
+                       "or Rxyz angles"),
+        "joints": Option(JOINTS, JOINTS[0], "joints in minimal coordinates (ObjectKinematicTree) or redundant ones "
+                         "(ObjectJointGeneric on rigid bodies)"),
+        "spectral_radius": Option(minimum=0.0, maximum=1.0, only=("generalized-alpha",),
+                                  description="generalized-alpha's spectral radius at infinity (default: Exudyn's)"),
+        "newton_rtol": Option(default=NEWTON_RTOL, exclusive_minimum=0.0, only=("generalized-alpha",),
+                              description="Newton's relative tolerance"),
+        "newton_atol": Option(default=NEWTON_ATOL, exclusive_minimum=0.0, only=("generalized-alpha",),
+                              description="Newton's absolute tolerance"),
+    }
     integrators = {
         **{k: IntegratorSpec(True, OPTIONS, f"Exudyn {v}") for k, v in IMPLICIT.items()},
         **{k: IntegratorSpec(k not in ADAPTIVE, OPTIONS, f"Exudyn {v}") for k, v in EXPLICIT.items()},
@@ -81,21 +93,6 @@ class ExudynAdapter(Adapter):
 
     def check(self, scene, times, settings):
         super().check(scene, times, settings)
-        o = settings.options
-        option_choice(settings, "node", tuple(NODES))
-        option_choice(settings, "joints", JOINTS)
-        for key in ("spectral_radius", "newton_rtol", "newton_atol"):
-            if key in o:
-                try:
-                    value = float(o[key])
-                except (TypeError, ValueError):
-                    raise ValueError(f"options.{key}: expected a number, got {o[key]!r}") from None
-                if key == "spectral_radius" and not 0.0 <= value <= 1.0:
-                    raise ValueError(f"options.spectral_radius: must lie in [0, 1], got {value}")
-                if key != "spectral_radius" and not value > 0.0:
-                    raise ValueError(f"options.{key}: must be positive, got {value}")
-                if settings.integrator != "generalized-alpha":
-                    raise ValueError(f"options.{key}: only generalized-alpha takes it")
         if settings.integrator in ADAPTIVE and settings.rtol is None:
             raise ValueError(f"rtol: {settings.integrator!r} is adaptive — give rtol (and atol)")
 

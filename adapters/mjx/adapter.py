@@ -24,7 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from dalembert.adapters.base import IntegratorSpec, Outcome, option_choice
+from dalembert.adapters.base import IntegratorSpec, Option, Outcome
 from dalembert.adapters.mujoco import MujocoAdapter
 from dalembert.adapters.mujoco.mjcf import WELDS
 from dalembert.adapters.mujoco.readback import read_back
@@ -45,6 +45,11 @@ class MjxAdapter(MujocoAdapter):
     ``welds`` = ``tree`` | ``equality``."""
 
     name = "mjx"
+    options = {
+        "precision": Option(PRECISIONS, PRECISIONS[0], "JAX's number type: float32 (MJX's default) or float64 "
+                            "(jax_enable_x64)"),
+        "welds": MujocoAdapter.options["welds"],
+    }
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "MJX semi-implicit Euler"),
         "rk4": IntegratorSpec(True, OPTIONS, "MJX classical RK4"),
@@ -61,13 +66,6 @@ class MjxAdapter(MujocoAdapter):
         """MJX and JAX imported (``version`` imports neither)."""
         self.version()
         mjx()
-
-    def check(self, scene, times, settings):
-        from dalembert.adapters.base import Adapter
-
-        Adapter.check(self, scene, times, settings)
-        option_choice(settings, "precision", PRECISIONS)
-        option_choice(settings, "welds", WELDS)
 
     def unsupported(self, scene, settings):
         """The base check, then MJX's own: where ``mjx.put_model`` refuses the compiled model

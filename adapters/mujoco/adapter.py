@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
-from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
+from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome
 from dalembert.adapters.mujoco.mjcf import LOAD_PATHS, WELDS, engine_frames, loop_softness, mjcf
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mujoco.springs import check_springs, other_passive, read_springs
@@ -53,6 +53,11 @@ class MujocoAdapter(Adapter):
     # checked against the scene when built and read back in the audit. Prismatic joints: slide joints (mjcf),
     # read back in the audit (``_joint_audit``).
     effects = EFFECTS | (LOOP_EFFECTS - {"loop:distance"}) | SPRING_EFFECTS
+    options = {
+        "loads": Option(LOAD_PATHS, LOAD_PATHS[0], "how loads enter: site actuators (every integrator stage) or "
+                        "xfrc_applied set from Python once per step"),
+        "welds": Option(WELDS, WELDS[0], "welds as nested bodies (exact) or free bodies held by equality constraints"),
+    }
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "semi-implicit Euler"),
         "rk4": IntegratorSpec(True, OPTIONS, "classical RK4"),
@@ -65,11 +70,6 @@ class MujocoAdapter(Adapter):
         import mujoco
 
         return mujoco.__version__
-
-    def check(self, scene, times, settings):
-        super().check(scene, times, settings)
-        option_choice(settings, "loads", LOAD_PATHS)
-        option_choice(settings, "welds", WELDS)
 
     def unsupported(self, scene, settings):
         reason = super().unsupported(scene, settings)

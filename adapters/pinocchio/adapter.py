@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 from dalembert import spatial
-from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
+from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome
 from dalembert.adapters.pinocchio import loops, springs
 from dalembert.adapters.pinocchio.integrators import STAGES, adaptive, fixed_step
 from dalembert.adapters.pinocchio.model import WELDS, PinocchioModel
@@ -44,6 +44,10 @@ class PinocchioAdapter(Adapter):
     name = "pinocchio"
     # loop:distance: loops.DISTANCE_REASON
     effects = EFFECTS | SPRING_EFFECTS | frozenset(f"loop:{k}" for k in loops.LOOP_KINDS)
+    options = {
+        "loop": Option(LOOPS, LOOPS[0], "the fixed-step loop: compiled (stepper.cpp) or the Python one"),
+        "welds": Option(WELDS, WELDS[0], "welds as one rigid body (tree) or as constraints (pin.constraintDynamics)"),
+    }
     integrators = {
         "euler": IntegratorSpec(True, ("loop", "welds"), "semi-implicit Euler on the group"),
         "rk4": IntegratorSpec(True, ("loop", "welds"), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
@@ -56,11 +60,6 @@ class PinocchioAdapter(Adapter):
         import pinocchio
 
         return pinocchio.__version__
-
-    def check(self, scene, times, settings):
-        super().check(scene, times, settings)
-        option_choice(settings, "loop", LOOPS)
-        option_choice(settings, "welds", WELDS)
 
     def unsupported(self, scene, settings):
         if any(lp.kind == "distance" for lp in scene.loops):

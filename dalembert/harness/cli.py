@@ -236,6 +236,11 @@ def cmd_engines(args):
             knobs = "dt" if spec.fixed_step else "rtol, atol"
             opts = f"; options: {', '.join(spec.options)}" if spec.options and args.verbose else ""
             print(f"    {integ:<20} {knobs}{opts}  {spec.description if args.verbose else ''}".rstrip())
+        if args.verbose:  # each option's values, from the adapter's declaration (``Adapter.options``)
+            for key, option in adapter.options.items():
+                default = "" if option.default is None else f"; default {option.default}"
+                only = f"; {', '.join(option.only)} only" if option.only else ""
+                print(f"    option {key}: {option.allowed()}{default}{only}  {option.description}".rstrip())
     return 0
 
 
