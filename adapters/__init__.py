@@ -23,6 +23,8 @@ The contract — every adapter class:
    every one against ``options`` —, dt that does not divide the sample
    interval, ...) — cheap, called before anything runs; ``unsupported(scene,
    settings)`` returns the reason a valid request cannot be represented, or None;
+   ``describe(scene, settings)`` returns the model it would build, as text
+   (``""``: none);
 6. ``prepare(scene, times, settings)`` builds the engine model (not timed);
 7. ``run(prepared)`` simulates from the initial state and samples at exactly
    ``times``, returning an ``Outcome``: the wall time of the stepping alone,

@@ -181,6 +181,12 @@ class Adapter:
         """Engine option sets the default matrix runs on ``scene`` (``[{}]``: the defaults only)."""
         return [{}]
 
+    def describe(self, scene, settings):
+        """The model the engine builds for ``scene`` with ``settings``, as text: what a report stores with the run
+        (the record's ``model``) and ``dalembert show-model`` prints (MJCF, a plant's or a system's summary).
+        Built without stepping; ``""`` where the engine describes none (this default), and then nothing is stored."""
+        return ""
+
     def prepare(self, scene, times, settings):
         raise NotImplementedError
 

@@ -591,8 +591,6 @@ def cmd_show_model(args):
                   f"({chosen.integrator if args.integrator else 'any integrator'}, {what}): {reason}{hint}",
                   file=sys.stderr)
             return 1
-        if not hasattr(adapter, "describe"):
-            raise ValueError(f"engine {args.engine!r} does not describe its model")
         text = adapter.describe(case.scene, chosen)
         if not text.strip():
             print(f"dalembert: {args.engine} describes no model for {args.case} with {chosen.integrator}",
