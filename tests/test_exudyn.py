@@ -270,7 +270,7 @@ def test_rotation_vector_node_reaction_finding_still_holds():
     Exudyn release fixes it, this fails: then drop ROTVEC_LG_REACTION from the audit."""
     import runpy
 
-    from dalembert.adapters.exudyn.adapter import ROTVEC_LG_REACTION
+    from dalembert.adapters.exudyn.audit import ROTVEC_LG_REACTION
 
     script = runpy.run_path(os.path.join(os.path.dirname(__file__), "..", "docs", "exudyn_rotvec_lg_reaction.py"))
     tilt = 0.7

@@ -334,7 +334,7 @@ def _bead_errors(traj, truth):
 # on the joints and 7.1e-12 relative on the reactions (the reference's own ~1e-11 among them).
 BEAD_TREE_TOL = 1e-10  # m, rad/s, m and relative: 4.5x the largest measured
 # Redundant joints on Euler-parameter nodes with trapezoidal-index2 (second order; rotation-vector nodes
-# report the reactions short of their centripetal part, adapter.ROTVEC_LG_REACTION): measured at dt = 1e-3,
+# report the reactions short of their centripetal part, audit.ROTVEC_LG_REACTION): measured at dt = 1e-3,
 # 5e-4: 1.58e-6, 3.95e-7 m; 7.37e-6, 1.83e-6 rad/s; 2.06e-6, 4.88e-7 on the joints; 2.36e-6, 9.7e-7 relative on
 # the reactions.
 BEAD_REDUNDANT_STEPS = (1e-3, 5e-4)

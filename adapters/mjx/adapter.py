@@ -26,7 +26,6 @@ import numpy as np
 
 from dalembert.adapters.base import IntegratorSpec, Option, Outcome
 from dalembert.adapters.mujoco import MujocoAdapter
-from dalembert.adapters.mujoco.mjcf import WELDS
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mjx.stepping import PRECISIONS, chunks, compile_rollout, mjx, precision, run_rollout, to_host
 
