@@ -3,7 +3,7 @@
 ``prepare`` compiles the generated MJCF (``mjcf``) and checks the compiled mass
 properties and springs against the scene's; ``run`` steps (``stepping``) with MuJoCo's
 warnings sent to the adapter, not to ``MUJOCO_LOG.TXT`` or the console, then
-reads the states back in body terms (``readback``); ``audit`` reads the
+reads the states back in body terms (``readback``); ``audit`` (the module) reads the
 compiled options, joints, loop constraints and springs back from the model.
 """
 
@@ -13,9 +13,10 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome
-from dalembert.adapters.mujoco.mjcf import LOAD_PATHS, WELDS, engine_frames, loop_softness, mjcf
+from dalembert.adapters.mujoco.audit import audit
+from dalembert.adapters.mujoco.mjcf import LOAD_PATHS, WELDS, engine_frames, mjcf
 from dalembert.adapters.mujoco.readback import read_back
-from dalembert.adapters.mujoco.springs import check_springs, other_passive, read_springs
+from dalembert.adapters.mujoco.springs import check_springs
 from dalembert.adapters.mujoco.stepping import step_loop, step_rollout
 from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
 from dalembert.settings import steps_per_interval
@@ -31,18 +32,6 @@ DISTANCE_REASON = ("the tendon equality holds the closure and the motion (7e-7 m
 # Compiled mass properties must reproduce the scene's to this relative accuracy:
 # MuJoCo diagonalizes the full inertia (an eigen-solve), which costs a few ulps.
 MASS_PROPERTY_REL_TOL = 1e-10
-# How each integrator treats a spring's tendon force (measured, one step of a damper alone: Euler's velocity
-# falls by h c / m, implicit's and implicitfast's by the factor 1 / (1 + h c / m); the eulerdamp flag changes
-# neither, it covers joint damping only).
-SPRING_INTEGRATION = {
-    "euler": "stiffness and damping explicit (semi-implicit Euler); MuJoCo's eulerdamp covers joint damping only",
-    "rk4": "stiffness and damping explicit, in every RK4 stage",
-    "implicit": "stiffness explicit; tendon damping implicit in velocity (backward Euler: -h c J^T J in the matrix)",
-    "implicitfast": "stiffness explicit; tendon damping implicit in velocity (backward Euler: -h c J^T J in the matrix)",
-    "discrete": "stiffness explicit; tendon damping implicit in velocity (MuJoCo's discrete integrator)",
-}
-
-
 class MujocoAdapter(Adapter):
     """MuJoCo (``mujoco`` Python bindings). Options: ``loads`` = ``actuator`` | ``xfrc_applied``;
     ``welds`` = ``tree`` | ``equality``."""
@@ -162,100 +151,5 @@ class MujocoAdapter(Adapter):
 
     # ------------------------------------------------------------- audit
     def audit(self, prepared, outcome):
-        import mujoco
+        return audit(prepared, outcome)
 
-        model = prepared["model"]
-        disabled = [name[len("mjDSBL_"):].lower() for name in dir(mujoco.mjtDisableBit) if name.startswith("mjDSBL_")
-                    and model.opt.disableflags & int(getattr(mujoco.mjtDisableBit, name))]
-        enabled = [name[len("mjENBL_"):].lower() for name in dir(mujoco.mjtEnableBit) if name.startswith("mjENBL_")
-                   and model.opt.enableflags & int(getattr(mujoco.mjtEnableBit, name))]
-        return {
-            "gravity": tuple(float(g) for g in model.opt.gravity),
-            "disabled": sorted(disabled),
-            "enabled": sorted(enabled),
-            "integrator": mujoco.mjtIntegrator(model.opt.integrator).name,
-            "timestep": float(model.opt.timestep),
-            "mujoco_version": mujoco.__version__,
-            "load_path": prepared["load_path"],
-            "actuators": [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i) for i in range(model.nu)],
-            "max_armature": float(np.abs(model.dof_armature).max(initial=0.0)),
-            "max_damping": float(np.abs(model.dof_damping).max(initial=0.0)),
-            "ngeom": int(model.ngeom),
-            "joints": self._joint_audit(prepared),
-            **self._loop_audit(prepared),
-            **self._spring_audit(prepared),
-            **self._read_audit(outcome),
-        }
-
-    @staticmethod
-    def _joint_audit(prepared):
-        """Every scene joint MuJoCo builds as a joint, as the compiled model holds it: dict joint (child) name ->
-        ``type`` (MuJoCo's: free, ball, slide, hinge), ``axis_W`` (hinge and slide: the unit axis in world axes at
-        the initial state, MuJoCo's ``xaxis``; else None) and the joint's own limit, stiffness, damping,
-        armature and friction loss (``limited`` a bool, the others the largest magnitude over its dofs)."""
-        import mujoco
-
-        model, scene = prepared["model"], prepared["scene"]
-        d = mujoco.MjData(model)
-        d.qpos[:] = prepared["qpos0"]
-        mujoco.mj_kinematics(model, d)
-        out = {}
-        for j in scene.joints:
-            jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j.child)
-            if jid < 0:  # a weld built as nesting: no joint
-                continue
-            kind = mujoco.mjtJoint(model.jnt_type[jid])
-            dofs = np.flatnonzero(model.dof_jntid == jid)
-            axial = kind in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
-            out[j.child] = {
-                "type": kind.name[len("mjJNT_"):].lower(),
-                "axis_W": [float(v) for v in d.xaxis[jid]] if axial else None,
-                "limited": bool(model.jnt_limited[jid]),
-                "stiffness": float(abs(model.jnt_stiffness[jid])),
-                "damping": float(np.abs(model.dof_damping[dofs]).max()),
-                "armature": float(np.abs(model.dof_armature[dofs]).max()),
-                "frictionloss": float(np.abs(model.dof_frictionloss[dofs]).max()),
-            }
-        return out
-
-    @staticmethod
-    def _loop_audit(prepared):
-        """The loops' constraints and their softness, read back from the compiled model (none: empty)."""
-        import mujoco
-
-        model, scene = prepared["model"], prepared["scene"]
-        if not scene.loops:
-            return {}
-        (tc, zeta), _ = loop_softness(prepared["settings"])
-        refsafe = not model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
-        kinds = [mujoco.mjtEq(t).name[len("mjEQ_"):].lower() for t in model.eq_type]
-        return {
-            "loop_constraints": {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, i): kinds[i]
-                                 for i in range(model.neq)},
-            "loop_solref": [float(v) for v in model.eq_solref[0]],
-            "loop_solimp": [float(v) for v in model.eq_solimp[0]],
-            "loop_softness": (f"MuJoCo's soft equality constraints: reference acceleration -b v - k r with time "
-                              f"constant {tc:g} s ({tc / prepared['settings'].dt:g} steps; refsafe {'on' if refsafe else 'off'}) "
-                              f"and damping ratio {zeta:g}; impedance {model.eq_solimp[0][0]:g} (MuJoCo's largest), so the "
-                              "solver's regularization leaves each constraint force ~1e-4 relative short, made up by the "
-                              "residual's spring: the closure is not exact, its residual is the run's loop_residual"),
-        }
-
-    @staticmethod
-    def _spring_audit(prepared):
-        """The springs as the compiled model holds them (``springs.read_springs``: stiffness, damping, rest
-        length, the bodies and points of the tendon's sites), every other passive parameter (all zero), and
-        how the integrator treats them (none: empty)."""
-        model, scene = prepared["model"], prepared["scene"]
-        if not scene.springs:
-            return {}
-        springs = [{k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in s.items()}
-                   for s in read_springs(model, scene, prepared["frames"])]
-        return {"springs": springs, "passive_not_springs": other_passive(model, scene),
-                "spring_integration": SPRING_INTEGRATION.get(prepared["settings"].integrator, "")}
-
-    @staticmethod
-    def _read_audit(outcome):
-        """The figures the read-back collects on its way (contacts, constraint rows, passive forces)."""
-        outcome.trajectory  # reads back, once, if nothing has yet
-        return outcome.info["audit"]
