@@ -25,7 +25,9 @@ The contract — every adapter class:
    settings)`` returns the reason a valid request cannot be represented, or None;
    ``describe(scene, settings)`` returns the model it would build, as text
    (``""``: none);
-6. ``prepare(scene, times, settings)`` builds the engine model (not timed);
+6. ``prepare(scene, times, settings)`` builds the engine model (not timed) and
+   returns it as a ``Prepared`` (a frozen dataclass: the engine's subclass
+   documents each field);
 7. ``run(prepared)`` simulates from the initial state and samples at exactly
    ``times``, returning an ``Outcome``: the wall time of the stepping alone,
    steps and right-hand-side evaluations, and a ``read_back`` that turns the
@@ -51,9 +53,9 @@ one module or package per engine: ``reference``, ``mujoco``, ``pinocchio``,
 ``exudyn``.
 """
 
-from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome
+from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
 from dalembert.adapters.contract import check_adapter
 from dalembert.adapters.registry import BUILTIN, adapter_names, adapter_path, get_adapter, register_adapter
 
-__all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome", "BUILTIN", "adapter_names", "adapter_path", "get_adapter",
+__all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome", "Prepared", "BUILTIN", "adapter_names", "adapter_path", "get_adapter",
            "register_adapter", "check_adapter"]

@@ -28,10 +28,12 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable
 
+import numpy as np
+
 from dalembert.registry import suggest
 from dalembert.scene import SPRING_EFFECT
 
-__all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome"]
+__all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome", "Prepared"]
 
 
 @dataclass(frozen=True)
@@ -97,6 +99,33 @@ class Option:
                 or number != number):
             return f"options.{name}: {number!r} is out of range — give {self.allowed()}"
         return None
+
+
+@dataclass(frozen=True, eq=False)
+class Prepared:
+    """What ``Adapter.prepare`` returns and ``run`` and ``audit`` take: one scene's engine model, built for one set
+    of sample times and settings. Each engine extends it with the fields its runs need (``MujocoPrepared``,
+    ``PinocchioPrepared``, ...), each documented there.
+
+    Attributes
+    ----------
+    scene : dalembert.scene.Scene — what was built
+    times : ndarray (n,) — the sample times, s
+    settings : dalembert.settings.Settings — the run's settings (integrator, dt or tolerances, options)
+
+    A field is also read by its name, ``prepared["times"]``, as the stepping modules built on the dicts this class
+    replaced do (read-only: the dataclass is frozen).
+    """
+
+    scene: object
+    times: np.ndarray
+    settings: object
+
+    def __getitem__(self, name):
+        try:
+            return getattr(self, name)
+        except AttributeError:
+            raise KeyError(f"{type(self).__name__} has no field {name!r}") from None
 
 
 @dataclass(frozen=True, eq=False)
@@ -188,11 +217,41 @@ class Adapter:
         return ""
 
     def prepare(self, scene, times, settings):
+        """Build the engine's model of ``scene`` for sampling at ``times`` with ``settings`` (already passed by
+        ``check`` and ``unsupported``); not timed: everything that is not stepping belongs here.
+
+        Parameters
+        ----------
+        scene : dalembert.scene.Scene
+        times : array_like (n,) — the sample times, s, increasing; the first is the initial state's
+        settings : dalembert.settings.Settings
+
+        Returns
+        -------
+        Prepared — the engine's subclass, with the built model and the initial state; ``run`` may be called on
+        it any number of times
+        """
         raise NotImplementedError
 
     def run(self, prepared):
+        """Simulate ``prepared`` from its initial state, sampling at exactly ``prepared.times``.
+
+        Parameters
+        ----------
+        prepared : Prepared — from ``prepare``; a run leaves it as it found it, so repeated runs give identical
+            results
+
+        Returns
+        -------
+        Outcome — the wall time of the stepping alone (s), steps and right-hand-side evaluations, and the
+        read-back to a ``Trajectory`` in body terms (run once, on first use). A run that diverges returns NaN
+        from the point of divergence on; one the engine stops raises RuntimeError saying where
+        """
         raise NotImplementedError
 
     def audit(self, prepared, outcome):
+        """What the engine actually simulated, read back from the engine (not from the scene): a dict with at
+        least ``gravity`` (m/s^2, world axes) and what else the engine reports (loads, joints, constraint rows,
+        contacts, passive forces, the integrator by the engine's name). ``outcome``: a ``run`` of ``prepared``."""
         return {}
 

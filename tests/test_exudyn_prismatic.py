@@ -195,18 +195,18 @@ def test_the_joint_readout_is_exudyns_and_catches_a_wrong_joint(joints):
     a generic joint whose rows leave a rotation free instead, are each reported."""
     scene, _ = inclined_slider()
     built = build(scene, Settings("generalized-alpha", dt=SLIDER_DT, options={"joints": joints}))
-    mbs = built["mbs"]
-    assert built["joint_readout"]["b"]["mismatches"] == []
+    mbs = built.mbs
+    assert built.joint_readout["b"]["mismatches"] == []
     if joints == "minimal":
-        T = np.asarray(mbs.GetObject(built["tree"])["jointTransformations"][0])
-        mbs.SetObjectParameter(built["tree"], "jointTransformations",
+        T = np.asarray(mbs.GetObject(built.tree)["jointTransformations"][0])
+        mbs.SetObjectParameter(built.tree, "jointTransformations",
                                exudyn.Matrix3DList([spatial.so3_exp(np.array([0.0, 0.1, 0.0])) @ T]))
         assert read_joints(mbs, scene, built)["b"]["mismatches"][0].startswith("axis: engine")
-        mbs.SetObjectParameter(built["tree"], "jointTypes", [exudyn.JointType.RevoluteZ])
+        mbs.SetObjectParameter(built.tree, "jointTypes", [exudyn.JointType.RevoluteZ])
         assert read_joints(mbs, scene, built)["b"]["mismatches"] == [
             "kind: engine 'revolute' (RevoluteZ), scene 'prismatic'"]
     else:
-        mbs.SetObjectParameter(built["joint_objects"]["b"], "constrainedAxes", [1, 1, 1, 1, 1, 0])
+        mbs.SetObjectParameter(built.joint_objects["b"], "constrainedAxes", [1, 1, 1, 1, 1, 0])
         assert read_joints(mbs, scene, built)["b"]["mismatches"] == [
             "kind: engine 'revolute' (constrainedAxes [1, 1, 1, 1, 1, 0]), scene 'prismatic'"]
 

@@ -195,11 +195,11 @@ def test_the_audit_reads_what_exudyn_holds_and_catches_what_the_scene_lacks(join
     or a load switched on are each reported."""
     scene = hinged_pair()
     built = build(scene, Settings("generalized-alpha", dt=1e-3, options={"joints": joints, "node": "ep"}))
-    mbs = built["mbs"]
-    assert all(s["mismatches"] == [] for s in built["spring_readout"].values())
-    rigid = sum(owner != "world" for owner in built["owners"].values())
+    mbs = built.mbs
+    assert all(s["mismatches"] == [] for s in built.spring_readout.values())
+    rigid = sum(owner != "world" for owner in built.owners.values())
     assert unexpected_passive(passive_effects(mbs), scene, rigid) == []
-    mbs.SetObjectParameter(built["springs"]["anchor"]["object"], "stiffness", 41.0)
+    mbs.SetObjectParameter(built.springs["anchor"]["object"], "stiffness", 41.0)
     mismatches = read_springs(mbs, scene, built)["anchor"]["mismatches"]
     assert mismatches[0] == "stiffness: engine 41.0, scene 40.0"
     assert any(m.startswith("initial_tension: engine") for m in mismatches)  # Exudyn's own force, read back
@@ -211,7 +211,7 @@ def test_the_audit_reads_what_exudyn_holds_and_catches_what_the_scene_lacks(join
         mbs.SetObjectParameter(tree, "jointDControlVector", [0.0, 0.3])
         marker = mbs.AddMarker(MarkerKinematicTreeRigid(objectNumber=tree, linkNumber=0))
     else:
-        marker = mbs.AddMarker(MarkerBodyRigid(bodyNumber=next(iter(built["owners"]))))
+        marker = mbs.AddMarker(MarkerBodyRigid(bodyNumber=next(iter(built.owners))))
     mbs.AddLoad(LoadForceVector(markerNumber=marker, loadVector=[1.0, 0.0, 0.0]))
     found = unexpected_passive(passive_effects(mbs), scene, rigid)
     assert "1 LoadForceVector(s) for 0" in found

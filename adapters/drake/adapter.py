@@ -25,9 +25,11 @@ limits, no damping. The audit reads each back from the finalized plant (type, ax
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
+from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared
 from dalembert.adapters.drake.audit import audit
 from dalembert.adapters.drake.loops import CONTINUOUS_REASON, LOOP_KINDS
 from dalembert.adapters.drake.model import drake_version
@@ -35,7 +37,7 @@ from dalembert.adapters.drake.springs import refusal as spring_refusal
 from dalembert.adapters.drake.stepping import SCHEMES, simulate
 from dalembert.scene import EFFECTS, SPRING_EFFECTS
 
-__all__ = ["DrakeAdapter"]
+__all__ = ["DrakeAdapter", "DrakePrepared"]
 
 FIXED = {
     "explicit-euler": "explicit (forward) Euler, first order",
@@ -63,6 +65,24 @@ def _integrators():
                 for k in ADAPTIVE})
     out["discrete"] = IntegratorSpec(True, (), "the plant in discrete mode (time_step = dt; SAP, semi-implicit)")
     return out
+
+
+@dataclass(frozen=True, eq=False)
+class DrakePrepared(Prepared):
+    """Drake's prepared run (``Prepared``): the plant and its diagram, and the initial state.
+
+    Attributes
+    ----------
+    model : DrakeModel — the plant (continuous, or discrete with ``time_step = dt``), its diagram and loads
+    q0 : ndarray (nq,) — the initial positions, Drake's coordinates (a free body's: quaternion w x y z, position)
+    v0 : ndarray (nv,) — the initial velocities (a free body's: w_WB_W, v_WB_W)
+    scheme : str or None — Drake's integrator scheme (``stepping.SCHEMES``); None: the plant's discrete update
+    """
+
+    model: object
+    q0: np.ndarray
+    v0: np.ndarray
+    scheme: str | None
 
 
 class DrakeAdapter(Adapter):
@@ -101,8 +121,7 @@ class DrakeAdapter(Adapter):
         model = DrakeModel(scene, settings.dt if discrete else 0.0)
         q0, v0 = model.initial_state()
         scheme = None if discrete else SCHEMES[settings.integrator.removesuffix(ADAPTIVE_SUFFIX)]
-        return dict(scene=scene, times=np.asarray(times, dtype=float), settings=settings, model=model, q0=q0, v0=v0,
-                    scheme=scheme)
+        return DrakePrepared(scene, np.asarray(times, dtype=float), settings, model, q0, v0, scheme)
 
     # ------------------------------------------------------------- run
     def run(self, prepared):
@@ -110,7 +129,7 @@ class DrakeAdapter(Adapter):
 
         p = prepared
         X, wall, n_steps, n_rhs, message, recharts = simulate(p)
-        loads = p["model"].loads
+        loads = p.model.loads
         info = {"message": message, "load_evaluations": loads.evaluations if loads is not None else 0,
                 "ball_recharts": recharts}
         return Outcome(lambda: read_back(p, X), wall, n_steps, n_rhs, info)

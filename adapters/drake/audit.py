@@ -13,28 +13,28 @@ def audit(prepared, outcome):
     """What Drake simulated, read back from the plant (``DrakeModel.audit``): mode and integrator, loads and
     their path, ball joints' charts, the loops and springs as the plant holds them."""
     p = prepared
-    s = p["settings"]
-    loads = p["model"].loads
-    follower = any(ld.frame == "body" for ld in p["scene"].loads)
+    s = p.settings
+    loads = p.model.loads
+    follower = any(ld.frame == "body" for ld in p.scene.loads)
     return {
-        **p["model"].audit(),
-        "mode": "discrete" if p["scheme"] is None else "continuous",
-        "integrator": p["scheme"] or "discrete update (MultibodyPlant)",
+        **p.model.audit(),
+        "mode": "discrete" if p.scheme is None else "continuous",
+        "integrator": p.scheme or "discrete update (MultibodyPlant)",
         "fixed_step": s.dt is not None,
         "target_accuracy": s.rtol, "atol_used": False,
-        "loads": ([f"{ld.effect} on {ld.body}" for ld in p["scene"].loads]),
+        "loads": ([f"{ld.effect} on {ld.body}" for ld in p.scene.loads]),
         "load_path": ("" if loads is None else
                       "SceneLoads system -> applied_spatial_force; follower forces turned into world axes from "
                       "the body_poses port at every evaluation of the dynamics" if follower else
                       "SceneLoads system -> applied_spatial_force (world-frame loads)"),
         "load_evaluations": outcome.info.get("load_evaluations", 0),
         "stopped": outcome.info.get("message", ""),
-        "ball_joint_charts": ("" if not any(j.kind == "ball" for j in p["scene"].joints) else
+        "ball_joint_charts": ("" if not any(j.kind == "ball" for j in p.scene.joints) else
                               f"BallRpyJoint frames re-set {outcome.info.get('ball_recharts', 0)} times (rpy = 0, "
                               f"x along w; at t = 0 and when |pitch| > {RECHART_PITCH} rad) to stay clear of "
                               "pitch = +-pi/2 (dalembert.adapters.drake.charts)"),
-        **(_loop_audit(p["model"]) if p["model"].loops else {}),
-        **_spring_audit(p["model"]),
+        **(_loop_audit(p.model) if p.model.loops else {}),
+        **_spring_audit(p.model),
         "drake_version": drake_version(),
     }
 

@@ -24,17 +24,19 @@ reached.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
+
 import numpy as np
 
-from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome
+from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
 from dalembert.adapters.exudyn import sampling
 from dalembert.adapters.exudyn.loops import loop_axes
-from dalembert.adapters.exudyn.model import JOINTS, NODES, TREE_JOINTS, build, rigid_bodies
+from dalembert.adapters.exudyn.model import JOINTS, ExudynSystem, NODES, TREE_JOINTS, build, rigid_bodies
 from dalembert.adapters.exudyn.audit import audit
 from dalembert.adapters.exudyn.readback import STALE_ACCELERATIONS, link_accelerations, read_back
 from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS, WORLD
 
-__all__ = ["ExudynAdapter"]
+__all__ = ["ExudynAdapter", "ExudynPrepared", "SamplingState", "Solved"]
 
 IMPLICIT = {"generalized-alpha": "GeneralizedAlpha", "trapezoidal-index2": "TrapezoidalIndex2"}
 EXPLICIT = {"explicit-euler": "ExplicitEuler", "explicit-midpoint": "ExplicitMidpoint", "rk33": "RK33",
@@ -47,6 +49,65 @@ OPTIONS = ("node", "joints", "spectral_radius", "newton_rtol", "newton_atol")
 # error of 9.4e-3 rad instead of 2.6e-6 on the intermediate-axis top at dt = 1e-4).
 NEWTON_RTOL = 1e-12
 NEWTON_ATOL = 1e-14
+@dataclass
+class SamplingState:
+    """How a prepared system's solves are sampled: the one thing its runs learn and keep.
+
+    Attributes
+    ----------
+    late : str or None — why Exudyn's stored sensors missed a sample of one of its solves (every later solve
+        then samples from Python, ``sampling.solve(stored=False)``); None while they have missed none
+    """
+
+    late: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class ExudynPrepared(Prepared):
+    """Exudyn's prepared run (``Prepared``): the system, built and assembled once (Exudyn's solvers start every
+    solve from its initial configuration, so each solve of it repeats the first bit for bit: measured on every
+    run of the default matrix Exudyn supports, three solves of one system against one of a fresh system each).
+
+    Attributes
+    ----------
+    system : ExudynSystem — the system (``model.build``), what the read-back and the audit read
+    sampling : SamplingState — whether its solves sample through Exudyn's stored sensors or from Python
+    """
+
+    system: ExudynSystem
+    sampling: SamplingState
+
+
+@dataclass(frozen=True)
+class Solved:
+    """One solve of a prepared system (``sampling.solve``'s result).
+
+    Attributes
+    ----------
+    values : dict (sensor group, quantity) -> ndarray (n, width) or list of rows — the samples
+    read : int — samples read
+    late : str or None — why Exudyn's stored sensors missed a sample, or None
+    it : Exudyn's solver iteration record, or None
+    error : Exception or None — what Exudyn raised
+    wall : float — the solve's wall time, s
+    steps : int — steps taken
+    stalled : str or None — why the guard or the Python sampler stopped the solve
+    sampling : str — how it was sampled, in words
+    reached : float — the time reached, s
+    """
+
+    values: dict
+    read: int
+    late: str | None
+    it: object
+    error: Exception | None
+    wall: float
+    steps: int
+    stalled: str | None
+    sampling: str
+    reached: float
+
+
 class ExudynAdapter(Adapter):
     """Exudyn (``exudyn``), its own solvers."""
 
@@ -126,15 +187,12 @@ class ExudynAdapter(Adapter):
 
     # ------------------------------------------------------------- build
     def describe(self, scene, settings):
-        return build(scene, settings, assemble=False)["summary"]
+        return build(scene, settings, assemble=False).summary
 
     def prepare(self, scene, times, settings):
-        # The system is built once: Exudyn's solvers start every solve from its initial configuration, so each solve
-        # of it repeats the first bit for bit (measured: every run of the default matrix Exudyn supports, three
-        # solves of one system against one of a fresh system each: samples, samples read, misses and errors equal).
-        # ``run`` adds ``late`` here once Exudyn's stored sensors have missed a sample of this run (then it samples
-        # from Python)
-        return dict(scene=scene, times=np.asarray(times, dtype=float), settings=settings, built=build(scene, settings))
+        # The system is built once (``ExudynPrepared``: its solves repeat bit for bit); ``run`` sets
+        # ``sampling.late`` once Exudyn's stored sensors have missed a sample of it (then it samples from Python)
+        return ExudynPrepared(scene, np.asarray(times, dtype=float), settings, build(scene, settings), SamplingState())
 
     # ------------------------------------------------------------- run
     def _settings(self, p):
@@ -170,50 +228,50 @@ class ExudynAdapter(Adapter):
         import exudyn as exu
 
         p = prepared
-        times, integrator = p["times"], p["settings"].integrator
+        times, integrator = p.times, p.settings.integrator
         console = exu.config.printToConsole
         exu.config.printToConsole = False  # silent unless the user asks (Exudyn prints solver banners)
         try:
             # once Exudyn's own sampling has missed a sample of this run, its next solves sample from Python
             # at once: the run repeats the same steps, and a solve thrown away was the timed repeats' overhead
-            late = p.get("late")
+            late = p.sampling.late
             solved = self._solve(p, stored=late is None)
-            if late is None and solved["late"] is not None:  # Exudyn's own sampling missed a sample
-                late = p["late"] = solved["late"]
+            if late is None and solved.late is not None:  # Exudyn's own sampling missed a sample
+                late = p.sampling.late = solved.late
                 solved = self._solve(p, stored=False)
             if late is not None:
-                solved["sampling"] = f"from Python ({late})"
+                solved = replace(solved, sampling=f"from Python ({late})")
         finally:
             exu.config.printToConsole = console
-        built, it, error, read = solved["built"], solved["it"], solved["error"], solved["read"]
+        built, it, error, read = p.system, solved.it, solved.error, solved.read
         # complete = every sample read (Exudyn's accumulated time may end a few ulps short of the horizon)
         if error is not None or read != len(times):
             missing = "" if read == len(times) else f" ({len(times) - read} sample(s) not reached)"
-            if solved["stalled"] is not None:  # our stop, not Exudyn's: its message would only echo ours
-                missing, error = f"{missing}: {solved['stalled']}", None
-            raise RuntimeError(f"Exudyn solver stopped at t = {solved['reached']:g} s of {times[-1]:g} s{missing}"
+            if solved.stalled is not None:  # our stop, not Exudyn's: its message would only echo ours
+                missing, error = f"{missing}: {solved.stalled}", None
+            raise RuntimeError(f"Exudyn solver stopped at t = {solved.reached:g} s of {times[-1]:g} s{missing}"
                                + (f": {error}" if error else ""))
 
         def read():
-            if built["links"] and integrator in EXPLICIT:
+            if built.links and integrator in EXPLICIT:
                 # explicit solvers keep no accelerations at sample 0, and some none of the sampled state
                 # at any sample (STALE_ACCELERATIONS): Exudyn evaluates them at the sampled states instead
-                link_accelerations(p, solved["values"], range(len(times)) if integrator in STALE_ACCELERATIONS else [0],
+                link_accelerations(p, solved.values, range(len(times)) if integrator in STALE_ACCELERATIONS else [0],
                                    lambda: self._settings(p))
-            return read_back(p, built, solved["values"])
+            return read_back(p, built, solved.values)
 
         rejected = int(it.rejectedAutomaticStepSizeSteps) if it is not None else 0
         info = {"newton_steps": int(it.newtonStepsCount) if it is not None else 0, "rejected_steps": rejected,
-                "sampling": solved["sampling"]}
-        n_rhs = (solved["steps"] + rejected) * STAGES.get(integrator, 1)
-        return Outcome(read, solved["wall"], solved["steps"], n_rhs, info)
+                "sampling": solved.sampling}
+        n_rhs = (solved.steps + rejected) * STAGES.get(integrator, 1)
+        return Outcome(read, solved.wall, solved.steps, n_rhs, info)
 
     def _solve(self, p, stored):
-        """One solve of the prepared system: ``sampling.solve`` on it, and the system (``built``)."""
-        st, built = p["settings"], p["built"]
-        return dict(sampling.solve(built["mbs"], built["sensors"], self._settings(p), p["times"],
-                                   None if st.integrator in ADAPTIVE else st.dt, stored), built=built)
+        """One solve of the prepared system: ``sampling.solve`` on it, as a ``Solved``."""
+        st, system = p.settings, p.system
+        return Solved(**sampling.solve(system.mbs, system.sensors, self._settings(p), p.times,
+                                       None if st.integrator in ADAPTIVE else st.dt, stored))
 
     # ------------------------------------------------------------- audit
     def audit(self, prepared, outcome):
-        return audit(prepared, outcome, {**IMPLICIT, **EXPLICIT}[prepared["settings"].integrator])
+        return audit(prepared, outcome, {**IMPLICIT, **EXPLICIT}[prepared.settings.integrator])

@@ -23,8 +23,8 @@ ROTVEC_LG_REACTION = (
 
 def constraint_rows(scene, built):
     """The constraint rows of the system ``built``: its redundant joints' constrained axes and its loops' rows."""
-    return (sum(sum(CONSTRAINED_AXES[scene.joint(c).kind]) for c in built["redundant_joints"])
-            + sum(sum(r.axes) for r in built["loop_rows"].values()))
+    return (sum(sum(CONSTRAINED_AXES[scene.joint(c).kind]) for c in built.redundant_joints)
+            + sum(sum(r.axes) for r in built.loop_rows.values()))
 
 
 def audit(prepared, outcome, solver):
@@ -33,15 +33,15 @@ def audit(prepared, outcome, solver):
     how reactions are obtained, the loops, the springs and every other passive element, the joints."""
     import exudyn
 
-    built = prepared["built"]
-    scene, st = prepared["scene"], prepared["settings"]
+    built = prepared.system
+    scene, st = prepared.scene, prepared.settings
     return {
         "gravity": tuple(scene.gravity) if any(scene.gravity) else (0.0, 0.0, 0.0),
         "gravity_loads": "mass-proportional (CreateRigidBody / KinematicTree)" if any(scene.gravity) else "none",
         "node": st.options.get("node", "rotvec-lg"), "joints": st.options.get("joints", "minimal"),
         "solver": solver,
         "constraints": constraint_rows(scene, built), "contacts": 0,
-        "model": built["summary"],
+        "model": built.summary,
         "newton_steps": outcome.info.get("newton_steps", 0),
         "rejected_steps": outcome.info.get("rejected_steps", 0),
         "exudyn_version": exudyn.__version__,
@@ -55,7 +55,7 @@ def audit(prepared, outcome, solver):
 
 def _loop_audit(scene, built):
     """What the run made of the scene's loop closures (``exudyn.loops``)."""
-    rows = {name: dict(constrained=sum(r.axes), dropped=list(r.dropped)) for name, r in built["loop_rows"].items()}
+    rows = {name: dict(constrained=sum(r.axes), dropped=list(r.dropped)) for name, r in built.loop_rows.items()}
     return {
         "closures": {lp.name: (f"{'ObjectConnectorDistance' if lp.kind == 'distance' else 'ObjectJointGeneric'} "
                                f"({lp.kind}), {rows[lp.name]['constrained']} row(s)"
@@ -75,10 +75,10 @@ def _loop_audit(scene, built):
 def _joint_audit(built):
     """The joints as the system that ran holds them (``joints.read_joints`` once it was assembled: joint
     type, axis, joint point, initial coordinate and rate read from Exudyn, each compared with the scene)."""
-    if not built["joint_readout"]:
+    if not built.joint_readout:
         return {}
     return {"joint_readout": {child: {k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in got.items()}
-                             for child, got in built["joint_readout"].items()}}
+                             for child, got in built.joint_readout.items()}}
 
 
 def _spring_audit(scene, built):
@@ -86,11 +86,11 @@ def _spring_audit(scene, built):
     parameters, ends, initial length and tension read from Exudyn, each compared with the scene) and every
     passive force element it carries (``springs.passive_effects``): the springs' connectors and nothing
     else."""
-    passive = passive_effects(built["mbs"])
+    passive = passive_effects(built.mbs)
     out = {"passive": passive}
     if scene.springs:
-        out["springs"] = built["spring_readout"]
-    rigid = sum(owner != WORLD for owner in built["owners"].values())
+        out["springs"] = built.spring_readout
+    rigid = sum(owner != WORLD for owner in built.owners.values())
     out["passive_extra"] = unexpected_passive(passive, scene, rigid)  # empty: no passive force but the scene's
     return out
 

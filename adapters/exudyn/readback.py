@@ -36,8 +36,8 @@ def link_accelerations(p, values, samples, settings):
     ``settings``: a callable returning the run's ``exudyn.SimulationSettings`` (the adapter's)."""
     import exudyn as exu
 
-    built = build(p["scene"], p["settings"])
-    mbs, current = built["mbs"], exu.ConfigurationType.Current
+    built = build(p.scene, p.settings)
+    mbs, current = built.mbs, exu.ConfigurationType.Current
     console = exu.config.printToConsole
     exu.config.printToConsole = False
     try:
@@ -52,8 +52,8 @@ def link_accelerations(p, values, samples, settings):
             mass = np.asarray(solver.GetSystemMassMatrix(), dtype=float)[:n, :n]
             rhs = np.asarray(solver.GetSystemResidual(), dtype=float)[:n]
             mbs.systemData.SetODE2Coordinates_tt(list(np.linalg.solve(mass, rhs)), configuration=current)
-            for name in built["links"]:
-                values[(name, "a")][k] = np.array(mbs.GetSensorValues(built["sensors"][name]["a"]), dtype=float)
+            for name in built.links:
+                values[(name, "a")][k] = np.array(mbs.GetSensorValues(built.sensors[name]["a"]), dtype=float)
         solver.FinalizeSolver(mbs, settings())
     finally:
         exu.config.printToConsole = console
@@ -65,7 +65,7 @@ def read_back(p, built, values):
     ``reaction_force:<name>``."""
     from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
-    scene, times = p["scene"], p["times"]
+    scene, times = p.scene, p.times
     n = len(times)
 
     def series(body, key, width):  # (n, width): stored rows, or the samples read from Python
@@ -75,7 +75,7 @@ def read_back(p, built, values):
     bodies, R_WB = {}, {}
     for b in scene.bodies:
         R_WE = series(b.name, "R", 9).reshape(n, 3, 3)  # row-major in sensor output
-        R_EB = built["X_EB"].get(b.name, (None, np.eye(3)))[1]  # a rigid body's E is B
+        R_EB = built.X_EB.get(b.name, (None, np.eye(3)))[1]  # a rigid body's E is B
         R_WB[b.name] = R_WE @ R_EB
         finite = np.all(np.isfinite(R_WB[b.name]), axis=(1, 2))
         quat = np.full((n, 4), np.nan)
@@ -84,17 +84,17 @@ def read_back(p, built, values):
                                     series(b.name, "w", 3), rotation=R_WB[b.name])
     joints, reactions = {}, {}
     loop_reactions = loop_forces(scene, built, bodies, R_WB, series)
-    if built["links"]:  # minimal coordinates: the tree's own; reactions by Newton's law per link
-        q, v = series("__q", "q", len(built["links"])), series("__v", "v", len(built["links"]))
-        for i, name in enumerate(built["links"]):
+    if built.links:  # minimal coordinates: the tree's own; reactions by Newton's law per link
+        q, v = series("__q", "q", len(built.links)), series("__v", "v", len(built.links))
+        for i, name in enumerate(built.links):
             joints[name] = JointStates(q[:, i:i + 1], v[:, i:i + 1])
-        for name in reversed(built["links"]):  # children first
+        for name in reversed(built.links):  # children first
             body = scene.body(name)
             f = body.mass * (series(name, "a", 3) - np.asarray(scene.gravity))
             for ld in scene.loads:
                 if ld.body == name and ld.kind == "force":
                     f -= spatial.load_to_world(ld, R_WB[name])
-            for child in built["links"]:
+            for child in built.links:
                 if scene.joint(child).parent == name:
                     f += reactions[child]
             for lp in scene.loops:  # the loop forces on this link (equal and opposite on a and b)
@@ -105,7 +105,7 @@ def read_back(p, built, values):
                     f_a = series(f"__spring:{sp.name}", "f", 3)
                     f -= f_a if sp.body_a == name else -f_a
             reactions[name] = f
-    for child, R0 in built["redundant_joints"].items():  # redundant coordinates: from the bodies
+    for child, R0 in built.redundant_joints.items():  # redundant coordinates: from the bodies
         j = scene.joint(child)
         R_WP = np.eye(3) if j.parent == WORLD else R_WB[j.parent]
         zero = np.zeros((n, 3))
@@ -140,6 +140,6 @@ def loop_forces(scene, built, bodies, R_WB, series):
             d_ba = point(lp.body_a, lp.point_a) - point(lp.body_b, lp.point_b)
             out[lp.name] = f * d_ba / np.linalg.norm(d_ba, axis=-1, keepdims=True)
         else:
-            R_WJa = (np.eye(3) if lp.body_a == WORLD else R_WB[lp.body_a]) @ built["loops"][lp.name]
+            R_WJa = (np.eye(3) if lp.body_a == WORLD else R_WB[lp.body_a]) @ built.loops[lp.name]
             out[lp.name] = -np.einsum("...ij,...j->...i", R_WJa, f)
     return out

@@ -9,10 +9,12 @@ compiled options, joints, loop constraints and springs back from the model.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from dalembert import spatial
-from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome
+from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
 from dalembert.adapters.mujoco.audit import audit
 from dalembert.adapters.mujoco.mjcf import LOAD_PATHS, WELDS, engine_frames, mjcf
 from dalembert.adapters.mujoco.readback import read_back
@@ -21,7 +23,7 @@ from dalembert.adapters.mujoco.stepping import step_loop, step_rollout
 from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
 from dalembert.settings import steps_per_interval
 
-__all__ = ["MujocoAdapter"]
+__all__ = ["MujocoAdapter", "MujocoPrepared"]
 
 OPTIONS = ("loads", "welds")
 # Why loop:distance is not declared (measured: a crank-coupler tree closed by a distance loop to the world,
@@ -32,6 +34,39 @@ DISTANCE_REASON = ("the tendon equality holds the closure and the motion (7e-7 m
 # Compiled mass properties must reproduce the scene's to this relative accuracy:
 # MuJoCo diagonalizes the full inertia (an eigen-solve), which costs a few ulps.
 MASS_PROPERTY_REL_TOL = 1e-10
+@dataclass(frozen=True, eq=False)
+class MujocoPrepared(Prepared):
+    """MuJoCo's prepared run (``Prepared``): the compiled model and its initial state.
+
+    Attributes
+    ----------
+    model : mujoco.MjModel — compiled from ``mjcf``, its mass properties and springs checked against the scene
+    data : mujoco.MjData — the state a run steps (set to the initial state at each run's start)
+    scratch : mujoco.MjData — the read-back's, for the derived quantities of each sampled state
+    qpos0 : ndarray (nq,) — the initial configuration, MuJoCo's coordinates (a free joint's quaternion w first)
+    qvel0 : ndarray (nv,) — the initial velocity (a free joint's: linear in world axes, angular in body axes)
+    steps : ndarray (n - 1,) of int — steps per sample interval (``settings.steps_per_interval``)
+    frames : dict body name -> (p_EB (3,), R_EB (3, 3)) — the scene's body frame B in MuJoCo's body frame E
+        (``mjcf.engine_frames``), m
+    ids : dict body name -> int — MuJoCo's body ids
+    mjcf : str — the generated MJCF the model was compiled from
+    load_path : str — option ``loads``: ``actuator`` or ``xfrc_applied``
+    welds : str — option ``welds``: ``tree`` or ``equality``
+    """
+
+    model: object
+    data: object
+    scratch: object
+    qpos0: np.ndarray
+    qvel0: np.ndarray
+    steps: np.ndarray
+    frames: dict
+    ids: dict
+    mjcf: str
+    load_path: str
+    welds: str
+
+
 class MujocoAdapter(Adapter):
     """MuJoCo (``mujoco`` Python bindings). Options: ``loads`` = ``actuator`` | ``xfrc_applied``;
     ``welds`` = ``tree`` | ``equality``."""
@@ -80,7 +115,7 @@ class MujocoAdapter(Adapter):
 
         text = mjcf(scene, settings)
         model = mujoco.MjModel.from_xml_string(text)
-        welds = settings.options.get("welds", "tree")
+        welds = self.option(settings, "welds")
         X_EB = engine_frames(scene, welds)
         ids = {b.name: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b.name) for b in scene.bodies}
         self._check_mass_properties(model, scene, X_EB, ids)
@@ -101,9 +136,9 @@ class MujocoAdapter(Adapter):
             qpos0[a:a + len(j.q0)] = j.q0
             qvel0[v:v + len(j.v0)] = j.v0
         steps = steps_per_interval(np.asarray(times, float), settings.dt)
-        return dict(scene=scene, times=np.asarray(times, float), settings=settings, model=model, data=data,
-                    scratch=mujoco.MjData(model), qpos0=qpos0, qvel0=qvel0, steps=steps, frames=X_EB, ids=ids,
-                    mjcf=text, load_path=settings.options.get("loads", "actuator"), welds=welds)
+        return MujocoPrepared(scene, np.asarray(times, float), settings, model=model, data=data,
+                              scratch=mujoco.MjData(model), qpos0=qpos0, qvel0=qvel0, steps=steps, frames=X_EB, ids=ids,
+                              mjcf=text, load_path=settings.options.get("loads", LOAD_PATHS[0]), welds=welds)
 
     @staticmethod
     def _check_mass_properties(model, scene, X_EB, ids):
@@ -130,7 +165,7 @@ class MujocoAdapter(Adapter):
         previous = mujoco.get_mju_user_warning()
         mujoco.set_mju_user_warning(messages.append)  # no MUJOCO_LOG.TXT, no printing
         try:
-            if p["load_path"] == "actuator":
+            if p.load_path == "actuator":
                 Q, V, wall, diverged_at = step_rollout(p)
                 if diverged_at is not None:  # locate the first bad sample
                     messages.clear()
@@ -139,8 +174,8 @@ class MujocoAdapter(Adapter):
                 Q, V, wall, diverged_at = step_loop(p)
         finally:
             mujoco.set_mju_user_warning(previous)
-        n_steps = int(p["steps"][:diverged_at].sum()) if diverged_at else int(p["steps"].sum())
-        stages = 4 if p["settings"].integrator == "rk4" else 1
+        n_steps = int(p.steps[:diverged_at].sum()) if diverged_at else int(p.steps.sum())
+        stages = 4 if p.settings.integrator == "rk4" else 1
         info = {"message": f"MuJoCo: {messages[0]}" if messages else "", "warnings": messages[:5]}
 
         def read():

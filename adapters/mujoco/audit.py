@@ -27,7 +27,7 @@ def audit(prepared, outcome):
     the read-back collects (contacts, constraint rows, passive forces)."""
     import mujoco
 
-    model = prepared["model"]
+    model = prepared.model
     disabled = [name[len("mjDSBL_"):].lower() for name in dir(mujoco.mjtDisableBit) if name.startswith("mjDSBL_")
                 and model.opt.disableflags & int(getattr(mujoco.mjtDisableBit, name))]
     enabled = [name[len("mjENBL_"):].lower() for name in dir(mujoco.mjtEnableBit) if name.startswith("mjENBL_")
@@ -39,7 +39,7 @@ def audit(prepared, outcome):
         "integrator": mujoco.mjtIntegrator(model.opt.integrator).name,
         "timestep": float(model.opt.timestep),
         "mujoco_version": mujoco.__version__,
-        "load_path": prepared["load_path"],
+        "load_path": prepared.load_path,
         "actuators": [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i) for i in range(model.nu)],
         "max_armature": float(np.abs(model.dof_armature).max(initial=0.0)),
         "max_damping": float(np.abs(model.dof_damping).max(initial=0.0)),
@@ -58,9 +58,9 @@ def _joint_audit(prepared):
     armature and friction loss (``limited`` a bool, the others the largest magnitude over its dofs)."""
     import mujoco
 
-    model, scene = prepared["model"], prepared["scene"]
+    model, scene = prepared.model, prepared.scene
     d = mujoco.MjData(model)
-    d.qpos[:] = prepared["qpos0"]
+    d.qpos[:] = prepared.qpos0
     mujoco.mj_kinematics(model, d)
     out = {}
     for j in scene.joints:
@@ -86,10 +86,10 @@ def _loop_audit(prepared):
     """The loops' constraints and their softness, read back from the compiled model (none: empty)."""
     import mujoco
 
-    model, scene = prepared["model"], prepared["scene"]
+    model, scene = prepared.model, prepared.scene
     if not scene.loops:
         return {}
-    (tc, zeta), _ = loop_softness(prepared["settings"])
+    (tc, zeta), _ = loop_softness(prepared.settings)
     refsafe = not model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
     kinds = [mujoco.mjtEq(t).name[len("mjEQ_"):].lower() for t in model.eq_type]
     return {
@@ -109,13 +109,13 @@ def _spring_audit(prepared):
     """The springs as the compiled model holds them (``springs.read_springs``: stiffness, damping, rest
     length, the bodies and points of the tendon's sites), every other passive parameter (all zero), and
     how the integrator treats them (none: empty)."""
-    model, scene = prepared["model"], prepared["scene"]
+    model, scene = prepared.model, prepared.scene
     if not scene.springs:
         return {}
     springs = [{k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in s.items()}
-               for s in read_springs(model, scene, prepared["frames"])]
+               for s in read_springs(model, scene, prepared.frames)]
     return {"springs": springs, "passive_not_springs": other_passive(model, scene),
-            "spring_integration": SPRING_INTEGRATION.get(prepared["settings"].integrator, "")}
+            "spring_integration": SPRING_INTEGRATION.get(prepared.settings.integrator, "")}
 
 
 def _read_audit(outcome):

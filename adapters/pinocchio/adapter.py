@@ -17,10 +17,11 @@ stiffness, damping and rest length from the dynamics the run used.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
-from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome
+from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
 from dalembert.adapters.pinocchio import loops
 from dalembert.adapters.pinocchio.audit import audit
 from dalembert.adapters.pinocchio.integrators import STAGES, adaptive, fixed_step
@@ -29,11 +30,34 @@ from dalembert.adapters.pinocchio.readback import REACTING, read_back
 from dalembert.scene import EFFECTS, SPRING_EFFECTS
 from dalembert.settings import steps_per_interval
 
-__all__ = ["PinocchioAdapter"]
+__all__ = ["PinocchioAdapter", "PinocchioPrepared"]
 
 # Fixed-step loops: compiled (stepper.cpp, the default) or the Python one
 # (the same integrators, kept as the readable specification and the fallback).
 LOOPS = ("native", "python")
+
+
+@dataclass(frozen=True, eq=False)
+class PinocchioPrepared(Prepared):
+    """Pinocchio's prepared run (``Prepared``): the model, its initial state and, for the fixed-step integrators,
+    the compiled loop.
+
+    Attributes
+    ----------
+    pm : PinocchioModel — the scene as a ``pin.Model`` with its loads, springs and constraints (``model``)
+    q0 : ndarray (nq,) — the initial configuration, Pinocchio's coordinates (quaternions ``(x, y, z, w)``)
+    v0 : ndarray (nv,) — the initial velocity, each joint's in its LOCAL frame
+    steps : ndarray (n - 1,) of int, or None — steps per sample interval (fixed-step integrators; None: adaptive)
+    native : native.NativeModel or None — the compiled loop (``stepper.cpp``), where it runs
+    native_error : str — why the compiled loop could not be loaded or built ("" where it was, or was not asked for)
+    """
+
+    pm: object
+    q0: np.ndarray
+    v0: np.ndarray
+    steps: np.ndarray | None
+    native: object = None
+    native_error: str = ""
 
 
 class PinocchioAdapter(Adapter):
@@ -63,7 +87,7 @@ class PinocchioAdapter(Adapter):
         if any(lp.kind == "distance" for lp in scene.loops):
             return loops.DISTANCE_REASON
         reason = super().unsupported(scene, settings)
-        if reason or settings.options.get("welds", "tree") != "constraint":
+        if reason or self.option(settings, "welds") != "constraint":
             return reason
         if scene.loads:
             return ("welds=constraint with loads: pin.constraintDynamics takes no external forces — "
@@ -84,33 +108,33 @@ class PinocchioAdapter(Adapter):
         return out
 
     def describe(self, scene, settings):
-        return PinocchioModel(scene, settings.options.get("welds", "tree")).summary + "\n"
+        return PinocchioModel(scene, self.option(settings, "welds")).summary + "\n"
 
     def prepare(self, scene, times, settings):
         from dalembert.adapters.pinocchio import native
 
-        pm = PinocchioModel(scene, settings.options.get("welds", "tree"))
+        pm = PinocchioModel(scene, self.option(settings, "welds"))
         q0, v0 = pm.initial_state()
         times = np.asarray(times, dtype=float)
         steps = steps_per_interval(times, settings.dt) if settings.dt else None
-        p = dict(scene=scene, pm=pm, q0=q0, v0=v0, times=times, settings=settings, steps=steps, native=None)
+        compiled, error = None, ""
         # the compiled loop is loaded (or built) here, with the model, never inside a timed run
-        if steps is not None and settings.options.get("loop", "native") == "native" and not pm.constrained:
+        if steps is not None and self.option(settings, "loop") == "native" and not pm.constrained:
             try:
-                p["native"] = native.NativeModel(pm)
+                compiled = native.NativeModel(pm)
             except RuntimeError as e:  # not built here: the Python loop runs, saying why
-                p["native_error"] = str(e)
-        return p
+                error = str(e)
+        return PinocchioPrepared(scene, times, settings, pm, q0, v0, steps, compiled, error)
 
     # ------------------------------------------------------------ stepping
     def run(self, prepared):
         p = prepared
-        method = p["settings"].integrator
+        method = p.settings.integrator
         info = {}
         start = time.perf_counter()
         if method in ("rk45", "dop853"):
-            s = p["settings"]
-            Q, V, n_steps, n_rhs = adaptive(p["pm"], method.upper(), p["q0"], p["v0"], p["times"], s.rtol, s.atol)
+            s = p.settings
+            Q, V, n_steps, n_rhs = adaptive(p.pm, method.upper(), p.q0, p.v0, p.times, s.rtol, s.atol)
             info["loop"] = "Python around scipy solve_ivp"
         else:
             Q, V, n_steps, n_rhs, info["loop"] = self._fixed_loop(p, method)
@@ -120,15 +144,15 @@ class PinocchioAdapter(Adapter):
     def _fixed_loop(self, p, method):
         """The compiled loop (``native``) unless ``options.loop`` is ``python`` or it cannot be
         built; the fifth item says which ran, and why not the compiled one."""
-        pm = p["pm"]
-        args = (pm, method, p["q0"], p["v0"], p["times"], p["steps"])
-        if p["settings"].options.get("loop", "native") == "python":
+        pm = p.pm
+        args = (pm, method, p.q0, p.v0, p.times, p.steps)
+        if self.option(p.settings, "loop") == "python":
             return (*fixed_step(*args), "Python (options.loop = python)")
         if pm.constrained:
             return (*fixed_step(*args), "Python (constraint dynamics: the compiled loop has aba only)")
-        if p["native"] is None:
-            return (*fixed_step(*args), f"Python (the compiled loop is unavailable: {p['native_error']})")
-        Q, V, n, error = p["native"].run(method, p["q0"], p["v0"], p["times"], p["steps"])
+        if p.native is None:
+            return (*fixed_step(*args), f"Python (the compiled loop is unavailable: {p.native_error})")
+        Q, V, n, error = p.native.run(method, p.q0, p.v0, p.times, p.steps)
         loop = "C++ (adapters/pinocchio/stepper.cpp)" + (f"; stopped: {error}" if error else "")
         return Q, V, n, n * STAGES[method], loop
 

@@ -16,19 +16,19 @@ def audit(prepared, outcome):
     springs) how they were closed and each spring identified from the run's dynamics."""
     import pinocchio
 
-    pm = prepared["pm"]
+    pm = prepared.pm
     model = pm.model
     return {
         "gravity": tuple(float(g) for g in model.gravity.linear),
         "joints": {name: model.joints[jid].shortname() for name, jid in pm.joint_ids.items()},
         # the unaligned revolute and prismatic joints' axes as the built model holds them (unit, joint frame)
         "joint_axes": {j.child: model.joints[pm.joint_ids[j.child]].extract().axis.tolist()
-                       for j in prepared["scene"].joints if j.kind in AXIS_KINDS},
-        "external_forces_per_evaluation": [f"{ld.effect} on {ld.body}" for ld in prepared["scene"].loads]
+                       for j in prepared.scene.joints if j.kind in AXIS_KINDS},
+        "external_forces_per_evaluation": [f"{ld.effect} on {ld.body}" for ld in prepared.scene.loads]
         + [f"spring_damper {el.name}: frames {model.frames[el.frame_a].name} -> {model.frames[el.frame_b].name}"
            for el in pm.springs],
         "nq": int(model.nq), "nv": int(model.nv),
-        "integrator": prepared["settings"].integrator,
+        "integrator": prepared.settings.integrator,
         "loop": outcome.info.get("loop", ""),
         "pinocchio_version": pinocchio.__version__,
         "contacts": 0,
@@ -47,9 +47,9 @@ def _spring_audit(prepared, outcome):
     one's (the joint torques ``constraintDynamics`` is given, with loops or welds as constraints)."""
     import pinocchio as pin
 
-    pm = prepared["pm"]
+    pm = prepared.pm
     model, data = pm.model, pm.data
-    native = prepared["native"] if outcome.info.get("loop", "").startswith("C++") else None
+    native = prepared.native if outcome.info.get("loop", "").startswith("C++") else None
     if native is not None:
         by = "the compiled right-hand side (stepper.cpp): M a"
 
@@ -64,7 +64,7 @@ def _spring_audit(prepared, outcome):
         def forces(q, v, elements):
             a = pin.aba(model, data, q, v, pm.tau, pm.external_forces(q, v, elements))
             return springs.mass_matrix(model, data, q) @ a
-    q0 = prepared["q0"]
+    q0 = prepared.q0
     return {"springs": {el.name: springs.identify(pm, el, forces, q0) for el in pm.springs},
             "springs_identified_from": by}
 

@@ -34,9 +34,9 @@ def read_back(p, Q, V):
 
     from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
-    pm, scene = p["pm"], p["scene"]
+    pm, scene = p.pm, p.scene
     model, data = pm.model, pm.data
-    n = len(p["times"])
+    n = len(p.times)
     bodies = {b.name: [np.full((n, 3), np.nan), None, np.full((n, 3), np.nan),
                        np.full((n, 3), np.nan)] for b in scene.bodies}
     R_WB = {b.name: np.full((n, 3, 3), np.nan) for b in scene.bodies}  # to quaternions once, below
@@ -106,4 +106,4 @@ def read_back(p, Q, V):
     traj_bodies = {name: BodyStates(*arrs) for name, arrs in bodies.items()}
     extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
     extras.update({f"reaction_force:{name}": f for name, f in loop_forces.items()})
-    return Trajectory(p["times"], traj_bodies, joints, extras)
+    return Trajectory(p.times, traj_bodies, joints, extras)
