@@ -221,23 +221,6 @@ def test_an_adaptive_solver_stuck_at_the_singularity_stops_with_the_time_reached
         ADAPTER.run(prepared)
 
 
-def test_no_files_written(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
-    for name in ("pivoted_rod", "particle_box"):
-        case = make_case(name, t_final=1.0)
-        for s in (Settings("rk44", dt=1e-2), Settings("generalized-alpha", dt=1e-2)):
-            ADAPTER.run(ADAPTER.prepare(case.scene, case.times, s))
-    assert list(tmp_path.iterdir()) == []
-
-
-def test_bad_options_fail_before_running():
-    top = make_case("free_top")
-    for options, words in (({"node": "quat"}, "options.node"), ({"spectral_radius": 2}, "spectral_radius"),
-                           ({"newton_rtol": 1e-9}, "only generalized-alpha")):
-        with pytest.raises(ValueError, match=words):
-            ADAPTER.check(top.scene, top.times, Settings("rk44", dt=1e-3, options=options))
-
-
 # Relative: the same state's reactions from Exudyn's model and from Kane's agree to roundoff
 # (measured at most 6e-16 with every explicit solver on the double pendulum).
 SAME_STATE_REACTION_TOL = 1e-12

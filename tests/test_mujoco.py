@@ -187,8 +187,6 @@ def test_dt_must_divide_the_sample_interval():
     case = make_case("free_top")
     with pytest.raises(ValueError, match="does not divide"):
         ADAPTER.check(case.scene, case.times, Settings("rk4", dt=3e-3))
-    with pytest.raises(ValueError, match="options.loads"):
-        ADAPTER.check(case.scene, case.times, Settings("rk4", dt=1e-3, options={"loads": "magic"}))
 
 
 def test_mjcf_is_plain_text_without_defaults():
