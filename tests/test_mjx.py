@@ -147,7 +147,7 @@ def test_the_default_matrix_runs_both_precisions():
 # ------------------------------------------------------------------ float32 (last: see the docstring)
 def test_float32_rod_and_its_precision():
     prepared, outcome = run(make_case("pivoted_rod"), Settings("rk4", dt=1e-3))
-    e = trajectory_errors(outcome.trajectory, make_case("pivoted_rod").exact(prepared["times"]))
+    e = trajectory_errors(outcome.trajectory, make_case("pivoted_rod").exact(prepared.times))
     assert ROD_ANGLE_TOL < e["joint"][0] < F32_ROD_ANGLE_TOL  # float32 shows, and stays bounded
     audit = ADAPTER.audit(prepared, outcome)
     assert audit["precision"] == "float32" and audit["dtype_qpos"] == "float32"
