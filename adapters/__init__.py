@@ -14,13 +14,20 @@ The contract — every adapter class:
    that needs another effect is not run: the harness stores it as
    ``unsupported`` with the reason — never a silent approximation;
 4. declares ``integrators``: name -> ``IntegratorSpec`` (fixed-step or
-   adaptive, and the engine options it accepts); ``variants(scene)`` lists the
+   adaptive, and the names of the engine options it accepts), and ``options``:
+   name -> ``Option`` (the values each option takes and its default), the one
+   place an option's values are written; ``variants(scene)`` lists the
    option sets the default matrix runs on a scene (e.g. each formulation);
 5. ``check(scene, times, settings)`` raises ValueError naming the field for
-   settings it cannot run (unknown option, dt that does not divide the sample
+   settings it cannot run (unknown option or value — the base class checks
+   every one against ``options`` —, dt that does not divide the sample
    interval, ...) — cheap, called before anything runs; ``unsupported(scene,
    settings)`` returns the reason a valid request cannot be represented, or None;
-6. ``prepare(scene, times, settings)`` builds the engine model (not timed);
+   ``describe(scene, settings)`` returns the model it would build, as text
+   (``""``: none);
+6. ``prepare(scene, times, settings)`` builds the engine model (not timed) and
+   returns it as a ``Prepared`` (a frozen dataclass: the engine's subclass
+   documents each field);
 7. ``run(prepared)`` simulates from the initial state and samples at exactly
    ``times``, returning an ``Outcome``: the wall time of the stepping alone,
    steps and right-hand-side evaluations, and a ``read_back`` that turns the
@@ -46,9 +53,9 @@ one module or package per engine: ``reference``, ``mujoco``, ``pinocchio``,
 ``exudyn``.
 """
 
-from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
+from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
 from dalembert.adapters.contract import check_adapter
 from dalembert.adapters.registry import BUILTIN, adapter_names, adapter_path, get_adapter, register_adapter
 
-__all__ = ["Adapter", "IntegratorSpec", "Outcome", "BUILTIN", "adapter_names", "adapter_path", "get_adapter",
-           "register_adapter", "check_adapter", "option_choice"]
+__all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome", "Prepared", "BUILTIN", "adapter_names", "adapter_path", "get_adapter",
+           "register_adapter", "check_adapter"]

@@ -28,10 +28,12 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable
 
+import numpy as np
+
 from dalembert.registry import suggest
 from dalembert.scene import SPRING_EFFECT
 
-__all__ = ["Adapter", "IntegratorSpec", "Outcome", "option_choice"]
+__all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome", "Prepared"]
 
 
 @dataclass(frozen=True)
@@ -41,6 +43,89 @@ class IntegratorSpec:
     fixed_step: bool
     options: tuple = ()
     description: str = ""
+
+
+@dataclass(frozen=True)
+class Option:
+    """One engine option and the values it takes, declared once on the adapter (``Adapter.options``, name ->
+    ``Option``) and checked by ``Adapter.check`` before anything runs.
+
+    Attributes
+    ----------
+    choices : tuple of str — the values it takes (empty: a number, bounded by ``minimum``/``maximum``)
+    default : object — the value a run takes when the option is not given (None: the engine's own, or one that
+        depends on the scene, as ``description`` says)
+    description : str — what it chooses, one line (``dalembert engines --verbose``)
+    minimum, maximum : float or None — a number's closed bounds
+    exclusive_minimum : float or None — a number's open lower bound (``> exclusive_minimum``)
+    only : tuple of str — the integrators that take it (empty: every integrator whose ``IntegratorSpec.options``
+        names it)
+    """
+
+    choices: tuple = ()
+    default: object = None
+    description: str = ""
+    minimum: float | None = None
+    maximum: float | None = None
+    exclusive_minimum: float | None = None
+    only: tuple = ()
+
+    def allowed(self):
+        """The values it takes, in words: ``"tree, equality"`` or ``"a number in [0, 1]"``."""
+        if self.choices:
+            return ", ".join(str(c) for c in self.choices)
+        if self.exclusive_minimum is not None:
+            return f"a number > {self.exclusive_minimum:g}" + (f", <= {self.maximum:g}" if self.maximum is not None else "")
+        if self.minimum is not None or self.maximum is not None:
+            return f"a number in [{'-inf' if self.minimum is None else f'{self.minimum:g}'}, " \
+                   f"{'inf' if self.maximum is None else f'{self.maximum:g}'}]"
+        return "a number"
+
+    def problem(self, name, value, integrator):
+        """What is wrong with ``value`` for option ``name`` under ``integrator``, in the project's words, or None."""
+        if self.only and integrator not in self.only:
+            return f"options.{name}: only {', '.join(self.only)} takes it — drop it, or use {' or '.join(self.only)}"
+        if self.choices:
+            if value not in self.choices:
+                return f"options.{name}: unknown {value!r} — use one of {self.allowed()}"
+            return None
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            return f"options.{name}: expected a number, got {value!r} — give {self.allowed()}"
+        if ((self.minimum is not None and not number >= self.minimum)
+                or (self.maximum is not None and not number <= self.maximum)
+                or (self.exclusive_minimum is not None and not number > self.exclusive_minimum)
+                or number != number):
+            return f"options.{name}: {number!r} is out of range — give {self.allowed()}"
+        return None
+
+
+@dataclass(frozen=True, eq=False)
+class Prepared:
+    """What ``Adapter.prepare`` returns and ``run`` and ``audit`` take: one scene's engine model, built for one set
+    of sample times and settings. Each engine extends it with the fields its runs need (``MujocoPrepared``,
+    ``PinocchioPrepared``, ...), each documented there.
+
+    Attributes
+    ----------
+    scene : dalembert.scene.Scene — what was built
+    times : ndarray (n,) — the sample times, s
+    settings : dalembert.settings.Settings — the run's settings (integrator, dt or tolerances, options)
+
+    A field is also read by its name, ``prepared["times"]``, as the stepping modules built on the dicts this class
+    replaced do (read-only: the dataclass is frozen).
+    """
+
+    scene: object
+    times: np.ndarray
+    settings: object
+
+    def __getitem__(self, name):
+        try:
+            return getattr(self, name)
+        except AttributeError:
+            raise KeyError(f"{type(self).__name__} has no field {name!r}") from None
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,6 +160,8 @@ class Adapter:
     name = ""
     effects = frozenset()
     integrators = {}
+    # name -> Option: every option an integrator's ``IntegratorSpec.options`` names, and the values it takes
+    options = {}
 
     def version(self):
         raise NotImplementedError
@@ -93,8 +180,17 @@ class Adapter:
                              f"{suggest(settings.integrator, self.integrators)}")
         spec = self.integrators[settings.integrator]
         problems = knob_problems(settings, f"{self.name} {settings.integrator!r}", spec.fixed_step, spec.options, times)
+        for key, value in settings.options.items():
+            if key in spec.options and key in self.options:
+                problem = self.options[key].problem(key, value, settings.integrator)
+                if problem:
+                    problems.append(problem)
         if problems:
             raise ValueError("; ".join(problems))
+
+    def option(self, settings, key):
+        """The value of option ``key`` a run with ``settings`` takes: the given one, else the declared default."""
+        return settings.options.get(key, self.options[key].default)
 
     def unsupported(self, scene, settings):
         """The reason this engine cannot represent ``scene``, or None."""
@@ -114,20 +210,48 @@ class Adapter:
         """Engine option sets the default matrix runs on ``scene`` (``[{}]``: the defaults only)."""
         return [{}]
 
+    def describe(self, scene, settings):
+        """The model the engine builds for ``scene`` with ``settings``, as text: what a report stores with the run
+        (the record's ``model``) and ``dalembert show-model`` prints (MJCF, a plant's or a system's summary).
+        Built without stepping; ``""`` where the engine describes none (this default), and then nothing is stored."""
+        return ""
+
     def prepare(self, scene, times, settings):
+        """Build the engine's model of ``scene`` for sampling at ``times`` with ``settings`` (already passed by
+        ``check`` and ``unsupported``); not timed: everything that is not stepping belongs here.
+
+        Parameters
+        ----------
+        scene : dalembert.scene.Scene
+        times : array_like (n,) — the sample times, s, increasing; the first is the initial state's
+        settings : dalembert.settings.Settings
+
+        Returns
+        -------
+        Prepared — the engine's subclass, with the built model and the initial state; ``run`` may be called on
+        it any number of times
+        """
         raise NotImplementedError
 
     def run(self, prepared):
+        """Simulate ``prepared`` from its initial state, sampling at exactly ``prepared.times``.
+
+        Parameters
+        ----------
+        prepared : Prepared — from ``prepare``; a run leaves it as it found it, so repeated runs give identical
+            results
+
+        Returns
+        -------
+        Outcome — the wall time of the stepping alone (s), steps and right-hand-side evaluations, and the
+        read-back to a ``Trajectory`` in body terms (run once, on first use). A run that diverges returns NaN
+        from the point of divergence on; one the engine stops raises RuntimeError saying where
+        """
         raise NotImplementedError
 
     def audit(self, prepared, outcome):
+        """What the engine actually simulated, read back from the engine (not from the scene): a dict with at
+        least ``gravity`` (m/s^2, world axes) and what else the engine reports (loads, joints, constraint rows,
+        contacts, passive forces, the integrator by the engine's name). ``outcome``: a ``run`` of ``prepared``."""
         return {}
 
-
-def option_choice(settings, key, choices):
-    """The value of engine option ``key`` (``choices[0]`` when absent); a ValueError naming the
-    option and its choices when it is not one of them."""
-    value = settings.options.get(key, choices[0])
-    if value not in choices:
-        raise ValueError(f"options.{key}: unknown {value!r} — use one of {list(choices)}")
-    return value

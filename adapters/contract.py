@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dalembert.adapters.base import Prepared
 from dalembert.adapters.registry import get_adapter
 
 __all__ = ["check_adapter"]
@@ -34,7 +35,8 @@ def check_adapter(name, cases=None, settings=None, integrators=None):
     unknown = sorted(set(integrators or ()) - set(adapter.integrators))
     if unknown:
         raise ValueError(f"integrators: {name} has no {', '.join(unknown)} — known: {', '.join(adapter.integrators)}")
-    problems = []
+    problems = [f"{name}: option {o!r} is taken by an integrator but not declared in {type(adapter).__name__}.options"
+                for o in sorted({o for spec in adapter.integrators.values() for o in spec.options} - set(adapter.options))]
     adapter.version()
     if cases is None:
         cases = [factory() for _, factory in load_cases().items()]
@@ -52,7 +54,11 @@ def check_adapter(name, cases=None, settings=None, integrators=None):
             adapter.check(case.scene, case.times, s)
             if adapter.unsupported(case.scene, s):
                 continue
+            if not isinstance(adapter.describe(case.scene, s), str):
+                problems.append(f"{where}: describe() must return text")
             prepared = adapter.prepare(case.scene, case.times, s)
+            if not isinstance(prepared, Prepared):
+                problems.append(f"{where}: prepare() must return a Prepared (dalembert.adapters.base)")
             first, second = adapter.run(prepared), adapter.run(prepared)
             traj = first.trajectory
             if not isinstance(traj, Trajectory):

@@ -2,12 +2,28 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
+from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
 from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
 
-__all__ = ["ReferenceAdapter"]
+__all__ = ["ReferenceAdapter", "ReferencePrepared"]
+
+
+@dataclass(frozen=True, eq=False)
+class ReferencePrepared(Prepared):
+    """The reference solver's prepared run (``Prepared``; ``settings`` is the integrator's: the options
+    without ``formulation``, which chose ``system``).
+
+    Attributes
+    ----------
+    system : the formulation's equations of motion (``reference.solver.FORMULATIONS``: ``NewtonEuler``,
+        ``Kane``, ``ClosedLoops`` or ``PlanarChain``), with its initial state
+    """
+
+    system: object
 
 
 class ReferenceAdapter(Adapter):
@@ -22,6 +38,12 @@ class ReferenceAdapter(Adapter):
     name = "reference"
     # loops: Kane's tree plus multipliers (reference.loops); prismatic joints: Kane's (reference.generalized)
     effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS
+    # the names of ``reference.solver.FORMULATIONS`` (not imported here: listing engines imports no solver;
+    # tests/test_adapter_contract.py checks that the two agree)
+    options = {
+        "formulation": Option(("newton-euler", "newton-euler-matrix", "kane", "planar"), None,
+                              "how the equations are written (default: newton-euler for free bodies, kane otherwise)"),
+    }
     integrators = {
         "dop853": IntegratorSpec(False, ("formulation",), "scipy DOP853, adaptive 8th order"),
         "rk4": IntegratorSpec(True, ("formulation",), "classical RK4 on embedded coordinates"),
@@ -69,7 +91,7 @@ class ReferenceAdapter(Adapter):
 
         times = np.asarray(times, dtype=float)
         system, inner = build(scene, settings, times)
-        return dict(scene=scene, times=times, system=system, settings=inner)
+        return ReferencePrepared(scene, times, inner, system)
 
     def run(self, prepared):
         import time
@@ -78,16 +100,16 @@ class ReferenceAdapter(Adapter):
 
         p = prepared
         start = time.perf_counter()
-        Q, V, stats = INTEGRATORS[p["settings"].integrator]().run(p["system"], p["times"], p["settings"])
+        Q, V, stats = INTEGRATORS[p.settings.integrator]().run(p.system, p.times, p.settings)
         wall = time.perf_counter() - start
-        return Outcome(lambda: p["system"].trajectory(p["times"], Q, V), wall, stats.n_steps, stats.n_rhs,
+        return Outcome(lambda: p.system.trajectory(p.times, Q, V), wall, stats.n_steps, stats.n_rhs,
                        {"message": stats.message})  # why an adaptive run stopped early, if it did
 
     def audit(self, prepared, outcome):
         from dalembert import closure
 
-        scene = prepared["scene"]
-        system = prepared["system"]
+        scene = prepared.scene
+        system = prepared.system
         return {
             "gravity": tuple(scene.gravity),
             "gravity_computed": any(g != 0.0 for g in scene.gravity),
@@ -99,5 +121,5 @@ class ReferenceAdapter(Adapter):
             "constraint_rows": sum(len(r.phi) for r in closure.initial_rows(scene)),
             "loops": str(scene.loop_summary()) if scene.loops else "none",
             "contacts": 0,
-            "integrator": prepared["settings"].integrator,
+            "integrator": prepared.settings.integrator,
         }

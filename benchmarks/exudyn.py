@@ -45,7 +45,7 @@ def bare_solve(adapter, prepared):
     import exudyn as exu
 
     built = build(prepared["scene"], prepared["settings"])
-    mbs, times = built["mbs"], prepared["times"]
+    mbs, times = built.mbs, prepared["times"]
     settings = adapter._settings(prepared)
     console, exu.config.printToConsole = exu.config.printToConsole, False
     try:

@@ -89,7 +89,7 @@ def test_world_frame_angular_velocity_in_and_out():
     case = make_case("free_top_intermediate", t_final=1.0)
     prepared, outcome = run(case, Settings("rk5", dt=1e-3))
     R0 = spatial.quat_to_matrix(case.scene.joints[0].q0[3:])
-    assert np.array_equal(prepared["v0"][:3], R0 @ np.array(case.scene.joints[0].v0[3:]))
+    assert np.array_equal(prepared.v0[:3], R0 @ np.array(case.scene.joints[0].v0[3:]))
     traj, exact = outcome.trajectory, case.exact(case.times)
     w_W = traj.bodies["top"].angular_velocity
     assert np.max(np.abs(w_W - exact.bodies["top"].angular_velocity)) < case.tolerances["angular_velocity"].value

@@ -142,7 +142,7 @@ def test_audit_reads_the_prismatic_joint_back_from_the_plant():
     for integrator in ("rk3", "discrete"):
         prepared, outcome = _run(scene, SLIDER_TIMES, Settings(integrator, dt=SLIDER_DT))
         audit = ADAPTER.audit(prepared, outcome)
-        built = prepared["model"].prismatic_joints()["b"]
+        built = prepared.model.prismatic_joints()["b"]
         assert built["type"] == "prismatic" and (built["parent"], built["child"]) == ("world", "b")
         np.testing.assert_allclose(built["axis_F"], np.array(SLIDER_AXIS) / 3.0, rtol=0, atol=AXIS_ROUNDOFF)
         for key in ("position_limits", "velocity_limits", "acceleration_limits"):
@@ -157,7 +157,7 @@ def test_audit_reads_the_prismatic_joint_back_from_the_plant():
 def test_audit_flags_a_plant_that_is_not_the_scene():
     """The check is on the plant: a limit set on the built joint is seen and reported."""
     prepared, outcome = _run(_slider(), SLIDER_TIMES, Settings("rk3", dt=SLIDER_DT))
-    prepared["model"].joints["b"].set_position_limits([-1.0], [1.0])
+    prepared.model.joints["b"].set_position_limits([-1.0], [1.0])
     audit = ADAPTER.audit(prepared, outcome)
     assert audit["prismatic_as_scene"] is False and "(-1.0, 1.0) m" in audit["prismatic_joints"]["b"]
 

@@ -244,7 +244,7 @@ def test_the_audit_reads_the_springs_back_from_the_plant():
     assert audit["force_elements"] == 2 and audit["max_joint_damping"] == 0.0 and audit["actuators"] == 0
     assert audit["spring_force_path"].startswith("force element: at every stage")
     # the check compares the plant with the scene: a plant built from another spring fails it
-    prepared["model"].scene = Scene(scene.name, scene.bodies, scene.joints, scene.gravity,
+    prepared.model.scene = Scene(scene.name, scene.bodies, scene.joints, scene.gravity,
                                     springs=[replace(scene.springs[0], stiffness=1.01 * STIFFNESS)])
     assert not ADAPTER.audit(prepared, outcome)["springs_as_scene"]
 

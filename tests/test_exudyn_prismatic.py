@@ -195,18 +195,18 @@ def test_the_joint_readout_is_exudyns_and_catches_a_wrong_joint(joints):
     a generic joint whose rows leave a rotation free instead, are each reported."""
     scene, _ = inclined_slider()
     built = build(scene, Settings("generalized-alpha", dt=SLIDER_DT, options={"joints": joints}))
-    mbs = built["mbs"]
-    assert built["joint_readout"]["b"]["mismatches"] == []
+    mbs = built.mbs
+    assert built.joint_readout["b"]["mismatches"] == []
     if joints == "minimal":
-        T = np.asarray(mbs.GetObject(built["tree"])["jointTransformations"][0])
-        mbs.SetObjectParameter(built["tree"], "jointTransformations",
+        T = np.asarray(mbs.GetObject(built.tree)["jointTransformations"][0])
+        mbs.SetObjectParameter(built.tree, "jointTransformations",
                                exudyn.Matrix3DList([spatial.so3_exp(np.array([0.0, 0.1, 0.0])) @ T]))
         assert read_joints(mbs, scene, built)["b"]["mismatches"][0].startswith("axis: engine")
-        mbs.SetObjectParameter(built["tree"], "jointTypes", [exudyn.JointType.RevoluteZ])
+        mbs.SetObjectParameter(built.tree, "jointTypes", [exudyn.JointType.RevoluteZ])
         assert read_joints(mbs, scene, built)["b"]["mismatches"] == [
             "kind: engine 'revolute' (RevoluteZ), scene 'prismatic'"]
     else:
-        mbs.SetObjectParameter(built["joint_objects"]["b"], "constrainedAxes", [1, 1, 1, 1, 1, 0])
+        mbs.SetObjectParameter(built.joint_objects["b"], "constrainedAxes", [1, 1, 1, 1, 1, 0])
         assert read_joints(mbs, scene, built)["b"]["mismatches"] == [
             "kind: engine 'revolute' (constrainedAxes [1, 1, 1, 1, 1, 0]), scene 'prismatic'"]
 
@@ -334,7 +334,7 @@ def _bead_errors(traj, truth):
 # on the joints and 7.1e-12 relative on the reactions (the reference's own ~1e-11 among them).
 BEAD_TREE_TOL = 1e-10  # m, rad/s, m and relative: 4.5x the largest measured
 # Redundant joints on Euler-parameter nodes with trapezoidal-index2 (second order; rotation-vector nodes
-# report the reactions short of their centripetal part, adapter.ROTVEC_LG_REACTION): measured at dt = 1e-3,
+# report the reactions short of their centripetal part, audit.ROTVEC_LG_REACTION): measured at dt = 1e-3,
 # 5e-4: 1.58e-6, 3.95e-7 m; 7.37e-6, 1.83e-6 rad/s; 2.06e-6, 4.88e-7 on the joints; 2.36e-6, 9.7e-7 relative on
 # the reactions.
 BEAD_REDUNDANT_STEPS = (1e-3, 5e-4)

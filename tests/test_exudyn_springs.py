@@ -34,7 +34,7 @@ ORDERS = {"explicit-midpoint": (2, 2.48e-4), "generalized-alpha": (2, 1.25e-4), 
           "rk33": (3, 1.85e-6), "rk44": (4, 7.75e-9), "rk67": (6, 3.77e-13)}
 MARGIN = 2.0  # the bounds above: twice the measured error; a wrong force, sign or rest length is O(STRETCH)
 # Exudyn's velocity-verlet takes the step-end acceleration at the half-step velocity, f(q_n+1, v_n+1/2)
-# (adapter.STALE_ACCELERATIONS): second order without a damper (measured 2.47e-4, 6.18e-5 m at dt = 1e-2,
+# (readback.STALE_ACCELERATIONS): second order without a damper (measured 2.47e-4, 6.18e-5 m at dt = 1e-2,
 # 5e-3), first with one, whose force is then an O(dt) step late (measured 2.79e-3, 1.37e-3 m).
 VERLET_UNDAMPED, VERLET_DAMPED = (2, 6.18e-5), (1, 1.37e-3)
 # dopri5 at rtol = atol = 1e-9: its steps are capped by the 0.01-s samples (sampling.solve_per_sample), and the
@@ -50,7 +50,7 @@ BOX_RATE_TOL = 1e-7  # rad/s: 3.4x the measured error
 PAIR_TREE_TOL = 1e-9  # m, rad/s and relative: 2x the largest measured (the rate's), 16x and 50x the others
 # The pair with redundant joints on Euler-parameter nodes and trapezoidal-index2 at dt = 5e-4 (second order):
 # measured 1.9e-6 m, 3.2e-5 rad/s, reactions 1.3e-5 relative (4x smaller than at 1e-3). Euler-parameter nodes:
-# rotation-vector nodes report the reactions short of their centripetal part (adapter.ROTVEC_LG_REACTION),
+# rotation-vector nodes report the reactions short of their centripetal part (audit.ROTVEC_LG_REACTION),
 # and generalized-alpha's multipliers carry a start-up transient (test_exudyn_loops.START_UP).
 PAIR_REDUNDANT_POSITION_TOL, PAIR_REDUNDANT_RATE_TOL, PAIR_REDUNDANT_REACTION_TOL = 5e-6, 1e-4, 3e-5  # 2.5-3x
 PAIR_STEPS = (1e-3, 5e-4)
@@ -195,11 +195,11 @@ def test_the_audit_reads_what_exudyn_holds_and_catches_what_the_scene_lacks(join
     or a load switched on are each reported."""
     scene = hinged_pair()
     built = build(scene, Settings("generalized-alpha", dt=1e-3, options={"joints": joints, "node": "ep"}))
-    mbs = built["mbs"]
-    assert all(s["mismatches"] == [] for s in built["spring_readout"].values())
-    rigid = sum(owner != "world" for owner in built["owners"].values())
+    mbs = built.mbs
+    assert all(s["mismatches"] == [] for s in built.spring_readout.values())
+    rigid = sum(owner != "world" for owner in built.owners.values())
     assert unexpected_passive(passive_effects(mbs), scene, rigid) == []
-    mbs.SetObjectParameter(built["springs"]["anchor"]["object"], "stiffness", 41.0)
+    mbs.SetObjectParameter(built.springs["anchor"]["object"], "stiffness", 41.0)
     mismatches = read_springs(mbs, scene, built)["anchor"]["mismatches"]
     assert mismatches[0] == "stiffness: engine 41.0, scene 40.0"
     assert any(m.startswith("initial_tension: engine") for m in mismatches)  # Exudyn's own force, read back
@@ -211,7 +211,7 @@ def test_the_audit_reads_what_exudyn_holds_and_catches_what_the_scene_lacks(join
         mbs.SetObjectParameter(tree, "jointDControlVector", [0.0, 0.3])
         marker = mbs.AddMarker(MarkerKinematicTreeRigid(objectNumber=tree, linkNumber=0))
     else:
-        marker = mbs.AddMarker(MarkerBodyRigid(bodyNumber=next(iter(built["owners"]))))
+        marker = mbs.AddMarker(MarkerBodyRigid(bodyNumber=next(iter(built.owners))))
     mbs.AddLoad(LoadForceVector(markerNumber=marker, loadVector=[1.0, 0.0, 0.0]))
     found = unexpected_passive(passive_effects(mbs), scene, rigid)
     assert "1 LoadForceVector(s) for 0" in found

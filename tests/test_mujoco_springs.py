@@ -203,7 +203,7 @@ def test_the_tendons_length_rate_and_force_are_dalembert_springs():
 
     scene = _oscillator(DAMPING, point_b=(0.05, 0.1, 0.15))
     prepared = ADAPTER.prepare(scene, TIMES, Settings("rk4", dt=1e-2))
-    model, d = prepared["model"], prepared["scratch"]
+    model, d = prepared.model, prepared.scratch
     p, quat = np.array([0.2, -0.1, -1.1]), spatial.quat_normalize(np.array([0.9, 0.2, -0.3, 0.1]))
     v, w_B = np.array([0.3, -0.4, 0.5]), np.array([1.0, -2.0, 3.0])
     d.qpos[:], d.qvel[:] = np.concatenate([p, quat]), np.concatenate([v, w_B])

@@ -59,10 +59,10 @@ def test_adaptive_integrators_reach_their_tolerance():
 
 def test_gravity_free_scene_has_zero_gravity_in_the_model():
     prepared = ADAPTER.prepare(make_case("free_top").scene, make_case("free_top").times, Settings("rk4", dt=1e-2))
-    assert np.array_equal(prepared["pm"].model.gravity.linear, np.zeros(3))
+    assert np.array_equal(prepared.pm.model.gravity.linear, np.zeros(3))
     box = make_case("particle_box")
     prepared = ADAPTER.prepare(box.scene, box.times, Settings("rk4", dt=1e-2))
-    assert np.array_equal(prepared["pm"].model.gravity.linear, [0.0, 0.0, -9.8])
+    assert np.array_equal(prepared.pm.model.gravity.linear, [0.0, 0.0, -9.8])
 
 
 def test_conventions_round_trip_exactly():
@@ -133,7 +133,7 @@ def test_welds_as_constraints_hold_the_box():
     case = make_case("particle_box_welded", t_final=0.5)
     settings = Settings("rk4", dt=1e-3, options={"welds": "constraint"})
     prepared = ADAPTER.prepare(case.scene, case.times, settings)
-    assert len(prepared["pm"].constraints) == 26 and prepared["pm"].model.nv == 27 * 6
+    assert len(prepared.pm.constraints) == 26 and prepared.pm.model.nv == 27 * 6
     out = ADAPTER.run(prepared)
     e = trajectory_errors(out.trajectory, case.exact(case.times))
     assert e["position"][0] < WELD_CONSTRAINT_TOL and e["orientation"][0] < WELD_CONSTRAINT_TOL

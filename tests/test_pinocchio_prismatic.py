@@ -275,7 +275,7 @@ def test_slider_crank_closes_its_loop_through_the_prismatic_joint():
         closure.append(np.abs(x - (CRANK * np.cos(th) + np.sqrt(ROD**2 - (CRANK * np.sin(th) - OFFSET) ** 2))).max())
         e = invariants.total_energy(scene, traj)
         energy.append(np.abs(e - e[0]).max())
-    assert prepared["pm"].constrained and np.ptp(th) > 3.0  # the loop was solved; the crank swung through 3 rad
+    assert prepared.pm.constrained and np.ptp(th) > 3.0  # the loop was solved; the crank swung through 3 rad
     assert closure[1] < CRANK_CLOSURE_TOL and energy[1] < CRANK_ENERGY_TOL, (closure, energy)
     assert ORDER_RATIO[0] < energy[0] / energy[1] < ORDER_RATIO[1], energy
     slide, loop = traj.extras["reaction_force:slider"], traj.extras["reaction_force:loop_rod_slider"]

@@ -199,7 +199,7 @@ def test_audit_identification_sees_a_spring_the_engine_applies_wrongly():
     doubled stiffness and its end moved off its frame is caught (a test that can fail)."""
     scene = _oscillator(DAMPING, GRAVITY, point_b=(0.05, 0.1, 0.15))
     prepared, outcome = _run(scene, TIMES[:3], Settings("rk4", dt=1e-2, options={"loop": "python"}))
-    pm = prepared["pm"]
+    pm = prepared.pm
     el = pm.springs[0]
     pm.springs = (dataclasses.replace(el, stiffness=2.0 * el.stiffness),)
     found = ADAPTER.audit(prepared, outcome)["springs"][el.name]

@@ -7,7 +7,7 @@ sample to sample: Drake's integrators, fixed-step or error-controlled, or the
 plant's discrete update), ``loops`` (loop closures as SAP constraints of the
 discrete plant), ``springs`` (spring-dampers as ``LinearSpringDamper``
 force elements, and their read-back for the audit), ``readback`` (Drake's states in body terms, joint reactions),
-``adapter`` (``DrakeAdapter``). Drake itself is imported only
+``audit`` (what the run simulated, read back from the plant), ``adapter`` (``DrakeAdapter``). Drake itself is imported only
 inside functions.
 """
 

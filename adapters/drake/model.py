@@ -36,12 +36,14 @@ ball joint ``q = (roll, pitch, yaw)`` of ``R_FM`` (``R = Rz(yaw) Ry(pitch) Rx(ro
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from dalembert import spatial
 from dalembert.scene import WORLD
 
-__all__ = ["DrakeModel", "AXIS_ROUNDOFF"]
+__all__ = ["DrakeModel", "AXIS_ROUNDOFF", "drake_version"]
 
 # A unit axis Drake normalized once more against the scene's normalized one: a few roundoffs of a unit vector.
 AXIS_ROUNDOFF = 1e-15
@@ -254,3 +256,18 @@ class DrakeModel:
         for ld in self.scene.loads:
             lines.append(f"load {ld.effect} on {ld.body}: {list(ld.vector)} at {list(ld.point)} (SceneLoads system)")
         return "\n".join(lines) + "\n"
+
+
+def drake_version():
+    """The installed Drake's version (ImportError when it is missing): ``pydrake.__version__``, or the
+    distribution's where the package has none."""
+    import pydrake
+
+    return pydrake.__version__ if hasattr(pydrake, "__version__") else _distribution_version()
+
+
+@functools.cache  # (installed packages do not change under a process; every run asks twice: ~1 ms a time)
+def _distribution_version():
+    from importlib.metadata import version
+
+    return version("drake")

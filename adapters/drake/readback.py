@@ -28,7 +28,7 @@ def read_back(p, X):
     reaction force on every revolute, prismatic, ball or welded child (N, world axes, on the child) as extras."""
     from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
-    model, scene, times = p["model"], p["scene"], p["times"]
+    model, scene, times = p.model, p.scene, p.times
     plant = model.plant
     n, nq = len(times), plant.num_positions()
     Q, V = X[:, :nq], X[:, nq:]
@@ -79,7 +79,7 @@ def _kinematics(p, X, bodies, jointed, reactions):
     from dalembert.adapters.drake.loops import LoopForces
     from dalembert.closure import RANK_RTOL
 
-    model = p["model"]
+    model = p.model
     plant = model.plant
     context = model.diagram.CreateDefaultContext()
     plant_context = plant.GetMyMutableContextFromRoot(context)
@@ -97,7 +97,7 @@ def _kinematics(p, X, bodies, jointed, reactions):
     V_WB = np.empty((m, nb, 6))  # (w_WB_W, v_WB_W)
     f_Jc = np.empty((m, nb, 3))  # the joint's force on the child at Jc, Jc axes
     for i, k in enumerate(finite):
-        context.SetTime(float(p["times"][k]))
+        context.SetTime(float(p.times[k]))
         plant.SetPositionsAndVelocities(plant_context, X[k])
         for b, body in enumerate(drake_bodies):
             X_WB[i, b] = plant.EvalBodyPoseInWorld(plant_context, body).GetAsMatrix34()

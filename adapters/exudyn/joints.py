@@ -59,9 +59,9 @@ def read_joints(mbs, scene, built):
     joint differs from the scene's (empty: the joint is the scene's)
     """
     out = {}
-    if built["links"]:
+    if built.links:
         out.update(_tree_joints(mbs, scene, built))
-    for child, number in built["joint_objects"].items():
+    for child, number in built.joint_objects.items():
         out[child] = _generic_joint(mbs, scene.joint(child), number)
     for child, got in out.items():
         got["mismatches"] = _mismatches(scene.joint(child), got)
@@ -69,15 +69,15 @@ def read_joints(mbs, scene, built):
 
 
 def _tree_joints(mbs, scene, built):
-    tree = mbs.GetObject(built["tree"])
-    node = mbs.GetNode(built["tree_node"])
+    tree = mbs.GetObject(built.tree)
+    node = mbs.GetNode(built.tree_node)
     out = {}
-    for i, name in enumerate(built["links"]):
+    for i, name in enumerate(built.links):
         j = scene.joint(name)
         joint_type = tree["jointTypes"][i].name
         kind, column = _TREE_TYPES.get(joint_type, (joint_type, None))
         # the parent's scene frame P in its link frame Ep (the base: the world)
-        p_EpP, R_EpP = (np.zeros(3), np.eye(3)) if j.parent == WORLD else built["X_EB"][j.parent]
+        p_EpP, R_EpP = (np.zeros(3), np.eye(3)) if j.parent == WORLD else built.X_EB[j.parent]
         T = np.asarray(tree["jointTransformations"][i], dtype=float)  # joint frame in Ep
         R_PJp = spatial.quat_to_matrix(j.parent_quat)
         axis = R_PJp.T @ R_EpP.T @ T[:, column] if column is not None else None

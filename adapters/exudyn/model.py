@@ -53,6 +53,8 @@ Free bodies on rigid-body nodes, jointed trees in minimal coordinates
 
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
+
 import numpy as np
 
 from dalembert import spatial
@@ -61,7 +63,7 @@ from dalembert.adapters.exudyn.loops import joint_frame, loop_axes
 from dalembert.adapters.exudyn.springs import add_springs, read_springs
 from dalembert.scene import WORLD
 
-__all__ = ["build", "rigid_bodies", "axis_frame", "NODES", "JOINTS", "CONSTRAINED_AXES", "TREE_JOINTS"]
+__all__ = ["build", "ExudynSystem", "rigid_bodies", "axis_frame", "NODES", "JOINTS", "CONSTRAINED_AXES", "TREE_JOINTS"]
 
 NODES = {"rotvec-lg": "RotationRotationVector", "ep": "RotationEulerParameters", "rxyz": "RotationRxyz"}
 JOINTS = ("minimal", "redundant")
@@ -77,20 +79,56 @@ def axis_frame(axis):
     return spatial.frame_with_z(axis)
 
 
+@dataclass(frozen=True, eq=False)
+class ExudynSystem:
+    """A scene as an Exudyn system (``build``), and what the read-back and the audit need to know of it.
+
+    Attributes
+    ----------
+    SC : exudyn.SystemContainer — holds ``mbs`` (kept alive with it)
+    mbs : exudyn.MainSystem — the system, assembled unless built for its summary alone
+    sensors : dict — body (or ``__q``/``__v``/``__joint:<child>``/``__loop:<loop name>``/``__spring:<spring
+        name>``) -> quantity (``p``, ``R``, ``v``, ``w``, ``a``, ``q``, ``v``, ``f``) -> sensor number
+    X_EB : dict link name -> (p_EB (3,), R_EB (3, 3)) — the scene's body frame B in the link frame E, m
+        (kinematic-tree links only: a rigid body's E is B)
+    links : list of str — the kinematic tree's bodies, in link order (empty: no tree)
+    tree, tree_node : int or None — the kinematic tree's object and node numbers
+    redundant_joints : dict child -> ndarray (3, 3) — each ObjectJointGeneric's frame in the parent's axes,
+        ``R_PJ R_A`` (joints=redundant)
+    joint_objects : dict child -> int — each ObjectJointGeneric's object number
+    loops : dict loop name -> ndarray (3, 3) — its joint frame Ja in body a's scene frame, ``R_BJa``
+    loop_rows : dict loop name -> loops.LoopRows — the rows given to Exudyn, and those left out
+    springs : dict spring name -> dict(object, markers) — its connector's object and marker numbers
+        (``springs.add_springs``)
+    owners : dict int -> str — rigid body or ground object number -> scene body name (``WORLD`` for a ground)
+    summary : str — one line per object, for reports (``describe``)
+    spring_readout : dict — ``springs.read_springs`` right after assembly (empty unassembled)
+    joint_readout : dict — ``joints.read_joints`` likewise
+    """
+
+    SC: object
+    mbs: object
+    sensors: dict
+    X_EB: dict
+    links: list
+    tree: int | None
+    tree_node: int | None
+    redundant_joints: dict
+    joint_objects: dict
+    loops: dict
+    loop_rows: dict
+    springs: dict
+    owners: dict
+    summary: str
+    spring_readout: dict
+    joint_readout: dict
+
+
 def build(scene, settings, assemble=True):
     """The Exudyn system of ``scene`` for ``settings.options`` (``node``, ``joints``), assembled
     unless ``assemble`` is False (for the summary alone).
 
-    Returns a dict: ``SC``, ``mbs`` (the system container and system), ``sensors`` (body or
-    ``__q``/``__v``/``__joint:<child>``/``__loop:<loop name>``/``__spring:<spring name>`` -> quantity -> sensor number), ``X_EB``
-    (per link), ``links`` (the kinematic tree's bodies, in link order), ``tree``, ``tree_node`` (the
-    kinematic tree's object and node numbers, or None), ``redundant_joints`` (child -> joint frame in the
-    parent's axes, ``R_PJ R_A``), ``joint_objects`` (child -> its ObjectJointGeneric's number), ``loops``
-    (loop name -> its joint frame Ja in body a's scene frame, ``R_BJa``), ``loop_rows`` (loop name -> ``loops.LoopRows``), ``springs`` (spring name
-    -> its connector's object and marker numbers, ``springs.add_springs``), ``owners`` (rigid body or ground
-    object number -> scene body name, ``WORLD`` for a ground), ``summary`` (text, for reports),
-    ``spring_readout`` (``springs.read_springs`` right after assembly; empty unassembled) and
-    ``joint_readout`` (``joints.read_joints`` likewise).
+    Returns an ``ExudynSystem``.
     """
     import exudyn as exu
     from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid, ObjectConnectorDistance,
@@ -243,14 +281,13 @@ def build(scene, settings, assemble=True):
         Load = LoadForceVector if ld.kind == "force" else LoadTorqueVector
         mbs.AddLoad(Load(markerNumber=marker, loadVector=vec, bodyFixed=follower))
         summary.append(f"{Load.__name__} on {ld.body} at {list(ld.point)}, bodyFixed={follower}")
-    built = dict(SC=SC, mbs=mbs, sensors=sensors, X_EB=X_EB, links=[b.name for b in links], tree=tree,
-                 tree_node=node, redundant_joints=redundant_joints, joint_objects=joint_objects, loops=loops,
-                 loop_rows=rows, springs=springs, owners=owners, summary="\n".join(summary) + "\n",
-                 spring_readout={}, joint_readout={})
+    built = ExudynSystem(SC=SC, mbs=mbs, sensors=sensors, X_EB=X_EB, links=[b.name for b in links], tree=tree,
+                         tree_node=node, redundant_joints=redundant_joints, joint_objects=joint_objects, loops=loops,
+                         loop_rows=rows, springs=springs, owners=owners, summary="\n".join(summary) + "\n",
+                         spring_readout={}, joint_readout={})
     if assemble:
         mbs.Assemble()
         # the springs and joints as Exudyn holds them, at the initial state (its connectors and markers report
         # their outputs in the current configuration only, which is the initial one until the solve)
-        built["spring_readout"] = read_springs(mbs, scene, built)
-        built["joint_readout"] = read_joints(mbs, scene, built)
+        built = replace(built, spring_readout=read_springs(mbs, scene, built), joint_readout=read_joints(mbs, scene, built))
     return built

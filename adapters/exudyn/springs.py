@@ -98,7 +98,7 @@ def read_springs(mbs, scene, built):
     states = {**spatial.initial_body_states(scene), WORLD: closure.world_state()}
     out = {}
     for sp in scene.springs:
-        number = built["springs"][sp.name]["object"]
+        number = built.springs[sp.name]["object"]
         obj = mbs.GetObject(number)
         m0, m1 = obj["markerNumbers"]  # the connector's own markers, as Exudyn holds them
         ends = [_marker_end(mbs, m, built) for m in (m0, m1)]
@@ -193,8 +193,8 @@ def _marker_end(mbs, number, built):
     marker = mbs.GetMarker(number)
     p_E = np.asarray(marker["localHT"], dtype=float)[:3, 3]
     if marker["markerType"] == "KinematicTreeRigid":
-        name = built["links"][marker["linkNumber"]]
-        p_EB, R_EB = built["X_EB"][name]  # x_E = p_EB + R_EB x_B
+        name = built.links[marker["linkNumber"]]
+        p_EB, R_EB = built.X_EB[name]  # x_E = p_EB + R_EB x_B
         return name, R_EB.T @ (p_E - p_EB)
-    return built["owners"][int(marker["bodyNumber"])], p_E  # a rigid body's E is B; the ground's is the world
+    return built.owners[int(marker["bodyNumber"])], p_E  # a rigid body's E is B; the ground's is the world
 

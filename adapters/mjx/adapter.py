@@ -20,17 +20,17 @@ from __future__ import annotations
 
 import functools
 import os
-from dataclasses import replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from dalembert.adapters.base import IntegratorSpec, Outcome, option_choice
+from dalembert.adapters.base import IntegratorSpec, Option, Outcome
 from dalembert.adapters.mujoco import MujocoAdapter
-from dalembert.adapters.mujoco.mjcf import WELDS
+from dalembert.adapters.mujoco.adapter import MujocoPrepared
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mjx.stepping import PRECISIONS, chunks, compile_rollout, mjx, precision, run_rollout, to_host
 
-__all__ = ["MjxAdapter"]
+__all__ = ["MjxAdapter", "MjxPrepared"]
 
 OPTIONS = ("precision", "welds")
 STAGES = {"euler": 1, "rk4": 4, "implicitfast": 1}  # evaluations of the dynamics per step
@@ -40,11 +40,39 @@ STAGES = {"euler": 1, "rk4": 4, "implicitfast": 1}  # evaluations of the dynamic
 REFUSAL_DT = 1e-3
 
 
+@dataclass(frozen=True, eq=False)
+class MjxPrepared(MujocoPrepared):
+    """MJX's prepared run: MuJoCo's (``MujocoPrepared``: the model compiled by MuJoCo C, its initial state, the
+    read-back's scratch data), put on the device and its rollout compiled.
+
+    Attributes
+    ----------
+    precision : str — option ``precision``: ``float32`` or ``float64``
+    mx : mjx.Model — the model on the device, in ``precision``
+    dx0 : mjx.Data — the initial state on the device
+    steps_device : list of jax.Array — the steps per sample interval, in the rollout's chunks
+    compile_s : float — the rollout's JIT compilation, s (build, not stepping)
+    backend : str — JAX's default backend (``cpu``)
+    """
+
+    precision: str
+    mx: object
+    dx0: object
+    steps_device: list
+    compile_s: float
+    backend: str
+
+
 class MjxAdapter(MujocoAdapter):
     """MJX (``mujoco-mjx``) on JAX's CPU backend. Options: ``precision`` = ``float32`` | ``float64``;
     ``welds`` = ``tree`` | ``equality``."""
 
     name = "mjx"
+    options = {
+        "precision": Option(PRECISIONS, PRECISIONS[0], "JAX's number type: float32 (MJX's default) or float64 "
+                            "(jax_enable_x64)"),
+        "welds": MujocoAdapter.options["welds"],
+    }
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "MJX semi-implicit Euler"),
         "rk4": IntegratorSpec(True, OPTIONS, "MJX classical RK4"),
@@ -61,13 +89,6 @@ class MjxAdapter(MujocoAdapter):
         """MJX and JAX imported (``version`` imports neither)."""
         self.version()
         mjx()
-
-    def check(self, scene, times, settings):
-        from dalembert.adapters.base import Adapter
-
-        Adapter.check(self, scene, times, settings)
-        option_choice(settings, "precision", PRECISIONS)
-        option_choice(settings, "welds", WELDS)
 
     def unsupported(self, scene, settings):
         """The base check, then MJX's own: where ``mjx.put_model`` refuses the compiled model
@@ -90,39 +111,39 @@ class MjxAdapter(MujocoAdapter):
         import mujoco
 
         p = super().prepare(scene, times, settings)  # compiled MJCF, checked; the initial state
-        p["precision"] = settings.options.get("precision", PRECISIONS[0])
-        data = mujoco.MjData(p["model"])
-        data.qpos[:], data.qvel[:] = p["qpos0"], p["qvel0"]
-        if p["load_path"] == "actuator":
+        chosen = self.option(settings, "precision")
+        data = mujoco.MjData(p.model)
+        data.qpos[:], data.qvel[:] = p.qpos0, p.qvel0
+        if p.load_path == "actuator":
             data.ctrl[:] = 1.0
-        with precision(p["precision"]):
-            p["mx"] = mjx().put_model(p["model"])
-            p["dx0"] = mjx().put_data(p["model"], data)
-            p["steps_device"] = [jnp.asarray(c) for c in chunks(p["steps"])]
-            p["compile_s"] = compile_rollout(p["mx"], p["dx0"])
-        p["backend"] = jax.default_backend()
-        return p
+        with precision(chosen):
+            mx = mjx().put_model(p.model)
+            dx0 = mjx().put_data(p.model, data)
+            steps_device = [jnp.asarray(c) for c in chunks(p.steps)]
+            compile_s = compile_rollout(mx, dx0)
+        return MjxPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, precision=chosen, mx=mx, dx0=dx0,
+                           steps_device=steps_device, compile_s=compile_s, backend=jax.default_backend())
 
     # ------------------------------------------------------------- run
     def run(self, prepared):
         p = prepared
-        with precision(p["precision"]):
-            Q, V, wall = run_rollout(p["mx"], p["dx0"], p["steps_device"])
-        n_steps = int(p["steps"].sum())
+        with precision(p.precision):
+            Q, V, wall = run_rollout(p.mx, p.dx0, p.steps_device)
+        n_steps = int(p.steps.sum())
         info = {"message": ""}
 
         def read():
-            Qh, Vh = to_host(Q, V, p["qpos0"], p["qvel0"], len(p["times"]))
+            Qh, Vh = to_host(Q, V, p.qpos0, p.qvel0, len(p.times))
             traj, info["audit"] = read_back(p, Qh, Vh)
             return traj
 
-        return Outcome(read, wall, n_steps, n_steps * STAGES[p["settings"].integrator], info)
+        return Outcome(read, wall, n_steps, n_steps * STAGES[p.settings.integrator], info)
 
     # ------------------------------------------------------------- audit
     def audit(self, prepared, outcome):
         import jax
 
-        p, mx = prepared, prepared["mx"]
+        p, mx = prepared, prepared.mx
         out = super().audit(prepared, outcome)  # MuJoCo C's compiled model: flags, gravity, actuators
         out.update({
             # the gravity put on the device, in its precision (float32 rounds -9.81 to -9.8100004)
@@ -130,20 +151,20 @@ class MjxAdapter(MujocoAdapter):
             "integrator": f"MJX {mx.opt.integrator.name}",
             "timestep": float(np.asarray(mx.opt.timestep)),
             "precision": str(np.asarray(mx.opt.timestep).dtype),
-            "dtype_qpos": str(p["dx0"].qpos.dtype),
-            "backend": p["backend"], "jax_version": jax.__version__,
+            "dtype_qpos": str(p.dx0.qpos.dtype),
+            "backend": p.backend, "jax_version": jax.__version__,
             # XLA's flags shape MJX's cost (with the CPU fusion emitters on, its kinematics are exponential in a
             # chain's depth: benchmarks/scaling.py): the run says which it had
             "xla_flags": os.environ.get("XLA_FLAGS", ""),
-            "jit_compile_s": p["compile_s"],
+            "jit_compile_s": p.compile_s,
             "mjx_version": self.version(),
             "reactions": "MuJoCo C mj_rnePostConstraint on MJX's sampled states (double)",
         })
-        if p["precision"] == "float32" and p["settings"].dt is not None:
+        if p.precision == "float32" and p.settings.dt is not None:
             # the attitude floor of the number type (rad; torque-free tops only, else NaN), for the report's parity
             from dalembert.adapters.mjx.parity import float32_floor
 
-            out["float32_floor"] = float32_floor(p["scene"], p["times"], p["settings"].dt)
+            out["float32_floor"] = float32_floor(p.scene, p.times, p.settings.dt)
         return out
 
 

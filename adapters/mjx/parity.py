@@ -32,12 +32,12 @@ def one_step(case, settings, n_steps=1):
     from dalembert.adapters.mjx.stepping import chunks, precision, run_rollout
 
     p = get_adapter("mjx").prepare(case.scene, case.times, settings)
-    with precision(p["precision"]):
-        Q, V, _ = run_rollout(p["mx"], p["dx0"], [jnp.asarray(c) for c in chunks([n_steps])])
+    with precision(p.precision):
+        Q, V, _ = run_rollout(p.mx, p.dx0, [jnp.asarray(c) for c in chunks([n_steps])])
         qpos, qvel = np.asarray(Q[0][0], dtype=float), np.asarray(V[0][0], dtype=float)
-    model, data = p["model"], mujoco.MjData(p["model"])
-    data.qpos[:], data.qvel[:] = p["qpos0"], p["qvel0"]
-    if p["load_path"] == "actuator":
+    model, data = p.model, mujoco.MjData(p.model)
+    data.qpos[:], data.qvel[:] = p.qpos0, p.qvel0
+    if p.load_path == "actuator":
         data.ctrl[:] = 1.0
     mujoco.mj_step(model, data, nstep=n_steps)
     return dict(qpos=float(np.max(np.abs(qpos - data.qpos))), qvel=float(np.max(np.abs(qvel - data.qvel))))

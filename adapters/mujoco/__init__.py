@@ -3,7 +3,8 @@
 Modules by job: ``mjcf`` (the model as MJCF text and where the scene's body
 frames sit in MuJoCo's; importable without MuJoCo), ``stepping`` (``rollout`` in
 chunks, divergence, the ``xfrc_applied`` load path), ``readback`` (MuJoCo's
-states in body terms, joint reactions), ``adapter`` (``MujocoAdapter``).
+states in body terms, joint reactions), ``audit`` (what the run simulated, read
+back from the compiled model), ``adapter`` (``MujocoAdapter``).
 """
 
 from dalembert.adapters.mujoco.adapter import MujocoAdapter

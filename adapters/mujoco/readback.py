@@ -38,12 +38,12 @@ def read_back(p, Q, V):
 
     from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
-    model, d, scene = _state_dynamics(p["model"]), p["scratch"], p["scene"]
-    n, nb = len(p["times"]), len(scene.bodies)
-    ids = np.array([p["ids"][b.name] for b in scene.bodies])
+    model, d, scene = _state_dynamics(p.model), p.scratch, p.scene
+    n, nb = len(p.times), len(scene.bodies)
+    ids = np.array([p.ids[b.name] for b in scene.bodies])
     # a weld held by an equality constraint has no joint force to read (cfrc_int is zero)
-    children = [j.child for j in scene.joints if not floating(j, p["welds"])]
-    child_ids = np.array([p["ids"][c] for c in children], dtype=int)
+    children = [j.child for j in scene.joints if not floating(j, p.welds)]
+    child_ids = np.array([p.ids[c] for c in children], dtype=int)
     roots = model.body_rootid[ids]
     # every MuJoCo body's figures per sample, whole arrays copied (a fancy-indexed copy costs ~7x a
     # slice copy, and this loop runs once per sample); the scene's bodies are picked out after it
@@ -58,7 +58,7 @@ def read_back(p, Q, V):
     loop_force = {name: np.full((n, 3), np.nan) for name in loops}
     tendons = spring_tendon_ids(model, scene)
     other_passive = np.zeros(n)  # |qfrc_passive - the springs' J^T f|: any passive force that is not a spring's
-    if p["load_path"] == "actuator":
+    if p.load_path == "actuator":
         d.ctrl[:] = 1.0
     finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)
     # views of MjData's arrays, taken once: each attribute access builds a new array object
@@ -66,7 +66,7 @@ def read_back(p, Q, V):
     d_passive, d_cfrc = d.qfrc_passive, d.cfrc_int
     for k in np.flatnonzero(finite):
         qpos[:], qvel[:] = Q[k], V[k]
-        if p["load_path"] == "xfrc_applied":
+        if p.load_path == "xfrc_applied":
             apply_xfrc(p, d)
         mujoco.mj_forward(model, d)
         if children:
@@ -87,8 +87,8 @@ def read_back(p, Q, V):
     cfrc = cfrc_all[:, child_ids, 3:]  # (n, children, 3)
     max_ncon, max_nefc = ncon.max(initial=0), nefc.max(initial=0)
     R_WE = xmat.reshape(n, nb, 3, 3)
-    p_EB = np.array([p["frames"][b.name][0] for b in scene.bodies])  # (nb, 3)
-    R_EB = np.array([p["frames"][b.name][1] for b in scene.bodies])  # (nb, 3, 3)
+    p_EB = np.array([p.frames[b.name][0] for b in scene.bodies])  # (nb, 3)
+    R_EB = np.array([p.frames[b.name][1] for b in scene.bodies])  # (nb, 3, 3)
     R_WB = R_WE @ R_EB  # W <- E <- B
     r = (R_WE @ p_EB[:, :, None])[..., 0]  # from the origin of E to that of B, world axes
     pos = xpos + r
@@ -99,16 +99,16 @@ def read_back(p, Q, V):
     vel = (cvel[..., 3:] - np.cross(xpos - com, omega)) + np.cross(omega, r)
     # Free bodies: the attitude is MuJoCo's own quaternion as integrated (its norm is data).
     for bi, b in enumerate(scene.bodies):
-        if floating(scene.joint(b.name), p["welds"]):
+        if floating(scene.joint(b.name), p.welds):
             a = model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, b.name)]
             quat[:, bi] = Q[:, a + 3:a + 7]
     order = {b.name: bi for bi, b in enumerate(scene.bodies)}
     reactions = {}
     for ci, child in enumerate(children):
         f = cfrc[:, ci].copy()
-        if p["load_path"] == "actuator":  # loads MuJoCo routed through joint space
+        if p.load_path == "actuator":  # loads MuJoCo routed through joint space
             for ld in scene.loads:
-                if ld.kind == "force" and ld.body in _subtree(scene, child, p["welds"]):
+                if ld.kind == "force" and ld.body in _subtree(scene, child, p.welds):
                     f -= spatial.load_to_world(ld, R_WB[:, order[ld.body]])
         reactions[child] = f
     bodies = {b.name: BodyStates(pos[:, bi], quat[:, bi], vel[:, bi], omega[:, bi]) for bi, b in enumerate(scene.bodies)}
@@ -125,7 +125,7 @@ def read_back(p, Q, V):
              "max_abs_passive_force": float(np.abs(passive).max(initial=0.0))}
     if tendons:
         audit["max_abs_passive_force_not_springs"] = float(np.nanmax(other_passive, initial=0.0))
-    return Trajectory(p["times"], bodies, joints, extras), audit
+    return Trajectory(p.times, bodies, joints, extras), audit
 
 
 def _state_dynamics(model):

@@ -31,16 +31,16 @@ ROLLOUT_CHUNK_STEPS = 50_000
 
 
 def reset(p):
-    """Initial state in ``p["data"]`` (warning counters cleared); sample arrays ``Q (n, nq)``,
+    """Initial state in ``p.data`` (warning counters cleared); sample arrays ``Q (n, nq)``,
     ``V (n, nv)`` NaN but for row 0. Returns ``(model, data, Q, V)``."""
     import mujoco
 
-    model, data = p["model"], p["data"]
+    model, data = p.model, p.data
     mujoco.mj_resetData(model, data)  # also clears the warning counters
-    data.qpos[:], data.qvel[:] = p["qpos0"], p["qvel0"]
-    if p["load_path"] == "actuator":
+    data.qpos[:], data.qvel[:] = p.qpos0, p.qvel0
+    if p.load_path == "actuator":
         data.ctrl[:] = 1.0
-    n = len(p["times"])
+    n = len(p.times)
     Q, V = np.full((n, model.nq), np.nan), np.full((n, model.nv), np.nan)
     Q[0], V[0] = data.qpos, data.qvel
     return model, data, Q, V
@@ -65,12 +65,12 @@ def step_rollout(p):
     state = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state, spec)
     control = np.ones((1, 1, model.nu)) if model.nu else None
-    cum = np.concatenate([[0], np.cumsum(p["steps"])])
+    cum = np.concatenate([[0], np.cumsum(p.steps)])
     start = time.perf_counter()
     k0 = 0
-    while k0 < len(p["steps"]):
+    while k0 < len(p.steps):
         k1 = k0 + 1
-        while k1 < len(p["steps"]) and cum[k1 + 1] - cum[k0] <= ROLLOUT_CHUNK_STEPS:
+        while k1 < len(p.steps) and cum[k1 + 1] - cum[k0] <= ROLLOUT_CHUNK_STEPS:
             k1 += 1
         nstep = int(cum[k1] - cum[k0])
         states, _ = rollout.rollout(model, data, state[None], control, nstep=nstep)
@@ -90,8 +90,8 @@ def step_loop(p):
 
     model, data, Q, V = reset(p)
     start = time.perf_counter()
-    for k, nstep in enumerate(p["steps"], 1):
-        if p["load_path"] == "actuator":
+    for k, nstep in enumerate(p.steps, 1):
+        if p.load_path == "actuator":
             mujoco.mj_step(model, data, nstep=int(nstep))
         else:
             for _ in range(nstep):
@@ -107,12 +107,12 @@ def apply_xfrc(p, data):
     """The lagging path: loads as xfrc_applied (at the COM, world axes) from the current pose."""
     import mujoco
 
-    scene, model = p["scene"], p["model"]
+    scene, model = p.scene, p.model
     data.xfrc_applied[:] = 0.0
     mujoco.mj_kinematics(model, data)
     for ld in scene.loads:
-        i = p["ids"][ld.body]
-        R_EB = p["frames"][ld.body][1]
+        i = p.ids[ld.body]
+        R_EB = p.frames[ld.body][1]
         R_WB = data.xmat[i].reshape(3, 3) @ R_EB
         vec = spatial.load_to_world(ld, R_WB)
         if ld.kind == "force":

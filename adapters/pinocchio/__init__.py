@@ -6,7 +6,9 @@ constraints for ``pin.constraintDynamics``: placement, regularisation, drift
 correction, reactions), ``integrators`` (the fixed-step and
 adaptive loops in Python), ``native`` (the fixed-step loop compiled from
 ``stepper.cpp``; ``python -m dalembert.adapters.pinocchio.native`` builds it),
-``adapter`` (``PinocchioAdapter``).
+``readback`` (the sampled states in body terms, joint and loop reactions),
+``audit`` (what the run simulated, read back from the model), ``adapter``
+(``PinocchioAdapter``).
 """
 
 from dalembert.adapters.pinocchio.adapter import PinocchioAdapter

@@ -241,6 +241,11 @@ def cmd_engines(args):
             knobs = "dt" if spec.fixed_step else "rtol, atol"
             opts = f"; options: {', '.join(spec.options)}" if spec.options and args.verbose else ""
             print(f"    {integ:<20} {knobs}{opts}  {spec.description if args.verbose else ''}".rstrip())
+        if args.verbose:  # each option's values, from the adapter's declaration (``Adapter.options``)
+            for key, option in adapter.options.items():
+                default = "" if option.default is None else f"; default {option.default}"
+                only = f"; {', '.join(option.only)} only" if option.only else ""
+                print(f"    option {key}: {option.allowed()}{default}{only}  {option.description}".rstrip())
     return 0
 
 
@@ -596,8 +601,6 @@ def cmd_show_model(args):
                   f"({chosen.integrator if args.integrator else 'any integrator'}, {what}): {reason}{hint}",
                   file=sys.stderr)
             return 1
-        if not hasattr(adapter, "describe"):
-            raise ValueError(f"engine {args.engine!r} does not describe its model")
         text = adapter.describe(case.scene, chosen)
         if not text.strip():
             print(f"dalembert: {args.engine} describes no model for {args.case} with {chosen.integrator}",

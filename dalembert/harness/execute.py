@@ -113,8 +113,9 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
         traj = first.trajectory  # the read-back, once
         readback_s = time.perf_counter() - t0
         found["audit"] = adapter.audit(prepared, first)
-        if hasattr(adapter, "describe"):
-            found["model"] = adapter.describe(case.scene, settings)
+        model = adapter.describe(case.scene, settings)
+        if model:  # (an engine that describes none stores none)
+            found["model"] = model
         if not traj.is_finite():
             t_bad = traj.first_nonfinite_time()
             cost = Cost(build_s=build_s, wall_s_median=first.wall_s, wall_s_min=first.wall_s,
