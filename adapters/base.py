@@ -113,19 +113,13 @@ class Prepared:
     times : ndarray (n,) — the sample times, s
     settings : dalembert.settings.Settings — the run's settings (integrator, dt or tolerances, options)
 
-    A field is also read by its name, ``prepared["times"]``, as the stepping modules built on the dicts this class
-    replaced do (read-only: the dataclass is frozen).
+    Its fields are read as attributes (``prepared.times``), never by name: a misspelt field is then an
+    AttributeError where it is read.
     """
 
     scene: object
     times: np.ndarray
     settings: object
-
-    def __getitem__(self, name):
-        try:
-            return getattr(self, name)
-        except AttributeError:
-            raise KeyError(f"{type(self).__name__} has no field {name!r}") from None
 
 
 @dataclass(frozen=True, eq=False)

@@ -54,7 +54,7 @@ def bare(prepared):
 
     simulator, _, _ = reset(prepared)
     t0 = time.perf_counter()
-    simulator.AdvanceTo(float(prepared["times"][-1]))
+    simulator.AdvanceTo(float(prepared.times[-1]))
     return time.perf_counter() - t0
 
 

@@ -44,13 +44,13 @@ def bare_solve(adapter, prepared):
     stored, no user function): ``SolveDynamic``, or the adapter's per-sample loop."""
     import exudyn as exu
 
-    built = build(prepared["scene"], prepared["settings"])
-    mbs, times = built.mbs, prepared["times"]
+    built = build(prepared.scene, prepared.settings)
+    mbs, times = built.mbs, prepared.times
     settings = adapter._settings(prepared)
     console, exu.config.printToConsole = exu.config.printToConsole, False
     try:
         t0 = time.perf_counter()
-        if prepared["settings"].integrator in ADAPTIVE:
+        if prepared.settings.integrator in ADAPTIVE:
             tol = ON_TIME * settings.timeIntegration.minimumStepSize
             solve_per_sample(exu.MainSolverExplicit(), mbs, settings, times, tol)
         else:

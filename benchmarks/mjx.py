@@ -61,14 +61,14 @@ def bare_scan(prepared):
     from dalembert.adapters.mjx.stepping import mjx, precision
 
     step = mjx().step
-    n = int(prepared["steps"].sum())
-    with precision(prepared["precision"]):
+    n = int(prepared.steps.sum())
+    with precision(prepared.precision):
         fn = jax.jit(lambda m, d: jax.lax.scan(lambda d, _: (step(m, d), None), d, None, length=n)[0].qpos)
-        fn(prepared["mx"], prepared["dx0"]).block_until_ready()  # compile
+        fn(prepared.mx, prepared.dx0).block_until_ready()  # compile
         walls = []
         for _ in range(REPEATS):
             t0 = time.perf_counter()
-            fn(prepared["mx"], prepared["dx0"]).block_until_ready()
+            fn(prepared.mx, prepared.dx0).block_until_ready()
             walls.append(time.perf_counter() - t0)
     return float(np.median(walls))
 

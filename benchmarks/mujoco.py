@@ -28,14 +28,14 @@ def bare_rollout(prepared):
     import mujoco
     from mujoco import rollout
 
-    model, data = prepared["model"], prepared["data"]
+    model, data = prepared.model, prepared.data
     mujoco.mj_resetData(model, data)
-    data.qpos[:], data.qvel[:] = prepared["qpos0"], prepared["qvel0"]
+    data.qpos[:], data.qvel[:] = prepared.qpos0, prepared.qvel0
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state, spec)
     control = np.ones((1, 1, model.nu))
-    nstep = int(prepared["steps"].sum())
+    nstep = int(prepared.steps.sum())
     t0 = time.perf_counter()
     rollout.rollout(model, data, state[None], control if model.nu else None, nstep=nstep)
     return time.perf_counter() - t0

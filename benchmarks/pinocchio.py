@@ -52,8 +52,8 @@ def main():
                 adapter.run(prepared)
                 walls[loop] = min(adapter.run(prepared).wall_s for _ in range(3))
             wall = walls["native"]
-            aba = bare_aba_seconds(prepared["pm"], prepared["q0"], prepared["v0"])
-            n_steps = int(prepared["steps"].sum())
+            aba = bare_aba_seconds(prepared.pm, prepared.q0, prepared.v0)
+            n_steps = int(prepared.steps.sum())
             print(f"{name:<24}{integ:<12}{1e3 * wall / case.t_final:>10.2f}{1e3 * walls['python'] / case.t_final:>9.2f}"
                   f"{1e6 * aba:>9.2f}{wall / (stages * n_steps * aba):>8.2f}"
                   f"{walls['python'] / (stages * n_steps * aba):>8.2f}")

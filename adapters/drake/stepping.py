@@ -25,7 +25,7 @@ kept; any other Drake exception (e.g. an implicit integrator that fails to
 converge at a fixed step) is raised with the time reached, and the run is
 stored as failed.
 
-``p`` is the dict ``DrakeAdapter.prepare`` returns.
+``p`` is the ``DrakePrepared`` that ``DrakeAdapter.prepare`` returns.
 """
 
 from __future__ import annotations
@@ -58,50 +58,50 @@ def reset(p):
     ``(simulator, integrator or None, BallCharts)``."""
     from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
 
-    model, s = p["model"], p["settings"]
+    model, s = p.model, p.settings
     simulator = Simulator(model.diagram)
     context = simulator.get_mutable_context()
-    context.SetTime(float(p["times"][0]))
+    context.SetTime(float(p.times[0]))
     plant_context = model.plant.GetMyMutableContextFromRoot(context)
-    model.plant.SetPositionsAndVelocities(plant_context, np.concatenate([p["q0"], p["v0"]]))
+    model.plant.SetPositionsAndVelocities(plant_context, np.concatenate([p.q0, p.v0]))
     charts = BallCharts(model, plant_context)
     if charts:
         charts.update(force=True)
     integrator = None
     if model.time_step == 0.0:
-        name = p["scheme"]
+        name = p.scheme
         if s.dt is not None:
             integrator = ResetIntegratorFromFlags(simulator, name, float(s.dt))
             integrator.set_fixed_step_mode(True)
         else:  # the largest step is the horizon: the accuracy alone sets the steps (``_dense``)
-            horizon = float(p["times"][-1] - p["times"][0])
+            horizon = float(p.times[-1] - p.times[0])
             integrator = ResetIntegratorFromFlags(simulator, name, horizon)
             integrator.set_fixed_step_mode(False)
-            integrator.request_initial_step_size_target(INITIAL_STEP_FRACTION * float(np.min(np.diff(p["times"]))))
+            integrator.request_initial_step_size_target(INITIAL_STEP_FRACTION * float(np.min(np.diff(p.times))))
             integrator.set_target_accuracy(float(s.rtol))
     simulator.Initialize()
     return simulator, integrator, charts
 
 
 def simulate(p):
-    """Step through ``p["times"]``: ``(X (n, nq + nv), wall s, steps, RHS evaluations, message, re-charts)``.
+    """Step through ``p.times``: ``(X (n, nq + nv), wall s, steps, RHS evaluations, message, re-charts)``.
 
     ``X`` rows are the plant's ``(q, v)`` at each sample (the scene's charts), NaN from the first sample not
     reached. Error-controlled runs are sampled from Drake's dense output (``_dense``), the others by advancing
     to each sample (``_sample_by_sample``).
     """
     simulator, integrator, charts = reset(p)
-    plant = p["model"].plant
+    plant = p.model.plant
     plant_context = plant.GetMyContextFromRoot(simulator.get_context())  # the simulator's own, for all its steps
     x0 = charts.to_scene_chart(plant.GetPositionsAndVelocities(plant_context))
-    X = np.full((len(p["times"]), len(x0)), np.nan)
+    X = np.full((len(p.times), len(x0)), np.nan)
     X[0] = x0
-    loads = p["model"].loads
+    loads = p.model.loads
     if loads is not None:
         loads.evaluations = 0
     # Discrete mode: stop half a step short of each sample, so that exactly round((t_k - t_0) / dt) updates
     # have run whatever the roundoff in t_k (module docstring)
-    early = 0.5 * p["settings"].dt if integrator is None else 0.0
+    early = 0.5 * p.settings.dt if integrator is None else 0.0
     start = time.perf_counter()
     if integrator is not None and not integrator.get_fixed_step_mode():
         message = _dense(p, simulator, integrator, charts, X)
@@ -111,7 +111,7 @@ def simulate(p):
     if integrator is not None:
         n_steps, n_rhs = integrator.get_num_steps_taken(), integrator.get_num_derivative_evaluations()
     else:  # discrete: one update, one evaluation of the dynamics per step
-        n_steps = n_rhs = int(round((simulator.get_context().get_time() + early - p["times"][0]) / p["settings"].dt))
+        n_steps = n_rhs = int(round((simulator.get_context().get_time() + early - p.times[0]) / p.settings.dt))
     return X, wall, int(n_steps), int(n_rhs), message, charts.recharts
 
 
@@ -122,10 +122,10 @@ def _advance(p, simulator, t):
     try:
         simulator.AdvanceTo(t)
     except (RuntimeError, SystemExit) as e:  # pydrake raises SystemExit for a failed internal assertion
-        plant = p["model"].plant
+        plant = p.model.plant
         x = plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(context))
         if np.isfinite(x).all() and "nan" not in str(e).lower():
-            raise RuntimeError(f"Drake stopped at t = {context.get_time():g} s of {p['times'][-1]:g} s: {e}") from None
+            raise RuntimeError(f"Drake stopped at t = {context.get_time():g} s of {p.times[-1]:g} s: {e}") from None
         return f"Drake at t = {context.get_time():g} s: {e}"
     return None
 
@@ -133,7 +133,7 @@ def _advance(p, simulator, t):
 def _sample_by_sample(p, simulator, early, charts, X):
     """Fixed-step and discrete runs: ``AdvanceTo`` each sample time (``early`` s before it), the state copied
     into ``X[k]`` and the ball joints re-charted where due; the message of a blow-up, or ``""``."""
-    times, plant = p["times"], p["model"].plant
+    times, plant = p.times, p.model.plant
     plant_context = plant.GetMyContextFromRoot(simulator.get_context())
     for k in range(1, len(times)):
         message = _advance(p, simulator, float(times[k]) - early)
@@ -164,7 +164,7 @@ def _dense(p, simulator, integrator, charts, X):
     """
     from pydrake.systems.framework import EventStatus
 
-    times, plant = p["times"], p["model"].plant
+    times, plant = p.times, p.model.plant
     if charts:
         def monitor(root_context):
             if charts.due(plant.GetPositions(plant.GetMyContextFromRoot(root_context))):

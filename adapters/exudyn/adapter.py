@@ -199,8 +199,8 @@ class ExudynAdapter(Adapter):
         import exudyn as exu
 
         s = exu.SimulationSettings()
-        st = p["settings"]
-        times = p["times"]
+        st = p.settings
+        times = p.times
         s.solution.file.write = False
         s.timeIntegration.verboseMode = 0
         s.timeIntegration.endTime = float(times[-1])

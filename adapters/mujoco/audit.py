@@ -98,7 +98,7 @@ def _loop_audit(prepared):
         "loop_solref": [float(v) for v in model.eq_solref[0]],
         "loop_solimp": [float(v) for v in model.eq_solimp[0]],
         "loop_softness": (f"MuJoCo's soft equality constraints: reference acceleration -b v - k r with time "
-                          f"constant {tc:g} s ({tc / prepared['settings'].dt:g} steps; refsafe {'on' if refsafe else 'off'}) "
+                          f"constant {tc:g} s ({tc / prepared.settings.dt:g} steps; refsafe {'on' if refsafe else 'off'}) "
                           f"and damping ratio {zeta:g}; impedance {model.eq_solimp[0][0]:g} (MuJoCo's largest), so the "
                           "solver's regularization leaves each constraint force ~1e-4 relative short, made up by the "
                           "residual's spring: the closure is not exact, its residual is the run's loop_residual"),

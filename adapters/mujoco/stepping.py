@@ -12,7 +12,7 @@ and freezes the state. When a chunk ends with a warning, the run is repeated
 with ``step_loop`` (``mj_step(nstep)`` per sample interval) to find the first
 bad sample; the adapter reports NaN from there on with MuJoCo's message.
 
-``prepared`` (``p``) is the dict ``MujocoAdapter.prepare`` returns.
+``prepared`` (``p``) is the ``MujocoPrepared`` that ``MujocoAdapter.prepare`` returns.
 """
 
 from __future__ import annotations
