@@ -36,7 +36,7 @@ from dalembert.adapters.exudyn.audit import audit
 from dalembert.adapters.exudyn.readback import STALE_ACCELERATIONS, link_accelerations, read_back
 from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS, WORLD
 
-__all__ = ["ExudynAdapter", "ExudynPrepared", "SamplingState", "Solved"]
+__all__ = ["ExudynAdapter", "ExudynPrepared", "SamplingState"]
 
 IMPLICIT = {"generalized-alpha": "GeneralizedAlpha", "trapezoidal-index2": "TrapezoidalIndex2"}
 EXPLICIT = {"explicit-euler": "ExplicitEuler", "explicit-midpoint": "ExplicitMidpoint", "rk33": "RK33",
@@ -76,36 +76,6 @@ class ExudynPrepared(Prepared):
 
     system: ExudynSystem
     sampling: SamplingState
-
-
-@dataclass(frozen=True)
-class Solved:
-    """One solve of a prepared system (``sampling.solve``'s result).
-
-    Attributes
-    ----------
-    values : dict (sensor group, quantity) -> ndarray (n, width) or list of rows — the samples
-    read : int — samples read
-    late : str or None — why Exudyn's stored sensors missed a sample, or None
-    it : Exudyn's solver iteration record, or None
-    error : Exception or None — what Exudyn raised
-    wall : float — the solve's wall time, s
-    steps : int — steps taken
-    stalled : str or None — why the guard or the Python sampler stopped the solve
-    sampling : str — how it was sampled, in words
-    reached : float — the time reached, s
-    """
-
-    values: dict
-    read: int
-    late: str | None
-    it: object
-    error: Exception | None
-    wall: float
-    steps: int
-    stalled: str | None
-    sampling: str
-    reached: float
 
 
 class ExudynAdapter(Adapter):
@@ -267,10 +237,10 @@ class ExudynAdapter(Adapter):
         return Outcome(read, solved.wall, solved.steps, n_rhs, info)
 
     def _solve(self, p, stored):
-        """One solve of the prepared system: ``sampling.solve`` on it, as a ``Solved``."""
+        """One solve of the prepared system: ``sampling.solve`` on it (a ``Solved``)."""
         st, system = p.settings, p.system
-        return Solved(**sampling.solve(system.mbs, system.sensors, self._settings(p), p.times,
-                                       None if st.integrator in ADAPTIVE else st.dt, stored))
+        return sampling.solve(system.mbs, system.sensors, self._settings(p), p.times,
+                              None if st.integrator in ADAPTIVE else st.dt, stored)
 
     # ------------------------------------------------------------- audit
     def audit(self, prepared, outcome):

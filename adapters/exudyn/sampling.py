@@ -26,10 +26,11 @@ shrinks on Newton failure are counted.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["solve", "solve_per_sample", "stored_samples", "steps_taken", "MIN_STEP_FRACTION",
+__all__ = ["Solved", "solve", "solve_per_sample", "stored_samples", "steps_taken", "MIN_STEP_FRACTION",
            "MAX_REJECTIONS_IN_A_ROW", "SCHEDULE_LEAD", "ON_TIME"]
 
 # Adaptive solvers stop (the run is stored as failed, with the time reached) when a step
@@ -58,6 +59,36 @@ SCHEDULE_LEAD = 1e-2
 ON_TIME = 1e-3
 
 
+@dataclass(frozen=True)
+class Solved:
+    """One solve of a prepared system (what ``solve`` returns).
+
+    Attributes
+    ----------
+    values : dict (sensor group, quantity) -> ndarray (n, width) or list of rows — the samples
+    read : int — samples read
+    late : str or None — why Exudyn's stored sensors missed a sample, or None
+    it : Exudyn's solver iteration record, or None
+    error : Exception or None — what Exudyn raised
+    wall : float — the solve's wall time, s
+    steps : int — steps taken
+    stalled : str or None — why the guard or the Python sampler stopped the solve
+    sampling : str — how it was sampled, in words
+    reached : float — the time reached, s
+    """
+
+    values: dict
+    read: int
+    late: str | None
+    it: object
+    error: Exception | None
+    wall: float
+    steps: int
+    stalled: str | None
+    sampling: str
+    reached: float
+
+
 def solve(mbs, sensors, settings, times, dt=None, stored=True):
     """One solve of the assembled system ``mbs``, sampled at ``times`` by Exudyn or from Python.
 
@@ -82,10 +113,7 @@ def solve(mbs, sensors, settings, times, dt=None, stored=True):
 
     Returns
     -------
-    dict: ``values`` ((sensor group, quantity) -> samples), ``read`` (samples read), ``late``
-    (why the stored sensors missed a sample, or None), ``it`` (the solver's iteration
-    record), ``error`` (what Exudyn raised, or None), ``wall`` (s), ``steps``, ``stalled``
-    (why ``_Guard`` or ``_Sampler`` stopped the solve, or None), ``sampling``, ``reached`` (s)
+    Solved — the samples, how many were read and how, and what the solver reported
     """
     import exudyn as exu
 
@@ -121,9 +149,9 @@ def solve(mbs, sensors, settings, times, dt=None, stored=True):
     else:
         values, read = sampler.values, sampler.next
     stalled = guard.stalled if guard else sampler.stalled if sampler else None
-    return dict(values=values, read=read, late=late, it=it, error=error, wall=wall,
-                steps=steps_taken(it), stalled=stalled, sampling="Exudyn's stored sensors",
-                reached=float(it.currentTime) if it is not None else float(times[max(read, 1) - 1]))
+    return Solved(values=values, read=read, late=late, it=it, error=error, wall=wall,
+                  steps=steps_taken(it), stalled=stalled, sampling="Exudyn's stored sensors",
+                  reached=float(it.currentTime) if it is not None else float(times[max(read, 1) - 1]))
 
 
 def stored_samples(mbs, flat, times, tol, error):
