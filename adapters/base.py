@@ -33,7 +33,7 @@ import numpy as np
 from dalembert.registry import suggest
 from dalembert.scene import SPRING_EFFECT
 
-__all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome", "Prepared"]
+__all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome", "Prepared", "option_value"]
 
 
 @dataclass(frozen=True)
@@ -99,6 +99,16 @@ class Option:
                 or number != number):
             return f"options.{name}: {number!r} is out of range — give {self.allowed()}"
         return None
+
+
+def option_value(options, settings, key):
+    """The value of option ``key`` a run with ``settings`` takes: the given one, else its declared default.
+
+    ``options``: name -> ``Option``, an adapter's declaration (``Adapter.options``) or the part of it that a module
+    building the engine's model declares where it reads it (``exudyn.model.MODEL_OPTIONS``,
+    ``mujoco.mjcf.MJCF_OPTIONS``); a key it does not declare is a KeyError, not a silent default.
+    """
+    return settings.options.get(key, options[key].default)
 
 
 @dataclass(frozen=True, eq=False)
@@ -184,7 +194,7 @@ class Adapter:
 
     def option(self, settings, key):
         """The value of option ``key`` a run with ``settings`` takes: the given one, else the declared default."""
-        return settings.options.get(key, self.options[key].default)
+        return option_value(self.options, settings, key)
 
     def unsupported(self, scene, settings):
         """The reason this engine cannot represent ``scene``, or None."""

@@ -65,12 +65,13 @@ class ReferenceAdapter(Adapter):
 
     def unsupported(self, scene, settings):
         reason = super().unsupported(scene, settings)
-        if reason is None and settings.options.get("formulation", "").startswith("newton-euler"):
+        formulation = self.option(settings, "formulation")  # None: the scene's default (kane where it has joints)
+        if reason is None and formulation in ("newton-euler", "newton-euler-matrix"):
             if any(j.kind != "free" for j in scene.joints):
                 return "Newton-Euler formulations handle free bodies only (use formulation=kane)"
             if scene.loops:
                 return "Newton-Euler formulations handle no loop closures (use formulation=kane)"
-        if reason is None and settings.options.get("formulation") == "planar":
+        if reason is None and formulation == "planar":
             from dalembert.reference.planar import why_not
 
             return why_not(scene)
@@ -79,7 +80,7 @@ class ReferenceAdapter(Adapter):
     def describe(self, scene, settings):
         from dalembert.reference.solver import FORMULATIONS, default_formulation
 
-        formulation = settings.options.get("formulation", default_formulation(scene))
+        formulation = self.option(settings, "formulation") or default_formulation(scene)
         system = FORMULATIONS[formulation](scene)
         return (f"reference {formulation} ({type(system).__name__}): nq = {len(system.q0)}, nv = {len(system.v0)}; "
                 f"blocks {[b.kind for b in system.blocks]}; gravity {list(scene.gravity)}; "

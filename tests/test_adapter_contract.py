@@ -115,6 +115,42 @@ def test_the_reference_declares_every_formulation_of_the_solver():
     assert get_adapter("reference").options["formulation"].choices == tuple(FORMULATIONS)
 
 
+# Scenes on which the engines' options change the model they build: a free body (Exudyn's ``node``), a jointed
+# tree with a load (``joints``, ``loads``), a weld (``welds``)
+OPTION_CASES = ("free_top", CASE, "particle_box_welded")
+
+
+@pytest.mark.parametrize("engine", [e for e in ENGINES
+                                    if any(o.default is not None for o in get_adapter(e).options.values())])
+def test_a_run_without_an_option_builds_what_its_declared_default_builds(engine):
+    """Leaving an option out refuses and builds (``unsupported``, ``describe``) as giving its declared
+    ``Option.default`` does: what builds the model reads the declaration, not a default of its own. Not vacuous:
+    some other declared value builds another model."""
+    adapter = _installed(engine)
+    other_models = []
+    for name in OPTION_CASES:
+        scene = make_case(name, t_final=T_FINAL).scene
+        for key, option in adapter.options.items():
+            if option.default is None:  # the engine's own or the scene's choice: nothing declared to compare
+                continue
+            integrator = option.only[0] if option.only else next(i for i, s in adapter.integrators.items()
+                                                                if key in s.options)
+            left_out, given = _settings(adapter, integrator=integrator), _settings(adapter, {key: option.default},
+                                                                                   integrator)
+            refusal = adapter.unsupported(scene, left_out)
+            assert refusal == adapter.unsupported(scene, given), (name, key)
+            if refusal is not None:
+                continue
+            model = adapter.describe(scene, left_out)
+            assert model == adapter.describe(scene, given), (name, key)
+            for value in option.choices:
+                other = _settings(adapter, {key: value}, integrator)
+                if value != option.default and adapter.unsupported(scene, other) is None \
+                        and adapter.describe(scene, other) != model:
+                    other_models.append((name, key, value))
+    assert other_models, f"no declared value of {engine}'s options changes the model on {OPTION_CASES}"
+
+
 @pytest.mark.parametrize("engine", ENGINES)
 def test_describe_gives_the_model_as_text(engine):
     adapter = _installed(engine)

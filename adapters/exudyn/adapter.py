@@ -31,7 +31,7 @@ import numpy as np
 from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
 from dalembert.adapters.exudyn import sampling
 from dalembert.adapters.exudyn.loops import loop_axes
-from dalembert.adapters.exudyn.model import JOINTS, ExudynSystem, NODES, TREE_JOINTS, build, rigid_bodies
+from dalembert.adapters.exudyn.model import MODEL_OPTIONS, ExudynSystem, NODES, TREE_JOINTS, build, rigid_bodies
 from dalembert.adapters.exudyn.audit import audit
 from dalembert.adapters.exudyn.readback import STALE_ACCELERATIONS, link_accelerations, read_back
 from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS, WORLD
@@ -85,10 +85,7 @@ class ExudynAdapter(Adapter):
     # ball joints and welds only with joints=redundant, loops only with implicit solvers (see ``unsupported``)
     effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS
     options = {
-        "node": Option(tuple(NODES), "rotvec-lg", "rigid-body node: rotation vector (Lie group), Euler parameters "
-                       "or Rxyz angles"),
-        "joints": Option(JOINTS, JOINTS[0], "joints in minimal coordinates (ObjectKinematicTree) or redundant ones "
-                         "(ObjectJointGeneric on rigid bodies)"),
+        **MODEL_OPTIONS,  # node, joints
         "spectral_radius": Option(minimum=0.0, maximum=1.0, only=("generalized-alpha",),
                                   description="generalized-alpha's spectral radius at infinity (default: Exudyn's)"),
         "newton_rtol": Option(default=NEWTON_RTOL, exclusive_minimum=0.0, only=("generalized-alpha",),
@@ -115,8 +112,8 @@ class ExudynAdapter(Adapter):
         reason = super().unsupported(scene, settings)
         if reason:
             return reason
-        node = settings.options.get("node", "rotvec-lg")
-        redundant = settings.options.get("joints", "minimal") == "redundant"
+        node = self.option(settings, "node")
+        redundant = self.option(settings, "joints") == "redundant"
         explicit = settings.integrator in EXPLICIT
         if scene.loops and explicit:
             return ("loop closures with an explicit integrator: Exudyn's explicit solvers solve no algebraic "
@@ -187,11 +184,11 @@ class ExudynAdapter(Adapter):
             s.timeIntegration.automaticStepSize = False
             s.timeIntegration.numberOfSteps = int(round((times[-1] - times[0]) / st.dt))
         if st.integrator == "generalized-alpha":
-            o = st.options
-            if "spectral_radius" in o:  # else Exudyn's own default
-                s.timeIntegration.generalizedAlpha.spectralRadius = float(o["spectral_radius"])
-            s.timeIntegration.newton.relativeTolerance = float(o.get("newton_rtol", NEWTON_RTOL))
-            s.timeIntegration.newton.absoluteTolerance = float(o.get("newton_atol", NEWTON_ATOL))
+            radius = self.option(st, "spectral_radius")
+            if radius is not None:  # else Exudyn's own default
+                s.timeIntegration.generalizedAlpha.spectralRadius = float(radius)
+            s.timeIntegration.newton.relativeTolerance = float(self.option(st, "newton_rtol"))
+            s.timeIntegration.newton.absoluteTolerance = float(self.option(st, "newton_atol"))
         return s
 
     def run(self, prepared):

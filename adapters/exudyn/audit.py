@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from dalembert.adapters.exudyn.model import CONSTRAINED_AXES
+from dalembert.adapters.base import option_value
+from dalembert.adapters.exudyn.model import CONSTRAINED_AXES, MODEL_OPTIONS
 from dalembert.adapters.exudyn.readback import STALE_ACCELERATIONS
 from dalembert.adapters.exudyn.springs import passive_effects, unexpected_passive
 from dalembert.scene import WORLD
@@ -38,7 +39,7 @@ def audit(prepared, outcome, solver):
     return {
         "gravity": tuple(scene.gravity) if any(scene.gravity) else (0.0, 0.0, 0.0),
         "gravity_loads": "mass-proportional (CreateRigidBody / KinematicTree)" if any(scene.gravity) else "none",
-        "node": st.options.get("node", "rotvec-lg"), "joints": st.options.get("joints", "minimal"),
+        "node": option_value(MODEL_OPTIONS, st, "node"), "joints": option_value(MODEL_OPTIONS, st, "joints"),
         "solver": solver,
         "constraints": constraint_rows(scene, built), "contacts": 0,
         "model": built.summary,
@@ -97,8 +98,8 @@ def _spring_audit(scene, built):
 
 def _rotvec_lg_reactions(scene, settings):
     """Whether the run reports joint reactions from bodies on rotation-vector nodes."""
-    o = settings.options
-    return (o.get("joints", "minimal") == "redundant" and o.get("node", "rotvec-lg") == "rotvec-lg"
+    return (option_value(MODEL_OPTIONS, settings, "joints") == "redundant"
+            and option_value(MODEL_OPTIONS, settings, "node") == "rotvec-lg"
             and any(j.kind != "free" for j in scene.joints))
 
 
@@ -106,7 +107,7 @@ def _reaction_method(scene, settings):
     """How the run's joint reactions are obtained (for the audit)."""
     if not any(j.kind != "free" for j in scene.joints):
         return "none (no joints)"
-    if settings.options.get("joints", "minimal") == "redundant":
+    if option_value(MODEL_OPTIONS, settings, "joints") == "redundant":
         return ("each joint's ForceLocal (ObjectJointGeneric), turned into world axes, negated: the force ON "
                 "the child")
     how = ("Newton's law per link, m (a - g) - loads + children's reactions"

@@ -58,15 +58,25 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from dalembert import spatial
+from dalembert.adapters.base import Option, option_value
 from dalembert.adapters.exudyn.joints import CONSTRAINED_AXES, TREE_JOINTS, read_joints
 from dalembert.adapters.exudyn.loops import joint_frame, loop_axes
 from dalembert.adapters.exudyn.springs import add_springs, read_springs
 from dalembert.scene import WORLD
 
-__all__ = ["build", "ExudynSystem", "rigid_bodies", "axis_frame", "NODES", "JOINTS", "CONSTRAINED_AXES", "TREE_JOINTS"]
+__all__ = ["build", "ExudynSystem", "rigid_bodies", "axis_frame", "NODES", "JOINTS", "MODEL_OPTIONS", "CONSTRAINED_AXES",
+           "TREE_JOINTS"]
 
 NODES = {"rotvec-lg": "RotationRotationVector", "ep": "RotationEulerParameters", "rxyz": "RotationRxyz"}
 JOINTS = ("minimal", "redundant")
+# The options the system is built by, declared here where ``build`` reads them (``ExudynAdapter.options`` adds
+# the solver's): their defaults are read from here by the model, the adapter and the audit alike.
+MODEL_OPTIONS = {
+    "node": Option(tuple(NODES), "rotvec-lg", "rigid-body node: rotation vector (Lie group), Euler parameters "
+                   "or Rxyz angles"),
+    "joints": Option(JOINTS, JOINTS[0], "joints in minimal coordinates (ObjectKinematicTree) or redundant ones "
+                     "(ObjectJointGeneric on rigid bodies)"),
+}
 
 
 def rigid_bodies(scene, redundant):
@@ -140,8 +150,8 @@ def build(scene, settings, assemble=True):
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     g = np.array(scene.gravity, dtype=float)
-    node_type = getattr(exu.NodeType, NODES[settings.options.get("node", "rotvec-lg")])
-    redundant = settings.options.get("joints", "minimal") == "redundant"
+    node_type = getattr(exu.NodeType, NODES[option_value(MODEL_OPTIONS, settings, "node")])
+    redundant = option_value(MODEL_OPTIONS, settings, "joints") == "redundant"
     OV = exu.OutputVariableType
     summary, sensors, markers, bodies = [], {}, {}, {}
     owners = {}  # rigid body or ground object number -> scene body name (WORLD for a ground)

@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from dalembert import spatial
-from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
+from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared, option_value
 from dalembert.adapters.mujoco.audit import audit
-from dalembert.adapters.mujoco.mjcf import LOAD_PATHS, WELDS, engine_frames, mjcf
+from dalembert.adapters.mujoco.mjcf import MJCF_OPTIONS, engine_frames, mjcf
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mujoco.springs import check_springs
 from dalembert.adapters.mujoco.stepping import step_loop, step_rollout
@@ -77,11 +77,7 @@ class MujocoAdapter(Adapter):
     # checked against the scene when built and read back in the audit. Prismatic joints: slide joints (mjcf),
     # read back in the audit (``_joint_audit``).
     effects = EFFECTS | (LOOP_EFFECTS - {"loop:distance"}) | SPRING_EFFECTS
-    options = {
-        "loads": Option(LOAD_PATHS, LOAD_PATHS[0], "how loads enter: site actuators (every integrator stage) or "
-                        "xfrc_applied set from Python once per step"),
-        "welds": Option(WELDS, WELDS[0], "welds as nested bodies (exact) or free bodies held by equality constraints"),
-    }
+    options = dict(MJCF_OPTIONS)  # loads, welds
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "semi-implicit Euler"),
         "rk4": IntegratorSpec(True, OPTIONS, "classical RK4"),
@@ -136,9 +132,10 @@ class MujocoAdapter(Adapter):
             qpos0[a:a + len(j.q0)] = j.q0
             qvel0[v:v + len(j.v0)] = j.v0
         steps = steps_per_interval(np.asarray(times, float), settings.dt)
+        # the load path the MJCF was written with, from its declaration (MJX, prepared here too, declares no loads)
         return MujocoPrepared(scene, np.asarray(times, float), settings, model=model, data=data,
                               scratch=mujoco.MjData(model), qpos0=qpos0, qvel0=qvel0, steps=steps, frames=X_EB, ids=ids,
-                              mjcf=text, load_path=settings.options.get("loads", LOAD_PATHS[0]), welds=welds)
+                              mjcf=text, load_path=option_value(MJCF_OPTIONS, settings, "loads"), welds=welds)
 
     @staticmethod
     def _check_mass_properties(model, scene, X_EB, ids):

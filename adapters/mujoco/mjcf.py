@@ -49,6 +49,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
+from dalembert.adapters.base import Option, option_value
 from dalembert.scene import WORLD
 
 __all__ = ["mjcf", "engine_frames", "floating", "loop_sites", "loop_softness", "spring_sites", "spring_tendon", "INTEGRATORS", "LOAD_PATHS", "WELDS",
@@ -61,6 +62,13 @@ LOAD_PATHS = ("actuator", "xfrc_applied")
 # Welds: nested bodies (``tree``, exact: no constraint) or free bodies held by equality
 # constraints (``equality``: MuJoCo's constraint solver, whose constraints are soft).
 WELDS = ("tree", "equality")
+# The options the MJCF is written by, declared here where ``mjcf`` reads them (``MujocoAdapter.options``; MJX's
+# takes ``welds``): their defaults are read from here by the MJCF and the adapters alike.
+MJCF_OPTIONS = {
+    "loads": Option(LOAD_PATHS, LOAD_PATHS[0], "how loads enter: site actuators (every integrator stage) or "
+                    "xfrc_applied set from Python once per step"),
+    "welds": Option(WELDS, WELDS[0], "welds as nested bodies (exact) or free bodies held by equality constraints"),
+}
 # Weld constraints as stiff as MuJoCo allows, since the scene's welds are rigid: the time
 # constant at 2 timesteps (MuJoCo clamps anything shorter, refsafe) with critical damping,
 # and the impedance at 0.9999 (MuJoCo's largest). What softness remains is MuJoCo's, and the
@@ -185,9 +193,9 @@ def _reference_poses(scene, X_EB, welds, state0):
 
 def mjcf(scene, settings):
     """MJCF text of ``scene`` for ``settings`` (dt, integrator, options)."""
-    welds = settings.options.get("welds", "tree")
+    welds = option_value(MJCF_OPTIONS, settings, "welds")
     X_EB = engine_frames(scene, welds)
-    load_path = settings.options.get("loads", "actuator")
+    load_path = option_value(MJCF_OPTIONS, settings, "loads")
     weld_constraints = [j for j in scene.joints if j.kind == "weld" and welds == "equality"]
     state0 = spatial.initial_body_states(scene) if weld_constraints else {}  # the welded bodies' poses
     sites = loop_sites(scene, welds)
