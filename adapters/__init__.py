@@ -16,7 +16,9 @@ The contract — every adapter class:
 4. declares ``integrators``: name -> ``IntegratorSpec`` (fixed-step or
    adaptive, and the names of the engine options it accepts), and ``options``:
    name -> ``Option`` (the values each option takes and its default), the one
-   place an option's values are written; ``variants(scene)`` lists the
+   place an option's values and default are written (a run's value is read
+   with ``Adapter.option``: the given one, else the declared default);
+   ``variants(scene)`` lists the
    option sets the default matrix runs on a scene (e.g. each formulation);
 5. ``check(scene, times, settings)`` raises ValueError naming the field for
    settings it cannot run (unknown option or value — the base class checks
@@ -27,7 +29,7 @@ The contract — every adapter class:
    (``""``: none);
 6. ``prepare(scene, times, settings)`` builds the engine model (not timed) and
    returns it as a ``Prepared`` (a frozen dataclass: the engine's subclass
-   documents each field);
+   documents each field, read as attributes);
 7. ``run(prepared)`` simulates from the initial state and samples at exactly
    ``times``, returning an ``Outcome``: the wall time of the stepping alone,
    steps and right-hand-side evaluations, and a ``read_back`` that turns the
