@@ -184,7 +184,7 @@ def test_squeezer_forces_in_drakes_model_give_the_published_initial_acceleration
 
     from dalembert.adapters.drake.loops import _Rows
 
-    model = ADAPTER.prepare(squeezer.scene, squeezer.times, Settings("discrete", dt=1e-4))["model"]
+    model = ADAPTER.prepare(squeezer.scene, squeezer.times, Settings("discrete", dt=1e-4)).model
     plant = model.plant
     context = model.diagram.CreateDefaultContext()
     plant_context = plant.GetMyMutableContextFromRoot(context)
