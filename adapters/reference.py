@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dalembert import contact
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
 from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
 
@@ -42,6 +43,8 @@ class ReferenceAdapter(Adapter):
             build(scene, settings, np.asarray(times))  # formulation and integrator checks
 
     def unsupported(self, scene, settings):
+        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
+            return why
         reason = super().unsupported(scene, settings)
         if reason is None and settings.options.get("formulation", "").startswith("newton-euler"):
             if any(j.kind != "free" for j in scene.joints):

@@ -21,7 +21,7 @@ import numpy as np
 
 from dalembert.rotations import cross, quat_to_matrix
 
-__all__ = ["Poses", "poses_of", "initial_poses", "gap", "depth", "slip_velocity", "geom_and_plane"]
+__all__ = ["Poses", "poses_of", "initial_poses", "gap", "depth", "slip_velocity", "geom_and_plane", "not_mapped"]
 
 # A box's 8 corners in its own axes, as multiples of its half edge lengths.
 _CORNERS = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
@@ -127,3 +127,12 @@ def slip_velocity(scene, pair, poses):
     foot = c - np.outer((c - p0) @ n, n)
     v = pose["v"] + cross(pose["w"], foot - pose["p"])
     return v - np.outer(v @ n, n)
+
+
+def not_mapped(scene, engine):
+    """The reason an adapter that does not map contact yet gives for a scene with contact pairs, or None: what its
+    ``unsupported`` returns first (contact is never silently left out: the bodies would fall through)."""
+    if scene.contacts:
+        return (f"contact not yet mapped for {engine} (the scene's pairs {[c.name for c in scene.contacts]} would be "
+                "left out, and its bodies pass through each other)")
+    return None

@@ -29,6 +29,7 @@ import functools
 
 import numpy as np
 
+from dalembert import contact
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome
 from dalembert.adapters.drake.charts import RECHART_PITCH
 from dalembert.adapters.drake.loops import ANCHOR, CONTINUOUS_REASON, LOOP_KINDS
@@ -81,6 +82,8 @@ class DrakeAdapter(Adapter):
         return pydrake.__version__ if hasattr(pydrake, "__version__") else _distribution_version()
 
     def unsupported(self, scene, settings):
+        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
+            return why
         reason = super().unsupported(scene, settings)
         if reason is None and scene.loops and settings.integrator != "discrete":
             kinds = ", ".join(sorted({lp.effect for lp in scene.loops}))

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dalembert import contact
 from dalembert import spatial
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert.adapters.exudyn import sampling
@@ -100,6 +101,8 @@ class ExudynAdapter(Adapter):
             raise ValueError(f"rtol: {settings.integrator!r} is adaptive — give rtol (and atol)")
 
     def unsupported(self, scene, settings):
+        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
+            return why
         reason = super().unsupported(scene, settings)
         if reason:
             return reason

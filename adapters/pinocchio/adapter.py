@@ -20,6 +20,7 @@ import time
 
 import numpy as np
 
+from dalembert import contact
 from dalembert import spatial
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, option_choice
 from dalembert.adapters.pinocchio import loops, springs
@@ -63,6 +64,8 @@ class PinocchioAdapter(Adapter):
         option_choice(settings, "welds", WELDS)
 
     def unsupported(self, scene, settings):
+        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
+            return why
         if any(lp.kind == "distance" for lp in scene.loops):
             return loops.DISTANCE_REASON
         reason = super().unsupported(scene, settings)
