@@ -25,7 +25,7 @@ VERSIONS = {
     "ball_rolling_incline": "860c7556ba69",
     "ball_slide_to_roll": "c106200e159c",
     "block_on_incline": "412156e62ff0",
-    "bouncing_ball": "8a5bc4069cdb",
+    "bouncing_ball": "573c5418d418",
     "bricard": "7c2b8c4a437c",
     "chain": "8049d7d884a4",
     "chain_chaotic": "e4af1066c068",
