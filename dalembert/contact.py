@@ -21,35 +21,29 @@ import numpy as np
 
 from dalembert.rotations import cross, quat_to_matrix
 
-__all__ = ["Poses", "poses_of", "initial_poses", "gap", "depth", "slip_velocity", "geom_and_plane", "not_mapped"]
+__all__ = ["poses_of", "initial_poses", "gap", "depth", "slip_velocity", "geom_and_plane", "not_mapped"]
 
 # A box's 8 corners in its own axes, as multiples of its half edge lengths.
 _CORNERS = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
 
 
-class Poses:
-    """Body poses and velocities at ``n`` samples: per body name, ``p`` (n, 3) COM position (m), ``R`` (n, 3, 3)
-    ``R_WB``, ``v`` (n, 3) COM velocity (m/s), ``w`` (n, 3) angular velocity ``w_WB_W`` (rad/s), world axes."""
-
-    def __init__(self, bodies):
-        self.bodies = bodies
-
-    def __getitem__(self, name):
-        return self.bodies[name]
+# Poses: body poses and velocities at n samples, a dict body name -> dict ``p`` (n, 3) COM position (m),
+# ``R`` (n, 3, 3) ``R_WB``, ``v`` (n, 3) COM velocity (m/s), ``w`` (n, 3) angular velocity ``w_WB_W`` (rad/s),
+# world axes: what every function here takes.
 
 
 def poses_of(traj):
-    """The ``Poses`` of a ``dalembert.trajectory.Trajectory``."""
-    return Poses({name: dict(p=b.position, R=b.rotation_matrix, v=b.velocity, w=b.angular_velocity)
-                  for name, b in traj.bodies.items()})
+    """The poses of a ``dalembert.trajectory.Trajectory``."""
+    return {name: dict(p=b.position, R=b.rotation_matrix, v=b.velocity, w=b.angular_velocity)
+            for name, b in traj.bodies.items()}
 
 
 def initial_poses(scene):
-    """The ``Poses`` of ``scene`` at its initial state (one sample; ``dalembert.spatial.initial_body_states``)."""
+    """The poses of ``scene`` at its initial state (one sample; ``dalembert.spatial.initial_body_states``)."""
     from dalembert import spatial
 
-    return Poses({name: {k: np.asarray(v)[None] for k, v in s.items()}
-                  for name, s in spatial.initial_body_states(scene).items()})
+    return {name: {k: np.asarray(v)[None] for k, v in s.items()}
+            for name, s in spatial.initial_body_states(scene).items()}
 
 
 def _geom_frame(geom, pose):
@@ -108,7 +102,7 @@ def gap(scene, pair, poses):
 
 def depth(scene, poses):
     """The deepest interpenetration (m, >= 0) over the scene's contact pairs at each sample, ndarray (n,)."""
-    n = len(next(iter(poses.bodies.values()))["p"])
+    n = len(next(iter(poses.values()))["p"])
     worst = np.zeros(n)
     for pair in scene.contacts:
         g = gap(scene, pair, poses)

@@ -7,7 +7,8 @@ unit quaternions, an axis where the kind takes one, a tree rooted at the world),
 closures (closed at the initial state to ``LOOP_CLOSURE_TOL``), spring-dampers (points apart at
 the initial state) and contact (geoms on known bodies with positive sizes, planes with a normal, pairs
 naming known geoms and planes with a Coulomb coefficient >= 0 and a restitution in [0, 1], no pair
-interpenetrating at the initial state beyond ``INITIAL_OVERLAP_TOL``). ``dalembert.scene`` re-exports ``SceneError`` and the tolerances.
+interpenetrating at the initial state beyond ``INITIAL_OVERLAP_TOL``). ``dalembert.scene`` re-exports
+``SceneError`` and the tolerances.
 """
 
 from __future__ import annotations
@@ -173,8 +174,9 @@ def _overlap_problems(scene):
         g = contact.gap(scene, c, poses)
         if g is not None and not -g[0] <= INITIAL_OVERLAP_TOL:
             problems.append(f"contacts[{i}] ({c.name!r}: {c.a!r} - {c.b!r}): the shapes interpenetrate by "
-                            f"{-g[0]:.3g} m at the initial state, above INITIAL_OVERLAP_TOL = {INITIAL_OVERLAP_TOL:g} m "
-                            "— place them touching or apart (q0, the geoms' points or the plane's)")
+                            f"{-g[0]:.3g} m at the initial state, above INITIAL_OVERLAP_TOL = "
+                            f"{INITIAL_OVERLAP_TOL:g} m — place them touching or apart (q0, the geoms' points or the "
+                            "plane's)")
     return problems
 
 

@@ -1,8 +1,8 @@
 """Two spheres meeting head-on in free space: their velocities after the impact.
 
 Source: conservation of linear momentum with Newton's impact law (Marion & Thornton, *Classical Dynamics of
-Particles and Systems*, 5th ed., chapter 9: inelastic collisions and the coefficient of restitution). Spheres of masses ``m1``, ``m2`` moving on the line of their centres at ``v1 > v2`` meet when the
-gap between their surfaces closes, at ``t_c = gap / (v1 - v2)``; frictionless, no gravity, nothing turns. With
+Particles and Systems*, 5th ed., chapter 9: inelastic collisions and the coefficient of restitution). Spheres of
+masses ``m1``, ``m2`` moving on the line of their centres at ``v1 > v2`` meet when the gap between their surfaces closes, at ``t_c = gap / (v1 - v2)``; frictionless, no gravity, nothing turns. With
 ``M = m1 + m2`` and restitution ``e`` (the separation speed is ``e (v1 - v2)``):
 
     v1' = (m1 v1 + m2 v2 - m2 e (v1 - v2)) / M,    v2' = (m1 v1 + m2 v2 + m1 e (v1 - v2)) / M
