@@ -121,3 +121,12 @@ def test_a_scene_without_contact_gets_no_contact_in_its_model():
     text = get_adapter("mujoco").describe(make_case("pivoted_rod").scene, Settings("rk4", dt=DT))
     assert "<contact>" not in text and "<geom" not in text and 'contact="disable"' in text and "cone=" not in text
     assert np.all(np.isfinite([contact.restitution_dampratio(e) for e in np.linspace(0.0, 0.99, 50)]))
+
+
+def test_the_adapter_contract_holds_on_the_contact_cases():
+    """Repeated runs identical (MuJoCo's warm start reset with the state), sampled at the case's times, gravity
+    read back: ``check_adapter`` on every contact case and every MuJoCo integrator."""
+    from dalembert.adapters import check_adapter
+
+    names = ("block_on_incline", "ball_slide_to_roll", "ball_rolling_incline", "bouncing_ball", "sphere_collision")
+    assert check_adapter("mujoco", cases=[make_case(n) for n in names]) == []
