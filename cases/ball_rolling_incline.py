@@ -35,11 +35,10 @@ def ball_rolling_incline(angle=math.radians(20.0), mu=0.5, radius=0.1, mass=1.0,
     conserves its energy. Judged on the motion, the energy, the slip and the penetration.
     """
     require("ball_rolling_incline", [
-        (0.0 < angle < 0.5 * math.pi, f"angle: must lie in (0, pi/2) rad, got {angle!r} — the slope's inclination"),
-        (mu > 2.0 / 7.0 * math.tan(angle) if 0.0 < angle < 0.5 * math.pi else True,
-         f"mu: {mu!r} is at most 2/7 tan(angle) = {2.0 / 7.0 * math.tan(angle):.4g}, so the ball would slip — "
-         "give a larger mu (or a gentler angle)"),
-    ])
+        (0.0 < angle < 0.5 * math.pi, f"angle: must lie in (0, pi/2) rad, got {angle!r} — the slope's inclination")])
+    require("ball_rolling_incline", [
+        (mu > 2.0 / 7.0 * math.tan(angle), f"mu: {mu!r} is at most 2/7 tan(angle) = {2.0 / 7.0 * math.tan(angle):.4g}, "
+                                           "so the ball would slip — give a larger mu (or a gentler angle)")])
     normal = np.array([math.sin(angle), 0.0, math.cos(angle)])
     downhill = np.array([math.cos(angle), 0.0, -math.sin(angle)])
     axis = np.cross(normal, downhill)  # rolling down turns the ball about normal x downhill (world -y)
