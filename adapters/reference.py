@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dalembert import contact
 from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
 from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
 
@@ -64,6 +65,8 @@ class ReferenceAdapter(Adapter):
             build(scene, settings, np.asarray(times))  # formulation and integrator checks
 
     def unsupported(self, scene, settings):
+        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
+            return why
         reason = super().unsupported(scene, settings)
         formulation = self.option(settings, "formulation")  # None: the scene's default (kane where it has joints)
         if reason is None and formulation in ("newton-euler", "newton-euler-matrix"):

@@ -197,8 +197,9 @@ class Case:
         scene, horizon, sample times, parameters, tolerance values, conserved quantities, declared
         invariants (name, unit, scale; the code of their series is not covered)."""
         scene = _canonical(self.scene)
-        if isinstance(scene, dict) and not scene.get("springs", True):
-            del scene["springs"]  # (absent when none, so cases without springs keep their versions)
+        for name in ("springs", "geoms", "planes", "contacts"):
+            if isinstance(scene, dict) and not scene.get(name, True):
+                del scene[name]  # (absent when none, so cases without springs or contact keep their versions)
         payload = {
             "name": self.name,
             "scene": scene,

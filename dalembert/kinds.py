@@ -1,5 +1,5 @@
-"""The vocabulary of a scene: the world's name, the kinds of joints, loop closures and loads (with
-the coordinates of each joint kind), and the effect tags a scene calls for and an adapter declares.
+"""The vocabulary of a scene: the world's name, the kinds of joints, loop closures, loads and collision
+geometry (with the coordinates of each joint kind), and the effect tags a scene calls for and an adapter declares.
 
 Shared by the scene's types (``dalembert.scene``) and its checks (``dalembert.scene_checks``);
 ``dalembert.scene`` re-exports every name, the import path users know.
@@ -8,7 +8,8 @@ Shared by the scene's types (``dalembert.scene``) and its checks (``dalembert.sc
 from __future__ import annotations
 
 __all__ = ["WORLD", "JOINT_KINDS", "AXIS_KINDS", "LOAD_KINDS", "LOAD_FRAMES", "LOOP_KINDS", "EFFECTS", "LOOP_EFFECTS",
-           "SPRING_EFFECT", "SPRING_EFFECTS"]
+           "SPRING_EFFECT", "SPRING_EFFECTS", "GEOM_KINDS", "CONTACT_EFFECT", "FRICTION_EFFECT", "RESTITUTION_EFFECT",
+           "CONTACT_EFFECTS"]
 
 WORLD = "world"
 
@@ -44,3 +45,15 @@ LOOP_EFFECTS = frozenset(f"loop:{k}" for k in LOOP_KINDS)
 # declares ``EFFECTS | SPRING_EFFECTS``; every other one declares them unsupported.
 SPRING_EFFECT = "spring_damper"
 SPRING_EFFECTS = frozenset({SPRING_EFFECT})
+
+# Collision geometry fixed in a body (``Geom``), per kind: its ``size`` (m) — a sphere's (radius,), a box's
+# full edge lengths (sx, sy, sz) along the geom's axes (as ``Body.box`` takes them).
+GEOM_KINDS = {"sphere": ("radius",), "box": ("sx", "sy", "sz")}
+# The tags of contact (``ContactPair``), apart like the springs': ``contact`` wherever the scene names a pair
+# that may touch, ``friction`` where a pair has a Coulomb coefficient > 0, ``restitution`` where a pair states
+# a coefficient of restitution. An adapter that maps contact declares ``EFFECTS | CONTACT_EFFECTS``; every other
+# one declares contact scenes unsupported.
+CONTACT_EFFECT = "contact"
+FRICTION_EFFECT = "friction"
+RESTITUTION_EFFECT = "restitution"
+CONTACT_EFFECTS = frozenset({CONTACT_EFFECT, FRICTION_EFFECT, RESTITUTION_EFFECT})

@@ -20,6 +20,12 @@ builds trees only declares loops unsupported through their effect tags (``loop:<
 Linear spring-dampers between two points (``Spring``) are a separate list too, with their own effect
 tag (``spring_damper``), kept out of ``EFFECTS`` for the same reason: an engine declares them only once
 its adapter builds them.
+
+Contact is explicit: collision geometry fixed in bodies (``Geom``: spheres and boxes), fixed planes in the
+world (``Plane``: a ground), and the list of pairs that may touch (``ContactPair``, each with its Coulomb
+friction coefficient and, where the case calls for one, its coefficient of restitution). Nothing touches
+that the scene does not name: two geoms without a pair pass through each other. Contact brings its own
+effect tags (``contact``, ``friction``, ``restitution``: ``CONTACT_EFFECTS``), apart like the springs'.
 """
 
 from __future__ import annotations
@@ -29,14 +35,17 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from dalembert import closure
-from dalembert.kinds import (AXIS_KINDS, EFFECTS, JOINT_KINDS, LOAD_FRAMES, LOAD_KINDS, LOOP_EFFECTS, LOOP_KINDS,
+from dalembert.kinds import (AXIS_KINDS, CONTACT_EFFECT, CONTACT_EFFECTS, EFFECTS, FRICTION_EFFECT, GEOM_KINDS,
+                             JOINT_KINDS, LOAD_FRAMES, LOAD_KINDS, LOOP_EFFECTS, LOOP_KINDS, RESTITUTION_EFFECT,
                              SPRING_EFFECT, SPRING_EFFECTS, WORLD)
-from dalembert.scene_checks import (INERTIA_REL_TOL, LOOP_CLOSURE_TOL, QUAT_NORM_TOL, SINGULAR_INERTIA_RATIO,
-                                    SceneError, scene_problems)
+from dalembert.scene_checks import (INERTIA_REL_TOL, INITIAL_OVERLAP_TOL, LOOP_CLOSURE_TOL, QUAT_NORM_TOL,
+                                    SINGULAR_INERTIA_RATIO, SceneError, scene_problems)
 
 __all__ = ["WORLD", "JOINT_KINDS", "AXIS_KINDS", "LOOP_KINDS", "LOAD_KINDS", "LOAD_FRAMES", "EFFECTS", "LOOP_EFFECTS",
-           "SPRING_EFFECT", "SPRING_EFFECTS", "Body", "Joint", "Loop", "Load", "Spring", "Scene", "SceneError",
-           "mass_properties", "QUAT_NORM_TOL", "INERTIA_REL_TOL", "SINGULAR_INERTIA_RATIO", "LOOP_CLOSURE_TOL"]
+           "SPRING_EFFECT", "SPRING_EFFECTS", "GEOM_KINDS", "CONTACT_EFFECT", "FRICTION_EFFECT", "RESTITUTION_EFFECT",
+           "CONTACT_EFFECTS", "Body", "Joint", "Loop", "Load", "Spring", "Geom", "Plane", "ContactPair", "Scene",
+           "SceneError", "mass_properties", "QUAT_NORM_TOL", "INERTIA_REL_TOL", "SINGULAR_INERTIA_RATIO",
+           "LOOP_CLOSURE_TOL", "INITIAL_OVERLAP_TOL"]
 
 
 def _vec(x, n=None):
@@ -288,6 +297,108 @@ class Spring:
 
 
 @dataclass(frozen=True)
+class Geom:
+    """Collision geometry fixed in ``body``: a ``sphere`` or a ``box`` (``GEOM_KINDS``).
+
+    Attributes
+    ----------
+    body : str — the body it moves with
+    kind : str — ``"sphere"`` or ``"box"``
+    size : tuple — m: a sphere's ``(radius,)``; a box's full edge lengths ``(sx, sy, sz)`` along the geom's axes
+    point : tuple of 3 floats — the geom's centre in the body frame B (m)
+    quat : tuple of 4 floats — the geom's axes in B (scalar first; a box's edges lie along them)
+    name : str — default ``geom_<body>``; a ``ContactPair`` names it
+    """
+
+    body: str
+    kind: str
+    size: tuple
+    point: tuple = (0.0, 0.0, 0.0)
+    quat: tuple = (1.0, 0.0, 0.0, 0.0)
+    name: str = ""
+
+    def __post_init__(self):
+        for name in ("size", "point", "quat"):
+            object.__setattr__(self, name, _vec(getattr(self, name)))
+        if not self.name:
+            object.__setattr__(self, "name", f"geom_{self.body}")
+
+
+@dataclass(frozen=True)
+class Plane:
+    """A fixed plane in the world (a ground): the solid half-space lies behind it, against ``normal``.
+
+    Attributes
+    ----------
+    name : str — a ``ContactPair`` names it
+    normal : tuple of 3 floats — the outward normal, world axes (any non-zero length; made unit)
+    point : tuple of 3 floats — a point of the plane, world (m)
+    """
+
+    name: str = "ground"
+    normal: tuple = (0.0, 0.0, 1.0)
+    point: tuple = (0.0, 0.0, 0.0)
+
+    def __post_init__(self):
+        for name in ("normal", "point"):
+            object.__setattr__(self, name, _vec(getattr(self, name)))
+
+    @property
+    def unit_normal(self):
+        """The outward unit normal, ndarray (3,), world."""
+        n = np.array(self.normal)
+        return n / np.linalg.norm(n)
+
+
+@dataclass(frozen=True)
+class ContactPair:
+    """Two geoms (or a geom and a plane), named by ``a`` and ``b``, that may touch: the only contacts a scene has.
+
+    The contact is rigid and unilateral: the two never interpenetrate, and push apart only. ``friction`` is the
+    Coulomb coefficient (static = kinetic: an ideal Coulomb cone at a point, no rolling or torsional
+    resistance): the tangential force at the contact point is at most ``friction`` times the normal force, and
+    opposes the slip while there is slip. ``restitution`` (None: the case states none, the contact stays
+    closed once made) is Newton's coefficient: at an impact the normal approach speed ``u`` becomes a
+    separation speed ``restitution u``.
+
+    Attributes
+    ----------
+    a, b : str — names of a ``Geom`` or a ``Plane`` of the scene (at least one a geom)
+    friction : float — Coulomb coefficient, >= 0 (0: frictionless)
+    restitution : float or None — in [0, 1]
+    name : str — default ``contact_<a>_<b>``
+    """
+
+    a: str
+    b: str
+    friction: float = 0.0
+    restitution: float | None = None
+    name: str = ""
+
+    def __post_init__(self):
+        object.__setattr__(self, "friction", float(self.friction))
+        if self.restitution is not None:
+            object.__setattr__(self, "restitution", float(self.restitution))
+        if not self.name:
+            object.__setattr__(self, "name", f"contact_{self.a}_{self.b}")
+
+    @property
+    def effects(self):
+        """Its effect tags: ``contact``, with ``friction`` when ``friction > 0`` and ``restitution`` when given."""
+        tags = {CONTACT_EFFECT}
+        if self.friction > 0.0:
+            tags.add(FRICTION_EFFECT)
+        if self.restitution is not None:
+            tags.add(RESTITUTION_EFFECT)
+        return tags
+
+
+# The contact fields of a scene, each absent from its JSON and its case's version when empty (a scene
+# without contact has the data it had before contact existed).
+_CONTACT_FIELDS = ("geoms", "planes", "contacts")
+
+
+@dataclass(frozen=True)
 class Scene:
     """A multibody system. ``gravity`` (m/s^2, world) is required, never defaulted.
 
@@ -301,6 +412,9 @@ class Scene:
     loads: tuple = field(default=())
     loops: tuple = field(default=())
     springs: tuple = field(default=())
+    geoms: tuple = field(default=())
+    planes: tuple = field(default=())
+    contacts: tuple = field(default=())
 
     def __post_init__(self):
         object.__setattr__(self, "bodies", tuple(self.bodies))
@@ -308,6 +422,8 @@ class Scene:
         object.__setattr__(self, "loads", tuple(self.loads))
         object.__setattr__(self, "loops", tuple(self.loops))
         object.__setattr__(self, "springs", tuple(self.springs))
+        for name in _CONTACT_FIELDS:
+            object.__setattr__(self, name, tuple(getattr(self, name)))
         object.__setattr__(self, "gravity", _vec(self.gravity))
         self.validate()
 
@@ -315,10 +431,10 @@ class Scene:
     def to_json(self):
         """The scene as plain JSON data; ``from_json`` rebuilds it exactly (floats round-trip).
 
-        ``loops`` and ``springs`` appear only when there are some: a scene without them has the data
-        it had before they existed."""
+        ``loops``, ``springs`` and the contact fields (``geoms``, ``planes``, ``contacts``) appear only when there are
+        some: a scene without them has the data it had before they existed."""
         data = asdict(self)
-        for name in ("loops", "springs"):
+        for name in ("loops", "springs", *_CONTACT_FIELDS):
             if not data[name]:
                 del data[name]
         return data
@@ -328,7 +444,9 @@ class Scene:
         """Inverse of ``to_json`` (validated like any scene)."""
         return cls(data["name"], [Body(**b) for b in data["bodies"]], [Joint(**j) for j in data["joints"]],
                    data["gravity"], [Load(**ld) for ld in data["loads"]],
-                   [Loop(**lp) for lp in data.get("loops", ())], [Spring(**sp) for sp in data.get("springs", ())])
+                   [Loop(**lp) for lp in data.get("loops", ())], [Spring(**sp) for sp in data.get("springs", ())],
+                   [Geom(**g) for g in data.get("geoms", ())], [Plane(**p) for p in data.get("planes", ())],
+                   [ContactPair(**c) for c in data.get("contacts", ())])
 
     # -------------------------------------------------------------- queries
     def body(self, name):
@@ -336,6 +454,20 @@ class Scene:
         for b in self.bodies:
             if b.name == name:
                 return b
+        raise KeyError(name)
+
+    def geom(self, name):
+        """The geom called ``name``."""
+        for g in self.geoms:
+            if g.name == name:
+                return g
+        raise KeyError(name)
+
+    def plane(self, name):
+        """The plane called ``name``."""
+        for p in self.planes:
+            if p.name == name:
+                return p
         raise KeyError(name)
 
     def joint(self, child):
@@ -352,11 +484,14 @@ class Scene:
         ``gravity`` when gravity is non-zero; ``joint:<kind>`` per joint kind
         present; ``load:{follower,world}_{force,torque}`` per load kind present;
         ``loop:<kind>`` per loop closure kind present (``LOOP_EFFECTS``); ``spring_damper`` when there
-        are springs (``SPRING_EFFECTS``).
+        are springs (``SPRING_EFFECTS``); ``contact``, ``friction``, ``restitution`` as the contact pairs call
+        for them (``ContactPair.effects``, ``CONTACT_EFFECTS``).
         """
         tags = {f"joint:{j.kind}" for j in self.joints}
         tags |= {lp.effect for lp in self.loops}
         tags |= {sp.effect for sp in self.springs}
+        for c in self.contacts:
+            tags |= c.effects
         tags |= {ld.effect for ld in self.loads}
         if any(g != 0.0 for g in self.gravity):
             tags.add("gravity")

@@ -4,8 +4,11 @@ field and the fix, and raised at once (``SceneError``) before anything runs.
 Bodies (a positive mass, a symmetric positive definite inertia that some mass distribution has; a
 free body's not singular), joints (known kinds, known bodies, the right number of coordinates,
 unit quaternions, an axis where the kind takes one, a tree rooted at the world), loads, loop
-closures (closed at the initial state to ``LOOP_CLOSURE_TOL``) and spring-dampers (points apart at
-the initial state). ``dalembert.scene`` re-exports ``SceneError`` and the tolerances.
+closures (closed at the initial state to ``LOOP_CLOSURE_TOL``), spring-dampers (points apart at
+the initial state) and contact (geoms on known bodies with positive sizes, planes with a normal, pairs
+naming known geoms and planes with a Coulomb coefficient >= 0 and a restitution in [0, 1], no pair
+interpenetrating at the initial state beyond ``INITIAL_OVERLAP_TOL``). ``dalembert.scene`` re-exports
+``SceneError`` and the tolerances.
 """
 
 from __future__ import annotations
@@ -14,12 +17,12 @@ import math
 
 import numpy as np
 
-from dalembert import closure, spatial, springs
-from dalembert.kinds import AXIS_KINDS, JOINT_KINDS, LOAD_FRAMES, LOAD_KINDS, LOOP_KINDS, WORLD
+from dalembert import closure, contact, spatial, springs
+from dalembert.kinds import AXIS_KINDS, GEOM_KINDS, JOINT_KINDS, LOAD_FRAMES, LOAD_KINDS, LOOP_KINDS, WORLD
 from dalembert.registry import suggest
 
 __all__ = ["SceneError", "scene_problems", "QUAT_NORM_TOL", "INERTIA_REL_TOL", "SINGULAR_INERTIA_RATIO",
-           "LOOP_CLOSURE_TOL"]
+           "LOOP_CLOSURE_TOL", "INITIAL_OVERLAP_TOL"]
 
 # |q| may differ from 1 by this much (roundoff in user-typed decimals is ~1e-16;
 # anything larger is a real mistake, not roundoff).
@@ -37,6 +40,10 @@ SINGULAR_INERTIA_RATIO = 1e-14
 # double precision close a loop to ~1e-15, and anything beyond 1e-9 is a state the solver would
 # have to move (the case's initial state would not be the one simulated).
 LOOP_CLOSURE_TOL = 1e-9
+# A contact pair whose shapes interpenetrate by more than this (m) at the initial state is refused: an engine
+# would push them apart at once, so the motion simulated would not start from the case's state. Shapes placed
+# to touch (a ball's centre at its radius above the ground) overlap by roundoff, ~1e-16 m.
+INITIAL_OVERLAP_TOL = 1e-9
 
 
 class SceneError(ValueError):
@@ -86,6 +93,90 @@ def scene_problems(scene):
         problems += _closure_problems(scene)
     if scene.springs and not problems:  # the initial lengths need valid names, joints and numbers
         problems += _spring_length_problems(scene)
+    problems += _contact_problems(scene, set(names))
+    if scene.contacts and not problems:  # the initial gaps need valid names, joints and numbers
+        problems += _overlap_problems(scene)
+    return problems
+
+
+def _contact_problems(scene, names):
+    """Geoms, planes and contact pairs: known names, sizes, numbers, coefficients."""
+    problems = []
+    add = problems.append
+    for i, g in enumerate(scene.geoms):
+        where = f"geoms[{i}] ({g.name!r} on {g.body!r})"
+        if g.body not in names:
+            add(f"{where}.body: no body named {g.body!r}{_did_you_mean(g.body, names)} — a geom is fixed in a body "
+                f"of the scene (the ground is a Plane)")
+        if g.kind not in GEOM_KINDS:
+            add(f"{where}.kind: unknown {g.kind!r} — use one of {list(GEOM_KINDS)}")
+        else:
+            sizes = GEOM_KINDS[g.kind]
+            shape = _numbers_problems(where, "size", g.size, len(sizes), f" ({', '.join(sizes)}, m)")
+            problems += shape
+            if not shape and not all(v > 0.0 for v in g.size):
+                add(f"{where}.size: {', '.join(sizes)} must be positive (m), got {g.size} — give the shape's "
+                    "dimensions")
+        problems += _numbers_problems(where, "point", g.point, 3, " (m, in the body's frame)")
+        shape = _numbers_problems(where, "quat", g.quat, 4)
+        problems += shape
+        if not shape and abs(math.sqrt(sum(x * x for x in g.quat)) - 1.0) > QUAT_NORM_TOL:
+            add(f"{where}.quat: quaternion norm is {math.sqrt(sum(x * x for x in g.quat)):.12g}, not 1 — "
+                "normalize it (scalar first: w, x, y, z)")
+    for i, p in enumerate(scene.planes):
+        where = f"planes[{i}] ({p.name!r})"
+        shape = _numbers_problems(where, "normal", p.normal, 3, " (the outward normal, world)")
+        problems += shape
+        if not shape and not any(p.normal):
+            add(f"{where}.normal: zero length — give the plane's outward normal (e.g. (0, 0, 1) for a level ground)")
+        problems += _numbers_problems(where, "point", p.point, 3, " (m, a point of the plane, world)")
+    shapes = [g.name for g in scene.geoms] + [p.name for p in scene.planes]
+    for dup in sorted({n for n in shapes if shapes.count(n) > 1}):
+        add(f"geoms, planes: name {dup!r} used twice — give every geom and plane a unique name=")
+    planes = {p.name for p in scene.planes}
+    seen = {}
+    for i, c in enumerate(scene.contacts):
+        where = f"contacts[{i}] ({c.name!r}: {c.a!r} - {c.b!r})"
+        for field_name in ("a", "b"):
+            end = getattr(c, field_name)
+            if end not in shapes:
+                add(f"{where}.{field_name}: no geom or plane named {end!r}{_did_you_mean(end, set(shapes))} — a pair "
+                    "names two of the scene's geoms, or a geom and a plane")
+        if c.a == c.b:
+            add(f"{where}: pairs {c.a!r} with itself — a pair names two different shapes")
+        elif c.a in planes and c.b in planes:
+            add(f"{where}: pairs two planes, which are fixed — a pair needs at least one geom")
+        else:
+            bodies = {g.name: g.body for g in scene.geoms}
+            if c.a in bodies and bodies.get(c.b) == bodies[c.a]:
+                add(f"{where}: both geoms are on body {bodies[c.a]!r}, which cannot touch itself — pair geoms of "
+                    "different bodies")
+        key = frozenset((c.a, c.b))
+        if key in seen:
+            add(f"{where}: the same shapes as contacts[{seen[key]}] — name each pair once")
+        seen.setdefault(key, i)
+        if not (math.isfinite(c.friction) and c.friction >= 0.0):
+            add(f"{where}.friction: must be finite and >= 0 (the Coulomb coefficient, static = kinetic), got "
+                f"{c.friction!r} — give 0 for a frictionless contact")
+        if c.restitution is not None and not (math.isfinite(c.restitution) and 0.0 <= c.restitution <= 1.0):
+            add(f"{where}.restitution: must lie in [0, 1] (Newton's coefficient: 0 plastic, 1 elastic), got "
+                f"{c.restitution!r} — or None where the case calls for none")
+    pair_names = [c.name for c in scene.contacts]
+    for dup in sorted({n for n in pair_names if pair_names.count(n) > 1}):
+        add(f"contacts: name {dup!r} used twice — give each pair a unique name=")
+    return problems
+
+
+def _overlap_problems(scene):
+    poses = contact.initial_poses(scene)
+    problems = []
+    for i, c in enumerate(scene.contacts):
+        g = contact.gap(scene, c, poses)
+        if g is not None and not -g[0] <= INITIAL_OVERLAP_TOL:
+            problems.append(f"contacts[{i}] ({c.name!r}: {c.a!r} - {c.b!r}): the shapes interpenetrate by "
+                            f"{-g[0]:.3g} m at the initial state, above INITIAL_OVERLAP_TOL = "
+                            f"{INITIAL_OVERLAP_TOL:g} m — place them touching or apart (q0, the geoms' points or the "
+                            "plane's)")
     return problems
 
 

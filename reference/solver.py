@@ -44,6 +44,9 @@ def build(scene, settings, times):
 
     Returns ``(system, integrator_settings)``; raises ValueError naming the field.
     """
+    if scene.contacts:  # never integrate a contact scene as if nothing touched
+        raise ValueError(f"scene.contacts: {[c.name for c in scene.contacts]} — the reference solver has no contact "
+                         "(it integrates smooth equations of motion); a contact case's truth is its closed form")
     options = dict(settings.options)
     formulation = options.pop("formulation", default_formulation(scene))
     if formulation not in FORMULATIONS:

@@ -50,6 +50,9 @@ def test_truth_conserves_what_the_case_declares(case, case_truth):
 def test_an_independent_solution_agrees_with_the_truth(case, case_truth):
     """The closed form against the reference; a truth from the reference against a second integrator
     (and formulation, where the truth's is not Kane's), never against itself."""
+    why = testing.reference_cannot_judge(case)
+    if why:  # contact: tests/test_contact_cases.py checks each closed form against an event-driven integration
+        pytest.skip(why)
     testing.check_reference_agrees(case, case_truth)
 
 

@@ -22,6 +22,10 @@ load_cases()
 
 VERSIONS = {
     "andrews_squeezer": "a3b07d6b2529",
+    "ball_rolling_incline": "860c7556ba69",
+    "ball_slide_to_roll": "c106200e159c",
+    "block_on_incline": "412156e62ff0",
+    "bouncing_ball": "573c5418d418",
     "bricard": "7c2b8c4a437c",
     "chain": "8049d7d884a4",
     "chain_chaotic": "e4af1066c068",
@@ -44,6 +48,7 @@ VERSIONS = {
     "pendulum_a01": "2c05611bb412",
     "pivoted_rod": "da2a01182e34",
     "pivoted_rod_violent": "ede03c9c63ec",
+    "sphere_collision": "a49d0f5e1e88",
 }
 
 

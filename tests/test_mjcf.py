@@ -102,6 +102,8 @@ def test_every_stage_the_scene_does_not_call_for_is_disabled(models, name, welds
     disabled = {k for k, v in flag.attrib.items() if v == "disable"}
     expected = set(ALWAYS_DISABLED) | (set() if constrained else set(CONSTRAINT_STAGES))
     expected |= set() if scene.springs else set(PASSIVE_STAGES)
+    if scene.contacts:  # contact pairs: the contact stage and its constraint rows
+        expected -= {"contact", "constraint"}
     if scene.loops:  # RK4 runs loop constraints at one step, below refsafe's two (mjcf.LOOP_SOLREF_STEPS)
         expected.add("refsafe")
     assert disabled == expected | ({"gravity"} if not any(scene.gravity) else set())
@@ -113,7 +115,10 @@ def test_every_stage_the_scene_does_not_call_for_is_disabled(models, name, welds
 @pytest.mark.parametrize("name, welds", CASES)
 def test_bodies_carry_the_scenes_mass_and_inertia_and_no_geoms(models, name, welds):
     scene, root = SCENES[name], models[f"{name}|{welds}"]
-    assert not list(root.iter("geom"))
+    # no geoms but the scene's collision shapes (contact scenes), massless and colliding with nothing by default
+    geoms = list(root.iter("geom"))
+    assert sorted(g.get("name") for g in geoms) == sorted([g.name for g in scene.geoms] + [p.name for p in scene.planes])
+    assert all(g.get("contype") == g.get("conaffinity") == "0" for g in geoms)
     assert sorted(b.get("name") for b in root.iter("body")) == sorted(b.name for b in scene.bodies)
     for body in scene.bodies:
         (inertial,) = body_element(root, body.name).findall("inertial")

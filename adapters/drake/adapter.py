@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dalembert import contact
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared
 from dalembert.adapters.drake.audit import audit
 from dalembert.adapters.drake.loops import CONTINUOUS_REASON, LOOP_KINDS
@@ -98,6 +99,8 @@ class DrakeAdapter(Adapter):
         return drake_version()
 
     def unsupported(self, scene, settings):
+        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
+            return why
         reason = super().unsupported(scene, settings)
         if reason is None and scene.loops and settings.integrator != "discrete":
             kinds = ", ".join(sorted({lp.effect for lp in scene.loops}))

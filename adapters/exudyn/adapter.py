@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from dalembert import contact
 from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
 from dalembert.adapters.exudyn import sampling
 from dalembert.adapters.exudyn.loops import loop_axes
@@ -109,6 +110,8 @@ class ExudynAdapter(Adapter):
             raise ValueError(f"rtol: {settings.integrator!r} is adaptive — give rtol (and atol)")
 
     def unsupported(self, scene, settings):
+        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
+            return why
         reason = super().unsupported(scene, settings)
         if reason:
             return reason

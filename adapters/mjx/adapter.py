@@ -24,6 +24,8 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
+from dalembert import contact
+from dalembert.kinds import CONTACT_EFFECTS
 from dalembert.adapters.base import IntegratorSpec, Option, Outcome
 from dalembert.adapters.mujoco import MujocoAdapter
 from dalembert.adapters.mujoco.adapter import MujocoPrepared
@@ -73,6 +75,7 @@ class MjxAdapter(MujocoAdapter):
                             "(jax_enable_x64)"),
         "welds": MujocoAdapter.options["welds"],
     }
+    effects = MujocoAdapter.effects - CONTACT_EFFECTS  # (MuJoCo's contact mapping is not checked on MJX yet)
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "MJX semi-implicit Euler"),
         "rk4": IntegratorSpec(True, OPTIONS, "MJX classical RK4"),
@@ -93,6 +96,8 @@ class MjxAdapter(MujocoAdapter):
     def unsupported(self, scene, settings):
         """The base check, then MJX's own: where ``mjx.put_model`` refuses the compiled model
         (NotImplementedError, e.g. a feature MJX lacks), the reason is MJX's."""
+        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
+            return why
         reason = super().unsupported(scene, settings)
         if reason:
             return reason

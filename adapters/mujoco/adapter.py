@@ -17,15 +17,16 @@ from dalembert import spatial
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared, option_value
 from dalembert.adapters.mujoco.audit import audit
 from dalembert.adapters.mujoco.mjcf import MJCF_OPTIONS, engine_frames, mjcf
+from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mujoco.springs import check_springs
 from dalembert.adapters.mujoco.stepping import step_loop, step_rollout
-from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
+from dalembert.scene import CONTACT_EFFECTS, EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS
 from dalembert.settings import steps_per_interval
 
 __all__ = ["MujocoAdapter", "MujocoPrepared"]
 
-OPTIONS = ("loads", "welds")
+OPTIONS = ("loads", "welds", *contact.OPTIONS)
 # Why loop:distance is not declared (measured: a crank-coupler tree closed by a distance loop to the world,
 # the four-bar with a massless rocker, against the reference; tests/test_mujoco_loops.py).
 DISTANCE_REASON = ("the tendon equality holds the closure and the motion (7e-7 m from the reference at dt = 1e-4) but "
@@ -69,15 +70,17 @@ class MujocoPrepared(Prepared):
 
 class MujocoAdapter(Adapter):
     """MuJoCo (``mujoco`` Python bindings). Options: ``loads`` = ``actuator`` | ``xfrc_applied``;
-    ``welds`` = ``tree`` | ``equality``."""
+    ``welds`` = ``tree`` | ``equality``; contact (``contact.OPTIONS``): ``cone`` = ``pyramidal`` | ``elliptic``,
+    ``impratio``, ``noslip_iterations``, ``contact_timeconst``."""
 
     name = "mujoco"
     # loops: equality constraints (mjcf), soft as MuJoCo's are: the audit states their softness. A distance
     # loop (a tendon equality) is generated but not declared: DISTANCE_REASON. Springs: spatial tendons (mjcf),
     # checked against the scene when built and read back in the audit. Prismatic joints: slide joints (mjcf),
     # read back in the audit (``_joint_audit``).
-    effects = EFFECTS | (LOOP_EFFECTS - {"loop:distance"}) | SPRING_EFFECTS
-    options = dict(MJCF_OPTIONS)  # loads, welds
+    # Contact: geoms, planes and explicit pairs (``contact``), read back in the audit.
+    effects = EFFECTS | (LOOP_EFFECTS - {"loop:distance"}) | SPRING_EFFECTS | CONTACT_EFFECTS
+    options = {**MJCF_OPTIONS, **contact.CONTACT_OPTIONS}  # loads, welds; cone, impratio, ...
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "semi-implicit Euler"),
         "rk4": IntegratorSpec(True, OPTIONS, "classical RK4"),
@@ -91,11 +94,15 @@ class MujocoAdapter(Adapter):
 
         return mujoco.__version__
 
+    def check(self, scene, times, settings):
+        super().check(scene, times, settings)
+        contact.contact_options(settings)  # (the declared options parsed as MuJoCo takes them)
+
     def unsupported(self, scene, settings):
         reason = super().unsupported(scene, settings)
         if reason and "loop:distance" in reason:
             reason += f" (a distance loop: {DISTANCE_REASON})"
-        return reason
+        return reason or contact.why_not(scene)
 
     def variants(self, scene):
         """Default matrix: where the scene has welds, also as equality constraints."""

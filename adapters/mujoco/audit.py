@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.mjcf import loop_softness
 from dalembert.adapters.mujoco.springs import other_passive, read_springs
 
@@ -47,6 +48,7 @@ def audit(prepared, outcome):
         "joints": _joint_audit(prepared),
         **_loop_audit(prepared),
         **_spring_audit(prepared),
+        **contact.audit(model, prepared.scene),
         **_read_audit(outcome),
     }
 

@@ -42,6 +42,9 @@ MuJoCo: nothing here calls it.
   ``loads=xfrc_applied`` instead rewrites ``data.xfrc_applied`` before each
   step (``stepping.apply_xfrc``), which lags follower forces by a step (kept to
   show the difference; never the default).
+* Contact (``Scene.geoms``, ``planes``, ``contacts``): geoms, planes and explicit pairs, with nothing colliding by
+  default, and the contact options (``contact``: its docstring states every mapping). A scene with contact pairs
+  keeps the contact and constraint stages enabled.
 """
 
 from __future__ import annotations
@@ -50,6 +53,7 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.base import Option, option_value
+from dalembert.adapters.mujoco import contact
 from dalembert.scene import WORLD
 
 __all__ = ["mjcf", "engine_frames", "floating", "loop_sites", "loop_softness", "spring_sites", "spring_tendon", "INTEGRATORS", "LOAD_PATHS", "WELDS",
@@ -213,7 +217,8 @@ def mjcf(scene, settings):
     gravity = np.array(scene.gravity)
     constrained = bool(weld_constraints or scene.loops)
     disabled = [f for f in DISABLED if not (constrained and f in ("constraint", "equality"))
-                and not (scene.springs and f in ("spring", "damper"))]
+                and not (scene.springs and f in ("spring", "damper"))
+                and not (scene.contacts and f in ("constraint", "contact"))]
     if scene.loops and _loop_steps(settings) < 2.0:
         disabled.append("refsafe")  # MuJoCo would clamp the time constant to 2 steps
     flags = " ".join(f'{f}="disable"' for f in disabled)
@@ -222,11 +227,12 @@ def mjcf(scene, settings):
     lines = ['<mujoco model="%s">' % scene.name,
              '  <compiler angle="radian" alignfree="false" autolimits="true" boundmass="0" boundinertia="0"/>',
              f'  <option timestep="{settings.dt!r}" integrator="{INTEGRATORS[settings.integrator]}" '
-             f'gravity="{_f(gravity)}">',
+             f'gravity="{_f(gravity)}"{contact.option_attributes(scene, settings)}>',
              f"    <flag {flags}/>", "  </option>", "  <worldbody>"]
     if load_path == "actuator" and any(ld.frame == "world" for ld in scene.loads):
         lines.append('    <site name="world_origin" pos="0 0 0"/>')
     lines += ["    " + line for line in site_lines.get(WORLD, [])]
+    lines += ["    " + line for line in contact.plane_lines(scene)]
 
     def body_xml(j, indent):
         p_EB, R_EB = X_EB[j.child]
@@ -254,6 +260,7 @@ def mjcf(scene, settings):
                     out.append(f'{indent}  <site name="load{k}" pos="{_f(site_pos)}" '
                                f'quat="{_f(spatial.matrix_to_quat(R_EB))}"/>')
         out += [f"{indent}  {line}" for line in site_lines.get(body.name, [])]
+        out += [f"{indent}  {line}" for line in contact.geom_lines(scene, body.name, p_EB, R_EB)]
         for c in children.get(body.name, []):
             out += body_xml(c, indent + "  ")
         out.append(f"{indent}</body>")
@@ -308,6 +315,7 @@ def mjcf(scene, settings):
                          f'solref="{solref}" solimp="{_f(WELD_SOLIMP)}"/>')
     if weld_constraints or scene.loops:
         lines.append("  </equality>")
+    lines += contact.pair_lines(scene, settings)
     if load_path == "actuator" and scene.loads:
         lines.append("  <actuator>")
         for k, ld in enumerate(scene.loads):

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dalembert import contact
 from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
 from dalembert.adapters.pinocchio import loops
 from dalembert.adapters.pinocchio.audit import audit
@@ -84,6 +85,8 @@ class PinocchioAdapter(Adapter):
         return pinocchio.__version__
 
     def unsupported(self, scene, settings):
+        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
+            return why
         if any(lp.kind == "distance" for lp in scene.loops):
             return loops.DISTANCE_REASON
         reason = super().unsupported(scene, settings)
