@@ -93,7 +93,7 @@ def test_nothing_collides_that_the_scene_does_not_name():
     prepared = adapter.prepare(scene, case.times, settings)
     z = adapter.run(prepared).trajectory.bodies["ball"].position[:, 2]
     assert z[-1] == pytest.approx(1.1 - 0.5 * 9.81 * case.t_final**2, abs=1e-2)  # free fall, through the ground
-    assert 'contype="0" conaffinity="0"' in prepared["mjcf"] and "<pair" not in prepared["mjcf"]
+    assert 'contype="0" conaffinity="0"' in prepared.mjcf and "<pair" not in prepared.mjcf
 
 
 def test_bad_contact_options_are_refused_naming_the_option():
