@@ -438,7 +438,7 @@ class _Cluster:
 
 
 # everything but where and how long a run ran
-TIMING_FIELDS = {"wall_s_median", "wall_s_min", "wall_s_max", "overhead_s", "readback_s", "build_s", "worker_s",
+TIMING_FIELDS = {"wall_s_median", "wall_s_min", "wall_s_max", "wall_s_repeats", "overhead_s", "readback_s", "build_s", "worker_s",
                  "stepping_total_s", "provenance", "load_start", "load_end", "concurrent", "repeats"}
 
 
