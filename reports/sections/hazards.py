@@ -9,6 +9,7 @@ from dalembert.reports.tables import escape_html, escape_md
 __all__ = ["hazards", "HAZARD_TITLES"]
 
 HAZARD_TITLES = {"diverged": "Diverged", "failed": "Stopped early", "energy": "Energy not kept",
+                 "creep": "Creeps where it must stick",
                  "closure": "Loops still opening", "reactions": "Motion right, reactions wrong",
                  "tolerance": "Finite but beyond the tolerance", "inert": "A tolerance changed nothing",
                  "disagreement": "Engines disagree", "unsupported": "Not supported (not run, not drawn)"}
