@@ -55,6 +55,17 @@ def test_contact_figures_appear_for_contact_cases_only(store):
     assert "Contact against the closed form" not in _section(md, "pendulum")
 
 
+def test_the_events_table_reads_the_closed_form_and_each_run(store):
+    md = _section(_md(store), "bouncing_ball")
+    case = next(f.case for f in find(store) if f.case.name == "bouncing_ball")
+    e, h = case.params["restitution"], case.params["height"]
+    (truth,) = [line for line in md.splitlines() if line.startswith("| closed form |")]
+    # the closed form's first apex e^2 h (the only one within this 1-s horizon), read off its stored samples (exact
+    # for the parabolic flight)
+    assert truth == f"| closed form | {e ** 2 * h:.4g} |"
+    assert any(line.startswith("| mujoco rk4 dt=0.001 |") for line in md.splitlines())
+
+
 def test_a_metric_is_shown_in_its_unit_not_as_a_drift(store):
     md = _section(_md(store), "block_on_incline")
     # the every-run table's column (one run: folded into its "In every row" note); the stored verdict's reason

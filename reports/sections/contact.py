@@ -11,19 +11,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from dalembert.metrics import apexes
+from dalembert.metrics import apexes, first_crossing
 from dalembert.reports import figures
 from dalembert.reports.findings import CREEP_METRIC, run_name, settings_text
 from dalembert.reports.formatting import value_text
 from dalembert.reports.page import Part
+from dalembert.reports.tables import Cell, Table, num
 from dalembert.reports.sections.common import declared, has_contact, is_metric
 from dalembert.reports.work_precision import sweep_key
 
-__all__ = ["contact", "FIGURES", "CREEP_UNIT"]
+__all__ = ["contact", "FIGURES", "CREEP_UNIT", "ROLL_FRACTION"]
 
 # The creep figure's unit: the issue's measurements read in mm/s (1.8 mm/s, MuJoCo's default cone), and the case's
 # bound (0.1 mm/s) sits inside the axis.
 CREEP_UNIT = ("mm/s", 1e-3)
+# The ball rolls from where its slip speed (speed less spin x radius) falls to this fraction of its launch value,
+# read the same way off the truth and every run (the closed form's slip falls linearly: it reaches 1 % at 0.99 t*).
+ROLL_FRACTION = 0.01
 
 
 def contact(rep, f, name):
@@ -41,9 +45,15 @@ def contact(rep, f, name):
     part.heading("Contact against the closed form", 3)
     if draw is not None:
         styles = _styles(runs, rep.colours)
-        panels, caption = draw(f.case, truth, [(r, rep.store.trajectory(r.key)) for r in runs], styles)
+        trajs = [(r, rep.store.trajectory(r.key)) for r in runs]
+        panels, caption, events = draw(f.case, truth, trajs, styles)
         part.figure(figures.contact_panels(panels), f"{name}: {caption} Every finished run (engine by colour, its "
                     "settings by line style); dashed black: the closed form.", f"{name}-contact")
+        head, values = events
+        part.para("The figures' events, read the same way off the closed form and off every finished run:")
+        part.table(Table(["run"] + head, [[Cell("closed form")] + [num(v, "{:.4g}") for v in values(truth)]]
+                         + [[Cell(run_name(r))] + [num(v, "{:.4g}") for v in values(traj)] for r, traj in trajs]),
+                   note_constant=False)
     _creep(part, rep, f, name, runs)
     return part
 
@@ -122,9 +132,13 @@ def _along_slope(case, truth, trajs, styles):
         p = traj.bodies[body].position
         return (p - p[0]) @ down
 
+    def at_end(traj):
+        return [distance(traj)[-1], traj.bodies[body].velocity[-1] @ down]
+
     panels = [dict(title="distance down the slope", xlabel="t (s)", ylabel="distance (m)",
                    lines=_lines(trajs, styles, distance), truth=(truth.t, distance(truth)))]
-    return panels, f"the {body}'s distance down the slope from where it started, against time."
+    return (panels, f"the {body}'s distance down the slope from where it started, against time.",
+            (["distance at t_final (m)", "speed down the slope at t_final (m/s)"], at_end))
 
 
 def _slide_to_roll(case, truth, trajs, styles):
@@ -143,12 +157,19 @@ def _slide_to_roll(case, truth, trajs, styles):
     def spin(traj):  # the speed the spin would roll at: (omega x R n) . along
         return radius * np.cross(traj.bodies[body].angular_velocity, normal) @ along
 
+    def events(traj):
+        slip = speed(traj) - spin(traj)
+        onset = first_crossing(traj.t, slip, ROLL_FRACTION * slip[0])
+        return [onset, speed(traj)[-1], spin(traj)[-1]]
+
     panels = [dict(title="speed", xlabel="t (s)", ylabel="speed along the launch (m/s)",
                    lines=_lines(trajs, styles, speed), truth=(truth.t, speed(truth))),
               dict(title="spin x radius", xlabel="t (s)", ylabel=f"omega x radius (m/s; radius {value_text(radius, 'm')})",
                    lines=_lines(trajs, styles, spin), truth=(truth.t, spin(truth)))]
-    return panels, ("the ball's speed along its launch and its spin times its radius (the speed it would roll at), "
-                    "against time: they meet where it starts to roll.")
+    return (panels, ("the ball's speed along its launch and its spin times its radius (the speed it would roll at), "
+                     "against time: they meet where it starts to roll."),
+            ([f"slip down to {100 * ROLL_FRACTION:g} % at (s)", "speed at t_final (m/s)",
+              "spin x radius at t_final (m/s)"], events))
 
 
 def _bounce(case, truth, trajs, styles):
@@ -173,8 +194,13 @@ def _bounce(case, truth, trajs, styles):
         panels.append(dict(title="apex height per bounce", xlabel="bounce", ylabel="apex height (m)",
                            lines=[(*styles[r.key], *tops(traj)) for r, traj in trajs], markers=True,
                            truth=(np.arange(1, bounces + 1), np.array([z for _, z in true_tops]))))
-    return panels, ("the height of the ball's lowest point above the plane against time, and the apex of each bounce "
-                    f"(the closed form's e^(2k) h; the first {bounces} within the horizon).")
+    def events(traj):
+        _, found = tops(traj)
+        return list(found) + [None] * (bounces - len(found))  # a bounce not found: missing
+
+    return (panels, ("the height of the ball's lowest point above the plane against time, and the apex of each "
+                     f"bounce (the closed form's e^(2k) h; the first {bounces} within the horizon)."),
+            ([f"apex {k} (m)" for k in range(1, bounces + 1)], events))
 
 
 def _collision(case, truth, trajs, styles):
@@ -184,11 +210,15 @@ def _collision(case, truth, trajs, styles):
     panels = [dict(title=f"{b}", xlabel="t (s)", ylabel=f"{b} velocity along the line of centres (m/s)",
                    lines=_lines(trajs, styles, lambda traj, b=b: traj.bodies[b].velocity @ axis),
                    truth=(truth.t, truth.bodies[b].velocity @ axis)) for b in bodies]
-    return panels, (f"the velocity of {bodies[0]} and {bodies[1]} along the line from the first's centre to the "
-                    "second's at t = 0, against time: the jump at the impact.")
+    def after(traj):
+        return [traj.bodies[b].velocity[-1] @ axis for b in bodies]
+
+    return (panels, (f"the velocity of {bodies[0]} and {bodies[1]} along the line from the first's centre to the "
+                     "second's at t = 0, against time: the jump at the impact."),
+            ([f"{b} at t_final (m/s)" for b in bodies], after))
 
 
 # The figure each contact case needs, by case name: ``(case, truth, [(run, trajectory)], styles) -> (panels,
-# caption)``; a contact case without one shows its creep (if measured) and its metrics in the tables only.
+# caption, (event headers, trajectory -> event values))``; a contact case without one shows its creep (if measured) and its metrics in the tables only.
 FIGURES = {"block_on_incline": _along_slope, "ball_rolling_incline": _along_slope,
            "ball_slide_to_roll": _slide_to_roll, "bouncing_ball": _bounce, "sphere_collision": _collision}
