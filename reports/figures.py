@@ -44,6 +44,7 @@ DIVERGED_MARGIN = 2.0  # factor of room below the lowest and above the largest e
 # the first samples) before the error grows, which would otherwise squeeze every run into the top decades.
 DIVERGED_LOW_PERCENTILE = 5.0
 TRUTH_STYLE = dict(color="k", ls="--", lw=1.6)  # the closed form, over the engines' lines
+LABEL_ROOM = 4.0  # factor of room right of the longest bar on a log axis, for the value written after it
 
 
 def _svg(fig):
@@ -507,7 +508,7 @@ def creep_bars(bars, colours, bound, xlabel):
         ax.annotate("the case's bound", (bound, 1.0), xycoords=("data", "axes fraction"), ha="center", va="bottom",
                     fontsize=7, color=TOLERANCE_STYLE["color"])
     ax.set_xscale("log")
-    ax.set_xlim(left=low)
+    ax.set_xlim(low, max(positive + ([bound] if bound else []), default=low * 10.0) * LABEL_ROOM)
     ax.set_yticks(range(len(bars)), [f"{e} {label}".strip() for e, label, _ in bars])
     ax.invert_yaxis()
     ax.set_xlabel(xlabel)

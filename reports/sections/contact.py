@@ -1,6 +1,8 @@
 """A contact case against its closed form: the figure a reader needs for each case (the distance down the slope,
 the speed and the spin, the height and the apex of each bounce, the velocities through an impact), every finished
-run against the stored truth, and the creep speed of every engine and setting on a log scale.
+run against the stored truth, a table of the figures' events (apex heights, the time the slip ends, the speeds at
+the end) read the same way off the truth and off every run, and the creep speed of every engine and setting on a log
+scale.
 
 Read from the store only: the trajectories, the truth and the stored metrics (``RunRecord.drifts`` of a case's
 ``dalembert.metrics.Metric``). A case's figures are chosen by its name (``FIGURES``); its geometry (the plane's
@@ -16,8 +18,8 @@ from dalembert.reports import figures
 from dalembert.reports.findings import CREEP_METRIC, run_name, settings_text
 from dalembert.reports.formatting import value_text
 from dalembert.reports.page import Part
-from dalembert.reports.tables import Cell, Table, num
 from dalembert.reports.sections.common import declared, has_contact, is_metric
+from dalembert.reports.tables import Cell, Table, num
 from dalembert.reports.work_precision import sweep_key
 
 __all__ = ["contact", "FIGURES", "CREEP_UNIT", "ROLL_FRACTION"]
@@ -82,7 +84,8 @@ def _creep(part, rep, f, name, runs):
     bound = tol.value * scale / per if tol else None
     part.figure(figures.creep_bars(bars, rep.colours, bound, f"creep speed ({unit}, log scale)"),
                 f"{name}: the creep of each engine and setting: {declared(f.case, CREEP_METRIC).description}; the "
-                "closed form sticks (0)" + (f"; dashed: the case's bound, {value_text(bound, unit)}." if bound else "."),
+                "closed form sticks (0)"
+                + (f"; dashed: the case's bound, {value_text(bound, unit)}." if bound else "."),
                 f"{name}-creep")
 
 
@@ -164,7 +167,8 @@ def _slide_to_roll(case, truth, trajs, styles):
 
     panels = [dict(title="speed", xlabel="t (s)", ylabel="speed along the launch (m/s)",
                    lines=_lines(trajs, styles, speed), truth=(truth.t, speed(truth))),
-              dict(title="spin x radius", xlabel="t (s)", ylabel=f"omega x radius (m/s; radius {value_text(radius, 'm')})",
+              dict(title="spin x radius", xlabel="t (s)",
+                   ylabel=f"omega x radius (m/s; radius {value_text(radius, 'm')})",
                    lines=_lines(trajs, styles, spin), truth=(truth.t, spin(truth)))]
     return (panels, ("the ball's speed along its launch and its spin times its radius (the speed it would roll at), "
                      "against time: they meet where it starts to roll."),
@@ -219,6 +223,7 @@ def _collision(case, truth, trajs, styles):
 
 
 # The figure each contact case needs, by case name: ``(case, truth, [(run, trajectory)], styles) -> (panels,
-# caption, (event headers, trajectory -> event values))``; a contact case without one shows its creep (if measured) and its metrics in the tables only.
+# caption, (event headers, trajectory -> event values))``; a contact case without one shows its creep (if measured)
+# and its metrics in the tables only.
 FIGURES = {"block_on_incline": _along_slope, "ball_rolling_incline": _along_slope,
            "ball_slide_to_roll": _slide_to_roll, "bouncing_ball": _bounce, "sphere_collision": _collision}
