@@ -271,7 +271,9 @@ class CaseRecord:
                 "tolerances": {k: {"value": t.value, "reason": t.reason} for k, t in self.tolerances.items()},
                 "conserved": list(self.conserved), "tags": list(self.tags), "floor": dict(self.floor),
                 "truth": self.truth,
-                "invariants": [{"name": i.name, "description": i.description, "unit": i.unit, "scale": i.scale}
+                # (a metric's kind is written, an invariant's left out: stores without metrics keep their files)
+                "invariants": [{"name": i.name, "description": i.description, "unit": i.unit, "scale": i.scale,
+                                **({"kind": i.kind} if i.kind != "invariant" else {})}
                                for i in self.invariants], "units": dict(self.units)}
 
     @classmethod
@@ -281,7 +283,8 @@ class CaseRecord:
                    Scene.from_json(data["scene"]), float(data["t_final"]), tuple(data["sample_times"]),
                    {k: Tolerance(t["value"], t["reason"]) for k, t in data["tolerances"].items()},
                    tuple(data["conserved"]), tuple(data["tags"]), dict(data["floor"]), data["truth"],
-                   tuple(InvariantLabel(i["name"], i["description"], i["unit"], float(i["scale"]))
+                   tuple(InvariantLabel(i["name"], i["description"], i["unit"], float(i["scale"]),
+                                        i.get("kind", "invariant"))
                          for i in data.get("invariants", ())), dict(data.get("units", {})))
 
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dalembert.tolerance import Invariant
+from dalembert.tolerance import Invariant, InvariantLabel
 
 __all__ = ["Metric", "constant", "first_crossing", "apexes"]
 
@@ -35,6 +35,11 @@ class Metric(Invariant):
     series : callable ``(scene, traj) -> ndarray (n,)`` — the figure at each sample of ``traj``, in ``unit``;
         the stored value is ``max |series| / scale`` (dimensionless)
     """
+
+    @property
+    def label(self):
+        """The ``InvariantLabel`` a store keeps, of kind "metric"."""
+        return InvariantLabel(self.name, self.description, self.unit, float(self.scale), "metric")
 
     def drift_series(self, scene, traj):
         """``|series(t)| / scale`` at each sample, ndarray (n,), dimensionless."""

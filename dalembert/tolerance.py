@@ -44,12 +44,15 @@ class InvariantLabel:
     description : str — what is conserved, with its frame and reference point
     unit : str — unit of the quantity (and of ``scale``)
     scale : float — the drift is ``max_t |x(t) - x(0)| / scale`` (dimensionless)
+    kind : str — "invariant", or "metric" for a ``dalembert.metrics.Metric`` (its stored value is
+        ``max_t |x(t)| / scale``: the figure itself, nothing subtracted), so a report shows it as what it is
     """
 
     name: str
     description: str
     unit: str
     scale: float
+    kind: str = "invariant"
 
 
 @dataclass(frozen=True, eq=False)

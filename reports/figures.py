@@ -18,6 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 from dalembert.reports.formatting import value_text  # noqa: E402
 
@@ -25,7 +26,7 @@ plt.rcParams.update({"svg.fonttype": "none", "font.size": 9, "axes.grid": True, 
                      "legend.fontsize": 7, "axes.titlesize": 10})
 
 __all__ = ["engine_colours", "pareto_summary", "work_precision", "stability", "time_grid", "diverged_runs",
-           "diverged_figure", "stability_map", "map_costs", "scaling", "MAX_POINTS"]
+           "diverged_figure", "stability_map", "map_costs", "scaling", "contact_panels", "creep_bars", "MAX_POINTS"]
 
 MAX_POINTS = 400  # per time-series line: figures stay small; the data stay in the store
 PANEL_W, PANEL_H = 3.3, 2.8  # inches per small-multiple panel: four fit across the page
@@ -42,6 +43,8 @@ DIVERGED_MARGIN = 2.0  # factor of room below the lowest and above the largest e
 # Per diverged run, the share of its samples (%) that may lie below the axis: its start at roundoff (1e-16 at
 # the first samples) before the error grows, which would otherwise squeeze every run into the top decades.
 DIVERGED_LOW_PERCENTILE = 5.0
+TRUTH_STYLE = dict(color="k", ls="--", lw=1.6)  # the closed form, over the engines' lines
+LABEL_ROOM = 4.0  # factor of room right of the longest bar on a log axis, for the value written after it
 
 
 def _svg(fig):
@@ -448,4 +451,66 @@ def scaling(lines, colours, sizes):
     ax.set_xlabel("bodies N")
     ax.set_ylabel("stepping time per simulated second (s/s)")
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
+    return _svg(fig)
+
+
+# ---------------------------------------------------------------------------------------------- contact
+def contact_panels(panels):
+    """A contact case's figures against the truth: one panel per figure, a line per run and the truth dashed.
+
+    Parameters
+    ----------
+    panels : list of dict — ``title``, ``xlabel``, ``ylabel``, ``lines`` [(label, colour, linestyle, x, y), ...]
+        (x, y ndarrays of one length, in the axes' units), ``truth`` (x, y) or None, ``markers`` (bool: points
+        joined, for per-event figures such as the apex of each bounce)
+    """
+    fig, axes = _grid(len(panels), ncols=2, sharex=False, sharey=False, height=PANEL_H + 0.4)
+    for ax, p in zip(axes, panels):
+        marker = dict(marker="o", ms=4) if p.get("markers") else {}
+        for label, colour, style, x, y in p["lines"]:
+            xx, yy = (x, y) if p.get("markers") else _thin(np.asarray(x), np.asarray(y))
+            ax.plot(xx, yy, color=colour, ls=style, lw=1.1, label=label, **marker)
+        if p.get("truth") is not None:
+            x, y = p["truth"]
+            ax.plot(x, y, **TRUTH_STYLE, label="closed form", **marker)
+        if p.get("markers"):  # events are counted: whole numbers on the axis
+            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.set_title(p["title"])
+        ax.set_xlabel(p["xlabel"])
+        ax.set_ylabel(p["ylabel"])
+        if ax.lines:
+            ax.legend(fontsize=6, framealpha=0.85)
+    fig.tight_layout()
+    return _svg(fig)
+
+
+def creep_bars(bars, colours, bound, xlabel):
+    """Creep speed per engine and setting, a bar each on a log axis, the case's bound dashed.
+
+    Parameters
+    ----------
+    bars : list of (engine, label, value) — value in the axis' unit; a zero is written beside the axis, not drawn
+    colours : dict engine -> colour
+    bound : float or None — the case's bound, in the axis' unit
+    xlabel : str
+    """
+    fig, ax = plt.subplots(figsize=(ROW_W * 0.6, 0.9 + 0.32 * len(bars)))
+    positive = [v for _, _, v in bars if v > 0 and math.isfinite(v)]
+    low = min(positive + ([bound] if bound else [])) / 10.0 if positive or bound else 1e-12
+    for i, (engine, label, value) in enumerate(bars):
+        if value > 0 and math.isfinite(value):
+            ax.barh(i, value - low, left=low, color=colours[engine], height=0.6)
+            ax.text(value, i, f" {value:.3g}", va="center", fontsize=7)
+        else:
+            ax.text(low, i, f" {value:g}", va="center", fontsize=7)
+    if bound:  # named above the axis, where no bar's value is written
+        ax.axvline(bound, **TOLERANCE_STYLE)
+        ax.annotate("the case's bound", (bound, 1.0), xycoords=("data", "axes fraction"), ha="center", va="bottom",
+                    fontsize=7, color=TOLERANCE_STYLE["color"])
+    ax.set_xscale("log")
+    ax.set_xlim(low, max(positive + ([bound] if bound else []), default=low * 10.0) * LABEL_ROOM)
+    ax.set_yticks(range(len(bars)), [f"{e} {label}".strip() for e, label, _ in bars])
+    ax.invert_yaxis()
+    ax.set_xlabel(xlabel)
+    fig.tight_layout()
     return _svg(fig)

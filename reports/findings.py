@@ -9,6 +9,9 @@ reached), and the hazards a user must know before trusting a setting:
 * ``failed`` — runs that stopped with an error or at the time limit;
 * ``energy`` — finished runs that lost or gained more than ``ENERGY_HAZARD`` of
   their energy over the horizon;
+* ``creep`` — finished runs of a case that measures ``creep`` (a ``dalembert.metrics.Metric``: the slip speed
+  while the closed form sticks) whose creep is beyond the case's bound: the body slides where it must stick
+  (soft contacts, a pyramidal friction cone), named with its speed;
 * ``closure`` — finished runs of a closed-loop case whose loop-closure residual leaves the case's
   bound and is still growing at the end: its largest value over the horizon's last quarter is more
   than ``CLOSURE_GROWTH`` times that over its first half (read from the stored trajectories); a
@@ -51,8 +54,8 @@ from dalembert.reports.formatting import value_text
 from dalembert.reports.work_precision import (cheapest_reaching, headline_quantity, pareto_front, points,
                                               sweep_key)
 
-__all__ = ["ACCURACY_TARGETS", "ENERGY_HAZARD", "DISAGREEMENT_FACTOR", "CLOSURE_GROWTH", "HAZARDS", "Reach", "EngineSummary",
-           "Hazard", "CaseFindings", "find", "run_name", "settings_text"]
+__all__ = ["ACCURACY_TARGETS", "ENERGY_HAZARD", "DISAGREEMENT_FACTOR", "CLOSURE_GROWTH", "HAZARDS", "CREEP_METRIC",
+           "Reach", "EngineSummary", "Hazard", "CaseFindings", "find", "run_name", "settings_text", "speed_text"]
 
 # Three accuracies a user asks for, three decades apart: an engineering answer (1e-3),
 # a careful simulation (1e-6), and near what double precision can resolve over a horizon (1e-9).
@@ -71,9 +74,12 @@ DISAGREEMENT_FACTOR = 10.0
 # spike, Drake discrete x2.2, MuJoCo discrete x3.0 (its soft residual follows the growing constraint load).
 CLOSURE_GROWTH = 3.0
 # Hazard kinds, in the order the report lists them.
-HAZARDS = ("diverged", "failed", "energy", "closure", "reactions", "tolerance", "inert", "disagreement",
+HAZARDS = ("diverged", "failed", "energy", "creep", "closure", "reactions", "tolerance", "inert", "disagreement",
            "unsupported")
 ENERGY_LIKE = ("energy", "energy_balance")
+# The metric a contact case names its creep by (``cases/block_on_incline``): the slip speed, m/s, over a phase
+# in which its closed form sticks.
+CREEP_METRIC = "creep"
 
 
 def settings_text(r):
@@ -82,6 +88,18 @@ def settings_text(r):
     if r.atol is not None and r.atol == r.rtol:
         return " ".join(x for x in (r.integrator, f"rtol={r.rtol:g}", r.options_label) if x)
     return r.settings_label
+
+
+# A speed's unit in a sentence: the largest of these (m/s) at or below it, so a creep reads "1.8 mm/s", not
+# "0.0018 m/s"; speeds below the last are written in it.
+SPEED_UNITS = ((1.0, "m/s"), (1e-3, "mm/s"), (1e-6, "um/s"), (1e-9, "nm/s"))
+
+
+def speed_text(v):
+    """A speed ``v`` (m/s) as text in the unit that reads best (``SPEED_UNITS``): ``speed_text(0.0018)`` is
+    "1.8 mm/s"."""
+    scale, unit = next(((s, u) for s, u in SPEED_UNITS if abs(v) >= s), SPEED_UNITS[-1])
+    return f"{v / scale:.3g} {unit}"
 
 
 def run_name(r):
@@ -168,7 +186,7 @@ def _case_findings(case, runs, store=None):
                                      best, tuple(pareto_front(pts))))
     hazards = []
     for e in engines:
-        hazards += (_diverged(e, case) + _failed(e) + _energy(e, case) + _closure(e, case, store)
+        hazards += (_diverged(e, case) + _failed(e) + _energy(e, case) + _creep(e, case) + _closure(e, case, store)
                     + _reactions(e, case, quantity) + _beyond(e, case) + _inert(e, quantity))
     inert = {r.key for h in hazards if h.kind == "inert" for r in h.runs}
     hazards += _disagreements([r for r in runs if r.key not in inert], quantity, case)
@@ -279,6 +297,26 @@ def _energy(e, case):
                                       f"more than {100 * ENERGY_HAZARD:g} % over the "
                                       f"{value_text(case.t_final, 's')} horizon",
                     line, max(bad, key=lambda r: r.drifts[name]))]
+
+
+def _creep(e, case):
+    """Finished runs whose creep (``CREEP_METRIC``, a metric: stored over its scale) is beyond the case's bound."""
+    label = next((inv for inv in case.invariants if inv.name == CREEP_METRIC and inv.kind == "metric"), None)
+    tol = case.tolerances.get(CREEP_METRIC)
+    if label is None or tol is None:
+        return []
+    speed = {r.key: r.drifts[CREEP_METRIC] * label.scale for r in e.runs
+             if r.ok and r.verdict != "diverged" and r.drifts.get(CREEP_METRIC, 0.0) > tol.value}
+    bad = _by_sweep(r for r in e.runs if r.key in speed)
+    if not bad:
+        return []
+
+    def line(r):
+        return f"{settings_text(r)} at {speed_text(speed[r.key])}"
+
+    return [_hazard("creep", e, bad, f"{_runs_word(len(bad))} {_verb(len(bad), 'creeps', 'creep')} where the "
+                                     f"closed form sticks (bound {speed_text(tol.value * label.scale)})",
+                    line, max(bad, key=lambda r: speed[r.key]))]
 
 
 def _growth_to_the_end(t, residual):
@@ -521,6 +559,7 @@ def _sentences(f):
             counts[h.kind] = counts.get(h.kind, 0) + (len(h.runs) if h.kind != "disagreement" else 1)
     words = {"diverged": "runs diverged", "failed": "runs stopped early",
              "energy": f"runs change the energy by more than {100 * ENERGY_HAZARD:g} %",
+             "creep": "runs creep where the closed form sticks",
              "closure": "runs still opening their loops", "reactions": "runs with the motion right and the reactions wrong",
              "tolerance": "finished runs leave the tolerance", "inert": "runs whose tolerance changed nothing",
              "disagreement": "settings where engines disagree"}

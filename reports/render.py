@@ -8,7 +8,7 @@ It opens with what was found (``sections.findings``): per case and engine, the
 cheapest run reaching each target accuracy, the Pareto fronts, the hazards naming
 their runs. Each case's section then shows what accuracy costs (work-precision
 small multiples), stability (drift magnitude with the stored verdicts), the runs
-that matter against time, and every run in a sortable table.
+that matter against time, a contact case's figures against its closed form, and every run in a sortable table.
 
 This module only orders the sections (``reports/sections/``, one module each) and
 hands them to the page writer (``reports/page.py``).
@@ -27,6 +27,7 @@ from dalembert.reports.page import Part, write_page
 from dalembert.reports.sections.against_time import against_time
 from dalembert.reports.sections.case import case_header
 from dalembert.reports.sections.common import Report, section_id, title
+from dalembert.reports.sections.contact import contact
 from dalembert.reports.sections.engines import engines_simulated
 from dalembert.reports.sections.findings import findings
 from dalembert.reports.sections.hazards import hazards
@@ -80,7 +81,7 @@ def _case_sections(rep, f, names, mapped):
         return [part]
     name = f"{f.case.name}-{f.case.version}" if count > 1 else f.case.name
     return [case_header(rep, f), work_precision(rep, f, name), stability(rep, f, name), against_time(rep, f, name),
-            every_run(rep, f), engines_simulated(rep, f)]
+            contact(rep, f, name), every_run(rep, f), engines_simulated(rep, f)]
 
 
 def build_report(store, out_dir=None):

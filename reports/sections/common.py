@@ -1,5 +1,5 @@
 """What the report's sections share: the data they are built from (``Report``), read once,
-and the few ways every section names a case, a run or a drift."""
+and the few ways every section names a case, a run, a drift or a metric."""
 
 from __future__ import annotations
 
@@ -10,7 +10,8 @@ from dalembert.reports.findings import settings_text
 from dalembert.reports.formatting import params_text, value_text
 from dalembert.reports.tables import Cell, escape_html
 
-__all__ = ["Report", "run_link", "section_id", "title", "grid_row", "drift_unit", "declared", "drifts_of"]
+__all__ = ["Report", "run_link", "section_id", "title", "grid_row", "drift_unit", "declared", "drifts_of",
+           "is_metric", "stored_label", "shown_value", "has_contact"]
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,33 @@ def grid_row(r):
 def declared(case, name):
     """The case's declared invariant ``name`` (an ``InvariantLabel``), or None for a built-in one."""
     return next((inv for inv in case.invariants if inv.name == name), None)
+
+
+def is_metric(case, name):
+    """Whether the case's stored figure ``name`` is a metric (``dalembert.metrics.Metric``: the figure itself, in
+    its unit, over its scale), not a conserved quantity's drift."""
+    inv = declared(case, name) if case is not None else None
+    return inv is not None and inv.kind == "metric"
+
+
+def stored_label(name, case=None):
+    """How a table or an axis names the stored figure ``name``: a metric by its name and unit ("creep (m/s)"), a
+    drift as "name drift (its unit)"."""
+    if is_metric(case, name):
+        return f"{name} ({declared(case, name).unit})"
+    return f"{name} drift ({drift_unit(name, case)})"
+
+
+def shown_value(r, name, case=None):
+    """The figure a report shows for run ``r``'s stored ``drifts[name]``: a metric in its unit (the stored value is
+    over its scale), a drift as stored; NaN when the run stored none."""
+    value = r.drifts.get(name, float("nan"))
+    return value * declared(case, name).scale if is_metric(case, name) else value
+
+
+def has_contact(case):
+    """Whether the case's scene names contact pairs (``Scene.contacts``)."""
+    return bool(getattr(case.scene, "contacts", ()))
 
 
 def drift_unit(name, case=None):

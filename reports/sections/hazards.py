@@ -9,6 +9,7 @@ from dalembert.reports.tables import escape_html, escape_md
 __all__ = ["hazards", "HAZARD_TITLES"]
 
 HAZARD_TITLES = {"diverged": "Diverged", "failed": "Stopped early", "energy": "Energy not kept",
+                 "creep": "Creeps where it must stick",
                  "closure": "Loops still opening", "reactions": "Motion right, reactions wrong",
                  "tolerance": "Finite but beyond the tolerance", "inert": "A tolerance changed nothing",
                  "disagreement": "Engines disagree", "unsupported": "Not supported (not run, not drawn)"}
@@ -26,6 +27,9 @@ def hazards(rep):
               f"trajectory; a loop is still opening when its closure residual is beyond the case's bound and its "
               f"largest value over the horizon's last quarter is more than {CLOSURE_GROWTH:g} times that over its "
               "first half.")
+    if any(h.kind == "creep" for f in rep.found for h in f.hazards):  # (said only where it applies)
+        part.para("A run creeps where its case's closed form sticks when its creep (the body's mean speed along the "
+                  "plane over the phase the closed form holds it still) is beyond the case's bound.")
     for f in rep.found:
         if not f.hazards:
             continue

@@ -1,6 +1,6 @@
 """Every run of one case in a sortable table: settings, status, cost and its spread, each error,
 each conserved quantity's drift (the case's declared ones too, relative to their scale in their
-unit), what is beyond the tolerance, and the stored verdict."""
+unit), each metric in its unit, what is beyond the tolerance, and the stored verdict."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from dalembert.errors import QUANTITIES
 from dalembert.reports.findings import settings_text
 from dalembert.reports.formatting import value_text
 from dalembert.reports.page import Part
-from dalembert.reports.sections.common import drift_unit, drifts_of
+from dalembert.reports.sections.common import drifts_of, shown_value, stored_label
 from dalembert.reports.tables import MISSING, Cell, Table, num
 from dalembert.reports.work_precision import cost_per_sim_s, sweep_key
 
@@ -25,7 +25,7 @@ def every_run(rep, f):
     errs.sort(key=lambda q: q != f.quantity)  # the headline error first
     drifts = [n for n in drifts_of(f.case) if any(not math.isnan(r.drifts.get(n, math.nan)) for r in runs)]
     head = (["engine", "settings", "status", "cost (s/s)", "cost min–max (s/s)"]
-            + [f"{q} ({QUANTITIES[q]})" for q in errs] + [f"{n} drift ({drift_unit(n, f.case)})" for n in drifts]
+            + [f"{q} ({QUANTITIES[q]})" for q in errs] + [stored_label(n, f.case) for n in drifts]
             + ["beyond tolerance", "verdict"])
     rows = []
     for r in runs:
@@ -38,7 +38,7 @@ def every_run(rep, f):
                        title=f"{r.cost.repeats} timed repeats; {r.cost.concurrent} runs in flight")
                   if math.isfinite(r.cost.wall_s_min) else Cell(MISSING, math.nan))
         rows.append([Cell(r.engine), Cell(settings_text(r), wrap=True), status, num(cost_per_sim_s(r), "{:.2g}"),
-                     spread] + [num(r.max_error(q)) for q in errs] + [num(r.drifts.get(n)) for n in drifts]
+                     spread] + [num(r.max_error(q)) for q in errs] + [num(shown_value(r, n, f.case)) for n in drifts]
                     + [Cell(", ".join(r.beyond) if r.ok else MISSING, wrap=True),
                        Cell(r.verdict, title=r.verdict_reason)])
     part.heading("Every run", 3)
