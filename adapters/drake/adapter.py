@@ -66,16 +66,16 @@ ADAPTIVE = ("rk3", "rk5", "bs3", "radau3")
 ADAPTIVE_SUFFIX = "-adaptive"
 
 
-# The contact options every integrator takes (``contact.CONTACT_OPTIONS``); the solver is the discrete plant's.
-CONTINUOUS_OPTIONS = ("contact_model", "point_contact_stiffness", "hunt_crossley_dissipation", "impact_speed")
-DISCRETE_OPTIONS = ("contact_solver", *CONTINUOUS_OPTIONS)
+# The contact options (``contact.CONTACT_OPTIONS``), named by every integrator; ``contact_solver`` is the
+# discrete plant's alone (its ``Option.only``).
+OPTIONS = tuple(contact.CONTACT_OPTIONS)
 
 
 def _integrators():
-    out = {k: IntegratorSpec(True, CONTINUOUS_OPTIONS, f"Drake {v}") for k, v in FIXED.items()}
-    out.update({k + ADAPTIVE_SUFFIX: IntegratorSpec(False, CONTINUOUS_OPTIONS, f"Drake {FIXED[k]}, error-controlled")
+    out = {k: IntegratorSpec(True, OPTIONS, f"Drake {v}") for k, v in FIXED.items()}
+    out.update({k + ADAPTIVE_SUFFIX: IntegratorSpec(False, OPTIONS, f"Drake {FIXED[k]}, error-controlled")
                 for k in ADAPTIVE})
-    out["discrete"] = IntegratorSpec(True, DISCRETE_OPTIONS,
+    out["discrete"] = IntegratorSpec(True, OPTIONS,
                                      "the plant in discrete mode (time_step = dt; SAP, semi-implicit)")
     return out
 

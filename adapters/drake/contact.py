@@ -52,7 +52,7 @@ from dalembert import spatial
 from dalembert.adapters.base import Option
 
 __all__ = ["CONTACT_OPTIONS", "SOLVERS", "MODELS", "STIFFNESS_DEFAULT", "DISSIPATION_DEFAULT", "STICTION_TOLERANCE",
-           "contact_options", "restitution_dissipation", "why_not", "add_geometry", "exclude_unnamed", "candidates",
+           "contact_options", "restitution_dissipation", "why_not", "add_geometry", "set_solver", "exclude_unnamed", "candidates",
            "audit", "summary_lines"]
 
 SOLVERS = ("sap", "tamsi")
@@ -143,10 +143,13 @@ def _pair_material(pair, options):
 
 
 def why_not(scene, settings):
-    """Why Drake cannot represent the scene's contact, or None."""
+    """Why Drake cannot represent the scene's contact (or its loops under TAMSI), or None."""
+    options = contact_options(settings)
+    if scene.loops and settings.integrator == "discrete" and options["solver"] != "sap":
+        return (f"loops with contact_solver={options['solver']}: Drake's loop constraints are SAP's (TAMSI "
+                "does not support constraints: Drake refuses the plant) — use contact_solver=sap")
     if not scene.contacts:
         return None
-    options = contact_options(settings)
     rubbing = [c.name for c in scene.contacts if c.friction > 0.0]
     if rubbing and settings.integrator != "discrete":
         return f"friction (pairs {rubbing}) with a continuous-time integrator: {CONTINUOUS_FRICTION_REASON}"
@@ -177,7 +180,7 @@ def add_geometry(plant, scene, bodies, settings):
     from pydrake.geometry import (AddCompliantHydroelasticProperties, AddContactMaterial, AddRigidHydroelasticProperties,
                                   Box, HalfSpace, ProximityProperties, Sphere)
     from pydrake.math import RigidTransform, RotationMatrix
-    from pydrake.multibody.plant import ContactModel, CoulombFriction, DiscreteContactApproximation
+    from pydrake.multibody.plant import ContactModel, CoulombFriction
 
     options = contact_options(settings)
     material = {}
@@ -208,10 +211,18 @@ def add_geometry(plant, scene, bodies, settings):
         ids[pl.name] = plant.RegisterCollisionGeometry(plant.world_body(), X_WG, HalfSpace(), pl.name,
                                                      props(pl.name, plane=True))
     plant.set_contact_model(ContactModel.kHydroelastic if hydro else ContactModel.kPoint)
-    if plant.time_step() > 0.0:
-        plant.set_discrete_contact_approximation(DiscreteContactApproximation.kLagged if options["solver"] == "sap"
-                                                 else DiscreteContactApproximation.kTamsi)
     return ids
+
+
+def set_solver(plant, settings):
+    """Set a discrete plant's contact solver (before ``Finalize``): ``sap`` is Drake's default (the SAP solver,
+    lagged approximation), set again as it is; ``tamsi`` the TAMSI solver. Every discrete plant, with contact or
+    without (the solver also steps a contact-free plant: TAMSI's and SAP's implicit joint terms differ)."""
+    from pydrake.multibody.plant import DiscreteContactApproximation
+
+    solver = contact_options(settings)["solver"]
+    plant.set_discrete_contact_approximation(DiscreteContactApproximation.kLagged if solver == "sap"
+                                             else DiscreteContactApproximation.kTamsi)
 
 
 def exclude_unnamed(scene_graph, scene, ids):

@@ -126,6 +126,7 @@ class DrakeModel:
             self.geometry_ids = contact.add_geometry(plant, scene, self.bodies, settings)
         if self.time_step > 0.0:  # output ports from the state they are evaluated at, not from the last step
             plant.SetUseSampledOutputPorts(False)
+            contact.set_solver(plant, settings)  # SAP (Drake's default) or TAMSI: option contact_solver
         plant.Finalize()
         if scene.contacts:  # nothing touches that the scene does not name
             contact.exclude_unnamed(self.scene_graph, scene, self.geometry_ids)
