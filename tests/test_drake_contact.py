@@ -160,3 +160,21 @@ def test_contact_solver_is_a_discrete_option():
     with pytest.raises(ValueError, match="contact_solver"):
         get_adapter("drake").check(case.scene, case.times, Settings("discrete", dt=DT,
                                                                      options={"contact_solver": "pgs"}))
+
+
+def test_a_geometry_in_pairs_of_different_friction_is_unsupported():
+    # Drake's friction is per geometry (combined per pair): the ground cannot be mu 0.2 with one ball, 0.6 with another
+    scene, times = _drop([ContactPair("geom_ball0", "ground", 0.2), ContactPair("geom_ball1", "ground", 0.6)],
+                         heights=(0.2, 0.2))
+    reason = get_adapter("drake").unsupported(scene, Settings("discrete", dt=DT))
+    assert reason.startswith("geometries ['ground']") and "per geometry" in reason
+    scene, times = _drop([ContactPair("geom_ball0", "ground", 0.6), ContactPair("geom_ball1", "ground", 0.6)],
+                         heights=(0.2, 0.2))
+    assert get_adapter("drake").unsupported(scene, Settings("discrete", dt=DT)) is None
+
+
+def test_a_scene_without_contact_gets_no_scene_graph():
+    case = make_case("pendulum")
+    prepared = get_adapter("drake").prepare(case.scene, case.times, Settings("discrete", dt=DT))
+    assert prepared.model.scene_graph is None and prepared.model.plant.num_collision_geometries() == 0
+    assert get_adapter("drake").audit(prepared, get_adapter("drake").run(prepared)).get("contact_pairs") is None
