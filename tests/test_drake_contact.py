@@ -35,7 +35,7 @@ HC_RESTITUTION_TOL = 1e-7
 HC_SMALL_DAMPING_TOL = 1e-7
 # Continuous mode integrates the Hunt-Crossley law as written, so the mapped restitution returns the closed
 # form's velocities after the impact (sphere_collision, e = 0.8 mapped at its 1-m/s approach speed): measured
-# within 1e-5 m/s with rk3-adaptive at rtol 1e-6 (gravity-free, frictionless); the bound leaves 10x.
+# within 1.5e-5 m/s with rk3-adaptive at rtol 1e-6 (gravity-free, frictionless); the bound leaves ~7x.
 CONTINUOUS_AFTER_TOL = 1e-4
 
 
