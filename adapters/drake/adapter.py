@@ -18,6 +18,12 @@ Spring-dampers (``springs``): ``LinearSpringDamper`` force elements, in both mod
 length 0 is unsupported (Drake's element needs a positive free length: ``springs.ZERO_REST_REASON``).
 The audit reads every spring back from the plant and checks it against the scene.
 
+Contact (``contact``): the geoms and planes as collision geometry of a SceneGraph, only the named pairs
+colliding, point contact with ``CoulombFriction(mu, mu)``; discrete mode with SAP (Drake's default) or TAMSI
+(option ``contact_solver``), continuous mode on the same penalty force; restitution mapped to a Hunt-Crossley
+dissipation at a named approach speed (option ``impact_speed``), unsupported without one. The audit reads every
+contact parameter back from the plant and its SceneGraph.
+
 Prismatic joints (``PrismaticJoint``, ``model``): in both modes, with every integrator, springs and loops; no
 limits, no damping. The audit reads each back from the finalized plant (type, axis, limits, damping:
 ``prismatic_joints``) and checks it against the scene (``prismatic_as_scene``).
@@ -29,14 +35,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dalembert import contact
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared
+from dalembert.adapters.drake import contact
 from dalembert.adapters.drake.audit import audit
 from dalembert.adapters.drake.loops import CONTINUOUS_REASON, LOOP_KINDS
 from dalembert.adapters.drake.model import drake_version
 from dalembert.adapters.drake.springs import refusal as spring_refusal
 from dalembert.adapters.drake.stepping import SCHEMES, simulate
-from dalembert.scene import EFFECTS, SPRING_EFFECTS
+from dalembert.scene import CONTACT_EFFECTS, EFFECTS, SPRING_EFFECTS
 
 __all__ = ["DrakeAdapter", "DrakePrepared"]
 
@@ -60,11 +66,17 @@ ADAPTIVE = ("rk3", "rk5", "bs3", "radau3")
 ADAPTIVE_SUFFIX = "-adaptive"
 
 
+# The contact options (``contact.CONTACT_OPTIONS``), named by every integrator; ``contact_solver`` is the
+# discrete plant's alone (its ``Option.only``).
+OPTIONS = tuple(contact.CONTACT_OPTIONS)
+
+
 def _integrators():
-    out = {k: IntegratorSpec(True, (), f"Drake {v}") for k, v in FIXED.items()}
-    out.update({k + ADAPTIVE_SUFFIX: IntegratorSpec(False, (), f"Drake {FIXED[k]}, error-controlled")
+    out = {k: IntegratorSpec(True, OPTIONS, f"Drake {v}") for k, v in FIXED.items()}
+    out.update({k + ADAPTIVE_SUFFIX: IntegratorSpec(False, OPTIONS, f"Drake {FIXED[k]}, error-controlled")
                 for k in ADAPTIVE})
-    out["discrete"] = IntegratorSpec(True, (), "the plant in discrete mode (time_step = dt; SAP, semi-implicit)")
+    out["discrete"] = IntegratorSpec(True, OPTIONS,
+                                     "the plant in discrete mode (time_step = dt; SAP, semi-implicit)")
     return out
 
 
@@ -92,16 +104,16 @@ class DrakeAdapter(Adapter):
     name = "drake"
     # loops: the discrete integrator only; springs: both modes, a positive rest length only; prismatic joints: both
     # modes, every integrator (``PrismaticJoint``, model)
-    effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS) | SPRING_EFFECTS
+    # contact: both modes, point contact (``contact``); restitution where an impact speed maps it
+    effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS) | SPRING_EFFECTS | CONTACT_EFFECTS
+    options = contact.CONTACT_OPTIONS  # contact_solver, point_contact_stiffness, hunt_crossley_dissipation, ...
     integrators = _integrators()
 
     def version(self):
         return drake_version()
 
     def unsupported(self, scene, settings):
-        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
-            return why
-        reason = super().unsupported(scene, settings)
+        reason = super().unsupported(scene, settings) or contact.why_not(scene, settings)
         if reason is None and scene.loops and settings.integrator != "discrete":
             kinds = ", ".join(sorted({lp.effect for lp in scene.loops}))
             # (no integrator name in it: the report groups the integrators refused for one reason)
@@ -114,14 +126,14 @@ class DrakeAdapter(Adapter):
         """The plant's summary, for reports and ``dalembert show-model``."""
         from dalembert.adapters.drake.model import DrakeModel
 
-        return DrakeModel(scene, settings.dt if settings.integrator == "discrete" else 0.0).summary
+        return DrakeModel(scene, settings.dt if settings.integrator == "discrete" else 0.0, settings).summary
 
     # ------------------------------------------------------------- build
     def prepare(self, scene, times, settings):
         from dalembert.adapters.drake.model import DrakeModel
 
         discrete = settings.integrator == "discrete"
-        model = DrakeModel(scene, settings.dt if discrete else 0.0)
+        model = DrakeModel(scene, settings.dt if discrete else 0.0, settings)
         q0, v0 = model.initial_state()
         scheme = None if discrete else SCHEMES[settings.integrator.removesuffix(ADAPTIVE_SUFFIX)]
         return DrakePrepared(scene, np.asarray(times, dtype=float), settings, model, q0, v0, scheme)

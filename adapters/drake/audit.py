@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dalembert.adapters.drake import contact
 from dalembert.adapters.drake.charts import RECHART_PITCH
 from dalembert.adapters.drake.loops import ANCHOR
 from dalembert.adapters.drake.model import drake_version
@@ -11,7 +12,7 @@ __all__ = ["audit"]
 
 def audit(prepared, outcome):
     """What Drake simulated, read back from the plant (``DrakeModel.audit``): mode and integrator, loads and
-    their path, ball joints' charts, the loops and springs as the plant holds them."""
+    their path, ball joints' charts, the loops, springs and contact (``contact.audit``) as the plant holds them."""
     p = prepared
     s = p.settings
     loads = p.model.loads
@@ -35,6 +36,7 @@ def audit(prepared, outcome):
                               "pitch = +-pi/2 (dalembert.adapters.drake.charts)"),
         **(_loop_audit(p.model) if p.model.loops else {}),
         **_spring_audit(p.model),
+        **contact.audit(p.model),
         "drake_version": drake_version(),
     }
 

@@ -14,7 +14,8 @@
   coordinates, singular at pitch = +-pi/2, kept clear of it by ``charts``), a weld a ``WeldJoint``; every damping
   zero, no limits.
 * Gravity set from the scene (Drake's default is -9.81 in z), zero when the
-  scene has none. No SceneGraph, no collision geometry, no actuators.
+  scene has none. No actuators. A scene without contact pairs has no SceneGraph and no collision geometry;
+  one with them gets both (``contact``: the geoms, planes and named pairs, point contact).
 * Loads through ``loads.SceneLoads``, connected to the plant's
   ``applied_spatial_force`` input: a follower force is turned into world axes
   from the pose the plant reports on its ``body_poses`` port, at every
@@ -41,6 +42,7 @@ import functools
 import numpy as np
 
 from dalembert import spatial
+from dalembert.adapters.drake import contact
 from dalembert.scene import WORLD
 
 __all__ = ["DrakeModel", "AXIS_ROUNDOFF", "drake_version"]
@@ -69,8 +71,8 @@ class DrakeModel:
     summary : str — the plant as text (``dalembert show-model``)
     """
 
-    def __init__(self, scene, time_step=0.0):
-        from pydrake.multibody.plant import MultibodyPlant
+    def __init__(self, scene, time_step=0.0, settings=None):
+        from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
         from pydrake.multibody.tree import (BallRpyJoint, FixedOffsetFrame, PrismaticJoint, QuaternionFloatingJoint,
                                             RevoluteJoint, RotationalInertia, SpatialInertia, WeldJoint)
         from pydrake.systems.framework import DiagramBuilder
@@ -79,9 +81,13 @@ class DrakeModel:
         from dalembert.adapters.drake.loops import add_loops
         from dalembert.adapters.drake.springs import add_springs
 
-        self.scene, self.time_step = scene, float(time_step)
+        self.scene, self.time_step, self.settings = scene, float(time_step), settings
         builder = DiagramBuilder()
-        plant = builder.AddSystem(MultibodyPlant(time_step=self.time_step))
+        self.scene_graph, self.geometry_ids = None, {}
+        if scene.contacts:  # with a SceneGraph for the collision geometry (``contact``); else the plant alone
+            plant, self.scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=self.time_step)
+        else:
+            plant = builder.AddSystem(MultibodyPlant(time_step=self.time_step))
         plant.set_name("plant")
         self.bodies, self.joints = {}, {}
         for body in scene.bodies:
@@ -116,9 +122,14 @@ class DrakeModel:
         self.loops = add_loops(plant, scene, self.bodies) if scene.loops and self.time_step > 0.0 else []
         self.springs = add_springs(plant, scene, self.bodies)
         plant.mutable_gravity_field().set_gravity_vector(np.asarray(scene.gravity, dtype=float))
+        if scene.contacts:
+            self.geometry_ids = contact.add_geometry(plant, scene, self.bodies, settings)
         if self.time_step > 0.0:  # output ports from the state they are evaluated at, not from the last step
             plant.SetUseSampledOutputPorts(False)
+            contact.set_solver(plant, settings)  # SAP (Drake's default) or TAMSI: option contact_solver
         plant.Finalize()
+        if scene.contacts:  # nothing touches that the scene does not name
+            contact.exclude_unnamed(self.scene_graph, scene, self.geometry_ids)
         self.loads = None
         if scene.loads:
             self.loads = builder.AddSystem(SceneLoads(scene.loads, {n: b.index() for n, b in self.bodies.items()}))
@@ -255,6 +266,7 @@ class DrakeModel:
                          f"{fe.stiffness():g} N/m, damping {fe.damping():g} N s/m")
         for ld in self.scene.loads:
             lines.append(f"load {ld.effect} on {ld.body}: {list(ld.vector)} at {list(ld.point)} (SceneLoads system)")
+        lines.extend(contact.summary_lines(self))
         return "\n".join(lines) + "\n"
 
 
