@@ -2,7 +2,6 @@
 case), metrics shown in their unit and not as drifts, the creep hazard naming the engine and its speed, and the
 reason an engine cannot run a contact case."""
 
-import importlib.util
 import json
 import os
 
@@ -106,11 +105,11 @@ def test_speed_text_picks_the_unit_a_creep_reads_in():
     assert speed_text(5e-12) == "0.005 nm/s"
 
 
-@pytest.mark.skipif(importlib.util.find_spec("pydrake") is None, reason="Drake is not installed")
-def test_drakes_refusal_shows_in_the_report(tmp_path):
-    s = small_store(tmp_path, cases=("block_on_incline",), engines=("drake",), integrators=("discrete",),
+def test_an_engine_that_cannot_run_contact_says_why_in_the_report(tmp_path):
+    """Pinocchio has no contact time-stepper mapped: its refusal, with the reason, is in the report."""
+    s = small_store(tmp_path, cases=("block_on_incline",), engines=("pinocchio",), integrators=("rk4",),
                     dts=(1e-3,), t_final=0.2)
     build_report(s)
     (r,) = s.records()
     assert r.status == "unsupported" and "contact" in r.message
-    assert f"drake cannot run discrete: {r.message}" in _md(s).replace("\\", "")
+    assert f"pinocchio cannot run rk4: {r.message}" in _md(s).replace("\\", "")
