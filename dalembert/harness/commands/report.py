@@ -1,0 +1,29 @@
+"""``dalembert report``: report.html, report.md and summary.csv of a results directory."""
+
+from __future__ import annotations
+
+from dalembert.harness.commands.console import fail
+
+__all__ = ["run", "main"]
+
+
+def run(run_dir, out_dir=None):
+    """Write the report of ``run_dir`` (a store's path, or a ``dalembert.store.Store``) into
+    ``out_dir`` (default: the store); returns the paths of report.html, report.md and summary.csv.
+    ValueError when ``run_dir`` holds no store of this dalembert's schema."""
+    from dalembert.record import SCHEMA_VERSION
+    from dalembert.reports.render import build_report
+    from dalembert.store import Store
+
+    store = run_dir if isinstance(run_dir, Store) else Store.open(run_dir, (SCHEMA_VERSION,))
+    return build_report(store, out_dir)
+
+
+def main(args):
+    try:
+        paths = run(args.run_dir)
+    except ValueError as e:
+        return fail(str(e))
+    for path in paths:
+        print(f"wrote {path}")
+    return 0
