@@ -104,11 +104,16 @@ def test_an_empty_value_is_an_error_naming_its_flag(argv, flag, tmp_path, capsys
     assert not any(tmp_path.iterdir())  # no default matrix started, no results/ made
 
 
-@pytest.mark.parametrize("keyword", ["resume", "scheduler", "out", "search"])
-def test_the_api_refuses_an_empty_value_too(keyword, tmp_path, monkeypatch):
+@pytest.mark.parametrize("keyword,value,words", [
+    ("resume", "", "--resume: empty"), ("scheduler", "", "--scheduler: empty"), ("out", "", "--out: empty"),
+    ("search", "", "--search: empty"), ("engines", [], "--engine: an empty list"), ("dts", [], "--dt: no value"),
+    ("tags", [""], "--tag: empty"),
+])
+def test_the_api_refuses_an_empty_value_too(keyword, value, words, tmp_path, monkeypatch):
+    """An empty string or list is not "the default" in Python either (that is None)."""
     monkeypatch.chdir(tmp_path)
-    with pytest.raises(ValueError, match=f"--{keyword}: empty"):
-        api.run(cases=["free_top"], **{keyword: ""})
+    with pytest.raises(ValueError, match=words):
+        api.run(**{"cases": ["free_top"], keyword: value})
     assert not any(tmp_path.iterdir())
 
 
@@ -183,6 +188,23 @@ def test_validate_counts_a_repeated_case_once():
 def test_a_single_valued_thing_given_twice_is_refused_everywhere(argv, tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(argv) == 2
+    assert "given twice" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("argv", [
+    ["run", "--out", "a", "--out", "b"],
+    ["run", "--jobs", "1", "--case", "free_top", "--jobs", "2"],
+    ["validate", "--out", "a", "--out", "a"],
+    ["export", "somewhere", "--case", "free_top", "--case", "pivoted_rod", "--csv", "x.csv"],
+    ["compare", "a", "b", "--threshold", "3", "--threshold", "4"],
+])
+def test_a_single_valued_flag_given_twice_is_refused(argv, tmp_path, capsys, monkeypatch):
+    """argparse would keep the last; which one was meant is a guess, so it is refused."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as stopped:
+        main(argv)
+    assert stopped.value.code == 2
     assert "given twice" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
 

@@ -14,6 +14,10 @@ Everything the command line does, for a notebook or a script::
     api.compare("results/before", "results/top").regressed
     api.trajectories(store, engine="mujoco")   # every sample of every run, long format
 
+It is the command line's code, not a copy: ``run`` and ``report`` are the ``run`` of
+``dalembert.harness.commands.run`` and ``.report`` (a keyword for every flag, checked
+the same way, refused before anything is written), the rest read stores.
+
 A record's columns are ``dalembert.record.RunRecord``'s (``to_row``): one per
 identity field, ``err_<quantity>_max``/``_final``, ``drift_<name>``, the cost,
 the stored verdict. The trajectory table's are ``dalembert.reports.export``'s.

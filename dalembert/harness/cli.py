@@ -41,8 +41,29 @@ def _floats(text):
         raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
 
 
+class _Once(argparse.Action):
+    """A single-valued flag: stored, and refused when given twice (which one was meant is a guess;
+    argparse would keep the last). Repeatable flags (``action="append"``) are not this."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        before = getattr(namespace, self.dest, None)
+        if before is not self.default:  # a value parsed from the command line is never the default object
+            raise argparse.ArgumentError(self, f"given twice ({before!r} and {values!r}) — give it once")
+        setattr(namespace, self.dest, values)
+
+
+class _Parser(argparse.ArgumentParser):
+    """The parser of ``dalembert`` and of each command (subparsers take their parent's class): a
+    plain ``add_argument`` stores once (``_Once``)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.register("action", None, _Once)
+        self.register("action", "store", _Once)
+
+
 def _parser():
-    p = argparse.ArgumentParser(prog="dalembert", description="Validation harness for multibody physics engines.",
+    p = _Parser(prog="dalembert", description="Validation harness for multibody physics engines.",
                                 epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--debug", action="store_true", help="show the traceback of an error instead of its message")
     sub = p.add_subparsers(dest="command", required=True)

@@ -91,6 +91,8 @@ def names(flag, values, notes):
     if isinstance(values, str):
         values = [values]
     values = [given(flag, v) for v in values]
+    if not values:
+        raise ValueError(f"{flag}: an empty list — give at least one name, or leave {flag} out for the default")
     unique = list(dict.fromkeys(values))
     if len(unique) < len(values):
         notes.append(f"{flag}: {', '.join(v for v in unique if values.count(v) > 1)} given more than once; "
