@@ -100,8 +100,9 @@ def to_markdown(store):
         lines += [f"- tolerance `{k}`: {t.value:g} — {t.reason}" for k, t in case.tolerances.items()]
         if case.truth != CLOSED_FORM:
             lines.append(f"- truth: {case.truth} — no closed form, so no independent check here: each row measures "
-                         "the reference against its own tight solution (convergence, not correctness), and the "
-                         "row marked *the truth itself* compares the truth with itself; the independent check is "
+                         "the reference against its own tight solution (convergence, not correctness), and a row "
+                         "run with the truth's own settings (marked *the truth itself*) compares the truth with "
+                         "itself; the independent check is "
                          "`dalembert.testing.second_solution`, run by the case contract (`check_case`)")
         else:
             lines.append("- truth: closed form (independent of the solver)")
