@@ -192,6 +192,16 @@ def test_a_single_valued_thing_given_twice_is_refused_everywhere(argv, tmp_path,
     assert not any(tmp_path.iterdir())
 
 
+def test_export_refuses_an_option_given_twice(tmp_path, capsys):
+    out = str(tmp_path / "top")
+    assert main(["run", *SMALL, "--out", out]) == 0
+    capsys.readouterr()
+    assert main(["export", out, "--option", "formulation=kane", "--option", "formulation=planar",
+                 "--csv", str(tmp_path / "x.csv")]) == 2
+    assert "--option formulation: given twice" in capsys.readouterr().err
+    assert not (tmp_path / "x.csv").exists()
+
+
 @pytest.mark.parametrize("argv", [
     ["run", "--out", "a", "--out", "b"],
     ["run", "--jobs", "1", "--case", "free_top", "--jobs", "2"],
