@@ -236,7 +236,10 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
         no_maps=False, force=False, strict=False, timing=None, progress=None, debug=False, command=None):
     """Run a matrix into a new store (or finish one, ``resume``); every input checked first.
 
-    Parameters (each a flag of ``dalembert run``; see ``dalembert run --help``)
+    Each keyword is a flag of ``dalembert run`` (``KEYWORDS`` names those that differ; see
+    ``dalembert run --help``), but for ``timing``, ``progress`` and ``command``.
+
+    Parameters
     ----------
     cases, tags, engines, integrators : list of str or None — names (``--case``, ``--tag``, ...;
         default: every case not tagged ``hard``, every installed engine, every integrator); a name
@@ -288,7 +291,6 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
                     params=params, options=options, out=out, timeout=timeout, force=force, search=search,
                     resolution=resolution, no_maps=no_maps, quick=quick, timing=timing)
     command = command or command_line()
-    built = {}
     if resume is not None:
         given_flags = [_flag(k) for k in _MATRIX_FLAGS
                        if keywords[k] is not None and keywords[k] is not False and keywords[k] != []]
