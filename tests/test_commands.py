@@ -44,6 +44,30 @@ def test_every_run_flag_has_its_api_keyword():
     assert "debug" in api_keywords  # the global --debug, which run uses for Dask's log
 
 
+def test_every_command_is_a_module_with_its_run():
+    """cli.py only dispatches: each command's handler is the ``main`` of its own module, beside its ``run``."""
+    import sys
+
+    from dalembert.harness.cli import COMMANDS
+
+    sub = next(a for a in _parser()._actions if isinstance(a, argparse._SubParsersAction))
+    assert set(COMMANDS) == set(sub.choices)
+    for name, handler in COMMANDS.items():
+        module = sys.modules[handler.__module__]
+        assert module.__name__ == "dalembert.harness.commands." + name.replace("-", "_")
+        assert handler is module.main and callable(module.run)
+
+
+def test_a_command_runs_from_keywords(tmp_path, capsys):
+    """truth's run from Python, refusing a parameter given twice as the command line does."""
+    from dalembert.harness.commands import truth
+
+    assert truth.run("particle_box", ["t_final=1"], csv=str(tmp_path / "box.csv")) == 0
+    assert (tmp_path / "box.csv").read_text().startswith("t,body,")
+    assert truth.run("particle_box", ["t_final=1", "t_final=2"], csv=str(tmp_path / "again.csv")) == 2
+    assert "given twice" in capsys.readouterr().err and not (tmp_path / "again.csv").exists()
+
+
 def test_the_api_refuses_an_unknown_parameter_as_the_cli_does(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     with pytest.raises(ValueError, match="--param t_finl: no selected case has this parameter.*did you mean 't_final'"):

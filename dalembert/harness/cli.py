@@ -9,17 +9,12 @@ lazily: listing and help work without any engine installed.
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 
-from dalembert.harness.commands import cases, engines, report, show_model, validate
+from dalembert.harness.commands import cases, compare, engines, export, report, show_model, truth, validate
 from dalembert.harness.commands import run as run_command
 from dalembert.harness.commands.console import fail as _fail
-from dalembert.harness.selection import pairs
-from dalembert.registry import UnknownNameError
-from dalembert.scene import SceneError
-from dalembert.store import atomic_write
 
 EPILOG = """examples:
   dalembert cases --verbose
@@ -189,111 +184,12 @@ def _parser():
     return p
 
 
-def cmd_truth(args):
-    from dalembert.case import load_cases, parse_param
-    from dalembert.trajectory import write_csv
-
-    try:
-        factory = load_cases()[args.case]
-        params = dict(parse_param(factory, f"{k}={v}") for k, v in pairs("--param", args.param).items())
-        case = factory(**params)
-    except (UnknownNameError, ValueError, SceneError) as e:
-        return _fail(str(e))
-    out_dir = os.path.dirname(os.path.abspath(args.csv))
-    if not os.access(out_dir, os.W_OK):
-        return _fail(f"--csv: cannot write to {out_dir!r}")
-    from dalembert.reference import truth
-
-    write_csv(truth(case), args.csv)
-    print(f"wrote {args.csv}: {case.name} (version {case.version}), {len(case.sample_times)} samples")
-    return 0
-
-
-def _open(path, schemas=None):
-    from dalembert.record import SCHEMA_VERSION
-    from dalembert.store import Store
-
-    return Store.open(path, schemas or (SCHEMA_VERSION,))
-
-
-def cmd_export(args):
-    from dalembert.reports.export import frame, select, write
-    from dalembert.reports.findings import run_name
-
-    try:
-        store = _open(args.run_dir)
-        options = pairs("--option", args.option)
-    except ValueError as e:
-        return _fail(str(e))
-    records = store.records()
-    chosen = select(records, set(args.key), args.case, args.engine, args.integrator, args.dt, args.rtol, options)
-    path = args.csv or args.parquet
-    if not args.all and len(chosen) != 1:
-        listed = chosen or records
-        return _fail(f"{len(chosen)} stored runs match (need exactly one: add --dt, --rtol, --option or --key, or "
-                     f"--all for every match). {'Matching' if chosen else 'Stored'}: "
-                     + "; ".join(f"{r.key} ({r.case} {run_name(r)}, {r.status})" for r in listed[:40])
-                     + (f"; and {len(listed) - 40} more" if len(listed) > 40 else ""))
-    if not args.all and not chosen[0].trajectory:
-        return _fail(f"that run has no trajectory (status {chosen[0].status}: {chosen[0].message})")
-    df = frame(store, chosen)
-    out_dir = os.path.dirname(os.path.abspath(path))
-    if not os.access(out_dir, os.W_OK):
-        return _fail(f"--{'csv' if args.csv else 'parquet'}: cannot write to {out_dir!r}")
-    write(df, path)
-    with_traj = sum(1 for r in chosen if r.trajectory)
-    print(f"wrote {path}: {with_traj} run(s), {len(df)} rows"
-          + (f" ({len(chosen) - with_traj} matching run(s) left no trajectory)" if with_traj < len(chosen) else ""))
-    return 0
-
-
-def cmd_compare(args):
-    import csv
-    import io
-    import json
-
-    from dalembert.record import READABLE_SCHEMAS
-    from dalembert.reports.compare import CSV_COLUMNS, compare_stores, csv_rows, to_json, to_text
-
-    try:
-        stores = [_open(d, READABLE_SCHEMAS) for d in (args.run_a, args.run_b)]
-    except ValueError as e:
-        return _fail(str(e))
-    for flag, value in (("--threshold", args.threshold), ("--cost-threshold", args.cost_threshold)):
-        if value is not None and not (math.isfinite(value) and value > 1.0):
-            return _fail(f"{flag}: a growth factor, must be finite and greater than 1, got {value}")
-    schemas = [s.schema_version() for s in stores]
-    if schemas[0] != schemas[1]:
-        print(f"dalembert: note: the stores have schemas {schemas[0]} and {schemas[1]}; runs are matched by case, "
-              "engine and settings", file=sys.stderr)
-    cmp = compare_stores(*stores, threshold=args.threshold, cost_threshold=args.cost_threshold,
-                         across_versions=args.across_versions)
-    outputs = {}
-    if args.json:
-        outputs[args.json] = json.dumps(to_json(cmp), indent=1, allow_nan=False) + "\n"
-    if args.csv:
-        buf = io.StringIO()
-        writer = csv.DictWriter(buf, CSV_COLUMNS, lineterminator="\n")
-        writer.writeheader()
-        writer.writerows({k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()} for row in csv_rows(cmp))
-        outputs[args.csv] = buf.getvalue()
-    if "-" not in outputs:
-        sys.stdout.write(to_text(cmp, args.only_changed))
-    for path, text in outputs.items():
-        if path == "-":
-            sys.stdout.write(text)
-        else:
-            atomic_write(path, text)
-            print(f"wrote {path}", file=sys.stderr)
-    return 1 if cmp.regressed else 0
-
-
 # What a user can get wrong (a name, a value, a file): a message naming it, exit 2.
 USER_ERRORS = (ValueError, KeyError, ImportError, OSError)
-# The command's module (its ``main(args)``) or, for the commands not yet moved, its handler.
+# Each command's module (its ``main(args)``).
 COMMANDS = {"cases": cases.main, "engines": engines.main, "run": run_command.main, "report": report.main,
-            "show-model": show_model.main, "validate": validate.main, "truth": cmd_truth, "export": cmd_export,
-            "compare": cmd_compare}
+            "show-model": show_model.main, "validate": validate.main, "truth": truth.main, "export": export.main,
+            "compare": compare.main}
 
 
 def _refuse_empty(parser, args):

@@ -11,11 +11,11 @@ def run(run_dir, out_dir=None):
     """Write the report of ``run_dir`` (a store's path, or a ``dalembert.store.Store``) into
     ``out_dir`` (default: the store); returns the paths of report.html, report.md and summary.csv.
     ValueError when ``run_dir`` holds no store of this dalembert's schema."""
-    from dalembert.record import SCHEMA_VERSION
+    from dalembert.harness.commands.stores import open_store
     from dalembert.reports.render import build_report
     from dalembert.store import Store
 
-    store = run_dir if isinstance(run_dir, Store) else Store.open(run_dir, (SCHEMA_VERSION,))
+    store = run_dir if isinstance(run_dir, Store) else open_store(run_dir)
     return build_report(store, out_dir)
 
 
