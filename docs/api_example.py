@@ -14,6 +14,12 @@ runs = api.run(cases=["free_top"], engines=["reference"], integrators=["rk4", "e
                params={"t_final": 1.0}, out=f"{out}/top", jobs=1)
 print(runs[["engine", "settings", "status", "err_orientation_max", "drift_energy", "wall_s_median", "verdict"]])
 
+# %% Inputs are checked as the command line checks them, before anything is written
+try:
+    api.run(cases=["free_top"], engines=["reference"], params={"t_finl": 1.0}, out=f"{out}/typo")
+except ValueError as refused:
+    print("refused:", refused)  # --param t_finl: no selected case has this parameter — did you mean 't_final'?
+
 # %% The same records from the store on disk, any time later
 store = api.load(runs.attrs["store"])
 best = min((r for r in store.records() if r.ok), key=lambda r: r.max_error("orientation"))

@@ -62,7 +62,7 @@ def test_a_bad_run_command_is_refused_and_writes_nothing(flags, phrase, tmp_path
 def test_an_unreachable_scheduler_writes_nothing(tmp_path, capsys, monkeypatch):
     # nothing listens on port 9: refused at once, but Dask retries until the connect limit (10 s); what is
     # checked, the refusal and the empty --out, does not depend on that limit
-    monkeypatch.setattr("dalembert.harness.cli.SCHEDULER_CONNECT_S", 1.0)
+    monkeypatch.setattr("dalembert.harness.commands.run.SCHEDULER_CONNECT_S", 1.0)
     out = tmp_path / "r"
     assert main(["run", *TINY, "--scheduler", "tcp://127.0.0.1:9", "--out", str(out)]) == 2
     assert "--scheduler tcp://127.0.0.1:9: cannot connect" in capsys.readouterr().err

@@ -14,6 +14,10 @@ Everything the command line does, for a notebook or a script::
     api.compare("results/before", "results/top").regressed
     api.trajectories(store, engine="mujoco")   # every sample of every run, long format
 
+It is the command line's code, not a copy: ``run`` and ``report`` are the ``run`` of
+``dalembert.harness.commands.run`` and ``.report`` (a keyword for every flag, checked
+the same way, refused before anything is written), the rest read stores.
+
 A record's columns are ``dalembert.record.RunRecord``'s (``to_row``): one per
 identity field, ``err_<quantity>_max``/``_final``, ``drift_<name>``, the cost,
 the stored verdict. The trajectory table's are ``dalembert.reports.export``'s.
@@ -30,21 +34,30 @@ line costs, and ``import dalembert`` stays as light as it is.
 
 from __future__ import annotations
 
-import os
-
-from dalembert.harness import session
-from dalembert.harness.execute import Timing
-from dalembert.harness.matrix import expand
-from dalembert.harness.pool import DEFAULT_TIMEOUT_S, run_matrix
+from dalembert.harness.commands import run as run_command
+from dalembert.harness.commands.report import run as _report
 from dalembert.record import READABLE_SCHEMAS, SCHEMA_VERSION
 from dalembert.store import Store
 
-__all__ = ["run", "load", "table", "findings", "report", "compare", "trajectories"]
+__all__ = ["run", "load", "table", "findings", "report", "compare", "trajectories", "MatrixError"]
+
+
+class MatrixError(RuntimeError):
+    """A matrix that ended without every run stored (lost to the infrastructure: ``resume`` finishes
+    it) or, with ``strict``, with runs that failed, diverged or timed out; ``.outcome`` is
+    ``dalembert.harness.commands.run.Outcome`` (its store and records)."""
+
+    def __init__(self, message, outcome):
+        super().__init__(message)
+        self.outcome = outcome
 
 
 def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=None, params=None, options=None,
-        out=None, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=None, progress=None):
-    """Run a selection of the matrix into a new store and return its records as a DataFrame.
+        jobs=None, timeout=None, quick=False, scheduler=None, out=None, resume=None, search=None, resolution=None,
+        no_maps=False, force=False, strict=False, timing=None, progress=None, debug=False):
+    """Run a selection of the matrix into a new store (or finish one: ``resume``) and return its
+    records as a DataFrame: ``dalembert run``, a keyword per flag (``dalembert.harness.commands.run.run``
+    documents each; a repeatable flag's keyword is its plural, ``--no-maps`` is ``no_maps``).
 
     Parameters
     ----------
@@ -53,33 +66,47 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     engines, integrators : list of str or None — default: every installed engine, every integrator
     dts : list of float or None — fixed steps, s (default 1e-2, 1e-3)
     rtols : list of float or None — tolerances of adaptive integrators (default 1e-6, 1e-9)
-    params : dict or None — case parameters, e.g. ``{"t_final": 2.0}``
+    params : dict or None — case parameters, e.g. ``{"t_final": 2.0}``; a list sweeps
+        (``{"spin": [5, 50]}``), a tuple is a vector, a str is the command line's text
     options : dict or None — engine options for every run (default: each engine's variants)
+    jobs : int or None — worker processes (default and cap: every core)
+    timeout : float or None — per-run limit, s (default 600)
+    quick : bool — time each run once after its warm-up (``--quick``)
+    scheduler : str or None — a Dask scheduler's address (``--scheduler``)
     out : str or None — the new store's directory (default ``results/<time>``); must not hold a run
-    jobs : int or None — worker processes (default: every core)
-    timeout : float — per-run limit, s
-    timing : dalembert.harness.execute.Timing or None — how each run is timed (repeats)
+    resume : str or None — finish this store instead (no flag that makes a matrix with it)
+    search, resolution : "dt" and float or None — the stability-boundary search (``--search dt``)
+    no_maps, force, strict : bool — as ``--no-maps``, ``--force``, ``--strict``
+    timing : dalembert.harness.execute.Timing or None — how each run is timed (not with ``quick``)
     progress : callable or None — ``progress(done, total, failures, record)`` after each run
+    debug : bool — keep Dask's own log
 
     Returns
     -------
     pandas.DataFrame — one row per run (``Store.table``); ``.attrs["store"]`` is the store's path
 
-    Raises ValueError (or KeyError with a "did you mean") on an unknown name or a bad setting,
-    before anything runs; a run that fails, diverges or times out is a row, not an exception.
+    Raises ValueError (or KeyError with a "did you mean") on an unknown name, parameter or a bad
+    setting, as the command line does and before anything is written; ``MatrixError`` when runs
+    were lost, or with ``strict`` when a run failed; KeyboardInterrupt when interrupted (every
+    finished run stored). A run that fails, diverges or times out is otherwise a row.
     """
-    specs, _ = expand(cases, tags, engines, integrators, dts, rtols, params, options)
-    timing = timing or Timing()
     given = {k: v for k, v in dict(cases=cases, tags=tags, engines=engines, integrators=integrators, dts=dts,
-                                   rtols=rtols, params=params, options=options).items() if v}
-    command = "dalembert.harness.api.run(" + ", ".join(f"{k}={v!r}" for k, v in given.items()) + ")"
-    store, lock = session.start(out or session.default_out(), session.manifest(specs, command, timeout, timing,
-                                                                               jobs or os.cpu_count()))
-    with lock:
-        run_matrix(specs, store, jobs, timeout, timing, progress)
-        session.end(store)
-    df = store.table()
-    df.attrs["store"] = store.path
+                                   rtols=rtols, params=params, options=options, out=out, resume=resume,
+                                   search=search).items() if v is not None}
+    outcome = run_command.run(cases, tags, engines, integrators, dts, rtols, params, options, jobs, timeout, quick,
+                              scheduler, out, resume, search, resolution, no_maps, force, strict, timing, progress,
+                              debug, command="dalembert.harness.api.run("
+                              + ", ".join(f"{k}={v!r}" for k, v in given.items()) + ")")
+    if outcome.interrupted:
+        raise KeyboardInterrupt(f"interrupted; finish with api.run(resume={outcome.store.path!r})")
+    if outcome.lost:
+        raise MatrixError(f"{len(outcome.lost)} run(s) lost to the infrastructure (first: {outcome.lost[0][1]}) — "
+                          f"finish with api.run(resume={outcome.store.path!r})", outcome)
+    if outcome.exit_status:
+        raise MatrixError(f"strict: {len(outcome.bad)} run(s) failed, diverged or timed out (first: "
+                          f"{outcome.bad[0].key}: {outcome.bad[0].status})", outcome)
+    df = outcome.store.table()
+    df.attrs["store"] = outcome.store.path
     return df
 
 
@@ -107,11 +134,9 @@ def findings(store):
 
 
 def report(store, out_dir=None):
-    """Write the report of ``store`` (into ``out_dir``, default the store); returns the paths of
-    report.html, report.md and summary.csv."""
-    from dalembert.reports.render import build_report
-
-    return build_report(_store(store), out_dir)
+    """Write the report of ``store`` (a Store or a path; into ``out_dir``, default the store);
+    returns the paths of report.html, report.md and summary.csv (``dalembert report``)."""
+    return _report(store, out_dir)
 
 
 def compare(before, after, threshold=2.0, cost_threshold=None, across_versions=False):

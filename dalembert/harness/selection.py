@@ -1,11 +1,17 @@
 """The ``run`` command's flags, checked: every one means something or is refused, before anything runs.
 
-Refused, naming the flag and the fix: empty lists (``--dt ,``), non-positive or
-non-finite steps, tolerances, timeouts; a parameter no selected case has
-(did-you-mean from those cases), the same parameter or option given twice, an
-empty ``--out``; ``--rtol`` when no selected integrator is adaptive, ``--dt``
-when none is fixed-step. Merged and said once: a value given twice in a list.
+Refused, naming the flag and the fix: an empty value (``--out ''``, ``--case ''``: empty never
+means "not given"), empty lists (``--dt ,``), non-positive or non-finite steps, tolerances,
+timeouts; a parameter no selected case has (did-you-mean from those cases); ``--rtol`` when no
+selected integrator is adaptive, ``--dt`` when none is fixed-step; and, unless ``--force`` says
+the size is meant, a sweep or matrix of more than ``MAX_RUNS`` runs, a model of more than
+``MAX_MODEL_PARTS`` parts, a run of more than ``matrix.MAX_STEPS_PER_RUN`` steps.
 Capped and said: ``--jobs`` beyond the cores (the timings would share them).
+
+Duplicates, one rule for every command: a single-valued thing given twice (``--param K``,
+``--option K``, ``--out``) is refused, since which one was meant is a guess; a name or value
+repeated in a list (``--case a --case a``, ``--dt 1e-3,1e-3``) is kept once, in the order
+first given, and a note says so.
 
 A parameter sweeps when given several values: ``spin=5,50,500`` (a scalar's values
 comma-separated), ``spin=log:5,500,7`` or ``lin:0,1,5`` (``n`` values log- or evenly
@@ -23,7 +29,19 @@ import numpy as np
 
 from dalembert.registry import suggest
 
-__all__ = ["Selection", "select", "numbers"]
+__all__ = ["Selection", "select", "numbers", "names", "given", "pairs", "sweep", "MAX_RUNS", "MAX_MODEL_PARTS"]
+
+# A guard against a slip of the keyboard (lin:1,2,100000000 for lin:1,2,10): the default matrix is
+# a few hundred runs and the largest shipped sweeps (the stability maps) a few hundred more; a
+# matrix, or one parameter's sweep, of more than this many runs is refused unless ``--force``
+# (at the reference's ~0.1-10 s a run, 1e4 runs are hours to days on a workstation).
+MAX_RUNS = 10_000
+# A guard on a model's size: every whole-number case parameter counts parts of the model (the
+# chain's links, n_four_bar's windows). The largest shipped use is n = 40 (IFToMM A02) and the
+# README's size sweep stops at 16; a 1e4-link chain already takes ~12 s to build and validate
+# before its first step, and the pure-Python reference hours per run. More is refused unless
+# ``--force``.
+MAX_MODEL_PARTS = 1000
 
 
 @dataclass(frozen=True)
@@ -57,9 +75,35 @@ def numbers(flag, groups, notes, lower=0.0):
     return unique
 
 
-def sweep(factory, key, text):
+def given(flag, value):
+    """``value`` unless it is an empty (or blank) string: ValueError naming ``flag`` (an empty value
+    is a mistake, never "not given")."""
+    if isinstance(value, str) and not value.strip():
+        raise ValueError(f"{flag}: empty — give a value, or leave {flag} out (an empty value is never the default)")
+    return value
+
+
+def names(flag, values, notes):
+    """The names of a repeatable flag, each checked non-empty, a repeated one kept once (first
+    place kept) and ``notes`` saying so; None when the flag was not given."""
+    if values is None:
+        return None
+    if isinstance(values, str):
+        values = [values]
+    values = [given(flag, v) for v in values]
+    if not values:
+        raise ValueError(f"{flag}: an empty list — give at least one name, or leave {flag} out for the default")
+    unique = list(dict.fromkeys(values))
+    if len(unique) < len(values):
+        notes.append(f"{flag}: {', '.join(v for v in unique if values.count(v) > 1)} given more than once; "
+                     "each counts once")
+    return unique
+
+
+def sweep(factory, key, text, force=False):
     """The values ``text`` gives parameter ``key`` of ``factory`` (one or several: a sweep), each
-    typed as the parameter's default; ValueError naming ``--param`` otherwise."""
+    typed as the parameter's default; ValueError naming ``--param`` otherwise, and for a sweep of
+    more than ``MAX_RUNS`` values or a whole number above ``MAX_MODEL_PARTS`` unless ``force``."""
     from dalembert.case import parse_param
 
     default = factory.params[key]
@@ -72,23 +116,35 @@ def sweep(factory, key, text):
             a, b, n = (float(x) for x in grid[1].split(","))
         except ValueError:
             raise ValueError(f"--param {key}={text}: write {grid[0]}:FIRST,LAST,COUNT") from None
-        if not (n >= 2 and n == int(n)) or (grid[0] == "log" and not (a > 0 and b > 0)):
+        if not (math.isfinite(n) and n >= 2 and n == int(n)) or (grid[0] == "log" and not (a > 0 and b > 0)):
             raise ValueError(f"--param {key}={text}: COUNT must be an integer >= 2"
                              + (", FIRST and LAST positive" if grid[0] == "log" else ""))
+        if n > MAX_RUNS and not force:
+            raise ValueError(f"--param {key}={text}: {n:.0f} values, more than {MAX_RUNS} runs of each selected "
+                             "integrator — check COUNT, or pass --force if the sweep is meant")
         points = (np.geomspace if grid[0] == "log" else np.linspace)(a, b, int(n))
         return [float(v) for v in points]
     parts = text.split(";") if isinstance(default, tuple) else text.split(",")
     if any(not p.strip() for p in parts):
         raise ValueError(f"--param {key}={text}: an empty value — separate values with "
                          + ("';' (a vector's numbers with ',')" if isinstance(default, tuple) else "','"))
+    if len(parts) > MAX_RUNS and not force:
+        raise ValueError(f"--param {key}: {len(parts)} values, more than {MAX_RUNS} runs — pass --force if the "
+                         "sweep is meant")
     values = [parse_param(factory, f"{key}={p}")[1] for p in parts]
+    big = [v for v in values if type(v) is int and v > MAX_MODEL_PARTS]
+    if big and not force:
+        raise ValueError(f"--param {key}={big[0]}: a model of more than {MAX_MODEL_PARTS} parts ({key!r} counts "
+                         f"{factory.units.get(key, 'parts')}) takes minutes to build and hours to run — check the "
+                         "value, or pass --force if it is meant")
     return list(dict.fromkeys(values))
 
 
-def _pairs(flag, texts):
-    """``KEY=VALUE`` texts as (key, value) pairs; ValueError on a malformed or repeated key."""
+def pairs(flag, texts):
+    """``KEY=VALUE`` texts as a dict; ValueError on a malformed or repeated key (a single-valued
+    thing given twice: which one was meant is a guess)."""
     pairs = {}
-    for text in texts:
+    for text in texts or []:
         if "=" not in text or not text.split("=", 1)[0]:
             raise ValueError(f"{flag} {text!r}: write KEY=VALUE")
         key, value = text.split("=", 1)
@@ -111,8 +167,8 @@ def select(args, cores):
     from dalembert.harness.pool import DEFAULT_TIMEOUT_S
 
     notes = []
-    if args.out is not None and not args.out.strip():
-        raise ValueError("--out: empty — give a directory, or leave --out out for results/<timestamp>")
+    if args.out is not None:
+        given("--out", args.out)
     if args.jobs is not None and args.jobs < 1:
         raise ValueError(f"--jobs: must be at least 1, got {args.jobs}")
     jobs = args.jobs or cores
@@ -124,24 +180,33 @@ def select(args, cores):
     if not (math.isfinite(timeout) and timeout > 0):
         raise ValueError(f"--timeout: must be a positive number of seconds, got {timeout}")
     dts, rtols = numbers("--dt", args.dt, notes), numbers("--rtol", args.rtol, notes)
+    cases, tag_list = names("--case", args.case, notes), names("--tag", args.tag, notes)
+    engines, integrators = names("--engine", args.engine, notes), names("--integrator", args.integrator, notes)
     registry = load_cases()
-    names = list(args.case or [])
-    for n in names:
+    for n in cases or []:
         registry[n]  # did-you-mean for unknown names
-    tags = set(args.tag or [])
-    selected = [f for n, f in registry.items() if n in names or tags & set(f.tags)] or (
-        [] if names or tags else [f for _, f in registry.items() if "hard" not in f.tags])
+    tags = set(tag_list or [])
+    selected = [f for n, f in registry.items() if n in (cases or []) or tags & set(f.tags)] or (
+        [] if cases or tags else [f for _, f in registry.items() if "hard" not in f.tags])
     params = {}
-    for key, value in _pairs("--param", args.param).items():
+    for key, value in pairs("--param", args.param).items():
         owners = [f for f in selected if key in f.params]
         if not owners:
             known = {k for f in selected for k in f.params}
             raise ValueError(f"--param {key}: no selected case has this parameter{suggest(key, known)}")
-        values = sweep(owners[0], key, value)
+        values = sweep(owners[0], key, value, args.force)
         params[key] = values if len(values) > 1 else values[0]
-    options = _pairs("--option", args.option)
-    specs, skipped = expand(args.case, args.tag, args.engine, args.integrator, dts or None, rtols or None, params,
+    variants = sum(math.prod(len(v) for k, v in params.items() if k in f.params and isinstance(v, list))
+                   for f in selected)
+    if variants > MAX_RUNS and not args.force:  # each variant is at least one run; refused before any is built
+        raise ValueError(f"--param: the sweeps make {variants} case variants, more than {MAX_RUNS} runs — sweep "
+                         "fewer values, or pass --force if the matrix is meant")
+    options = pairs("--option", args.option)
+    specs, skipped = expand(cases, tag_list, engines, integrators, dts or None, rtols or None, params,
                             options, force=args.force)
+    if len(specs) > MAX_RUNS and not args.force:
+        raise ValueError(f"the selection is {len(specs)} runs, more than {MAX_RUNS} — select fewer cases, engines, "
+                         "integrators, steps or sweep values, or pass --force if the matrix is meant")
     if rtols and not any(s.rtol is not None for s in specs):
         raise ValueError("--rtol: no selected integrator is adaptive — drop --rtol, or select one (e.g. "
                          "--integrator dop853)")
@@ -171,7 +236,7 @@ def select(args, cores):
     elif args.resolution is not None:
         raise ValueError("--resolution: only with --search")
     if tags and not args.no_maps and not args.search:
-        for plan, first in _maps(args, tags, registry, options):
+        for plan, first in _maps(engines, integrators, args.force, tags, registry, options):
             notes.append(f"stability map {plan.name}: {plan.case} over {plan.parameter} = {plan.values}, each "
                          f"fixed-step integrator's boundary searched in [{plan.bracket[0]:g}, {plan.bracket[1]:g}] s "
                          "(--no-maps leaves it out)")
@@ -180,7 +245,7 @@ def select(args, cores):
     return Selection(specs, skipped, notes, jobs, timeout, tuple(searches))
 
 
-def _maps(args, tags, registry, options):
+def _maps(engines, integrators, force, tags, registry, options):
     """The default stability maps the selected tags carry: ``[(MapPlan, first probes)]``."""
     from dalembert.harness.matrix import expand
     from dalembert.maps import MAPS
@@ -189,9 +254,9 @@ def _maps(args, tags, registry, options):
     for _, plan in MAPS.items():
         if not tags & set(plan.tags):
             continue
-        values = sweep(registry[plan.case], plan.parameter, plan.values)
-        first, _ = expand([plan.case], None, args.engine, args.integrator, list(plan.bracket), None,
-                          {**plan.params, plan.parameter: values}, options, force=args.force)
+        values = sweep(registry[plan.case], plan.parameter, plan.values, force)
+        first, _ = expand([plan.case], None, engines, integrators, list(plan.bracket), None,
+                          {**plan.params, plan.parameter: values}, options, force=force)
         first = [s for s in first if s.dt is not None]
         if first:
             out.append((plan, first))

@@ -1,8 +1,9 @@
 """A matrix's store from start to end: what its manifest says, and the one writer that holds it.
 
 ``start`` makes the new store (taking its one-writer lock before checking that no run is
-there yet) with the manifest of a matrix; ``end`` records when and under what load it ended.
-The command line and the Python API both go through them.
+there yet) with the manifest of a matrix and the cases and truths built for it (by
+``truths.build``, before: every refusal comes before the store exists); ``end`` records
+when and under what load it ended. The command line and the Python API both go through them.
 """
 
 from __future__ import annotations
@@ -45,10 +46,12 @@ def manifest(specs, command, timeout, timing, jobs, scheduler=None):
     }
 
 
-def start(out, manifest):
+def start(out, manifest, cases=None):
     """A new store at ``out`` (created) and its one-writer lock, taken before the check that no
     run is there yet (two runs into one directory cannot both pass it); ValueError naming
-    ``--out`` when it cannot be."""
+    ``--out`` when it cannot be. ``cases``: what ``truths.build`` made for the matrix, written
+    into the new store."""
+    from dalembert.harness.truths import store_cases
     from dalembert.store import Store
 
     try:
@@ -62,7 +65,13 @@ def start(out, manifest):
     if store.exists():
         lock.release()
         raise ValueError(f"--out: {out!r} already holds a run — use --resume {out} or another directory")
-    return store.create(manifest), lock
+    try:
+        store = store.create(manifest)
+        store_cases(store, cases or {})
+    except BaseException:
+        lock.release()
+        raise
+    return store, lock
 
 
 def end(store):

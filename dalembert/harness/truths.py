@@ -8,7 +8,7 @@ and reports read both from the store.
 
 from __future__ import annotations
 
-__all__ = ["prepare_cases", "truth_source"]
+__all__ = ["prepare_cases", "truth_source", "build", "store_cases"]
 
 
 def truth_source(case):
@@ -36,3 +36,60 @@ def prepare_cases(specs, store):
             store.write_case(CaseRecord.from_case(case, truth_source(case)), truth(case))
         truths[(name, version)] = store.truth(name, version)
     return truths
+
+
+def _finite(trajectory):
+    """Whether every number of ``trajectory`` is finite."""
+    import numpy as np
+
+    arrays = [trajectory.t] + [a for b in trajectory.bodies.values()
+                               for a in (b.position, b.quaternion, b.velocity, b.angular_velocity)]
+    arrays += [a for j in trajectory.joints.values() for a in (j.q, j.v)]
+    return all(np.isfinite(np.asarray(a, dtype=float)).all() for a in arrays)
+
+
+def build(specs):
+    """Each (case, version) of ``specs`` built with its truth, before any store is made (so that a
+    case that cannot be computed refuses the matrix, not its first run): ``{(case, version): (Case,
+    truth)}``, for ``store_cases``.
+
+    Raises ValueError naming the case and its parameters when the case cannot be built or its truth
+    computed or is not finite; numpy's warnings on the way (an overflow) are part of that message,
+    not printed. A truth that comes out finite gives its warnings back as they were.
+    """
+    import warnings
+
+    from dalembert.case import make_case
+    from dalembert.reference import truth
+    from dalembert.scene import SceneError
+
+    built = {}
+    for name, params, version in sorted({(s.case, s.params, s.case_version) for s in specs}):
+        given = ", ".join(f"{k}={v}" for k, v in params) or "its defaults"
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", RuntimeWarning)
+            try:
+                case = make_case(name, **dict(params))
+                made = truth(case)
+                problem = None if _finite(made) else "its truth is not finite"
+            except (ValueError, ArithmeticError, SceneError) as e:
+                problem = f"its truth cannot be computed ({e})"
+        numpy_said = sorted({str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)})
+        if problem:
+            raise ValueError(f"case {name!r} with {given}: {problem}"
+                             + (f"; numpy: {'; '.join(numpy_said)}" if numpy_said else "")
+                             + " — check the parameters (--param): the values are out of the case's range")
+        for w in caught:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        built[(name, version)] = (case, made)
+    return built
+
+
+def store_cases(store, built):
+    """Write what ``build`` made into ``store`` (each case's record and truth), so that the matrix's
+    ``prepare_cases`` finds them there instead of computing them again."""
+    from dalembert.case import CaseRecord
+
+    for case, made in built.values():
+        if not store.has_case(case.name, case.version) or store.truth(case.name, case.version) is None:
+            store.write_case(CaseRecord.from_case(case, truth_source(case)), made)
