@@ -143,15 +143,36 @@ def test_the_api_refuses_an_empty_value_too(keyword, value, words, tmp_path, mon
 
 # --- refusals before the store -------------------------------------------------------------------
 
-def test_a_case_that_cannot_be_computed_leaves_no_store(tmp_path, capfd):
-    """omega0=1e200 overflows the truth: refused with one message (numpy's warnings in it, not
-    printed), nothing written, and the corrected command then uses the same directory."""
+def test_a_case_that_cannot_be_computed_leaves_no_store(tmp_path, capfd, monkeypatch):
+    """A truth that overflows (here the reference's truth made to, as an overflow in a case's closed form
+    would) is refused with one message (numpy's warnings in it, not printed), nothing written, and the
+    corrected command then uses the same directory; a parameter the case itself refuses (omega0 beyond its
+    domain) leaves no store either."""
+    import warnings
+
+    import numpy as np
+
+    import dalembert.reference as reference
+
     out = str(tmp_path / "top")
     assert main(["run", *SMALL, "--param", "omega0=1e200,0,0", "--out", out]) == 2
     err = capfd.readouterr().err
+    assert "free_top.omega0" in err and not os.path.exists(out)
+    real = reference.truth
+
+    def overflowing(case):
+        made = real(case)
+        warnings.warn("overflow encountered in multiply", RuntimeWarning)
+        made.bodies["top"].angular_velocity[-1, 0] = np.inf
+        return made
+
+    monkeypatch.setattr(reference, "truth", overflowing)
+    assert main(["run", *SMALL, "--out", out]) == 2
+    err = capfd.readouterr().err
     assert "case 'free_top' with" in err and "not finite" in err and "--param" in err
-    assert "RuntimeWarning" not in err and err.count("\n") == 1
+    assert "overflow encountered" in err and "RuntimeWarning" not in err and err.count("\n") == 1
     assert not os.path.exists(out)
+    monkeypatch.setattr(reference, "truth", real)
     assert main(["run", *SMALL, "--out", out]) == 0
 
 
