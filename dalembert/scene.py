@@ -26,6 +26,7 @@ world (``Plane``: a ground), and the list of pairs that may touch (``ContactPair
 friction coefficient and, where the case calls for one, its coefficient of restitution). Nothing touches
 that the scene does not name: two geoms without a pair pass through each other. Contact brings its own
 effect tags (``contact``, ``friction``, ``restitution``: ``CONTACT_EFFECTS``), apart like the springs'.
+The three types live in ``dalembert.collision`` and are re-exported here.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from dalembert import closure
+from dalembert.collision import ContactPair, Geom, Plane, floats
 from dalembert.kinds import (AXIS_KINDS, CONTACT_EFFECT, CONTACT_EFFECTS, EFFECTS, FRICTION_EFFECT, GEOM_KINDS,
                              JOINT_KINDS, LOAD_FRAMES, LOAD_KINDS, LOOP_EFFECTS, LOOP_KINDS, RESTITUTION_EFFECT,
                              SPRING_EFFECT, SPRING_EFFECTS, WORLD)
@@ -48,11 +50,7 @@ __all__ = ["WORLD", "JOINT_KINDS", "AXIS_KINDS", "LOOP_KINDS", "LOAD_KINDS", "LO
            "LOOP_CLOSURE_TOL", "INITIAL_OVERLAP_TOL"]
 
 
-def _vec(x, n=None):
-    t = tuple(float(v) for v in np.ravel(np.asarray(x, dtype=float)))
-    if n is not None and len(t) != n:
-        return t  # the length problem is reported by validate()
-    return t
+_vec = floats  # (the length of a tuple is checked by validate())
 
 
 def mass_properties(masses, positions):
@@ -294,103 +292,6 @@ class Spring:
     def effect(self):
         """Effect tag: ``spring_damper`` (``SPRING_EFFECTS``)."""
         return SPRING_EFFECT
-
-
-@dataclass(frozen=True)
-class Geom:
-    """Collision geometry fixed in ``body``: a ``sphere`` or a ``box`` (``GEOM_KINDS``).
-
-    Attributes
-    ----------
-    body : str — the body it moves with
-    kind : str — ``"sphere"`` or ``"box"``
-    size : tuple — m: a sphere's ``(radius,)``; a box's full edge lengths ``(sx, sy, sz)`` along the geom's axes
-    point : tuple of 3 floats — the geom's centre in the body frame B (m)
-    quat : tuple of 4 floats — the geom's axes in B (scalar first; a box's edges lie along them)
-    name : str — default ``geom_<body>``; a ``ContactPair`` names it
-    """
-
-    body: str
-    kind: str
-    size: tuple
-    point: tuple = (0.0, 0.0, 0.0)
-    quat: tuple = (1.0, 0.0, 0.0, 0.0)
-    name: str = ""
-
-    def __post_init__(self):
-        for name in ("size", "point", "quat"):
-            object.__setattr__(self, name, _vec(getattr(self, name)))
-        if not self.name:
-            object.__setattr__(self, "name", f"geom_{self.body}")
-
-
-@dataclass(frozen=True)
-class Plane:
-    """A fixed plane in the world (a ground): the solid half-space lies behind it, against ``normal``.
-
-    Attributes
-    ----------
-    name : str — a ``ContactPair`` names it
-    normal : tuple of 3 floats — the outward normal, world axes (any non-zero length; made unit)
-    point : tuple of 3 floats — a point of the plane, world (m)
-    """
-
-    name: str = "ground"
-    normal: tuple = (0.0, 0.0, 1.0)
-    point: tuple = (0.0, 0.0, 0.0)
-
-    def __post_init__(self):
-        for name in ("normal", "point"):
-            object.__setattr__(self, name, _vec(getattr(self, name)))
-
-    @property
-    def unit_normal(self):
-        """The outward unit normal, ndarray (3,), world."""
-        n = np.array(self.normal)
-        return n / np.linalg.norm(n)
-
-
-@dataclass(frozen=True)
-class ContactPair:
-    """Two geoms (or a geom and a plane), named by ``a`` and ``b``, that may touch: the only contacts a scene has.
-
-    The contact is rigid and unilateral: the two never interpenetrate, and push apart only. ``friction`` is the
-    Coulomb coefficient (static = kinetic: an ideal Coulomb cone at a point, no rolling or torsional
-    resistance): the tangential force at the contact point is at most ``friction`` times the normal force, and
-    opposes the slip while there is slip. ``restitution`` (None: the case states none, the contact stays
-    closed once made) is Newton's coefficient: at an impact the normal approach speed ``u`` becomes a
-    separation speed ``restitution u``.
-
-    Attributes
-    ----------
-    a, b : str — names of a ``Geom`` or a ``Plane`` of the scene (at least one a geom)
-    friction : float — Coulomb coefficient, >= 0 (0: frictionless)
-    restitution : float or None — in [0, 1]
-    name : str — default ``contact_<a>_<b>``
-    """
-
-    a: str
-    b: str
-    friction: float = 0.0
-    restitution: float | None = None
-    name: str = ""
-
-    def __post_init__(self):
-        object.__setattr__(self, "friction", float(self.friction))
-        if self.restitution is not None:
-            object.__setattr__(self, "restitution", float(self.restitution))
-        if not self.name:
-            object.__setattr__(self, "name", f"contact_{self.a}_{self.b}")
-
-    @property
-    def effects(self):
-        """Its effect tags: ``contact``, with ``friction`` when ``friction > 0`` and ``restitution`` when given."""
-        tags = {CONTACT_EFFECT}
-        if self.friction > 0.0:
-            tags.add(FRICTION_EFFECT)
-        if self.restitution is not None:
-            tags.add(RESTITUTION_EFFECT)
-        return tags
 
 
 # The contact fields of a scene, each absent from its JSON and its case's version when empty (a scene
