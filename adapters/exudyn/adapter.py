@@ -50,6 +50,20 @@ OPTIONS = ("node", "joints", "spectral_radius", "newton_rtol", "newton_atol")
 # error of 9.4e-3 rad instead of 2.6e-6 on the intermediate-axis top at dt = 1e-4).
 NEWTON_RTOL = 1e-12
 NEWTON_ATOL = 1e-14
+# Why a contact scene is refused, and what mapping it would take (Exudyn 1.13's contact elements, as their
+# docstrings describe them): every contact there is a penalty spring, so the mapping has parameters to declare.
+CONTACT_REASON = ("Exudyn's contact would need: spheres as GeneralContact.AddSphereWithMarker (or one "
+                  "ObjectContactSphereSphere per sphere pair) and each plane as static triangles "
+                  "(AddTrianglesRigidBodyBased on a ground marker, or ObjectContactSphereTriangle); a box against a "
+                  "plane has no element (GeneralContact pairs spheres with spheres and triangles, never triangles "
+                  "with triangles), so block_on_incline's box would need spheres at its corners; a penalty "
+                  "contactStiffness and contactDamping per pair declared as options with their defaults (the scene's "
+                  "contact is rigid); restitution only through the connectors' restitutionCoefficient with an "
+                  "impactModel (GeneralContact has none); friction regularized below frictionProportionalZone (m/s, "
+                  "an option: a sticking contact creeps by construction); a NodeGenericData per connector and the "
+                  "solver's discontinuous iterations, each read back in the audit")
+
+
 @dataclass
 class SamplingState:
     """How a prepared system's solves are sampled: the one thing its runs learn and keep.
@@ -110,7 +124,7 @@ class ExudynAdapter(Adapter):
             raise ValueError(f"rtol: {settings.integrator!r} is adaptive — give rtol (and atol)")
 
     def unsupported(self, scene, settings):
-        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
+        if (why := contact.not_mapped(scene, self.name, CONTACT_REASON)):  # contact: not mapped here yet
             return why
         reason = super().unsupported(scene, settings)
         if reason:
