@@ -19,8 +19,9 @@ DT = 1e-3
 # MJX's default (pyramidal cone, impratio 1) lets the box that must stick creep at a measured 1.79 mm/s over the
 # default block_on_incline (float32; 1.80 mm/s in float64), MuJoCo C's 1.8 mm/s; the bound leaves ~1.7x.
 DEFAULT_CREEP_BOUND = 3e-3
-# The elliptic cone with impratio 10 cuts it tenfold: measured 1.01e-4 m/s (MuJoCo C: 0.0875 mm/s); the bound
-# leaves 3x and sits below the default's creep, so options that never reach the device fail it.
+# The elliptic cone with impratio 10 cuts it tenfold: measured 1.01e-4 m/s in float32 (float64: 9.04e-5 m/s, MuJoCo
+# C's figure at these settings); the bound leaves 3x and sits below the default's creep, so options that never
+# reach the device fail it.
 ELLIPTIC_IMPRATIO_CREEP_BOUND = 3e-4
 # MJX starts the ball rolling 6.4 ms after the closed form's onset (float32; 6.6 ms in float64; MuJoCo's soft
 # friction: the 0.313-0.319 s for t* = 0.2912 s); the bound leaves ~1.5x.
