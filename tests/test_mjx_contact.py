@@ -1,6 +1,7 @@
 """MJX runs the contact cases with MuJoCo's mapping (the same MJCF: geoms, planes, explicit pairs, friction,
 restitution as solref's damping ratio), its contact options reach the device, and what MJX lacks is refused with the
-reason: noslip (MJX's solver has no noslip pass) and a frictionless pair under the elliptic cone (``mjx.make_data``).
+reason: noslip (MJX's JAX implementation has no noslip pass) and a frictionless pair under the elliptic cone
+(``mjx.make_data``).
 MJX 3.17 on JAX's CPU backend, semi-implicit Euler at dt = 1e-3 (the numbers each bound rests on are in its
 comment; MuJoCo C 4.0 gives the same figures at these settings)."""
 
@@ -78,7 +79,8 @@ def test_bouncing_ball_apexes_and_sphere_collision_in_float64():
 def test_what_mjx_lacks_is_refused_with_the_reason():
     block, ball = make_case("block_on_incline"), make_case("bouncing_ball")
     reason = ADAPTER.unsupported(block.scene, Settings("euler", dt=DT, options={"noslip_iterations": 10}))
-    assert reason.startswith("options.noslip_iterations: MJX has no noslip pass") and "--engine mujoco" in reason
+    assert reason.startswith("options.noslip_iterations: MJX's JAX implementation has no noslip pass")
+    assert "--engine mujoco" in reason
     # a frictionless pair (condim 1) under the elliptic cone: MJX's own refusal, from mjx.make_data
     reason = ADAPTER.unsupported(ball.scene, Settings("euler", dt=DT, options={"cone": "elliptic"}))
     assert reason.startswith("MJX cannot put this model on the device (mjx.make_data") and "condim=1" in reason

@@ -20,8 +20,9 @@ pairs, friction and restitution-as-dampratio in the same MJCF), with MuJoCo's
 contact options ``cone``, ``impratio`` and ``contact_timeconst`` (MJX's
 constraint rows and solver read ``cone`` and ``impratio`` as MuJoCo C does).
 What MJX lacks is refused with the reason, before anything runs (``why_not``):
-``noslip_iterations`` > 0 (MJX's solver has no noslip pass: mujoco.mjx would
-ignore the option silently, and the run would be MuJoCo's without noslip), and,
+``noslip_iterations`` > 0 (the JAX implementation this adapter runs has no
+noslip pass — only MJX's Warp backend, a GPU one, has: ``mujoco.mjx._src``
+would ignore the option silently, and the run would be one without noslip), and,
 from MJX itself, a frictionless pair (condim 1) under the elliptic cone
 (``mjx.make_data``: "condim=1 with ConeType.ELLIPTIC not implemented") and any
 geometry pair MJX has no collision function for (``mjx.put_model``).
@@ -47,8 +48,8 @@ __all__ = ["MjxAdapter", "MjxPrepared"]
 OPTIONS = ("precision", "welds", *contact.OPTIONS)
 STAGES = {"euler": 1, "rk4": 4, "implicitfast": 1}  # evaluations of the dynamics per step
 # The step the refusal check compiles every model with: ``mjx.put_model`` and ``mjx.make_data`` refuse features
-# (integrator, cone, solver, flags, geometry pairs, condim, sensors), never a step, which enters the MJCF only as numbers (timestep,
-# solref), so one check serves every step of a sweep (~8 ms a check).
+# (integrator, cone, solver, flags, geometry pairs, condim, sensors), never a step, which enters the MJCF only as
+# numbers (timestep, solref), so one check serves every step of a sweep (~8 ms a check).
 REFUSAL_DT = 1e-3
 
 
@@ -78,7 +79,7 @@ class MjxPrepared(MujocoPrepared):
 class MjxAdapter(MujocoAdapter):
     """MJX (``mujoco-mjx``) on JAX's CPU backend. Options: ``precision`` = ``float32`` | ``float64``;
     ``welds`` = ``tree`` | ``equality``; contact as MuJoCo's (``cone``, ``impratio``, ``contact_timeconst``;
-    ``noslip_iterations`` only at its default 0: MJX has no noslip pass)."""
+    ``noslip_iterations`` only at its default 0: MJX's JAX implementation has no noslip pass)."""
 
     name = "mjx"
     options = {
@@ -178,7 +179,7 @@ class MjxAdapter(MujocoAdapter):
         })
         if p.scene.contacts:  # the contact options as the device model holds them (MuJoCo C's are read back above)
             out.update({"cone_device": mx.opt.cone.name.lower(), "impratio_device": float(np.asarray(mx.opt.impratio)),
-                        "noslip": "none: MJX's solver has no noslip pass (noslip_iterations > 0 is refused)"})
+                        "noslip": "none: MJX's JAX solver has no noslip pass (noslip_iterations > 0 is refused)"})
         if p.precision == "float32" and p.settings.dt is not None:
             # the attitude floor of the number type (rad; torque-free tops only, else NaN), for the report's parity
             from dalembert.adapters.mjx.parity import float32_floor
@@ -189,11 +190,12 @@ class MjxAdapter(MujocoAdapter):
 
 def why_not(scene, settings):
     """Why MJX cannot run ``scene``'s contact at ``settings`` where MuJoCo C could, or None: a noslip pass, which
-    MJX's solver does not have (``mujoco.mjx`` reads no ``noslip_iterations``: it would be ignored silently)."""
+    MJX's JAX implementation does not have (``mujoco.mjx._src`` reads no ``noslip_iterations``: it would be ignored
+    silently; only the Warp backend, a GPU one, has a noslip pass)."""
     if scene.contacts and contact.contact_options(settings)["noslip_iterations"] > 0:
-        return ("options.noslip_iterations: MJX has no noslip pass (mujoco.mjx's solver never reads "
-                "noslip_iterations, so the run would silently be one without noslip) — run noslip on MuJoCo C "
-                "(--engine mujoco), or MJX with noslip_iterations=0")
+        return ("options.noslip_iterations: MJX's JAX implementation has no noslip pass (its solver never reads "
+                "noslip_iterations, so the run would silently be one without noslip; only MJX's Warp backend, a GPU "
+                "one, has one) — run noslip on MuJoCo C (--engine mujoco), or MJX with noslip_iterations=0")
     return None
 
 
