@@ -123,10 +123,11 @@ def slip_velocity(scene, pair, poses):
     return v - np.outer(v @ n, n)
 
 
-def not_mapped(scene, engine):
+def not_mapped(scene, engine, would_take=None):
     """The reason an adapter that does not map contact yet gives for a scene with contact pairs, or None: what its
-    ``unsupported`` returns first (contact is never silently left out: the bodies would fall through)."""
+    ``unsupported`` returns first (contact is never silently left out: the bodies would fall through).
+    ``would_take`` (str, optional): what mapping it would take in this engine, appended to the reason."""
     if scene.contacts:
         return (f"contact not yet mapped for {engine} (the scene's pairs {[c.name for c in scene.contacts]} would be "
-                "left out, and its bodies pass through each other)")
+                "left out, and its bodies pass through each other)" + (f": {would_take}" if would_take else ""))
     return None

@@ -28,14 +28,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from dalembert import contact
 from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
-from dalembert.adapters.exudyn import sampling
+from dalembert.adapters.exudyn import contact, sampling
 from dalembert.adapters.exudyn.loops import loop_axes
 from dalembert.adapters.exudyn.model import MODEL_OPTIONS, ExudynSystem, NODES, TREE_JOINTS, build, rigid_bodies
 from dalembert.adapters.exudyn.audit import audit
 from dalembert.adapters.exudyn.readback import STALE_ACCELERATIONS, link_accelerations, read_back
-from dalembert.scene import EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS, WORLD
+from dalembert.scene import CONTACT_EFFECTS, EFFECTS, LOOP_EFFECTS, SPRING_EFFECTS, WORLD
 
 __all__ = ["ExudynAdapter", "ExudynPrepared", "SamplingState"]
 
@@ -44,12 +43,27 @@ EXPLICIT = {"explicit-euler": "ExplicitEuler", "explicit-midpoint": "ExplicitMid
             "rk44": "RK44", "rk67": "RK67", "velocity-verlet": "VelocityVerlet", "dopri5": "DOPRI5", "ode23": "ODE23"}
 ADAPTIVE = ("dopri5", "ode23")
 STAGES = {"rk44": 4, "rk33": 3, "rk67": 7, "explicit-midpoint": 2, "dopri5": 7, "ode23": 4}
-OPTIONS = ("node", "joints", "spectral_radius", "newton_rtol", "newton_atol")
+OPTIONS = ("node", "joints", "spectral_radius", "newton_rtol", "newton_atol", *contact.OPTIONS)
 # Newton tolerances used unless the options say otherwise: Exudyn's defaults
 # (1e-8 relative, 1e-10 absolute) cap generalized-alpha's accuracy (measured: an orientation
 # error of 9.4e-3 rad instead of 2.6e-6 on the intermediate-axis top at dt = 1e-4).
 NEWTON_RTOL = 1e-12
 NEWTON_ATOL = 1e-14
+# ... but a scene with contact runs at Exudyn's own defaults unless the options say otherwise: Newton fails at the
+# tighter ones (measured: ball_slide_to_roll at dt = 1e-3 and 1e-4, within 0.15 s) against penalty forces of
+# ~1e6 N/m times the penetration.
+CONTACT_NEWTON_RTOL = 1e-8
+CONTACT_NEWTON_ATOL = 1e-10
+
+
+def newton_tolerances(scene, settings):
+    """generalized-alpha's Newton tolerances ``(relative, absolute)`` for ``scene`` at ``settings``: the options',
+    else ``NEWTON_RTOL``/``NEWTON_ATOL``, or Exudyn's own defaults for a scene with contact."""
+    rtol, atol = (CONTACT_NEWTON_RTOL, CONTACT_NEWTON_ATOL) if scene.contacts else (NEWTON_RTOL, NEWTON_ATOL)
+    o = settings.options
+    return float(o.get("newton_rtol", rtol)), float(o.get("newton_atol", atol))
+
+
 @dataclass
 class SamplingState:
     """How a prepared system's solves are sampled: the one thing its runs learn and keep.
@@ -84,15 +98,17 @@ class ExudynAdapter(Adapter):
 
     name = "exudyn"
     # ball joints and welds only with joints=redundant, loops only with implicit solvers (see ``unsupported``)
-    effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS
+    # contact: sphere-sphere and sphere-plane connectors, implicit solvers only (``contact``, ``contact.why_not``)
+    effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS | CONTACT_EFFECTS
     options = {
         **MODEL_OPTIONS,  # node, joints
         "spectral_radius": Option(minimum=0.0, maximum=1.0, only=("generalized-alpha",),
                                   description="generalized-alpha's spectral radius at infinity (default: Exudyn's)"),
         "newton_rtol": Option(default=NEWTON_RTOL, exclusive_minimum=0.0, only=("generalized-alpha",),
-                              description="Newton's relative tolerance"),
+                              description=f"Newton's relative tolerance (with contact: {CONTACT_NEWTON_RTOL:g})"),
         "newton_atol": Option(default=NEWTON_ATOL, exclusive_minimum=0.0, only=("generalized-alpha",),
-                              description="Newton's absolute tolerance"),
+                              description=f"Newton's absolute tolerance (with contact: {CONTACT_NEWTON_ATOL:g})"),
+        **contact.CONTACT_OPTIONS,  # contact_stiffness, friction_zone
     }
     integrators = {
         **{k: IntegratorSpec(True, OPTIONS, f"Exudyn {v}") for k, v in IMPLICIT.items()},
@@ -108,16 +124,17 @@ class ExudynAdapter(Adapter):
         super().check(scene, times, settings)
         if settings.integrator in ADAPTIVE and settings.rtol is None:
             raise ValueError(f"rtol: {settings.integrator!r} is adaptive — give rtol (and atol)")
+        contact.contact_options(settings)  # (the declared options parsed as the model takes them)
 
     def unsupported(self, scene, settings):
-        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
-            return why
         reason = super().unsupported(scene, settings)
         if reason:
             return reason
         node = self.option(settings, "node")
         redundant = self.option(settings, "joints") == "redundant"
         explicit = settings.integrator in EXPLICIT
+        if (why := contact.why_not(scene, settings, rigid_bodies(scene, redundant), explicit)):
+            return why
         if scene.loops and explicit:
             return ("loop closures with an explicit integrator: Exudyn's explicit solvers solve no algebraic "
                     "constraints (a closure is an index-3 DAE: use generalized-alpha or trapezoidal-index2)")
@@ -190,8 +207,13 @@ class ExudynAdapter(Adapter):
             radius = self.option(st, "spectral_radius")
             if radius is not None:  # else Exudyn's own default
                 s.timeIntegration.generalizedAlpha.spectralRadius = float(radius)
-            s.timeIntegration.newton.relativeTolerance = float(self.option(st, "newton_rtol"))
-            s.timeIntegration.newton.absoluteTolerance = float(self.option(st, "newton_atol"))
+            rtol, atol = newton_tolerances(p.scene, st)
+            s.timeIntegration.newton.relativeTolerance = rtol
+            s.timeIntegration.newton.absoluteTolerance = atol
+        if p.scene.contacts:
+            # the run steps at the user's dt (its samples must land on its steps): Exudyn's contact connectors
+            # otherwise shrink the step at each impact to the one they recommend, off the grid for good
+            s.timeIntegration.discontinuous.useRecommendedStepSize = False
         return s
 
     def run(self, prepared):
@@ -244,4 +266,9 @@ class ExudynAdapter(Adapter):
 
     # ------------------------------------------------------------- audit
     def audit(self, prepared, outcome):
-        return audit(prepared, outcome, {**IMPLICIT, **EXPLICIT}[prepared.settings.integrator])
+        out = audit(prepared, outcome, {**IMPLICIT, **EXPLICIT}[prepared.settings.integrator])
+        if prepared.scene.contacts:  # the solver settings contact changes (``_settings``)
+            out["recommended_step_size"] = "off: the steps stay on the run's dt (Exudyn's connectors would shrink them)"
+            if prepared.settings.integrator == "generalized-alpha":
+                out["newton_tolerances"] = list(newton_tolerances(prepared.scene, prepared.settings))
+        return out

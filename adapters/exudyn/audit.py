@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert.adapters.base import option_value
+from dalembert.adapters.exudyn import contact
 from dalembert.adapters.exudyn.model import CONSTRAINED_AXES, MODEL_OPTIONS
 from dalembert.adapters.exudyn.readback import STALE_ACCELERATIONS
 from dalembert.adapters.exudyn.springs import passive_effects, unexpected_passive
@@ -41,7 +42,7 @@ def audit(prepared, outcome, solver):
         "gravity_loads": "mass-proportional (CreateRigidBody / KinematicTree)" if any(scene.gravity) else "none",
         "node": option_value(MODEL_OPTIONS, st, "node"), "joints": option_value(MODEL_OPTIONS, st, "joints"),
         "solver": solver,
-        "constraints": constraint_rows(scene, built), "contacts": 0,
+        "constraints": constraint_rows(scene, built), "contacts": len(scene.contacts),
         "model": built.summary,
         "newton_steps": outcome.info.get("newton_steps", 0),
         "rejected_steps": outcome.info.get("rejected_steps", 0),
@@ -50,6 +51,7 @@ def audit(prepared, outcome, solver):
         **({"loops": _loop_audit(scene, built)} if scene.loops else {}),
         **_spring_audit(scene, built),
         **_joint_audit(built),
+        **contact.audit(built.mbs, scene),  # every contact connector as the system holds it
         **({"known_issue": ROTVEC_LG_REACTION} if _rotvec_lg_reactions(scene, st) else {}),
     }
 

@@ -59,6 +59,7 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.base import Option, option_value
+from dalembert.adapters.exudyn.contact import add_contacts
 from dalembert.adapters.exudyn.joints import CONSTRAINED_AXES, TREE_JOINTS, read_joints
 from dalembert.adapters.exudyn.loops import joint_frame, loop_axes
 from dalembert.adapters.exudyn.springs import add_springs, read_springs
@@ -256,7 +257,7 @@ def build(scene, settings, assemble=True):
                        f"(minimal coordinates), gravity {g.tolist()}")
     # --- loop closures: one constraint object from a marker on body a (marker 0) to one on body b,
     # its rows those independent at the initial state (``loops.loop_axes``)
-    if scene.loops or scene.springs:  # their ends on the world: markers on a ground
+    if scene.loops or scene.springs or scene.planes:  # their ends on the world (a plane is): markers on a ground
         ground = mbs.AddObject(ObjectGround())
         owners[int(ground)] = WORLD
         markers[WORLD] = lambda p, R=np.eye(3): mbs.AddMarker(MarkerBodyRigid(
@@ -282,6 +283,8 @@ def build(scene, settings, assemble=True):
     # --- spring-dampers: one ObjectConnectorSpringDamper from a marker on body a (marker 0) to one on body b
     springs, lines = add_springs(mbs, scene, markers, sensors)
     summary += lines
+    # --- contact: one connector per scene pair (``contact``)
+    summary += add_contacts(mbs, scene, settings, markers)
     # --- loads
     for ld in scene.loads:
         R_EB = X_EB.get(ld.body, (None, np.eye(3)))[1]  # a rigid body's E is B

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import springs as spring_forces
+from dalembert.adapters.exudyn.contact import ELEMENTS as CONTACT_ELEMENTS
 from dalembert.scene import WORLD
 
 __all__ = ["ELEMENT", "POINT_TOL", "OBJECTS", "add_springs", "read_springs", "passive_effects", "unexpected_passive"]
@@ -181,7 +182,11 @@ def unexpected_passive(passive, scene, rigid_bodies):
             "LoadMassProportional": rigid_bodies if any(scene.gravity) else 0}
     found += [f"{n} {kind}(s) for {want.get(kind, 0)}" for kind, n in passive["loads"].items() if n != want.get(kind, 0)]
     found += [f"0 {kind}(s) for {n}" for kind, n in want.items() if n and kind not in passive["loads"]]
-    found += [f"{n} {kind}(s): not made by build" for kind, n in passive["objects"].items() if kind not in OBJECTS]
+    contacts = sum(passive["objects"].get(kind, 0) for kind in CONTACT_ELEMENTS)
+    found += [f"{contacts} contact connector(s) for {len(scene.contacts)} contact pair(s)"] if contacts != len(
+        scene.contacts) else []
+    found += [f"{n} {kind}(s): not made by build" for kind, n in passive["objects"].items()
+              if kind not in OBJECTS + CONTACT_ELEMENTS]
     found += [f"{k} {passive[k]!r}" for k in ("tree_joint_stiffness", "tree_joint_damping", "tree_joint_forces",
                                                 "tree_link_loads") if passive[k]]
     found += [f"user functions on objects {passive['user_functions']}"] if passive["user_functions"] else []

@@ -14,6 +14,18 @@ Options: ``precision`` = ``float32`` (MJX's default) | ``float64``
 (``jax_enable_x64``); ``welds`` as for MuJoCo. Loads go through MuJoCo's site
 actuators only (MJX applies them inside every integrator stage); MuJoCo's
 ``loads=xfrc_applied`` path, a Python call per step, is not offered.
+
+Contact: MuJoCo's mapping (``mujoco.contact``: the same geoms, planes, explicit
+pairs, friction and restitution-as-dampratio in the same MJCF), with MuJoCo's
+contact options ``cone``, ``impratio`` and ``contact_timeconst`` (MJX's
+constraint rows and solver read ``cone`` and ``impratio`` as MuJoCo C does).
+What MJX lacks is refused with the reason, before anything runs (``why_not``):
+``noslip_iterations`` > 0 (the JAX implementation this adapter runs has no
+noslip pass — only MJX's Warp backend, a GPU one, has: ``mujoco.mjx._src``
+would ignore the option silently, and the run would be one without noslip), and,
+from MJX itself, a frictionless pair (condim 1) under the elliptic cone
+(``mjx.make_data``: "condim=1 with ConeType.ELLIPTIC not implemented") and any
+geometry pair MJX has no collision function for (``mjx.put_model``).
 """
 
 from __future__ import annotations
@@ -24,21 +36,20 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from dalembert import contact
-from dalembert.kinds import CONTACT_EFFECTS
 from dalembert.adapters.base import IntegratorSpec, Option, Outcome
 from dalembert.adapters.mujoco import MujocoAdapter
+from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.adapter import MujocoPrepared
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mjx.stepping import PRECISIONS, chunks, compile_rollout, mjx, precision, run_rollout, to_host
 
 __all__ = ["MjxAdapter", "MjxPrepared"]
 
-OPTIONS = ("precision", "welds")
+OPTIONS = ("precision", "welds", *contact.OPTIONS)
 STAGES = {"euler": 1, "rk4": 4, "implicitfast": 1}  # evaluations of the dynamics per step
-# The step the refusal check compiles every model with: ``mjx.put_model`` refuses features (integrator, cone,
-# solver, flags, geometry pairs, sensors), never a step, which enters the MJCF only as numbers (timestep,
-# solref), so one check serves every step of a sweep (~8 ms a check).
+# The step the refusal check compiles every model with: ``mjx.put_model`` and ``mjx.make_data`` refuse features
+# (integrator, cone, solver, flags, geometry pairs, condim, sensors), never a step, which enters the MJCF only as
+# numbers (timestep, solref), so one check serves every step of a sweep (~8 ms a check).
 REFUSAL_DT = 1e-3
 
 
@@ -67,15 +78,17 @@ class MjxPrepared(MujocoPrepared):
 
 class MjxAdapter(MujocoAdapter):
     """MJX (``mujoco-mjx``) on JAX's CPU backend. Options: ``precision`` = ``float32`` | ``float64``;
-    ``welds`` = ``tree`` | ``equality``."""
+    ``welds`` = ``tree`` | ``equality``; contact as MuJoCo's (``cone``, ``impratio``, ``contact_timeconst``;
+    ``noslip_iterations`` only at its default 0: MJX's JAX implementation has no noslip pass)."""
 
     name = "mjx"
     options = {
         "precision": Option(PRECISIONS, PRECISIONS[0], "JAX's number type: float32 (MJX's default) or float64 "
                             "(jax_enable_x64)"),
         "welds": MujocoAdapter.options["welds"],
+        **contact.CONTACT_OPTIONS,
     }
-    effects = MujocoAdapter.effects - CONTACT_EFFECTS  # (MuJoCo's contact mapping is not checked on MJX yet)
+    effects = MujocoAdapter.effects  # contact included: MuJoCo's mapping, what MJX lacks refused (``why_not``)
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "MJX semi-implicit Euler"),
         "rk4": IntegratorSpec(True, OPTIONS, "MJX classical RK4"),
@@ -94,11 +107,10 @@ class MjxAdapter(MujocoAdapter):
         mjx()
 
     def unsupported(self, scene, settings):
-        """The base check, then MJX's own: where ``mjx.put_model`` refuses the compiled model
-        (NotImplementedError, e.g. a feature MJX lacks), the reason is MJX's."""
-        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
-            return why
-        reason = super().unsupported(scene, settings)
+        """The base check, then MJX's own: the contact options MJX lacks (``why_not``), and where
+        ``mjx.put_model`` or ``mjx.make_data`` refuses the compiled model (NotImplementedError, e.g. a
+        feature MJX lacks), the reason is MJX's."""
+        reason = super().unsupported(scene, settings) or why_not(scene, settings)
         if reason:
             return reason
         from dalembert.adapters.mujoco.mjcf import mjcf
@@ -165,6 +177,9 @@ class MjxAdapter(MujocoAdapter):
             "mjx_version": self.version(),
             "reactions": "MuJoCo C mj_rnePostConstraint on MJX's sampled states (double)",
         })
+        if p.scene.contacts:  # the contact options as the device model holds them (MuJoCo C's are read back above)
+            out.update({"cone_device": mx.opt.cone.name.lower(), "impratio_device": float(np.asarray(mx.opt.impratio)),
+                        "noslip": "none: MJX's JAX solver has no noslip pass (noslip_iterations > 0 is refused)"})
         if p.precision == "float32" and p.settings.dt is not None:
             # the attitude floor of the number type (rad; torque-free tops only, else NaN), for the report's parity
             from dalembert.adapters.mjx.parity import float32_floor
@@ -173,17 +188,31 @@ class MjxAdapter(MujocoAdapter):
         return out
 
 
+def why_not(scene, settings):
+    """Why MJX cannot run ``scene``'s contact at ``settings`` where MuJoCo C could, or None: a noslip pass, which
+    MJX's JAX implementation does not have (``mujoco.mjx._src`` reads no ``noslip_iterations``: it would be ignored
+    silently; only the Warp backend, a GPU one, has a noslip pass)."""
+    if scene.contacts and contact.contact_options(settings)["noslip_iterations"] > 0:
+        return ("options.noslip_iterations: MJX's JAX implementation has no noslip pass (its solver never reads "
+                "noslip_iterations, so the run would silently be one without noslip; only MJX's Warp backend, a GPU "
+                "one, has one) — run noslip on MuJoCo C (--engine mujoco), or MJX with noslip_iterations=0")
+    return None
+
+
 @functools.lru_cache(maxsize=64)
 def _refusal(xml):
-    """Why ``mjx.put_model`` refuses the model compiled from the MJCF ``xml``, or None; once per model
-    in a worker (every integrator and step of a case asks: ~8-20 ms a time)."""
+    """Why ``mjx.put_model`` or ``mjx.make_data`` refuses the model compiled from the MJCF ``xml``, or None;
+    once per model in a worker (every integrator and step of a case asks: ~8-20 ms a time)."""
     import mujoco
 
     model = mujoco.MjModel.from_xml_string(xml)
-    try:
-        mjx().put_model(model)  # host to device only: nothing is compiled
-    except NotImplementedError as e:
-        return f"MJX cannot put this model on the device (mjx.put_model: NotImplementedError: {e})"
+    for step, call in (("put_model", lambda: mjx().put_model(model)),  # host to device only: nothing is compiled
+                       # the data's contact rows: MJX refuses some here only (condim 1 under the elliptic cone)
+                       ("make_data", lambda: mjx().make_data(model))):
+        try:
+            call()
+        except NotImplementedError as e:
+            return f"MJX cannot put this model on the device (mjx.{step}: NotImplementedError: {e})"
     return None
 
 

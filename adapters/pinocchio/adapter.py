@@ -36,6 +36,12 @@ __all__ = ["PinocchioAdapter", "PinocchioPrepared"]
 # Fixed-step loops: compiled (stepper.cpp, the default) or the Python one
 # (the same integrators, kept as the readable specification and the fallback).
 LOOPS = ("native", "python")
+# Why a contact scene is refused (class names as pin 4.1 exports them): Pinocchio solves a contact problem at one
+# instant but does not integrate one through time.
+CONTACT_REASON = ("Pinocchio 4 solves contact problems (pin.ADMMConstraintSolver / pin.PGSConstraintSolver on a "
+                  "Delassus operator) but has no time-stepper: a contact time-stepper would be built in the adapter "
+                  "(collision detection between the scene's pairs, the Delassus operator from constraintDynamics' "
+                  "Jacobians, one solve per step)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,7 +91,7 @@ class PinocchioAdapter(Adapter):
         return pinocchio.__version__
 
     def unsupported(self, scene, settings):
-        if (why := contact.not_mapped(scene, self.name)):  # contact: not mapped here yet
+        if (why := contact.not_mapped(scene, self.name, CONTACT_REASON)):  # contact: no time-stepper in pin 4
             return why
         if any(lp.kind == "distance" for lp in scene.loops):
             return loops.DISTANCE_REASON
