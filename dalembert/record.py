@@ -185,11 +185,16 @@ class RunRecord:
         return self.status == "ok"
 
     @property
+    def settings(self):
+        """The run's ``Settings``."""
+        from dalembert.settings import Settings
+
+        return Settings(self.integrator, self.dt, self.rtol, self.atol, self.options)
+
+    @property
     def settings_label(self):
-        """``rk4 dt=0.001``, ``dop853 rtol=1e-09 atol=1e-09``, options appended."""
-        parts = [self.integrator] + [f"{n}={v:g}" for n, v in (("dt", self.dt), ("rtol", self.rtol),
-                                                                ("atol", self.atol)) if v is not None]
-        return " ".join(parts + [f"{k}={v}" for k, v in sorted(self.options.items())])
+        """``Settings.label()`` of the run: ``rk4 dt=0.001``, ``dop853 rtol=1e-09 atol=1e-09``, options appended."""
+        return self.settings.label()
 
     @property
     def sweep_label(self):

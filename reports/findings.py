@@ -83,11 +83,9 @@ CREEP_METRIC = "creep"
 
 
 def settings_text(r):
-    """A run's settings as the report writes them: ``RunRecord.settings_label`` without an atol equal
-    to the rtol (the default matrix's choice, which would double every adaptive label)."""
-    if r.atol is not None and r.atol == r.rtol:
-        return " ".join(x for x in (r.integrator, f"rtol={r.rtol:g}", r.options_label) if x)
-    return r.settings_label
+    """A run's settings as the report writes them: ``Settings.label(brief=True)`` (no atol equal
+    to the rtol, the default matrix's choice, which would double every adaptive label)."""
+    return r.settings.label(brief=True)
 
 
 # A speed's unit in a sentence: the largest of these (m/s) at or below it, so a creep reads "1.8 mm/s", not

@@ -40,3 +40,19 @@ def test_the_manifest_records_numpy_and_scipy(tmp_path):
     assert main(["run", "--case", "pendulum", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2",
                  "--param", "t_final=0.1", "--quick", "--jobs", "1", "--out", str(out)]) == 0
     assert load(out).manifest()["libraries"] == {"numpy": numpy.__version__, "scipy": scipy.__version__}
+
+
+def test_the_settings_label_is_one_function_and_reads_as_it_always_did():
+    """``Settings.label()`` is THE label: the stored ``settings`` column and the report's text are it."""
+    from dalembert.reports.findings import settings_text
+    from dalembert.settings import Settings
+
+    fixed = RunRecord("k", "pendulum", "v", "mujoco", "rk4", dt=1e-3, options={"jacobian": "dense"}, status="ok")
+    adaptive = RunRecord("k", "pendulum", "v", "reference", "dop853", rtol=1e-9, atol=1e-9, status="ok")
+    # the labels stores have always held (byte for byte: a store's `settings` column is filtered on)
+    assert fixed.to_row()["settings"] == "rk4 dt=0.001 jacobian=dense" == Settings("rk4", 1e-3, options={"jacobian": "dense"}).label()
+    assert adaptive.settings_label == "dop853 rtol=1e-09 atol=1e-09"
+    # the report's text leaves out an atol equal to the rtol, and only that
+    assert settings_text(adaptive) == "dop853 rtol=1e-09" == adaptive.settings.label(brief=True)
+    assert settings_text(fixed) == fixed.settings_label
+    assert Settings("rk45", rtol=1e-6, atol=1e-8).label(brief=True) == "rk45 rtol=1e-06 atol=1e-08"
