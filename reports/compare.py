@@ -32,6 +32,7 @@ import math
 from dataclasses import dataclass, field
 
 from dalembert.errors import QUANTITIES
+from dalembert.identity import check_version, run_identity
 from dalembert.record import BAD_STATUSES
 from dalembert.reports.findings import settings_text
 from dalembert.reports.timing import once_note
@@ -52,9 +53,8 @@ CHANGES = ("worse", "better", "status", "same")
 
 
 def _key(r):
-    """What identifies a run across stores."""
-    return (r.case, json.dumps(r.params, sort_keys=True, default=list), r.engine, r.integrator, r.dt, r.rtol, r.atol,
-            r.options_label)
+    """What identifies a run across stores: its ``dalembert.identity.RunIdentity``."""
+    return run_identity(r.case, r.params, r.engine, r.settings)
 
 
 def label(r):
@@ -197,8 +197,10 @@ def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_
     changes, not_compared = [], []
     for key in sorted(set(a) & set(b), key=str):
         x, y = a[key], b[key]
-        if x.case_version != y.case_version and not across_versions:
-            not_compared.append((x, y, f"case version differs ({x.case_version} vs {y.case_version})"))
+        differs = check_version(x.case, x.case_version, y.case_version, "the first store's runs are of",
+                                now="in the second store")
+        if differs and not across_versions:
+            not_compared.append((x, y, f"case version differs ({differs})"))
             continue
         changes.append(_change(x, y, threshold, cost_threshold, costs_judged=once is None))
     changes.sort(key=lambda c: (not c.regression, CHANGES.index(c.change), c.label))
@@ -277,8 +279,10 @@ def to_text(cmp, only_changed=False):
 
 
 def _identity(r):
-    return {"case": r.case, "params": r.params, "engine": r.engine, "integrator": r.integrator, "dt": r.dt,
-            "rtol": r.rtol, "atol": r.atol, "options": r.options_label, "label": label(r)}
+    """A run's identity as the JSON and CSV outputs write it (parameters as given, options as words)."""
+    i = _key(r)
+    return {"case": i.case, "params": r.params, "engine": i.engine, "integrator": i.integrator, "dt": i.dt,
+            "rtol": i.rtol, "atol": i.atol, "options": r.options_label, "label": label(r)}
 
 
 def _num(x):

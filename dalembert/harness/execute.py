@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dalembert.harness.threads import VARIABLES
+from dalembert.identity import check_version
 from dalembert.judge import judge
 from dalembert.record import Cost, RunRecord
 
@@ -98,9 +99,9 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
         found["engine_version"] = adapter.version()
         case = make_case(spec.case, **dict(spec.params))
         found["t_final"] = case.t_final
-        if case.version != spec.case_version:
-            return _record(spec, "failed", f"case {spec.case!r} is now version {case.version}, the matrix was made "
-                                           f"for {spec.case_version}: its code changed — start a new matrix", **found), None
+        changed = check_version(spec.case, spec.case_version, case.version, "the matrix was made for")
+        if changed:
+            return _record(spec, "failed", f"{changed}: its code changed — start a new matrix", **found), None
         settings = spec.settings
         reason = adapter.unsupported(case.scene, settings)
         if reason:

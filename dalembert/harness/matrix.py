@@ -6,13 +6,12 @@ before anything runs; ``spec(...)`` makes one spec from explicit settings.
 
 from __future__ import annotations
 
-import hashlib
 import itertools
-import json
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from dalembert.identity import run_identity, run_key
 from dalembert.registry import suggest
 from dalembert.settings import Settings, steps_per_interval
 
@@ -52,10 +51,12 @@ class RunSpec:
     @property
     def key(self):
         """Deterministic, readable file key: case, engine, integrator and a content hash."""
-        payload = json.dumps([self.case, self.case_version, self.engine, self.integrator, self.dt, self.rtol,
-                              self.atol, list(self.options)], default=repr)
-        digest = hashlib.sha256(payload.encode()).hexdigest()[:12]
-        return f"{self.case}__{self.engine}__{self.integrator}__{digest}"
+        return run_key(self.identity, self.case_version)
+
+    @property
+    def identity(self):
+        """The run's ``dalembert.identity.RunIdentity``."""
+        return run_identity(self.case, self.params, self.engine, self.settings)
 
     def to_json(self):
         d = asdict(self)

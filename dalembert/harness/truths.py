@@ -24,15 +24,16 @@ def prepare_cases(specs, store):
     Returns ``{(case, version): truth trajectory}`` for the workers.
     """
     from dalembert.case import CaseRecord, make_case
+    from dalembert.identity import check_version
     from dalembert.reference import truth
 
     truths = {}
     for name, params, version in sorted({(s.case, s.params, s.case_version) for s in specs}):
         if not store.has_case(name, version) or store.truth(name, version) is None:
             case = make_case(name, **dict(params))
-            if case.version != version:
-                raise ValueError(f"case {name!r}: the matrix was made for version {version}, the code now makes "
-                                 f"{case.version} — start a new matrix")
+            changed = check_version(name, version, case.version, "the matrix was made for")
+            if changed:
+                raise ValueError(f"{changed} — start a new matrix")
             store.write_case(CaseRecord.from_case(case, truth_source(case)), truth(case))
         truths[(name, version)] = store.truth(name, version)
     return truths
