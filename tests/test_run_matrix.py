@@ -363,3 +363,26 @@ def test_a_free_worker_keeps_to_its_sweep_and_otherwise_takes_a_sweep_nobody_hol
     assert [_take(queue, a, {b.group}).integrator for _ in range(2)] == [sweeps[0]] * 2
     assert _take(queue, a, {b.group}).integrator == sweeps[2]  # its sweep done: the one nobody holds
     assert sorted(s.integrator for _, s in queue) == sorted([sweeps[1]] * 2 + [sweeps[2]] * 2)
+
+
+def test_a_case_is_built_once_for_its_runs(monkeypatch):
+    """Expansion, truth, and every run of one case variant share one build of the case and one
+    computation of its version (a content hash of the whole case)."""
+    from collections import OrderedDict
+
+    from dalembert.case import Case
+    from dalembert.harness import truths
+
+    monkeypatch.setattr(truths, "_BUILT", OrderedDict())
+    hashed = []
+    version = Case.version.fget
+    monkeypatch.setattr(Case, "version", property(lambda self: hashed.append(self.name) or version(self)))
+    specs, _ = expand(cases=["pendulum"], engines=["reference"], integrators=["rk4", "euler"], dts=[1e-2, 5e-3],
+                      params={"t_final": 0.2})
+    assert len(specs) == 4 and hashed == ["pendulum"]
+    (case, made), = truths.build(specs).values()
+    records = [execute(s, QUICK, made)[0] for s in specs]
+    assert [r.status for r in records] == ["ok"] * 4 and hashed == ["pendulum"]
+    assert truths.built_case("pendulum", {"t_final": 0.2})[0] is case
+    # another variant is another case
+    assert truths.built_case("pendulum", {"t_final": 0.1})[0].t_final == 0.1 and hashed == ["pendulum"] * 2

@@ -88,8 +88,8 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
     """
     from dalembert import invariants
     from dalembert.adapters import get_adapter
-    from dalembert.case import make_case
     from dalembert.errors import trajectory_errors
+    from dalembert.harness.truths import built_case
     from dalembert.store import trajectory_to_npz
 
     started, load_start = time.perf_counter(), _load()
@@ -97,9 +97,9 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
     try:
         adapter = get_adapter(spec.engine, spec.adapter)
         found["engine_version"] = adapter.version()
-        case = make_case(spec.case, **dict(spec.params))
+        case, version = built_case(spec.case, spec.params)  # built once per worker, not once per run
         found["t_final"] = case.t_final
-        changed = check_version(spec.case, spec.case_version, case.version, "the matrix was made for")
+        changed = check_version(spec.case, spec.case_version, version, "the matrix was made for")
         if changed:
             return _record(spec, "failed", f"{changed}: its code changed — start a new matrix", **found), None
         settings = spec.settings

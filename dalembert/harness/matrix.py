@@ -72,10 +72,11 @@ class RunSpec:
         return cls(**d)
 
 
-def spec(case, engine, settings, params=(), force=False):
+def spec(case, engine, settings, params=(), force=False, version=None):
     """The spec of running ``case`` (a Case made with ``params``) on ``engine`` with ``settings``;
     ValueError naming the field when the engine cannot take the settings, or when the run would
-    take more than ``MAX_STEPS_PER_RUN`` steps and ``force`` is not given."""
+    take more than ``MAX_STEPS_PER_RUN`` steps and ``force`` is not given. ``version``: ``case.version``
+    where the caller has it (a content hash of the whole case: computed once per case, not per run)."""
     from dalembert.adapters import adapter_path, get_adapter
 
     if settings.dt is not None and not force and case.t_final / settings.dt > MAX_STEPS_PER_RUN:
@@ -84,7 +85,8 @@ def spec(case, engine, settings, params=(), force=False):
                          "value, or pass --force if the run is meant")
     adapter = get_adapter(engine)
     made = RunSpec(case.name, engine, settings.integrator, settings.dt, settings.rtol, settings.atol,
-                   tuple(sorted(settings.options.items())), tuple(sorted(dict(params).items())), case.version,
+                   tuple(sorted(settings.options.items())), tuple(sorted(dict(params).items())),
+                   case.version if version is None else version,
                    adapter_path(engine))
     adapter.check(case.scene, case.times, made.settings)
     return made
@@ -129,6 +131,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
     """
     from dalembert.adapters import adapter_names, get_adapter
     from dalembert.case import in_default_matrix, load_cases
+    from dalembert.harness.truths import built_case
 
     registry = load_cases()
     names = list(cases or [])
@@ -171,7 +174,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
         mine = {k: v if isinstance(v, list) else [v] for k, v in params.items() if k in factory.params}
         variants += [(factory, dict(zip(mine, values))) for values in itertools.product(*mine.values())]
     for factory, case_params in variants:
-        case = factory(**case_params)
+        case, version = built_case(factory.name, case_params)
         case_dts = dts if given_dts else _dividing(dts, case)
         for e, adapter in adapters.items():
             for integ, ispec in adapter.integrators.items():
@@ -184,7 +187,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
                 # given options apply where the integrator takes them; else the engine's own variants
                 mine = {k: v for k, v in (options or {}).items() if k in ispec.options}
                 option_sets = [mine] if mine else adapter.variants(case.scene)
-                specs += [spec(case, e, Settings(integ, options=opts, **k), case_params, force)
+                specs += [spec(case, e, Settings(integ, options=opts, **k), case_params, force, version)
                           for opts in option_sets for k in knobs]
     for key in options or {}:
         if not any(key in ispec.options for a in adapters.values() for name, ispec in a.integrators.items()

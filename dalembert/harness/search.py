@@ -64,15 +64,14 @@ def search(specs, store, run, resolution=RESOLUTION, progress=None):
 
     Returns the runs lost to the infrastructure (their curves stop where they were).
     """
-    from dalembert.case import load_cases
+    from dalembert.harness.truths import built_case
 
-    registry = load_cases()
     by_curve, intervals = {}, {}
     for s in specs:
         key = (s.case, s.case_version, s.engine, s.integrator, " ".join(f"{k}={v}" for k, v in s.options))
         by_curve.setdefault(key, s)
         if key not in intervals:
-            times = registry[s.case](**dict(s.params)).times
+            times = built_case(s.case, s.params)[0].times
             intervals[key] = float(times[1] - times[0])
     lost = list(run(specs))
     keys = {s.key for s in specs}

@@ -145,6 +145,7 @@ def _resumable(path):
     from dalembert.adapters import adapter_names, adapter_path
     from dalembert.case import load_cases
     from dalembert.harness.matrix import RunSpec
+    from dalembert.harness.truths import built_case
     from dalembert.identity import check_version
     from dalembert.store import Store
 
@@ -165,7 +166,7 @@ def _resumable(path):
         if name not in registry:
             changed.append(f"case {name!r} is no longer registered")
             continue
-        differs = check_version(name, version, registry[name](**dict(params)).version, "the store holds runs of")
+        differs = check_version(name, version, built_case(name, params)[1], "the store holds runs of")
         if differs:
             changed.append(differs)
     if changed:
