@@ -147,11 +147,11 @@ def _change(a, b, threshold, cost_threshold, costs_judged=True):
     worse = [q for q, (_, _, r) in errors.items() if r > threshold]
     better = [q for q, (_, _, r) in errors.items() if r < 1.0 / threshold]
     notes = [f"{q} x{errors[q][2]:.3g}" for q in worse + better]
-    if a.verdict and b.verdict and a.verdict != b.verdict:
-        notes.append(f"verdict {a.verdict} -> {b.verdict}")
+    if a.judgement.verdict and b.judgement.verdict and a.judgement.verdict != b.judgement.verdict:
+        notes.append(f"verdict {a.judgement.verdict} -> {b.judgement.verdict}")
     if cost_change in ("slower", "faster"):
         notes.append(f"cost x{cost_ratio:.3g} ({cost_change}, beyond both spreads)")
-    blew_up = b.verdict == "diverged" and a.verdict not in ("diverged", "")
+    blew_up = b.judgement.verdict == "diverged" and a.judgement.verdict not in ("diverged", "")
     regression = bool(worse) or cost_regressed or blew_up
     if regression or cost_change == "slower":
         change = "worse"
@@ -246,9 +246,9 @@ def _lines(c, only_changed, threshold):
     if not (only_changed and mark == " "):
         out.append(f"{mark} {_fmt(ca.wall_s_median):>10} {_fmt(cb.wall_s_median):>10} {c.cost_ratio:>8.3g}  "
                    f"{'cost (s)':<24} {c.label}  [{spread}]")
-    if c.a.verdict != c.b.verdict and c.a.verdict and c.b.verdict:
-        out.append(f"{'+' if c.b.verdict == 'diverged' else '!'} {'':>10} {'':>10} {'':>8}  {'verdict':<24} "
-                   f"{c.label}: {c.a.verdict} -> {c.b.verdict}")
+    if c.a.judgement.verdict != c.b.judgement.verdict and c.a.judgement.verdict and c.b.judgement.verdict:
+        out.append(f"{'+' if c.b.judgement.verdict == 'diverged' else '!'} {'':>10} {'':>10} {'':>8}  {'verdict':<24} "
+                   f"{c.label}: {c.a.judgement.verdict} -> {c.b.judgement.verdict}")
     return out
 
 
@@ -298,7 +298,7 @@ def to_json(cmp):
     """The comparison as a JSON-able dict: before/after/ratio per run for every error and the cost."""
     runs = [{**_identity(c.b), "change": c.change, "regression": c.regression, "notes": list(c.notes),
              "status": {"before": c.a.status, "after": c.b.status},
-             "verdict": {"before": c.a.verdict, "after": c.b.verdict},
+             "verdict": {"before": c.a.judgement.verdict, "after": c.b.judgement.verdict},
              "errors": {q: {"unit": QUANTITIES[q], "before": _num(x), "after": _num(y), "ratio": _num(r)}
                         for q, (x, y, r) in c.errors.items()},
              "cost": {"unit": "s", "before": _cost_json(c.a.cost), "after": _cost_json(c.b.cost),

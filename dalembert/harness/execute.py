@@ -53,10 +53,8 @@ def _record(spec, status, message="", errors=None, drifts=None, tolerances=None,
     verdict = judge(status, message, {q: mx for q, (mx, _) in errors.items()}, drifts, tolerances or {},
                     fields.get("growths"))
     return RunRecord(key=spec.key, case=spec.case, case_version=spec.case_version, engine=spec.engine,
-                     integrator=spec.integrator, dt=spec.dt, rtol=spec.rtol, atol=spec.atol,
-                     options=dict(spec.options), params=dict(spec.params), status=status, message=message,
-                     errors=errors, drifts=drifts, beyond=verdict.beyond, verdict=verdict.verdict,
-                     verdict_reason=verdict.reason, within_tolerance=verdict.within_tolerance,
+                     settings=spec.settings, params=dict(spec.params), status=status, message=message,
+                     errors=errors, drifts=drifts, judgement=verdict,
                      provenance={"host": socket.gethostname(), "pid": os.getpid(), "threads": _pool_width()},
                      **fields)
 

@@ -7,7 +7,7 @@ before anything runs; ``spec(...)`` makes one spec from explicit settings.
 from __future__ import annotations
 
 import itertools
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -31,22 +31,18 @@ MAX_STEPS_PER_RUN = 1e8
 
 @dataclass(frozen=True)
 class RunSpec:
-    """One (case, engine, settings) run. ``params``, ``options``: sorted (key, value) pairs."""
+    """One (case, engine, settings) run. ``params``: sorted (key, value) pairs.
+
+    Its JSON (``to_json``, a manifest's ``specs``) keeps the settings flat (``integrator``, ``dt``,
+    ``rtol``, ``atol``, ``options`` as sorted pairs), as every manifest has been written.
+    """
 
     case: str
     engine: str
-    integrator: str
-    dt: float | None = None
-    rtol: float | None = None
-    atol: float | None = None
-    options: tuple = ()
+    settings: Settings
     params: tuple = ()
     case_version: str = ""
     adapter: str = ""  # "module:Class" of the engine's adapter, for workers that must import it
-
-    @property
-    def settings(self):
-        return Settings(self.integrator, self.dt, self.rtol, self.atol, dict(self.options))
 
     @property
     def key(self):
@@ -59,17 +55,20 @@ class RunSpec:
         return run_identity(self.case, self.params, self.engine, self.settings)
 
     def to_json(self):
-        d = asdict(self)
-        d["options"] = [list(x) for x in self.options]
-        d["params"] = [[k, list(v) if isinstance(v, tuple) else v] for k, v in self.params]
-        return d
+        s = self.settings
+        return {"case": self.case, "engine": self.engine, "integrator": s.integrator, "dt": s.dt, "rtol": s.rtol,
+                "atol": s.atol, "options": [[k, v] for k, v in sorted(s.options.items())],
+                "params": [[k, list(v) if isinstance(v, tuple) else v] for k, v in self.params],
+                "case_version": self.case_version, "adapter": self.adapter}
 
     @classmethod
     def from_json(cls, d):
+        """Inverse of ``to_json``; a TypeError or KeyError when ``d`` is not a spec's JSON."""
         d = dict(d)
-        d["options"] = tuple(tuple(x) for x in d["options"])
+        settings = Settings(d.pop("integrator"), d.pop("dt"), d.pop("rtol"), d.pop("atol"),
+                            dict(tuple(x) for x in d.pop("options")))
         d["params"] = tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in d["params"])
-        return cls(**d)
+        return cls(settings=settings, **d)
 
 
 def spec(case, engine, settings, params=(), force=False, version=None):
@@ -84,8 +83,7 @@ def spec(case, engine, settings, params=(), force=False, version=None):
                          f"{case.t_final / settings.dt:.3g} steps, more than {MAX_STEPS_PER_RUN:.0e} — check the "
                          "value, or pass --force if the run is meant")
     adapter = get_adapter(engine)
-    made = RunSpec(case.name, engine, settings.integrator, settings.dt, settings.rtol, settings.atol,
-                   tuple(sorted(settings.options.items())), tuple(sorted(dict(params).items())),
+    made = RunSpec(case.name, engine, settings, tuple(sorted(dict(params).items())),
                    case.version if version is None else version,
                    adapter_path(engine))
     adapter.check(case.scene, case.times, made.settings)
