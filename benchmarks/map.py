@@ -59,7 +59,9 @@ def _synthetic(source, path, n):
     for i in range(n):
         base = records[i % len(records)]
         k = 1 + i // len(records)  # each copy a finer probe of the same curve
-        store.write_record(replace(base, key=f"synthetic{i:07d}", dt=base.dt / k if base.dt else None, trajectory=""))
+        dt = base.settings.dt / k if base.settings.dt else None
+        store.write_record(replace(base, key=f"synthetic{i:07d}", settings=replace(base.settings, dt=dt),
+                                   trajectory=""))
     return store, time.perf_counter() - t0
 
 

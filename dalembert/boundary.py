@@ -66,7 +66,7 @@ class Boundary:
 
 def curve_of(record):
     """The curve a run belongs to: (case, case_version, engine, integrator, options)."""
-    return record.case, record.case_version, record.engine, record.integrator, record.options_label
+    return record.case, record.case_version, record.engine, record.settings.integrator, record.options_label
 
 
 def bracket(probes, passes):
@@ -82,11 +82,11 @@ def boundaries(records):
     """The ``Boundary`` of every curve among ``records``' fixed-step runs, sorted by curve."""
     curves = {}
     for r in records:
-        if r.dt is not None:
+        if r.settings.dt is not None:
             curves.setdefault(curve_of(r), []).append(r)
     out = []
     for key, runs in sorted(curves.items()):
-        probes = [(r.dt, r.verdict) for r in runs]
+        probes = [(r.settings.dt, r.judgement.verdict) for r in runs]
         out.append(Boundary(*key, runs[0].params, bracket(probes, lambda v: v == "stable"),
                             bracket(probes, lambda v: v in FINITE), len(runs)))
     return out

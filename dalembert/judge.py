@@ -1,6 +1,6 @@
 """Judging a run, once, at run time: is it within the case's tolerances, and is it stable?
 
-The verdict is stored with the run (``RunRecord.verdict``), so a report reads how a
+The verdict is stored with the run (``RunRecord.judgement``), so a report reads how a
 run was judged when it ran; changing a tolerance changes the case's version, never
 the judgement of runs already stored.
 

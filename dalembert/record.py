@@ -48,8 +48,11 @@ import json
 import math
 from dataclasses import asdict, dataclass, field, fields, replace
 
+from dalembert.judge import Judgement
+from dalembert.settings import Settings
+
 __all__ = ["SCHEMA_VERSION", "READABLE_SCHEMAS", "STATUSES", "BAD_STATUSES", "CHECKS", "Cost", "RunRecord",
-           "SchemaError"]
+           "SchemaError", "UNJUDGED"]
 
 SCHEMA_VERSION = 3
 READABLE_SCHEMAS = (1, 2, 3)
@@ -65,6 +68,10 @@ CHECKS = ("orthonormality", "quaternion_norm", "joint_residual")
 
 _NAN = float("nan")
 _COUNTS = ("repeats", "n_steps", "n_rhs", "concurrent")  # the integer fields of Cost
+
+
+# The judgement of a record made without one (schema 1 stores kept no verdict).
+UNJUDGED = Judgement(beyond=(), verdict="", reason="", within_tolerance=None)
 
 
 class SchemaError(ValueError):
@@ -122,9 +129,8 @@ class RunRecord:
     key : str — the run's file key in the store
     case, case_version : str — the case and the content hash of the version run
     params : dict — the case parameters given (the rest are the factory's defaults)
-    engine, engine_version, integrator : str
-    dt : float or None — fixed step, s; rtol, atol : float or None — adaptive tolerances
-    options : dict str -> str — engine options
+    engine, engine_version : str
+    settings : Settings — integrator, fixed step ``dt`` (s) or tolerances ``rtol``/``atol``, engine options
     status : str — one of ``STATUSES``; message : str — why, for anything but ``ok``
     t_final : float — the case's horizon, s; t_diverged : float or None — first non-finite sample, s
     cost : Cost
@@ -134,8 +140,8 @@ class RunRecord:
     drift_rates : dict conserved name -> slope of the relative change, 1/s (energy-like ones)
     growths : dict conserved name -> change in units of its scale on the truth (blow-ups show here)
     checks : dict name -> float — ``CHECKS``
-    beyond : tuple of str — the tolerances exceeded; verdict, verdict_reason : str
-        (``dalembert.judge``); within_tolerance : bool or None
+    judgement : Judgement — the tolerances exceeded (``beyond``), the ``verdict`` and its ``reason``,
+        ``within_tolerance`` (``dalembert.judge``; stored as the ``verdict_reason`` column and the others)
     audit : dict — effects read back from the engine; model : str — its model, as text
     provenance : dict — where it ran (host, pid) and its BLAS/OpenMP pools' width (threads, None when not set)
     trajectory : str — path of its trajectory in the store, "" when none
@@ -147,11 +153,7 @@ class RunRecord:
     case: str
     case_version: str
     engine: str
-    integrator: str
-    dt: float | None = None
-    rtol: float | None = None
-    atol: float | None = None
-    options: dict = field(default_factory=dict)
+    settings: Settings
     params: dict = field(default_factory=dict)
     status: str = "failed"
     message: str = ""
@@ -164,10 +166,7 @@ class RunRecord:
     drift_rates: dict = field(default_factory=dict)
     growths: dict = field(default_factory=dict)
     checks: dict = field(default_factory=dict)
-    beyond: tuple = ()
-    verdict: str = ""
-    verdict_reason: str = ""
-    within_tolerance: bool | None = None
+    judgement: Judgement = UNJUDGED
     audit: dict = field(default_factory=dict)
     model: str = ""
     provenance: dict = field(default_factory=dict)
@@ -186,20 +185,19 @@ class RunRecord:
 
     @property
     def settings_label(self):
-        """``rk4 dt=0.001``, ``dop853 rtol=1e-09 atol=1e-09``, options appended."""
-        parts = [self.integrator] + [f"{n}={v:g}" for n, v in (("dt", self.dt), ("rtol", self.rtol),
-                                                                ("atol", self.atol)) if v is not None]
-        return " ".join(parts + [f"{k}={v}" for k, v in sorted(self.options.items())])
+        """``Settings.label()`` of the run: ``rk4 dt=0.001``, ``dop853 rtol=1e-09 atol=1e-09``, options appended."""
+        return self.settings.label()
 
     @property
     def sweep_label(self):
         """Where the run sits in its sweep: ``dt=0.001`` or ``tol=1e-09``."""
-        return f"dt={self.dt:g}" if self.dt is not None else f"tol={self.rtol:g}"
+        s = self.settings
+        return f"dt={s.dt:g}" if s.dt is not None else f"tol={s.rtol:g}"
 
     @property
     def options_label(self):
         """Engine options as ``key=value`` words ("" for the defaults)."""
-        return " ".join(f"{k}={v}" for k, v in sorted(self.options.items()))
+        return " ".join(f"{k}={v}" for k, v in sorted(self.settings.options.items()))
 
     def max_error(self, quantity):
         """The max error over the horizon of ``quantity``, or NaN when not measured."""
@@ -213,9 +211,9 @@ class RunRecord:
         """The flat, strict-JSON row (column names in the module docstring)."""
         row = {"key": self.key, "schema_version": self.schema_version, "case": self.case,
                "case_version": self.case_version, "params": json.dumps(self.params, sort_keys=True, default=list),
-               "engine": self.engine, "engine_version": self.engine_version, "integrator": self.integrator,
-               "dt": self.dt, "rtol": self.rtol, "atol": self.atol,
-               "options": json.dumps(self.options, sort_keys=True), "settings": self.settings_label,
+               "engine": self.engine, "engine_version": self.engine_version, "integrator": self.settings.integrator,
+               "dt": self.settings.dt, "rtol": self.settings.rtol, "atol": self.settings.atol,
+               "options": json.dumps(dict(self.settings.options), sort_keys=True), "settings": self.settings_label,
                **{f"param_{k}": json.dumps(list(v)) if isinstance(v, (tuple, list)) else v
                   for k, v in self.params.items()},
                "status": self.status, "message": self.message, "t_final": self.t_final,
@@ -227,8 +225,9 @@ class RunRecord:
         row.update({f"drift_rate_{n}": v for n, v in self.drift_rates.items()})
         row.update({f"growth_{n}": v for n, v in self.growths.items()})
         row.update(self.checks)
-        row.update(within_tolerance=self.within_tolerance, beyond_tolerance=" ".join(self.beyond),
-                   verdict=self.verdict, verdict_reason=self.verdict_reason,
+        j = self.judgement
+        row.update(within_tolerance=j.within_tolerance, beyond_tolerance=" ".join(j.beyond),
+                   verdict=j.verdict, verdict_reason=j.reason,
                    audit=json.dumps(self.audit, sort_keys=True, default=str), model=self.model,
                    provenance=json.dumps(self.provenance, sort_keys=True), trajectory=self.trajectory)
         return {k: _strict(v) for k, v in row.items()}
@@ -254,17 +253,17 @@ class RunRecord:
         within = row.get("within_tolerance")
         return cls(
             key=row["key"], case=row["case"], case_version=row["case_version"], engine=row["engine"],
-            integrator=row["integrator"], dt=_opt(row.get("dt")), rtol=_opt(row.get("rtol")),
-            atol=_opt(row.get("atol")), options=json.loads(row.get("options") or "{}"),
+            settings=Settings(row["integrator"], _opt(row.get("dt")), _opt(row.get("rtol")), _opt(row.get("atol")),
+                              json.loads(row.get("options") or "{}")),
             params={k: tuple(v) if isinstance(v, list) else v for k, v in json.loads(row.get("params") or "{}").items()},
             status=row["status"], message=row.get("message") or "", engine_version=row.get("engine_version") or "",
             t_final=_num(row.get("t_final")), t_diverged=_opt(row.get("t_diverged")),
             cost=Cost(**{f.name: _cost_field(f.name, row[f.name]) for f in fields(Cost) if f.name in row}),
             errors=errors, drifts=drifts, drift_rates=rates, growths=growths,
             checks={c: _num(row[c]) for c in CHECKS if row.get(c) is not None},
-            beyond=tuple((row.get("beyond_tolerance") or "").split()), verdict=row.get("verdict") or "",
-            verdict_reason=row.get("verdict_reason") or "",
-            within_tolerance=None if within is None or within != within else bool(within),
+            judgement=Judgement(beyond=tuple((row.get("beyond_tolerance") or "").split()),
+                                verdict=row.get("verdict") or "", reason=row.get("verdict_reason") or "",
+                                within_tolerance=None if within is None or within != within else bool(within)),
             audit=json.loads(row["audit"]) if isinstance(row.get("audit"), str) else {},
             model=row.get("model") if isinstance(row.get("model"), str) else "",
             provenance=json.loads(row["provenance"]) if isinstance(row.get("provenance"), str) else {},

@@ -84,12 +84,17 @@ class Settings:
         if problems:
             raise SettingsError("; ".join(problems))
 
-    def label(self):
-        """Short human label, e.g. ``rk4 dt=0.001`` or ``dop853 rtol=1e-10``."""
+    def label(self, brief=False):
+        """THE label of these settings (stored as a run's ``settings`` column, written in the reports):
+        ``rk4 dt=0.001`` or ``dop853 rtol=1e-09 atol=1e-09``, options appended as ``key=value``.
+
+        ``brief``: leave out an atol equal to the rtol (the default matrix's choice, which would
+        double every adaptive label in a report's text).
+        """
         parts = [self.integrator]
         for name in ("dt", "rtol", "atol"):
             v = getattr(self, name)
-            if v is not None:
+            if v is not None and not (brief and name == "atol" and v == self.rtol):
                 parts.append(f"{name}={v:g}")
         parts += [f"{k}={v}" for k, v in sorted(self.options.items())]
         return " ".join(parts)

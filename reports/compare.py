@@ -32,6 +32,7 @@ import math
 from dataclasses import dataclass, field
 
 from dalembert.errors import QUANTITIES
+from dalembert.identity import check_version, run_identity
 from dalembert.record import BAD_STATUSES
 from dalembert.reports.findings import settings_text
 from dalembert.reports.timing import once_note
@@ -52,9 +53,8 @@ CHANGES = ("worse", "better", "status", "same")
 
 
 def _key(r):
-    """What identifies a run across stores."""
-    return (r.case, json.dumps(r.params, sort_keys=True, default=list), r.engine, r.integrator, r.dt, r.rtol, r.atol,
-            r.options_label)
+    """What identifies a run across stores: its ``dalembert.identity.RunIdentity``."""
+    return run_identity(r.case, r.params, r.engine, r.settings)
 
 
 def label(r):
@@ -147,11 +147,11 @@ def _change(a, b, threshold, cost_threshold, costs_judged=True):
     worse = [q for q, (_, _, r) in errors.items() if r > threshold]
     better = [q for q, (_, _, r) in errors.items() if r < 1.0 / threshold]
     notes = [f"{q} x{errors[q][2]:.3g}" for q in worse + better]
-    if a.verdict and b.verdict and a.verdict != b.verdict:
-        notes.append(f"verdict {a.verdict} -> {b.verdict}")
+    if a.judgement.verdict and b.judgement.verdict and a.judgement.verdict != b.judgement.verdict:
+        notes.append(f"verdict {a.judgement.verdict} -> {b.judgement.verdict}")
     if cost_change in ("slower", "faster"):
         notes.append(f"cost x{cost_ratio:.3g} ({cost_change}, beyond both spreads)")
-    blew_up = b.verdict == "diverged" and a.verdict not in ("diverged", "")
+    blew_up = b.judgement.verdict == "diverged" and a.judgement.verdict not in ("diverged", "")
     regression = bool(worse) or cost_regressed or blew_up
     if regression or cost_change == "slower":
         change = "worse"
@@ -197,8 +197,10 @@ def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_
     changes, not_compared = [], []
     for key in sorted(set(a) & set(b), key=str):
         x, y = a[key], b[key]
-        if x.case_version != y.case_version and not across_versions:
-            not_compared.append((x, y, f"case version differs ({x.case_version} vs {y.case_version})"))
+        differs = check_version(x.case, x.case_version, y.case_version, "the first store's runs are of",
+                                now="in the second store")
+        if differs and not across_versions:
+            not_compared.append((x, y, f"case version differs ({differs})"))
             continue
         changes.append(_change(x, y, threshold, cost_threshold, costs_judged=once is None))
     changes.sort(key=lambda c: (not c.regression, CHANGES.index(c.change), c.label))
@@ -244,9 +246,9 @@ def _lines(c, only_changed, threshold):
     if not (only_changed and mark == " "):
         out.append(f"{mark} {_fmt(ca.wall_s_median):>10} {_fmt(cb.wall_s_median):>10} {c.cost_ratio:>8.3g}  "
                    f"{'cost (s)':<24} {c.label}  [{spread}]")
-    if c.a.verdict != c.b.verdict and c.a.verdict and c.b.verdict:
-        out.append(f"{'+' if c.b.verdict == 'diverged' else '!'} {'':>10} {'':>10} {'':>8}  {'verdict':<24} "
-                   f"{c.label}: {c.a.verdict} -> {c.b.verdict}")
+    if c.a.judgement.verdict != c.b.judgement.verdict and c.a.judgement.verdict and c.b.judgement.verdict:
+        out.append(f"{'+' if c.b.judgement.verdict == 'diverged' else '!'} {'':>10} {'':>10} {'':>8}  {'verdict':<24} "
+                   f"{c.label}: {c.a.judgement.verdict} -> {c.b.judgement.verdict}")
     return out
 
 
@@ -277,8 +279,10 @@ def to_text(cmp, only_changed=False):
 
 
 def _identity(r):
-    return {"case": r.case, "params": r.params, "engine": r.engine, "integrator": r.integrator, "dt": r.dt,
-            "rtol": r.rtol, "atol": r.atol, "options": r.options_label, "label": label(r)}
+    """A run's identity as the JSON and CSV outputs write it (parameters as given, options as words)."""
+    i = _key(r)
+    return {"case": i.case, "params": r.params, "engine": i.engine, "integrator": i.integrator, "dt": i.dt,
+            "rtol": i.rtol, "atol": i.atol, "options": r.options_label, "label": label(r)}
 
 
 def _num(x):
@@ -294,7 +298,7 @@ def to_json(cmp):
     """The comparison as a JSON-able dict: before/after/ratio per run for every error and the cost."""
     runs = [{**_identity(c.b), "change": c.change, "regression": c.regression, "notes": list(c.notes),
              "status": {"before": c.a.status, "after": c.b.status},
-             "verdict": {"before": c.a.verdict, "after": c.b.verdict},
+             "verdict": {"before": c.a.judgement.verdict, "after": c.b.judgement.verdict},
              "errors": {q: {"unit": QUANTITIES[q], "before": _num(x), "after": _num(y), "ratio": _num(r)}
                         for q, (x, y, r) in c.errors.items()},
              "cost": {"unit": "s", "before": _cost_json(c.a.cost), "after": _cost_json(c.b.cost),

@@ -49,9 +49,9 @@ def select(records, keys=(), case=None, engine=None, integrator=None, dt=None, r
     options = options or {}
     return [r for r in records
             if (not keys or r.key in keys) and (case is None or r.case == case)
-            and (engine is None or r.engine == engine) and (integrator is None or r.integrator == integrator)
-            and (dt is None or r.dt == dt) and (rtol is None or r.rtol == rtol)
-            and all(r.options.get(k, "") == v for k, v in options.items())]
+            and (engine is None or r.engine == engine) and (integrator is None or r.settings.integrator == integrator)
+            and (dt is None or r.settings.dt == dt) and (rtol is None or r.settings.rtol == rtol)
+            and all(r.settings.options.get(k, "") == v for k, v in options.items())]
 
 
 def trajectory_frame(traj):
@@ -87,7 +87,8 @@ def frame(store, records):
         f = trajectory_frame(store.trajectory(r.key))
         identity = dict(key=r.key, case=r.case, case_version=r.case_version,
                         params=json.dumps(r.params, sort_keys=True, default=list), engine=r.engine,
-                        integrator=r.integrator, dt=r.dt, rtol=r.rtol, atol=r.atol, options=r.options_label,
+                        integrator=r.settings.integrator, dt=r.settings.dt, rtol=r.settings.rtol,
+                        atol=r.settings.atol, options=r.options_label,
                         status=r.status)
         for k, (name, value) in enumerate(identity.items()):
             f.insert(k, name, value)

@@ -83,11 +83,9 @@ CREEP_METRIC = "creep"
 
 
 def settings_text(r):
-    """A run's settings as the report writes them: ``RunRecord.settings_label`` without an atol equal
-    to the rtol (the default matrix's choice, which would double every adaptive label)."""
-    if r.atol is not None and r.atol == r.rtol:
-        return " ".join(x for x in (r.integrator, f"rtol={r.rtol:g}", r.options_label) if x)
-    return r.settings_label
+    """A run's settings as the report writes them: ``Settings.label(brief=True)`` (no atol equal
+    to the rtol, the default matrix's choice, which would double every adaptive label)."""
+    return r.settings.label(brief=True)
 
 
 # A speed's unit in a sentence: the largest of these (m/s) at or below it, so a creep reads "1.8 mm/s", not
@@ -213,7 +211,7 @@ def _verb(n, one, many):
 
 
 def _by_sweep(runs):
-    return sorted(runs, key=lambda r: (r.integrator, r.options_label, sweep_key(r)))
+    return sorted(runs, key=lambda r: (r.settings.integrator, r.options_label, sweep_key(r)))
 
 
 # A hazard sentence names its runs when they are at most this many; past it, what they share and
@@ -224,7 +222,7 @@ NAMED = 3
 def _shared(runs):
     """What every one of ``runs`` has in common ("all rk44 with node=rxyz"), or ""."""
     parts = []
-    for get, word in ((lambda r: r.integrator, ""), (lambda r: r.sweep_label, "at "),
+    for get, word in ((lambda r: r.settings.integrator, ""), (lambda r: r.sweep_label, "at "),
                       (lambda r: r.options_label, "with ")):
         values = {get(r) for r in runs}
         if len(values) == 1 and next(iter(values)):
@@ -246,7 +244,7 @@ def _hazard(kind, e, runs, lead, line, worst=None, tail=""):
 
 
 def _diverged(e, case):
-    bad = _by_sweep(r for r in e.runs if r.verdict == "diverged")
+    bad = _by_sweep(r for r in e.runs if r.judgement.verdict == "diverged")
     if not bad:
         return []
     times = [r.t_diverged for r in bad if r.t_diverged is not None]
@@ -254,7 +252,7 @@ def _diverged(e, case):
     def line(r):
         if r.t_diverged is not None:
             return f"{settings_text(r)} at t = {value_text(r.t_diverged, 's')}"
-        return f"{settings_text(r)} ({r.verdict_reason or r.message})"
+        return f"{settings_text(r)} ({r.judgement.reason or r.message})"
 
     when = (f" between t = {value_text(min(times), 's')} and {value_text(max(times), 's')}"
             if len(times) > 1 and len(bad) > NAMED else "")
@@ -264,7 +262,7 @@ def _diverged(e, case):
 
 
 def _failed(e):
-    bad = _by_sweep(r for r in e.runs if r.status in BAD_STATUSES and r.verdict != "diverged")
+    bad = _by_sweep(r for r in e.runs if r.status in BAD_STATUSES and r.judgement.verdict != "diverged")
     if not bad:
         return []
 
@@ -282,7 +280,8 @@ def _energy(e, case):
     name = _energy_name(case)
     if name is None:
         return []
-    bad = _by_sweep(r for r in e.runs if r.ok and r.verdict != "diverged" and r.drifts.get(name, 0.0) > ENERGY_HAZARD)
+    bad = _by_sweep(r for r in e.runs
+                    if r.ok and r.judgement.verdict != "diverged" and r.drifts.get(name, 0.0) > ENERGY_HAZARD)
     if not bad:
         return []
     what = "energy" if name == "energy" else "energy balance (energy less the work of the loads)"
@@ -306,7 +305,7 @@ def _creep(e, case):
     if label is None or tol is None:
         return []
     speed = {r.key: r.drifts[CREEP_METRIC] * label.scale for r in e.runs
-             if r.ok and r.verdict != "diverged" and r.drifts.get(CREEP_METRIC, 0.0) > tol.value}
+             if r.ok and r.judgement.verdict != "diverged" and r.drifts.get(CREEP_METRIC, 0.0) > tol.value}
     bad = _by_sweep(r for r in e.runs if r.key in speed)
     if not bad:
         return []
@@ -333,7 +332,7 @@ def _closure(e, case, store):
         return []
     found = {}
     for r in e.runs:
-        if not (r.ok and r.verdict != "diverged" and r.trajectory):
+        if not (r.ok and r.judgement.verdict != "diverged" and r.trajectory):
             continue
         beyond = [(level, name) for level, name in LOOP_RESIDUALS.items()
                   if name in case.tolerances and r.drifts.get(name, 0.0) > case.tolerances[name].value]
@@ -362,7 +361,7 @@ def _reactions(e, case, quantity):
     tol, motion = case.tolerances.get("reaction_force"), case.tolerances.get(quantity) if quantity else None
     if tol is None or motion is None:
         return []
-    bad = _by_sweep(r for r in e.runs if r.ok and r.verdict != "diverged" and r.max_error(quantity) <= motion.value
+    bad = _by_sweep(r for r in e.runs if r.ok and r.judgement.verdict != "diverged" and r.max_error(quantity) <= motion.value
                     and not r.max_error("reaction_force") <= tol.value)
 
     if not bad:
@@ -379,15 +378,15 @@ def _reactions(e, case, quantity):
 
 
 def _beyond(e, case):
-    finished = [r for r in e.runs if r.ok and r.verdict != "diverged"]
-    bad = _by_sweep(r for r in finished if r.within_tolerance is False)
+    finished = [r for r in e.runs if r.ok and r.judgement.verdict != "diverged"]
+    bad = _by_sweep(r for r in finished if r.judgement.within_tolerance is False)
     if not bad:
         return []
     counts = {}
     for r in bad:
-        for name in r.beyond:
+        for name in r.judgement.beyond:
             counts[name] = counts.get(name, 0) + 1
-    quiet = [r for r in bad if r.verdict == "stable"]
+    quiet = [r for r in bad if r.judgement.verdict == "stable"]
     tail = ""
     if quiet:
         if len(quiet) == len(bad):
@@ -403,7 +402,7 @@ def _beyond(e, case):
             + ", ".join(f"{name} {n}" for name, n in sorted(counts.items(), key=lambda kv: -kv[1])) + ")")
 
     def line(r):
-        return f"{settings_text(r)} (beyond {', '.join(r.beyond)})"
+        return f"{settings_text(r)} (beyond {', '.join(r.judgement.beyond)})"
 
     return [_hazard("tolerance", e, bad, lead, line, tail=tail)]
 
@@ -412,27 +411,28 @@ def _inert(e, quantity):
     """Runs of one integrator, options and step at two or more tolerances whose stored errors are identical."""
     groups = {}
     for r in e.runs:
-        if (r.ok and r.rtol is not None and r.errors
+        if (r.ok and r.settings.rtol is not None and r.errors
                 and all(math.isfinite(v) for pair in r.errors.values() for v in pair)):
             signature = tuple(sorted((q, tuple(pair)) for q, pair in r.errors.items()))
-            groups.setdefault((r.integrator, r.options_label, r.dt, signature), []).append(r)
-    same = [sorted(rs, key=lambda r: (-r.rtol, -(r.atol or 0.0))) for rs in groups.values()
-            if len({(r.rtol, r.atol) for r in rs}) > 1]
+            groups.setdefault((r.settings.integrator, r.options_label, r.settings.dt, signature), []).append(r)
+    same = [sorted(rs, key=lambda r: (-r.settings.rtol, -(r.settings.atol or 0.0))) for rs in groups.values()
+            if len({(r.settings.rtol, r.settings.atol) for r in rs}) > 1]
     if not same:
         return []
-    same.sort(key=lambda rs: (rs[0].integrator, rs[0].options_label))
+    same.sort(key=lambda rs: (rs[0].settings.integrator, rs[0].options_label))
     unit = QUANTITIES.get(quantity, "")
 
     def group_text(rs):
         r = rs[0]
-        atols = any(x.atol != x.rtol for x in rs)  # named unless each equals its rtol (the matrix's default)
-        tols = _list([f"{x.rtol:g}" + (f" (atol {'default' if x.atol is None else f'{x.atol:g}'})" if atols else "")
-                      for x in rs])
+        knobs = [x.settings for x in rs]
+        atols = any(k.atol != k.rtol for k in knobs)  # named unless each equals its rtol (the matrix's default)
+        tols = _list([f"{k.rtol:g}" + (f" (atol {'default' if k.atol is None else f'{k.atol:g}'})" if atols else "")
+                      for k in knobs])
         steps = {x.cost.n_steps for x in rs}
         what = [f"{quantity} {r.max_error(quantity):.2e} {unit}".rstrip()] if quantity in r.errors else []
         what += [f"{next(iter(steps))} steps"] if len(steps) == 1 else []
         options = f" with {r.options_label}" if r.options_label else ""
-        return f"{r.integrator}{options} at rtol {tols}" + (f" ({', '.join(what)} each)" if what else "")
+        return f"{r.settings.integrator}{options} at rtol {tols}" + (f" ({', '.join(what)} each)" if what else "")
 
     runs = [r for rs in same for r in rs]
     text = (f"{e.engine}: a tolerance changed nothing: {'; '.join(group_text(rs) for rs in same)} — every stored "
@@ -447,13 +447,13 @@ def _comparable(r):
     """Whether ``r``'s settings mean the same in every engine: a fixed step always does; an adaptive run's only
     with both tolerances given, as each engine fills in a missing one with its own default (Pinocchio's
     scipy solvers 1e-8, the reference's DOP853 1e-12, Exudyn atol = rtol, Drake no atol at all)."""
-    return r.dt is not None or (r.rtol is not None and r.atol is not None)
+    return r.settings.dt is not None or (r.settings.rtol is not None and r.settings.atol is not None)
 
 
 def _representative(runs):
     """An engine's run at one setting: its default variant (no options) if it ran one, else its
     most accurate variant."""
-    plain = [r for r in runs if not r.options]
+    plain = [r for r in runs if not r.settings.options]
     return plain[0] if plain else runs[0]
 
 
@@ -471,22 +471,23 @@ def _disagreements(runs, quantity, case):
     groups = {}
     for r in runs:
         if r.status != "unsupported" and _comparable(r):
-            groups.setdefault((r.integrator, r.dt, r.rtol, r.atol), {}).setdefault(r.engine, []).append(r)
+            s = r.settings
+            groups.setdefault((s.integrator, s.dt, s.rtol, s.atol), {}).setdefault(r.engine, []).append(r)
     out = []
     for (integrator, dt, rtol, _), by_engine in sorted(groups.items(), key=lambda kv: (kv[0][0], kv[0][1] is None,
                                                                                       -(kv[0][1] or kv[0][2] or 0))):
         if len(by_engine) < 2:
             continue
-        chosen = {e: _representative(sorted(rs, key=lambda r: (bool(r.options), _err(r, quantity))))
+        chosen = {e: _representative(sorted(rs, key=lambda r: (bool(r.settings.options), _err(r, quantity))))
                   for e, rs in sorted(by_engine.items())}
         sample = next(iter(chosen.values()))
         setting = " ".join([integrator, sample.sweep_label.replace("tol=", "rtol=")])
         finite = {e: r for e, r in chosen.items() if r.ok and math.isfinite(r.max_error(quantity))}
         within = [e for e, r in finite.items() if tol is None or r.max_error(quantity) <= tol.value]
-        broken = [e for e, r in chosen.items() if r.verdict in ("diverged", "failed", "timeout")]
+        broken = [e for e, r in chosen.items() if r.judgement.verdict in ("diverged", "failed", "timeout")]
         if within and broken:
             text = (f"at {setting}, {_list(within)} {'stays' if len(within) == 1 else 'stay'} within the "
-                    f"{quantity} tolerance while " + _list(f"{e} {chosen[e].verdict}" for e in broken) + ".")
+                    f"{quantity} tolerance while " + _list(f"{e} {chosen[e].judgement.verdict}" for e in broken) + ".")
             out.append(Hazard("disagreement", "", tuple(chosen.values()), text))
             continue
         if len(finite) < 2:
@@ -494,7 +495,7 @@ def _disagreements(runs, quantity, case):
         errs = {e: max(r.max_error(quantity), 1e-300) for e, r in finite.items()}
         hi, lo = max(errs.values()), min(errs.values())
         if hi / lo > DISAGREEMENT_FACTOR and (tol is None or hi > tol.value):
-            values = _list(f"{e} {errs[e]:.2e}" + (f" ({finite[e].options_label})" if finite[e].options else "")
+            values = _list(f"{e} {errs[e]:.2e}" + (f" ({finite[e].options_label})" if finite[e].settings.options else "")
                            for e in sorted(errs, key=errs.get))
             bound = f" (tolerance {tol.value:g} {unit})" if tol else ""
             out.append(Hazard("disagreement", "", tuple(finite.values()),
@@ -516,12 +517,12 @@ def _unsupported(e):
     out = []
     for reason, rs in sorted(by_reason.items()):
         options = {r.options_label for r in rs}
-        integrators = sorted({r.integrator for r in rs})
+        integrators = sorted({r.settings.integrator for r in rs})
         what = _list(integrators)
         if len(options) == 1 and next(iter(options)):
             what += f" with {next(iter(options))}"
         elif len(options) > 1:
-            what = _list(sorted({" ".join(x for x in (r.integrator, r.options_label) if x) for r in rs}))
+            what = _list(sorted({" ".join(x for x in (r.settings.integrator, r.options_label) if x) for r in rs}))
         out.append(Hazard("unsupported", e.engine, tuple(_by_sweep(rs)), f"{e.engine} cannot run {what}: {reason}"))
     return out
 

@@ -69,15 +69,16 @@ def parities(records, trajectory_of, floor_of):
     originals = {}
     for r in done:
         if r.engine in PORTS.values():
-            originals[(r.engine, r.case, r.case_version, r.integrator, r.dt, r.rtol,
-                       tuple(sorted(r.options.items())))] = r
+            originals[(r.engine, r.case, r.case_version, r.settings.integrator, r.settings.dt, r.settings.rtol,
+                       tuple(sorted(r.settings.options.items())))] = r
     out = []
     for r in done:
         if r.engine not in PORTS:
             continue
         original = PORTS[r.engine]
-        options = tuple(sorted((k, v) for k, v in r.options.items() if k not in PORT_ONLY_OPTIONS.get(r.engine, ())))
-        o = originals.get((original, r.case, r.case_version, r.integrator, r.dt, r.rtol, options))
+        s = r.settings
+        options = tuple(sorted((k, v) for k, v in s.options.items() if k not in PORT_ONLY_OPTIONS.get(r.engine, ())))
+        o = originals.get((original, r.case, r.case_version, s.integrator, s.dt, s.rtol, options))
         if o is None:
             continue
         a, b = trajectory_of(r.key), trajectory_of(o.key)
@@ -85,8 +86,8 @@ def parities(records, trajectory_of, floor_of):
             orientation = max(float(np.max(spatial.rotation_angle(a.bodies[n].quaternion, b.bodies[n].quaternion)))
                               for n in a.bodies)
             position = max(float(np.max(np.abs(a.bodies[n].position - b.bodies[n].position))) for n in a.bodies)
-        step = f"dt={r.dt:g}" if r.dt is not None else f"rtol={r.rtol:g}"
-        label = " ".join(x for x in (r.integrator, step, r.options_label) if x)
+        step = f"dt={r.settings.dt:g}" if r.settings.dt is not None else f"rtol={r.settings.rtol:g}"
+        label = " ".join(x for x in (r.settings.integrator, step, r.options_label) if x)
         out.append(Parity(r.case, r.case_version, r.engine, original, label, str(r.audit.get("precision", "")),
                           orientation, position,
                           _finite(floor_of(r.case, r.case_version).get("orientation")),

@@ -42,9 +42,10 @@ def diverged(runs):
     """``{engine: [run, ...]}``: every run judged diverged that left a trajectory, by setting."""
     out = {}
     for r in runs:
-        if r.verdict == "diverged" and r.trajectory:
+        if r.judgement.verdict == "diverged" and r.trajectory:
             out.setdefault(r.engine, []).append(r)
-    return {e: sorted(rs, key=lambda r: (r.integrator, r.options_label, sweep_key(r))) for e, rs in sorted(out.items())}
+    return {e: sorted(rs, key=lambda r: (r.settings.integrator, r.options_label, sweep_key(r)))
+            for e, rs in sorted(out.items())}
 
 
 def headline_series(store, run, truth, quantity):

@@ -47,12 +47,12 @@ def cost_per_sim_s(r):
 
 def line_label(r):
     """A work-precision line: ``engine integrator`` and its options."""
-    return " ".join(x for x in (r.engine, r.integrator, r.options_label) if x)
+    return " ".join(x for x in (r.engine, r.settings.integrator, r.options_label) if x)
 
 
 def sweep_key(r):
     """Order along a sweep and across a grid: fixed steps before tolerances, each coarse to fine."""
-    return (r.dt is None, -(r.dt if r.dt is not None else (r.rtol or 0.0)))
+    return (r.settings.dt is None, -(r.settings.dt if r.settings.dt is not None else (r.settings.rtol or 0.0)))
 
 
 def points(records, quantity):

@@ -39,12 +39,31 @@ def base(store):
     return store.records()[0]
 
 
+# The fields of a record's ``settings`` and ``judgement`` (as its row's columns name them), which
+# ``changed`` takes flat.
+SETTINGS_FIELDS = ("integrator", "dt", "rtol", "atol", "options")
+JUDGEMENT_FIELDS = {"beyond": "beyond", "verdict": "verdict", "verdict_reason": "reason",
+                    "within_tolerance": "within_tolerance"}
+
+
+def changed(record, **changes):
+    """``replace(record, **changes)``, where the fields of its settings and its judgement may be given
+    flat (``dt=...``, ``verdict=...``), as the row's columns name them."""
+    settings = {k: changes.pop(k) for k in SETTINGS_FIELDS if k in changes}
+    judgement = {JUDGEMENT_FIELDS[k]: changes.pop(k) for k in list(JUDGEMENT_FIELDS) if k in changes}
+    if settings:
+        changes["settings"] = replace(record.settings, **settings)
+    if judgement:
+        changes["judgement"] = replace(record.judgement, **judgement)
+    return replace(record, **changes)
+
+
 def add_run(store, key, nan_from=None, **changes):
-    """Write a record made from the store's first run with ``changes``; its trajectory is the first
-    run's, with NaN from ``nan_from`` (s) on when given (a divergence), none when ``status`` is not ok
-    and ``nan_from`` is None."""
+    """Write a record made from the store's first run with ``changes`` (``changed``'s); its trajectory is
+    the first run's, with NaN from ``nan_from`` (s) on when given (a divergence), none when ``status`` is
+    not ok and ``nan_from`` is None."""
     first = base(store)
-    record = replace(first, key=key, trajectory="", **changes)
+    record = changed(first, key=key, trajectory="", **changes)
     npz = None
     if record.status == "ok" or nan_from is not None:
         traj = store.trajectory(first.key)

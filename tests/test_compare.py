@@ -61,7 +61,8 @@ def test_a_tenfold_error_is_a_regression_with_before_after_and_ratio(store, tmp_
 
 def test_options_are_in_the_labels_and_runs_in_one_store_are_apart(store, tmp_path, capsys):
     other = _copy(store, tmp_path / "other")
-    tamper(other, lambda r: replace(r, options={"node": "ep"}))  # now a run A does not have, and B lacks one
+    # now a run A does not have, and B lacks one
+    tamper(other, lambda r: replace(r, settings=replace(r.settings, options={"node": "ep"})))
     cmp = compare_stores(store, other)
     assert len(cmp.only_in_a) == 1 and len(cmp.only_in_b) == 1 and len(cmp.changes) == 3
     assert "node=ep" in to_json(cmp)["only_in_b"][0]["label"]
@@ -121,7 +122,8 @@ def test_a_changed_case_is_not_compared_unless_asked(store, tmp_path):
 
 def test_a_run_that_now_diverges_is_a_regression(store, tmp_path):
     other = _copy(store, tmp_path / "other")
-    tamper(other, lambda r: replace(r, status="diverged", verdict="diverged", message="non-finite state",
+    tamper(other, lambda r: replace(r, status="diverged", judgement=replace(r.judgement, verdict="diverged"),
+                                    message="non-finite state",
                                     errors={q: (math.nan, math.nan) for q in r.errors}))
     cmp = compare_stores(store, other)
     assert cmp.regressed and any("status ok -> diverged" in n for c in cmp.changes for n in c.notes)

@@ -110,6 +110,7 @@ def test_every_engine_gets_a_verdict_on_every_hard_case(tmp_path):
     assert {(r.case, r.engine) for r in records} == {(c, e) for c in HARD for e in ENGINES}
     verdicts = {}
     for r in records:
-        assert r.verdict in VERDICTS and r.verdict != "timeout", (r.case, r.engine, r.settings_label, r.verdict)
-        verdicts[r.verdict] = verdicts.get(r.verdict, 0) + 1
+        verdict = r.judgement.verdict
+        assert verdict in VERDICTS and verdict != "timeout", (r.case, r.engine, r.settings_label, verdict)
+        verdicts[verdict] = verdicts.get(verdict, 0) + 1
     assert verdicts.get("stable", 0) > 0

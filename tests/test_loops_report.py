@@ -64,7 +64,7 @@ def four_bar_store(tmp_path_factory):
                        integrators=("rk4",), dts=(1e-2,), t_final=0.5)
 
 
-def _opened(store, key, gap, **changes):
+def _opened(store, key, gap, dt):
     """A record of the store's first run whose rocker is moved by ``gap(t)`` (m) along world x: the loop at C
     opens by exactly that much (the coupler stays), its velocity-level residual by ``gap``'s rate, 0 here."""
     first = store.records()[0]
@@ -72,9 +72,10 @@ def _opened(store, key, gap, **changes):
     rocker = traj.bodies["rocker"]
     moved = replace(rocker, position=rocker.position + np.outer(gap(traj.t), [1.0, 0.0, 0.0]))
     traj = Trajectory(traj.t, {**traj.bodies, "rocker": moved}, traj.joints, traj.extras)
-    record = replace(first, key=key, trajectory="", within_tolerance=False, beyond=("loop_residual_position",),
-                     verdict="drifts", drifts={**first.drifts, "loop_residual_position": float(gap(traj.t).max())},
-                     **changes)
+    record = replace(first, key=key, trajectory="", settings=replace(first.settings, dt=dt),
+                     judgement=replace(first.judgement, beyond=("loop_residual_position",), verdict="drifts",
+                                       within_tolerance=False),
+                     drifts={**first.drifts, "loop_residual_position": float(gap(traj.t).max())})
     store.write_record(record, trajectory_to_npz(traj))
 
 
@@ -99,10 +100,13 @@ def test_a_run_whose_motion_is_right_and_reactions_wrong_is_a_hazard(four_bar_st
     store = Store.open(tmp_path / "s")
     first = store.records()[0]
     add = dict(first.errors, reaction_force=(2e-3, 1e-3))
-    store.write_record(replace(first, key="loads", trajectory="", dt=5e-3, errors=add, within_tolerance=False,
-                               beyond=("reaction_force",)), None)
-    store.write_record(replace(first, key="both", trajectory="", dt=2e-3, within_tolerance=False,
-                               errors=dict(add, joint=(1e-3, 1e-3)), beyond=("joint", "reaction_force")), None)
+    store.write_record(replace(first, key="loads", trajectory="", settings=replace(first.settings, dt=5e-3), errors=add,
+                               judgement=replace(first.judgement, within_tolerance=False, beyond=("reaction_force",))),
+                       None)
+    store.write_record(replace(first, key="both", trajectory="", settings=replace(first.settings, dt=2e-3),
+                               errors=dict(add, joint=(1e-3, 1e-3)),
+                               judgement=replace(first.judgement, within_tolerance=False,
+                                                 beyond=("joint", "reaction_force"))), None)
     (f,) = find(store)
     (h,) = [h for h in f.hazards if h.kind == "reactions"]
     assert [r.key for r in h.runs] == ["loads"]  # "both" has the motion wrong too: a tolerance hazard only

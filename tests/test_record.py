@@ -7,6 +7,7 @@ import numpy as np
 from dalembert.harness.api import load
 from dalembert.harness.cli import main
 from dalembert.record import Cost, RunRecord
+from dalembert.settings import Settings
 
 
 def test_every_timed_repeat_is_stored_and_its_figures_are_theirs(tmp_path):
@@ -22,7 +23,7 @@ def test_every_timed_repeat_is_stored_and_its_figures_are_theirs(tmp_path):
 
 
 def test_repeats_survive_the_row_and_older_schemas_read_without_them():
-    record = RunRecord(key="k", case="c", case_version="v", engine="e", integrator="rk4", dt=1e-3, status="ok",
+    record = RunRecord(key="k", case="c", case_version="v", engine="e", settings=Settings("rk4", 1e-3), status="ok",
                        cost=Cost(wall_s_median=0.2, wall_s_min=0.1, wall_s_max=0.3, wall_s_repeats=(0.3, 0.1, 0.2),
                                  repeats=3))
     row = json.loads(json.dumps(record.to_row()))  # strict JSON, as stored
@@ -40,3 +41,38 @@ def test_the_manifest_records_numpy_and_scipy(tmp_path):
     assert main(["run", "--case", "pendulum", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2",
                  "--param", "t_final=0.1", "--quick", "--jobs", "1", "--out", str(out)]) == 0
     assert load(out).manifest()["libraries"] == {"numpy": numpy.__version__, "scipy": scipy.__version__}
+
+
+def test_the_settings_label_is_one_function_and_reads_as_it_always_did():
+    """``Settings.label()`` is THE label: the stored ``settings`` column and the report's text are it."""
+    from dalembert.reports.findings import settings_text
+
+    fixed = RunRecord("k", "pendulum", "v", "mujoco", Settings("rk4", 1e-3, options={"jacobian": "dense"}), status="ok")
+    adaptive = RunRecord("k", "pendulum", "v", "reference", Settings("dop853", rtol=1e-9, atol=1e-9), status="ok")
+    # the labels stores have always held (byte for byte: a store's `settings` column is filtered on)
+    assert fixed.to_row()["settings"] == "rk4 dt=0.001 jacobian=dense" == Settings("rk4", 1e-3, options={"jacobian": "dense"}).label()
+    assert adaptive.settings_label == "dop853 rtol=1e-09 atol=1e-09"
+    # the report's text leaves out an atol equal to the rtol, and only that
+    assert settings_text(adaptive) == "dop853 rtol=1e-09" == adaptive.settings.label(brief=True)
+    assert settings_text(fixed) == fixed.settings_label
+    assert Settings("rk45", rtol=1e-6, atol=1e-8).label(brief=True) == "rk45 rtol=1e-06 atol=1e-08"
+
+
+def test_settings_and_judgement_are_nested_and_the_row_stays_flat():
+    """``RunRecord`` holds a ``Settings`` and a ``Judgement``; its row keeps the flat columns every store
+    was written with, and reads back into the same nested record."""
+    from dalembert.judge import Judgement
+
+    record = RunRecord("k", "pendulum", "v", "mujoco", Settings("rk45", rtol=1e-6, atol=1e-8, options={"a": "b"}),
+                       status="ok", judgement=Judgement(("energy", "joint"), "drifts", "energy grows", False))
+    row = json.loads(json.dumps(record.to_row()))
+    assert {k: row[k] for k in ("integrator", "dt", "rtol", "atol", "options", "settings")} == {
+        "integrator": "rk45", "dt": None, "rtol": 1e-6, "atol": 1e-8, "options": '{"a": "b"}',
+        "settings": "rk45 rtol=1e-06 atol=1e-08 a=b"}
+    assert {k: row[k] for k in ("within_tolerance", "beyond_tolerance", "verdict", "verdict_reason")} == {
+        "within_tolerance": False, "beyond_tolerance": "energy joint", "verdict": "drifts",
+        "verdict_reason": "energy grows"}
+    assert not {"judgement", "beyond", "reason"} & set(row)
+    back = RunRecord.from_row(row)
+    assert back.settings == record.settings and back.judgement == record.judgement
+    assert back.to_row() == row

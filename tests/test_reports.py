@@ -65,9 +65,9 @@ def test_energy_drift_rates_are_shown_as_stored(store):
     top = [r for r in store.records() if r.case == "free_top" and r.ok and r.engine == "reference"]
     assert len(top) == 4
     for r in top:
-        line = next(x for x in section.splitlines() if x.startswith(f"| {r.engine} {r.integrator} |"))
+        line = next(x for x in section.splitlines() if x.startswith(f"| {r.engine} {r.settings.integrator} |"))
         assert f"{r.drift_rates['energy']:+.2e} /s" in line
-    euler, rk4 = (max(abs(r.drift_rates["energy"]) for r in top if r.integrator == k) for k in ("euler", "rk4"))
+    euler, rk4 = (max(abs(r.drift_rates["energy"]) for r in top if r.settings.integrator == k) for k in ("euler", "rk4"))
     assert euler > 1e3 * rk4
 
 
@@ -152,7 +152,7 @@ def test_report_reads_only_the_store(store, tmp_path):
     out = tmp_path / "copy"
     shutil.copytree(store.path, out)
     # one stored verdict that the tolerances in code would not give: the report must show it as stored
-    key = next(r.key for r in store.records() if r.verdict == "stable")
+    key = next(r.key for r in store.records() if r.judgement.verdict == "stable")
     row = json.load(open(out / "rows" / f"{key}.json"))
     row["verdict"], row["verdict_reason"] = "drifts", "as judged when it ran"
     json.dump(row, open(out / "rows" / f"{key}.json", "w"))
@@ -165,7 +165,7 @@ def test_report_reads_only_the_store(store, tmp_path):
     assert ran.returncode == 0, ran.stderr[-2000:]
     md = (out / "report.md").read_text()
     for r in Store(out).records():
-        assert r.verdict in md
+        assert r.judgement.verdict in md
     assert "as judged when it ran" in md
 
 

@@ -78,13 +78,13 @@ def test_failures_are_stored_not_raised(tmp_path):
     specs, _ = expand(cases=["pivoted_rod"], engines=["broken"], dts=[1e-2])
     store = Store(tmp_path).create({"specs": [s.to_json() for s in specs]})
     run_matrix(specs, store, jobs=2, timeout=5.0, timing=QUICK)
-    runs = {r.integrator: r for r in store.records()}
+    runs = {r.settings.integrator: r for r in store.records()}
     assert runs["raises"].status == "failed" and "exploded on purpose" in runs["raises"].message
     assert runs["nan"].status == "diverged" and "t = 1 s" in runs["nan"].message
     assert runs["hangs"].status == "timeout" and "5 s" in runs["hangs"].message
-    assert runs["rk4"].status == "ok" and runs["rk4"].within_tolerance
+    assert runs["rk4"].status == "ok" and runs["rk4"].judgement.within_tolerance
     # the verdict is judged when the run ends and stored with it
-    assert [runs[k].verdict for k in ("raises", "nan", "hangs", "rk4")] == ["failed", "diverged", "timeout", "stable"]
+    assert [runs[k].judgement.verdict for k in ("raises", "nan", "hangs", "rk4")] == ["failed", "diverged", "timeout", "stable"]
     table = store.write_table()
     assert len(table) == 4 and (tmp_path / "runs.parquet").exists()
     assert {"schema_version", "verdict", "verdict_reason"} <= set(table.columns)
@@ -94,7 +94,7 @@ def test_unsupported_effect_is_a_stored_result():
     (spec,), _ = expand(cases=["pivoted_rod"], engines=["no-follower"], integrators=["rk4"], dts=[1e-2])
     record, npz = execute(spec, QUICK)
     assert record.status == "unsupported" and "load:follower_force" in record.message and npz is None
-    assert record.verdict == "unsupported" and record.verdict_reason == record.message
+    assert record.judgement.verdict == "unsupported" and record.judgement.reason == record.message
 
 
 def test_the_read_back_is_timed_once_and_apart_from_the_stepping():
@@ -336,7 +336,7 @@ def test_default_steps_fit_each_cases_sampling():
     Andrews squeezer is sampled every 1 ms, the Test Set's grid: no 1e-2 step); a step given on the
     command line is never changed, and is refused naming the fix."""
     specs, _ = expand(cases=["andrews_squeezer", "four_bar"], engines=["reference"])
-    steps = {(s.case, s.dt) for s in specs if s.dt is not None}
+    steps = {(s.case, s.settings.dt) for s in specs if s.settings.dt is not None}
     assert steps == {("andrews_squeezer", 1e-3), ("four_bar", 1e-2), ("four_bar", 1e-3)}
     with pytest.raises(ValueError, match="does not divide the sample interval"):
         expand(cases=["andrews_squeezer"], engines=["reference"], dts=[1e-2])
@@ -351,15 +351,38 @@ def test_a_free_worker_keeps_to_its_sweep_and_otherwise_takes_a_sweep_nobody_hol
 
     specs, _ = expand(cases=["pivoted_rod"], engines=["reference"], integrators=["rk4", "euler", "rkmk4"],
                       dts=[1e-2, 5e-3, 2e-3])
-    sweeps = [s.integrator for s in specs[::3]]  # expand's order: a sweep's three runs in a row
-    assert [s.integrator for s in specs] == [i for i in sweeps for _ in range(3)]
+    sweeps = [s.settings.integrator for s in specs[::3]]  # expand's order: a sweep's three runs in a row
+    assert [s.settings.integrator for s in specs] == [i for i in sweeps for _ in range(3)]
     queue = [(affinity(s), s) for s in reversed(specs)]
     a, b = SimpleNamespace(group=None), SimpleNamespace(group=None)
     first = _take(queue, a, set())
     a.group = affinity(first)
     second = _take(queue, b, {a.group})  # plain order would give b the rk4 sweep's second run
     b.group = affinity(second)
-    assert (first.integrator, second.integrator) == tuple(sweeps[:2])
-    assert [_take(queue, a, {b.group}).integrator for _ in range(2)] == [sweeps[0]] * 2
-    assert _take(queue, a, {b.group}).integrator == sweeps[2]  # its sweep done: the one nobody holds
-    assert sorted(s.integrator for _, s in queue) == sorted([sweeps[1]] * 2 + [sweeps[2]] * 2)
+    assert (first.settings.integrator, second.settings.integrator) == tuple(sweeps[:2])
+    assert [_take(queue, a, {b.group}).settings.integrator for _ in range(2)] == [sweeps[0]] * 2
+    assert _take(queue, a, {b.group}).settings.integrator == sweeps[2]  # its sweep done: the one nobody holds
+    assert sorted(s.settings.integrator for _, s in queue) == sorted([sweeps[1]] * 2 + [sweeps[2]] * 2)
+
+
+def test_a_case_is_built_once_for_its_runs(monkeypatch):
+    """Expansion, truth, and every run of one case variant share one build of the case and one
+    computation of its version (a content hash of the whole case)."""
+    from collections import OrderedDict
+
+    from dalembert.case import Case
+    from dalembert.harness import truths
+
+    monkeypatch.setattr(truths, "_BUILT", OrderedDict())
+    hashed = []
+    version = Case.version.fget
+    monkeypatch.setattr(Case, "version", property(lambda self: hashed.append(self.name) or version(self)))
+    specs, _ = expand(cases=["pendulum"], engines=["reference"], integrators=["rk4", "euler"], dts=[1e-2, 5e-3],
+                      params={"t_final": 0.2})
+    assert len(specs) == 4 and hashed == ["pendulum"]
+    (case, made), = truths.build(specs).values()
+    records = [execute(s, QUICK, made)[0] for s in specs]
+    assert [r.status for r in records] == ["ok"] * 4 and hashed == ["pendulum"]
+    assert truths.built_case("pendulum", {"t_final": 0.2})[0] is case
+    # another variant is another case
+    assert truths.built_case("pendulum", {"t_final": 0.1})[0].t_final == 0.1 and hashed == ["pendulum"] * 2

@@ -97,6 +97,6 @@ def test_the_hard_suite_carries_its_stability_maps():
     assert len(with_maps.searches) == len(plans) >= 2
     for (first, _), plan in zip(with_maps.searches, plans):
         assert {s.case for s in first} == {plan.case}
-        assert {s.dt for s in first} == set(plan.bracket)
+        assert {s.settings.dt for s in first} == set(plan.bracket)
         assert len({dict(s.params)[plan.parameter] for s in first}) == int(plan.values.rsplit(",", 1)[1])
     assert set(without.specs) < set(with_maps.specs)

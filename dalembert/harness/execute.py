@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dalembert.harness.threads import VARIABLES
+from dalembert.identity import check_version
 from dalembert.judge import judge
 from dalembert.record import Cost, RunRecord
 
@@ -52,10 +53,8 @@ def _record(spec, status, message="", errors=None, drifts=None, tolerances=None,
     verdict = judge(status, message, {q: mx for q, (mx, _) in errors.items()}, drifts, tolerances or {},
                     fields.get("growths"))
     return RunRecord(key=spec.key, case=spec.case, case_version=spec.case_version, engine=spec.engine,
-                     integrator=spec.integrator, dt=spec.dt, rtol=spec.rtol, atol=spec.atol,
-                     options=dict(spec.options), params=dict(spec.params), status=status, message=message,
-                     errors=errors, drifts=drifts, beyond=verdict.beyond, verdict=verdict.verdict,
-                     verdict_reason=verdict.reason, within_tolerance=verdict.within_tolerance,
+                     settings=spec.settings, params=dict(spec.params), status=status, message=message,
+                     errors=errors, drifts=drifts, judgement=verdict,
                      provenance={"host": socket.gethostname(), "pid": os.getpid(), "threads": _pool_width()},
                      **fields)
 
@@ -87,8 +86,8 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
     """
     from dalembert import invariants
     from dalembert.adapters import get_adapter
-    from dalembert.case import make_case
     from dalembert.errors import trajectory_errors
+    from dalembert.harness.truths import built_case
     from dalembert.store import trajectory_to_npz
 
     started, load_start = time.perf_counter(), _load()
@@ -96,11 +95,11 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
     try:
         adapter = get_adapter(spec.engine, spec.adapter)
         found["engine_version"] = adapter.version()
-        case = make_case(spec.case, **dict(spec.params))
+        case, version = built_case(spec.case, spec.params)  # built once per worker, not once per run
         found["t_final"] = case.t_final
-        if case.version != spec.case_version:
-            return _record(spec, "failed", f"case {spec.case!r} is now version {case.version}, the matrix was made "
-                                           f"for {spec.case_version}: its code changed — start a new matrix", **found), None
+        changed = check_version(spec.case, spec.case_version, version, "the matrix was made for")
+        if changed:
+            return _record(spec, "failed", f"{changed}: its code changed — start a new matrix", **found), None
         settings = spec.settings
         reason = adapter.unsupported(case.scene, settings)
         if reason:

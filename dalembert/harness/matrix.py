@@ -6,13 +6,12 @@ before anything runs; ``spec(...)`` makes one spec from explicit settings.
 
 from __future__ import annotations
 
-import hashlib
 import itertools
-import json
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
+from dalembert.identity import run_identity, run_key
 from dalembert.registry import suggest
 from dalembert.settings import Settings, steps_per_interval
 
@@ -32,49 +31,51 @@ MAX_STEPS_PER_RUN = 1e8
 
 @dataclass(frozen=True)
 class RunSpec:
-    """One (case, engine, settings) run. ``params``, ``options``: sorted (key, value) pairs."""
+    """One (case, engine, settings) run. ``params``: sorted (key, value) pairs.
+
+    Its JSON (``to_json``, a manifest's ``specs``) keeps the settings flat (``integrator``, ``dt``,
+    ``rtol``, ``atol``, ``options`` as sorted pairs), as every manifest has been written.
+    """
 
     case: str
     engine: str
-    integrator: str
-    dt: float | None = None
-    rtol: float | None = None
-    atol: float | None = None
-    options: tuple = ()
+    settings: Settings
     params: tuple = ()
     case_version: str = ""
     adapter: str = ""  # "module:Class" of the engine's adapter, for workers that must import it
 
     @property
-    def settings(self):
-        return Settings(self.integrator, self.dt, self.rtol, self.atol, dict(self.options))
-
-    @property
     def key(self):
         """Deterministic, readable file key: case, engine, integrator and a content hash."""
-        payload = json.dumps([self.case, self.case_version, self.engine, self.integrator, self.dt, self.rtol,
-                              self.atol, list(self.options)], default=repr)
-        digest = hashlib.sha256(payload.encode()).hexdigest()[:12]
-        return f"{self.case}__{self.engine}__{self.integrator}__{digest}"
+        return run_key(self.identity, self.case_version)
+
+    @property
+    def identity(self):
+        """The run's ``dalembert.identity.RunIdentity``."""
+        return run_identity(self.case, self.params, self.engine, self.settings)
 
     def to_json(self):
-        d = asdict(self)
-        d["options"] = [list(x) for x in self.options]
-        d["params"] = [[k, list(v) if isinstance(v, tuple) else v] for k, v in self.params]
-        return d
+        s = self.settings
+        return {"case": self.case, "engine": self.engine, "integrator": s.integrator, "dt": s.dt, "rtol": s.rtol,
+                "atol": s.atol, "options": [[k, v] for k, v in sorted(s.options.items())],
+                "params": [[k, list(v) if isinstance(v, tuple) else v] for k, v in self.params],
+                "case_version": self.case_version, "adapter": self.adapter}
 
     @classmethod
     def from_json(cls, d):
+        """Inverse of ``to_json``; a TypeError or KeyError when ``d`` is not a spec's JSON."""
         d = dict(d)
-        d["options"] = tuple(tuple(x) for x in d["options"])
+        settings = Settings(d.pop("integrator"), d.pop("dt"), d.pop("rtol"), d.pop("atol"),
+                            dict(tuple(x) for x in d.pop("options")))
         d["params"] = tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in d["params"])
-        return cls(**d)
+        return cls(settings=settings, **d)
 
 
-def spec(case, engine, settings, params=(), force=False):
+def spec(case, engine, settings, params=(), force=False, version=None):
     """The spec of running ``case`` (a Case made with ``params``) on ``engine`` with ``settings``;
     ValueError naming the field when the engine cannot take the settings, or when the run would
-    take more than ``MAX_STEPS_PER_RUN`` steps and ``force`` is not given."""
+    take more than ``MAX_STEPS_PER_RUN`` steps and ``force`` is not given. ``version``: ``case.version``
+    where the caller has it (a content hash of the whole case: computed once per case, not per run)."""
     from dalembert.adapters import adapter_path, get_adapter
 
     if settings.dt is not None and not force and case.t_final / settings.dt > MAX_STEPS_PER_RUN:
@@ -82,8 +83,8 @@ def spec(case, engine, settings, params=(), force=False):
                          f"{case.t_final / settings.dt:.3g} steps, more than {MAX_STEPS_PER_RUN:.0e} — check the "
                          "value, or pass --force if the run is meant")
     adapter = get_adapter(engine)
-    made = RunSpec(case.name, engine, settings.integrator, settings.dt, settings.rtol, settings.atol,
-                   tuple(sorted(settings.options.items())), tuple(sorted(dict(params).items())), case.version,
+    made = RunSpec(case.name, engine, settings, tuple(sorted(dict(params).items())),
+                   case.version if version is None else version,
                    adapter_path(engine))
     adapter.check(case.scene, case.times, made.settings)
     return made
@@ -128,6 +129,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
     """
     from dalembert.adapters import adapter_names, get_adapter
     from dalembert.case import in_default_matrix, load_cases
+    from dalembert.harness.truths import built_case
 
     registry = load_cases()
     names = list(cases or [])
@@ -170,7 +172,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
         mine = {k: v if isinstance(v, list) else [v] for k, v in params.items() if k in factory.params}
         variants += [(factory, dict(zip(mine, values))) for values in itertools.product(*mine.values())]
     for factory, case_params in variants:
-        case = factory(**case_params)
+        case, version = built_case(factory.name, case_params)
         case_dts = dts if given_dts else _dividing(dts, case)
         for e, adapter in adapters.items():
             for integ, ispec in adapter.integrators.items():
@@ -183,7 +185,7 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
                 # given options apply where the integrator takes them; else the engine's own variants
                 mine = {k: v for k, v in (options or {}).items() if k in ispec.options}
                 option_sets = [mine] if mine else adapter.variants(case.scene)
-                specs += [spec(case, e, Settings(integ, options=opts, **k), case_params, force)
+                specs += [spec(case, e, Settings(integ, options=opts, **k), case_params, force, version)
                           for opts in option_sets for k in knobs]
     for key in options or {}:
         if not any(key in ispec.options for a in adapters.values() for name, ispec in a.integrators.items()

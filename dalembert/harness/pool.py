@@ -110,7 +110,7 @@ def _serve(conn, parent_pid, n_threads, engines):
 
 def affinity(spec):
     """The group of runs that share an engine's compiled program (module docstring)."""
-    return (spec.case, spec.case_version, spec.engine, spec.integrator, spec.options)
+    return (spec.case, spec.case_version, spec.engine, spec.settings.integrator, spec.settings.options)
 
 
 def _take(queue, worker, held):

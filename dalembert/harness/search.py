@@ -37,7 +37,7 @@ def next_probes(specs_by_curve, records, intervals, resolution):
     probes = []
     done = {curve_of(r): set() for r in records}
     for r in records:
-        done[curve_of(r)].add(r.dt)
+        done[curve_of(r)].add(r.settings.dt)
     for b in boundaries(records):
         key = (b.case, b.case_version, b.engine, b.integrator, b.options)
         if key not in specs_by_curve:
@@ -47,7 +47,7 @@ def next_probes(specs_by_curve, records, intervals, resolution):
                 continue
             dt = _snap(math.sqrt(side.passed * side.failed), intervals[key])
             if dt not in done[key] and side.passed < dt < side.failed:
-                probes.append(replace(specs_by_curve[key], dt=dt))
+                probes.append(replace(specs_by_curve[key], settings=replace(specs_by_curve[key].settings, dt=dt)))
                 break  # one probe per curve per round: the stable side first
     return probes
 
@@ -64,15 +64,15 @@ def search(specs, store, run, resolution=RESOLUTION, progress=None):
 
     Returns the runs lost to the infrastructure (their curves stop where they were).
     """
-    from dalembert.case import load_cases
+    from dalembert.harness.truths import built_case
 
-    registry = load_cases()
     by_curve, intervals = {}, {}
     for s in specs:
-        key = (s.case, s.case_version, s.engine, s.integrator, " ".join(f"{k}={v}" for k, v in s.options))
+        key = (s.case, s.case_version, s.engine, s.settings.integrator,
+               " ".join(f"{k}={v}" for k, v in sorted(s.settings.options.items())))
         by_curve.setdefault(key, s)
         if key not in intervals:
-            times = registry[s.case](**dict(s.params)).times
+            times = built_case(s.case, s.params)[0].times
             intervals[key] = float(times[1] - times[0])
     lost = list(run(specs))
     keys = {s.key for s in specs}

@@ -207,14 +207,14 @@ def select(args, cores):
     if len(specs) > MAX_RUNS and not args.force:
         raise ValueError(f"the selection is {len(specs)} runs, more than {MAX_RUNS} — select fewer cases, engines, "
                          "integrators, steps or sweep values, or pass --force if the matrix is meant")
-    if rtols and not any(s.rtol is not None for s in specs):
+    if rtols and not any(s.settings.rtol is not None for s in specs):
         raise ValueError("--rtol: no selected integrator is adaptive — drop --rtol, or select one (e.g. "
                          "--integrator dop853)")
-    if dts and not any(s.dt is not None for s in specs):
+    if dts and not any(s.settings.dt is not None for s in specs):
         raise ValueError("--dt: no selected integrator takes a fixed step — drop --dt, or select one (e.g. "
                          "--integrator rk4)")
     for key in options:
-        engines = sorted({s.engine for s in specs if key in dict(s.options)})
+        engines = sorted({s.engine for s in specs if key in dict(s.settings.options)})
         if engines != sorted({s.engine for s in specs}):
             notes.append(f"--option {key}: applies to {', '.join(engines)} only; the other engines run their defaults")
     searches = []
@@ -226,10 +226,10 @@ def select(args, cores):
             raise ValueError(f"--resolution: a factor between steps, must be greater than 1, got {resolution}")
         if len(dts) < 2:
             raise ValueError("--search dt: give the bracket as --dt SMALLEST,LARGEST (e.g. --dt 1e-4,1e-2)")
-        adaptive = sorted({f"{s.engine} {s.integrator}" for s in specs if s.dt is None})
+        adaptive = sorted({f"{s.engine} {s.settings.integrator}" for s in specs if s.settings.dt is None})
         if adaptive:
             notes.append(f"--search dt: adaptive integrators have no step to search, left out: {', '.join(adaptive)}")
-        specs = [s for s in specs if s.dt is not None]
+        specs = [s for s in specs if s.settings.dt is not None]
         if not specs:
             raise ValueError("--search dt: no selected integrator takes a fixed step")
         searches.append((tuple(specs), resolution))
@@ -257,7 +257,7 @@ def _maps(engines, integrators, force, tags, registry, options):
         values = sweep(registry[plan.case], plan.parameter, plan.values, force)
         first, _ = expand([plan.case], None, engines, integrators, list(plan.bracket), None,
                           {**plan.params, plan.parameter: values}, options, force=force)
-        first = [s for s in first if s.dt is not None]
+        first = [s for s in first if s.settings.dt is not None]
         if first:
             out.append((plan, first))
     return out

@@ -8,7 +8,46 @@ and reports read both from the store.
 
 from __future__ import annotations
 
-__all__ = ["prepare_cases", "truth_source", "build", "store_cases"]
+from collections import OrderedDict
+
+__all__ = ["built_case", "prepare_cases", "truth_source", "build", "store_cases"]
+
+# The cases a process keeps built: a matrix has a few dozen case variants at most, and a long-lived
+# process (the Python API, a pool's worker) needs only the recent ones.
+CASES_KEPT = 64
+_BUILT = OrderedDict()  # (name, sorted params) -> (factory, Case, version)
+
+
+def built_case(name, params=()):
+    """The case ``name`` made with ``params`` ((key, value) pairs or a mapping), and its version.
+
+    Built once per process and kept (``CASES_KEPT``): a run's case is asked for by the matrix's
+    expansion, its truth, a resume's check and the run itself, and its version (a content hash of the
+    whole case) is computed once with it. A case whose factory was registered anew is built again.
+
+    Returns
+    -------
+    case : dalembert.case.Case
+    version : str — ``case.version``
+    """
+    from dalembert.case import load_cases
+
+    factory = load_cases()[name]  # KeyError with "did you mean" for an unknown name
+    params = tuple(sorted(dict(params).items()))
+    key = (name, params)
+    try:
+        hit = _BUILT.get(key)
+    except TypeError:  # a value that cannot be a key (a list): built, not kept
+        case = factory(**dict(params))
+        return case, case.version
+    if hit is not None and hit[0] is factory:
+        _BUILT.move_to_end(key)
+        return hit[1], hit[2]
+    case = factory(**dict(params))
+    _BUILT[key] = (factory, case, case.version)
+    while len(_BUILT) > CASES_KEPT:
+        _BUILT.popitem(last=False)
+    return case, _BUILT[key][2]
 
 
 def truth_source(case):
@@ -23,16 +62,17 @@ def prepare_cases(specs, store):
 
     Returns ``{(case, version): truth trajectory}`` for the workers.
     """
-    from dalembert.case import CaseRecord, make_case
+    from dalembert.case import CaseRecord
+    from dalembert.identity import check_version
     from dalembert.reference import truth
 
     truths = {}
     for name, params, version in sorted({(s.case, s.params, s.case_version) for s in specs}):
         if not store.has_case(name, version) or store.truth(name, version) is None:
-            case = make_case(name, **dict(params))
-            if case.version != version:
-                raise ValueError(f"case {name!r}: the matrix was made for version {version}, the code now makes "
-                                 f"{case.version} — start a new matrix")
+            case, now = built_case(name, params)
+            changed = check_version(name, version, now, "the matrix was made for")
+            if changed:
+                raise ValueError(f"{changed} — start a new matrix")
             store.write_case(CaseRecord.from_case(case, truth_source(case)), truth(case))
         truths[(name, version)] = store.truth(name, version)
     return truths
@@ -59,7 +99,6 @@ def build(specs):
     """
     import warnings
 
-    from dalembert.case import make_case
     from dalembert.reference import truth
     from dalembert.scene import SceneError
 
@@ -69,7 +108,7 @@ def build(specs):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", RuntimeWarning)
             try:
-                case = make_case(name, **dict(params))
+                case, _ = built_case(name, params)
                 made = truth(case)
                 problem = None if _finite(made) else "its truth is not finite"
             except (ValueError, ArithmeticError, SceneError) as e:

@@ -117,7 +117,8 @@ def to_markdown(store):
                      str(r.cost.n_rhs)]
             cells += [_fmt(r.max_error(q)) for q in errors] + [_fmt(r.drifts.get(n, math.nan)) for n in drifts]
             cells += [_fmt(r.checks.get(c, math.nan)) for c in checks]
-            cells.append("— (the truth itself)" if is_the_truth(r, case) else _fmt(bool(r.within_tolerance)))
+            within = bool(r.judgement.within_tolerance)
+            cells.append("— (the truth itself)" if is_the_truth(r, case) else _fmt(within))
             lines.append("| " + " | ".join(cells) + " |")
         lines.append("")
     return "\n".join(lines)

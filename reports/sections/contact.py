@@ -39,7 +39,7 @@ def contact(rep, f, name):
     if not has_contact(f.case):
         return part
     truth = rep.store.truth(f.case.name, f.case.version)
-    runs = sorted((r for r in f.runs if r.ok and r.trajectory), key=lambda r: (r.engine, r.integrator,
+    runs = sorted((r for r in f.runs if r.ok and r.trajectory), key=lambda r: (r.engine, r.settings.integrator,
                                                                                 r.options_label, sweep_key(r)))
     draw = FIGURES.get(f.case.name)
     if truth is None or not runs:

@@ -20,7 +20,7 @@ __all__ = ["every_run"]
 def every_run(rep, f):
     """Case version ``f``'s table of runs, folded (a ``Part``); each row's id is ``run-<key>``."""
     part = Part()
-    runs = sorted(f.runs, key=lambda r: (r.engine, r.integrator, r.options_label, sweep_key(r)))
+    runs = sorted(f.runs, key=lambda r: (r.engine, r.settings.integrator, r.options_label, sweep_key(r)))
     errs = [q for q in QUANTITIES if any(not math.isnan(r.max_error(q)) for r in runs)]
     errs.sort(key=lambda q: q != f.quantity)  # the headline error first
     drifts = [n for n in drifts_of(f.case) if any(not math.isnan(r.drifts.get(n, math.nan)) for r in runs)]
@@ -39,9 +39,10 @@ def every_run(rep, f):
                   if math.isfinite(r.cost.wall_s_min) else Cell(MISSING, math.nan))
         rows.append([Cell(r.engine), Cell(settings_text(r), wrap=True), status, num(cost_per_sim_s(r), "{:.2g}"),
                      spread] + [num(r.max_error(q)) for q in errs] + [num(shown_value(r, n, f.case)) for n in drifts]
-                    + [Cell(", ".join(r.beyond) if r.ok else MISSING, wrap=True),
-                       Cell(r.verdict, title=r.verdict_reason)])
+                    + [Cell(", ".join(r.judgement.beyond) if r.ok else MISSING, wrap=True),
+                       Cell(r.judgement.verdict, title=r.judgement.reason)])
     part.heading("Every run", 3)
-    part.table(Table(head, rows, row_ids=[f"run-{r.key}" for r in runs], row_classes=[r.verdict for r in runs]),
+    part.table(Table(head, rows, row_ids=[f"run-{r.key}" for r in runs],
+                     row_classes=[r.judgement.verdict for r in runs]),
                collapsed=f"all {len(runs)} runs of {f.case.name}: click to open; click a header to sort")
     return part

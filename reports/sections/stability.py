@@ -28,7 +28,8 @@ def stability(rep, f, name):
     shown = [r for r in f.runs if r.status != "unsupported"]
     blocks = []
     for title, fixed in (("fixed step", True), ("adaptive", False)):
-        runs = sorted((r for r in shown if (r.dt is not None) == fixed), key=lambda r: (grid_row(r), sweep_key(r)))
+        runs = sorted((r for r in shown if (r.settings.dt is not None) == fixed),
+                      key=lambda r: (grid_row(r), sweep_key(r)))
         if not runs:
             continue
         cells = {}
@@ -36,7 +37,7 @@ def stability(rep, f, name):
             value = r.drifts.get(measure) if energy else r.max_error(measure)
             note = f"t={value_text(r.t_diverged, 's')}" if r.t_diverged is not None else ""
             cells[(grid_row(r), r.sweep_label)] = (value if r.ok and value is not None and math.isfinite(value)
-                                                   else None, r.verdict, note)
+                                                   else None, r.judgement.verdict, note)
         blocks.append(dict(title=title, cells=cells,
                            rows=sorted({k[0] for k in cells}),
                            columns=[c for c in dict.fromkeys(r.sweep_label for r in sorted(runs, key=sweep_key))]))
@@ -52,8 +53,8 @@ def stability(rep, f, name):
     n_unsupported = len(f.runs) - len(shown)
     if n_unsupported:
         part.para(f"{n_unsupported} unsupported runs are not drawn; the hazards above list them with the reason.")
-    reasons = [f"{run_name(r)}: {r.verdict} — {r.verdict_reason}" for r in shown if r.verdict_reason
-               and r.verdict != "stable"]
+    reasons = [f"{run_name(r)}: {r.judgement.verdict} — {r.judgement.reason}" for r in shown if r.judgement.reason
+               and r.judgement.verdict != "stable"]
     if reasons:
         part.details(f"why {len(reasons)} run(s) are not stable (stored verdict reasons)", "\n".join(reasons))
     _drift_rates(part, f)

@@ -145,6 +145,8 @@ def _resumable(path):
     from dalembert.adapters import adapter_names, adapter_path
     from dalembert.case import load_cases
     from dalembert.harness.matrix import RunSpec
+    from dalembert.harness.truths import built_case
+    from dalembert.identity import check_version
     from dalembert.store import Store
 
     store = Store.open(path)
@@ -164,9 +166,9 @@ def _resumable(path):
         if name not in registry:
             changed.append(f"case {name!r} is no longer registered")
             continue
-        now = registry[name](**dict(params)).version
-        if now != version:
-            changed.append(f"case {name!r} is version {now} now, the store holds runs of version {version}")
+        differs = check_version(name, version, built_case(name, params)[1], "the store holds runs of")
+        if differs:
+            changed.append(differs)
     if changed:
         raise ValueError(f"--resume {path}: " + "; ".join(changed) + " — finishing it would mix two versions of a "
                          "case; start a new matrix with --out")
