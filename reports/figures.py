@@ -18,7 +18,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
-from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 from dalembert.reports.formatting import value_text  # noqa: E402
 
@@ -26,7 +25,7 @@ plt.rcParams.update({"svg.fonttype": "none", "font.size": 9, "axes.grid": True, 
                      "legend.fontsize": 7, "axes.titlesize": 10})
 
 __all__ = ["engine_colours", "pareto_summary", "work_precision", "stability", "time_grid", "diverged_runs",
-           "diverged_figure", "stability_map", "map_costs", "scaling", "contact_panels", "creep_bars", "MAX_POINTS"]
+           "diverged_figure", "stability_map", "map_costs", "scaling", "MAX_POINTS", "svg", "grid", "thin"]
 
 MAX_POINTS = 400  # per time-series line: figures stay small; the data stay in the store
 PANEL_W, PANEL_H = 3.3, 2.8  # inches per small-multiple panel: four fit across the page
@@ -43,11 +42,9 @@ DIVERGED_MARGIN = 2.0  # factor of room below the lowest and above the largest e
 # Per diverged run, the share of its samples (%) that may lie below the axis: its start at roundoff (1e-16 at
 # the first samples) before the error grows, which would otherwise squeeze every run into the top decades.
 DIVERGED_LOW_PERCENTILE = 5.0
-TRUTH_STYLE = dict(color="k", ls="--", lw=1.6)  # the closed form, over the engines' lines
-LABEL_ROOM = 4.0  # factor of room right of the longest bar on a log axis, for the value written after it
 
 
-def _svg(fig):
+def svg(fig):
     buf = io.StringIO()
     fig.savefig(buf, format="svg", bbox_inches="tight")
     plt.close(fig)
@@ -55,7 +52,7 @@ def _svg(fig):
     return text[text.index("<svg"):]
 
 
-def _thin(t, y):
+def thin(t, y):
     step = max(1, len(t) // MAX_POINTS)
     return t[::step], y[::step]
 
@@ -76,7 +73,7 @@ def _panel_width(ncols):
     return min(MAX_PANEL_W, ROW_W / ncols)
 
 
-def _grid(n, ncols=4, sharex=True, sharey=True, height=PANEL_H):
+def grid(n, ncols=4, sharex=True, sharey=True, height=PANEL_H):
     ncols = _columns(n, ncols)
     nrows = math.ceil(n / ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(_panel_width(ncols) * ncols, height * nrows), sharex=sharex,
@@ -105,7 +102,7 @@ def pareto_summary(panels, colours, xlabel="stepping time per simulated second (
         ``floor``, ``tolerance`` (None when absent)
     colours : dict engine -> colour
     """
-    fig, axes = _grid(len(panels), sharey=False)
+    fig, axes = grid(len(panels), sharey=False)
     for ax, p in zip(axes, panels):
         for engine, front in sorted(p["fronts"].items()):
             c, e = zip(*front)
@@ -126,7 +123,7 @@ def pareto_summary(panels, colours, xlabel="stepping time per simulated second (
     fig.legend(handles, labels, loc="upper center", ncol=len(labels), bbox_to_anchor=(0.5, 1.0), frameon=False,
                fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.93 if len(axes) <= 4 else 0.96))
-    return _svg(fig)
+    return svg(fig)
 
 
 # ---------------------------------------------------------------------------------------------- work-precision
@@ -172,7 +169,7 @@ def work_precision(panels, ylabel, floor=None, tolerance=None, xlabel="stepping 
                   frameon=False, handlelength=1.4, columnspacing=0.9)
     for row in axes:
         row[0].set_ylabel(ylabel)
-    return _svg(fig)
+    return svg(fig)
 
 
 def _end_label(ax, placed, x, y, text, colour):
@@ -247,7 +244,7 @@ def stability(blocks, label, bound=None, cmap="YlOrRd"):
         if bound and norm.vmin <= bound <= norm.vmax:
             bar.ax.axhline(bound, color="k", lw=2)
             bar.ax.text(-0.3, bound, "bound", ha="right", va="center", fontsize=7, transform=bar.ax.get_yaxis_transform())
-    return _svg(fig)
+    return svg(fig)
 
 
 # ---------------------------------------------------------------------------------------------- time plots
@@ -272,7 +269,7 @@ def time_grid(rows, engines, sweep_colours):
         for j, engine in enumerate(engines):
             ax = axes[i, j]
             for label, sweep, t, y in row["series"].get(engine, []):
-                tt, yy = _thin(t, y)
+                tt, yy = thin(t, y)
                 if row["log"]:
                     ax.semilogy(tt, np.where(np.isfinite(yy), np.maximum(np.abs(yy), 1e-17), np.nan), lw=1,
                                 color=sweep_colours[sweep], label=label)
@@ -289,7 +286,7 @@ def time_grid(rows, engines, sweep_colours):
             if i == n_rows - 1:
                 ax.set_xlabel("t (s)")
     fig.tight_layout()
-    return _svg(fig)
+    return svg(fig)
 
 
 def diverged_figure(panels, ylabel):
@@ -316,7 +313,7 @@ def diverged_figure(panels, ylabel):
         drawn = []
         for k, (label, t, y, t_div) in enumerate(runs):
             colour = INTEGRATOR_PALETTE[k % len(INTEGRATOR_PALETTE)]
-            tt, yy = _thin(np.asarray(t), np.abs(np.asarray(y, dtype=float)))
+            tt, yy = thin(np.asarray(t), np.abs(np.asarray(y, dtype=float)))
             yy = np.where(np.isfinite(yy) & (yy > 0), yy, np.nan)
             drawn.append(yy[np.isfinite(yy)])
             ax.semilogy(tt, yy, lw=1, color=colour,
@@ -338,7 +335,7 @@ def diverged_figure(panels, ylabel):
 
 def diverged_runs(panels, ylabel):
     """``diverged_figure`` as SVG text."""
-    return _svg(diverged_figure(panels, ylabel))
+    return svg(diverged_figure(panels, ylabel))
 
 
 # ---------------------------------------------------------------------------------------------- stability maps
@@ -408,7 +405,7 @@ def stability_map(panels, xlabel, ylabel, rate):
     fig.subplots_adjust(wspace=LEGEND_W / PANEL_W + 0.25)
     for ax in axes[:len(panels)]:
         ax.xaxis.set_tick_params(labelbottom=True)
-    return _svg(fig)
+    return svg(fig)
 
 
 def map_costs(panels, xlabel, ylabel):
@@ -416,7 +413,7 @@ def map_costs(panels, xlabel, ylabel):
     a line per integrator (values that never reach it are left out)."""
     labels = sorted({label for p in panels for label in p["lines"]})
     colour = {label: INTEGRATOR_PALETTE[i % len(INTEGRATOR_PALETTE)] for i, label in enumerate(labels)}
-    fig, axes = _grid(len(panels))
+    fig, axes = grid(len(panels))
     for ax, p in zip(axes, panels):
         for label, points in sorted(p["lines"].items()):
             reached = [(x, c) for x, c in points if c is not None]
@@ -430,7 +427,7 @@ def map_costs(panels, xlabel, ylabel):
     fig.legend([Line2D([], [], color=colour[label], lw=2) for label in labels], labels, loc="upper center",
                ncol=min(len(labels), 6), bbox_to_anchor=(0.5, 1.0), frameon=False)
     fig.tight_layout(rect=(0, 0, 1, 0.93))
-    return _svg(fig)
+    return svg(fig)
 
 
 def scaling(lines, colours, sizes):
@@ -451,66 +448,7 @@ def scaling(lines, colours, sizes):
     ax.set_xlabel("bodies N")
     ax.set_ylabel("stepping time per simulated second (s/s)")
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
-    return _svg(fig)
+    return svg(fig)
 
 
 # ---------------------------------------------------------------------------------------------- contact
-def contact_panels(panels):
-    """A contact case's figures against the truth: one panel per figure, a line per run and the truth dashed.
-
-    Parameters
-    ----------
-    panels : list of dict — ``title``, ``xlabel``, ``ylabel``, ``lines`` [(label, colour, linestyle, x, y), ...]
-        (x, y ndarrays of one length, in the axes' units), ``truth`` (x, y) or None, ``markers`` (bool: points
-        joined, for per-event figures such as the apex of each bounce)
-    """
-    fig, axes = _grid(len(panels), ncols=2, sharex=False, sharey=False, height=PANEL_H + 0.4)
-    for ax, p in zip(axes, panels):
-        marker = dict(marker="o", ms=4) if p.get("markers") else {}
-        for label, colour, style, x, y in p["lines"]:
-            xx, yy = (x, y) if p.get("markers") else _thin(np.asarray(x), np.asarray(y))
-            ax.plot(xx, yy, color=colour, ls=style, lw=1.1, label=label, **marker)
-        if p.get("truth") is not None:
-            x, y = p["truth"]
-            ax.plot(x, y, **TRUTH_STYLE, label="closed form", **marker)
-        if p.get("markers"):  # events are counted: whole numbers on the axis
-            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-        ax.set_title(p["title"])
-        ax.set_xlabel(p["xlabel"])
-        ax.set_ylabel(p["ylabel"])
-        if ax.lines:
-            ax.legend(fontsize=6, framealpha=0.85)
-    fig.tight_layout()
-    return _svg(fig)
-
-
-def creep_bars(bars, colours, bound, xlabel):
-    """Creep speed per engine and setting, a bar each on a log axis, the case's bound dashed.
-
-    Parameters
-    ----------
-    bars : list of (engine, label, value) — value in the axis' unit; a zero is written beside the axis, not drawn
-    colours : dict engine -> colour
-    bound : float or None — the case's bound, in the axis' unit
-    xlabel : str
-    """
-    fig, ax = plt.subplots(figsize=(ROW_W * 0.6, 0.9 + 0.32 * len(bars)))
-    positive = [v for _, _, v in bars if v > 0 and math.isfinite(v)]
-    low = min(positive + ([bound] if bound else [])) / 10.0 if positive or bound else 1e-12
-    for i, (engine, label, value) in enumerate(bars):
-        if value > 0 and math.isfinite(value):
-            ax.barh(i, value - low, left=low, color=colours[engine], height=0.6)
-            ax.text(value, i, f" {value:.3g}", va="center", fontsize=7)
-        else:
-            ax.text(low, i, f" {value:g}", va="center", fontsize=7)
-    if bound:  # named above the axis, where no bar's value is written
-        ax.axvline(bound, **TOLERANCE_STYLE)
-        ax.annotate("the case's bound", (bound, 1.0), xycoords=("data", "axes fraction"), ha="center", va="bottom",
-                    fontsize=7, color=TOLERANCE_STYLE["color"])
-    ax.set_xscale("log")
-    ax.set_xlim(low, max(positive + ([bound] if bound else []), default=low * 10.0) * LABEL_ROOM)
-    ax.set_yticks(range(len(bars)), [f"{e} {label}".strip() for e, label, _ in bars])
-    ax.invert_yaxis()
-    ax.set_xlabel(xlabel)
-    fig.tight_layout()
-    return _svg(fig)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert.metrics import apexes, first_crossing
-from dalembert.reports import figures
+from dalembert.reports import contact_figures, figures
 from dalembert.reports.findings import CREEP_METRIC, run_name, settings_text
 from dalembert.reports.formatting import value_text
 from dalembert.reports.page import Part
@@ -49,7 +49,7 @@ def contact(rep, f, name):
         styles = _styles(runs, rep.colours)
         trajs = [(r, rep.store.trajectory(r.key)) for r in runs]
         panels, caption, events = draw(f.case, truth, trajs, styles)
-        part.figure(figures.contact_panels(panels), f"{name}: {caption} Every finished run (engine by colour, its "
+        part.figure(contact_figures.contact_panels(panels), f"{name}: {caption} Every finished run (engine by colour, its "
                     "settings by line style); dashed black: the closed form.", f"{name}-contact")
         head, values = events
         part.para("The figures' events, read the same way off the closed form and off every finished run:")
@@ -82,7 +82,7 @@ def _creep(part, rep, f, name, runs):
         return
     tol = f.case.tolerances.get(CREEP_METRIC)
     bound = tol.value * scale / per if tol else None
-    part.figure(figures.creep_bars(bars, rep.colours, bound, f"creep speed ({unit}, log scale)"),
+    part.figure(contact_figures.creep_bars(bars, rep.colours, bound, f"creep speed ({unit}, log scale)"),
                 f"{name}: the creep of each engine and setting: {declared(f.case, CREEP_METRIC).description}; the "
                 "closed form sticks (0)"
                 + (f"; dashed: the case's bound, {value_text(bound, unit)}." if bound else "."),
