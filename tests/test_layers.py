@@ -131,3 +131,14 @@ def test_one_import_name_after_install(tmp_path):
              "import dalembert.cases, dalembert.reports, dalembert.adapters, dalembert.reference\n")
     ran = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True, text=True)
     assert ran.returncode == 0, ran.stdout + ran.stderr
+
+
+# One concept, one module: a module past this many lines is doing more than one job (the rooms the
+# renovation split were 555-718 lines, each holding several concepts).
+MAX_MODULE_LINES = 500
+
+
+def test_no_module_is_over_the_line_limit():
+    """Every first-party module (tests and benchmarks aside) fits in MAX_MODULE_LINES lines."""
+    long = {m: n for m, p in MODULES.items() if (n := sum(1 for _ in open(p))) > MAX_MODULE_LINES}
+    assert not long, f"over {MAX_MODULE_LINES} lines — split by concept: {long}"
