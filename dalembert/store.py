@@ -232,6 +232,24 @@ class StoreError(ValueError):
     """A results directory that cannot be read as asked; the message names the file and the fix."""
 
 
+# Trajectories a ``Store`` keeps once read: every run a report section draws or a finding measures is read
+# again by another (the headline error, the drifts, the loop residuals, the contact figures); 64 runs of the
+# largest default case (27 bodies, 1001 samples: ~3 MB each) stay under 200 MB.
+TRAJECTORY_CACHE = 64
+
+
+def _read_only(traj):
+    """``traj`` with every array made read-only: a cached trajectory is shared by its readers."""
+    for states in (*traj.bodies.values(), *traj.joints.values()):
+        for value in vars(states).values():
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+    for value in (traj.t, *traj.extras.values()):
+        if isinstance(value, np.ndarray):
+            value.flags.writeable = False
+    return traj
+
+
 class Store:
     """A results directory (see the module docstring)."""
 
@@ -242,6 +260,7 @@ class Store:
         self.cases_dir = os.path.join(self.path, "cases")
         self.truth_dir = os.path.join(self.path, "truth")
         self._cases = {}  # (name, version) -> CaseRecord, read once (``case``)
+        self._trajectories = {}  # key -> Trajectory, the TRAJECTORY_CACHE last read (``trajectory``)
 
     # -------------------------------------------------------------- create, open
     def create(self, manifest):
@@ -338,6 +357,7 @@ class Store:
         file_name(record.key, "run key", self.rows_dir, "a run spec named outside the store; nothing was written")
         if trajectory_npz is not None:
             atomic_write(os.path.join(self.traj_dir, f"{record.key}.npz"), trajectory_npz)
+            self._trajectories.pop(record.key, None)
             record = record.with_trajectory(f"trajectories/{record.key}.npz")
         atomic_write(os.path.join(self.rows_dir, f"{record.key}.json"),
                      json.dumps(record.to_row(), sort_keys=True, allow_nan=False))
@@ -393,10 +413,22 @@ class Store:
         return df
 
     def trajectory(self, key):
-        """The stored trajectory of run ``key``; ``StoreError`` naming the file when it is missing or damaged."""
+        """The stored trajectory of run ``key``, read-only; ``StoreError`` naming the file when it is missing or
+        damaged. The last ``TRAJECTORY_CACHE`` read are kept, so the report's sections and findings read
+        each run's file once."""
+        if key in self._trajectories:
+            self._trajectories[key] = traj = self._trajectories.pop(key)  # (now the most recent)
+            return traj
+        traj = self._read_trajectory(key)
+        self._trajectories[key] = traj
+        while len(self._trajectories) > TRAJECTORY_CACHE:
+            del self._trajectories[next(iter(self._trajectories))]  # the least recently read
+        return traj
+
+    def _read_trajectory(self, key):
         path = os.path.join(self.traj_dir, f"{file_name(key, 'run key', self.traj_dir)}.npz")
         try:
-            return trajectory_from_npz(path)
+            return _read_only(trajectory_from_npz(path))
         except FileNotFoundError:
             raise StoreError(f"{path}: missing — {self._redo(key, f'rows/{key}.json')}") from None
         except (OSError, ValueError, KeyError, TypeError) as e:

@@ -154,3 +154,22 @@ def test_each_case_record_is_read_once(sweep_store, monkeypatch, tmp_path):
     build_report(Store.open(sweep_store.path), tmp_path)
     stored = {(r.case, r.case_version) for r in sweep_store.records()}
     assert sorted(reads) == sorted(stored), reads
+
+
+def test_each_trajectory_is_read_once(sweep_store, monkeypatch, tmp_path):
+    """The sections and findings share the store's trajectories: building the report reads each run's file
+    at most once, and the shared arrays are read-only (no reader can change another's data)."""
+    reads = []
+    read = Store._read_trajectory
+
+    def counted(self, key):
+        reads.append(key)
+        return read(self, key)
+
+    monkeypatch.setattr(Store, "_read_trajectory", counted)
+    store = Store.open(sweep_store.path)
+    build_report(store, tmp_path)
+    assert reads and len(reads) == len(set(reads)), reads
+    traj = store.trajectory(reads[0])
+    assert not traj.t.flags.writeable
+    assert not next(iter(traj.bodies.values())).position.flags.writeable
