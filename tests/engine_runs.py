@@ -1,9 +1,10 @@
 """One engine run as the engine tests take it: prepared, run, read back, audited."""
 
-from dalembert import Settings
+from dalembert import Settings, invariants
 from dalembert.adapters import get_adapter
+from dalembert.case import make_case
 
-__all__ = ["run_with_audit"]
+__all__ = ["run_with_audit", "run_case"]
 
 
 def run_with_audit(scene, times, integrator, dt, engine="mujoco", **options):
@@ -13,3 +14,17 @@ def run_with_audit(scene, times, integrator, dt, engine="mujoco", **options):
     prepared = adapter.prepare(scene, times, Settings(integrator, dt=dt, options=options))
     out = adapter.run(prepared)
     return out.trajectory, adapter.audit(prepared, out)
+
+
+def run_case(engine, name, settings, **params):
+    """``(case, prepared, outcome, drifts)``: case ``name`` (with ``params``) checked, refused by nothing, prepared
+    and run once by ``engine`` with ``settings``; ``drifts`` holds its conserved quantities' drifts and its
+    metrics (``dalembert.metrics``) as the harness stores them."""
+    adapter = get_adapter(engine)
+    case = make_case(name, **params)
+    adapter.check(case.scene, case.times, settings)
+    assert adapter.unsupported(case.scene, settings) is None
+    prepared = adapter.prepare(case.scene, case.times, settings)
+    outcome = adapter.run(prepared)
+    drifts = invariants.summary(case.scene, outcome.trajectory, case.conserved, case.invariants).drifts
+    return case, prepared, outcome, drifts

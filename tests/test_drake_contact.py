@@ -3,7 +3,6 @@ friction), the audit read back from the plant and its SceneGraph, the contact op
 and what Drake does on the closed forms (Drake 1.51, discrete mode, dt = 1e-3; the numbers each bound rests on
 are in its comment)."""
 
-import math
 
 import numpy as np
 import pytest
@@ -12,12 +11,12 @@ pytest.importorskip("pydrake")
 
 from scipy.integrate import solve_ivp  # noqa: E402
 
-from dalembert import invariants  # noqa: E402
 from dalembert.adapters import get_adapter  # noqa: E402
 from dalembert.adapters.drake import contact  # noqa: E402
 from dalembert.case import make_case  # noqa: E402
 from dalembert.scene import Body, ContactPair, Geom, Joint, Plane, Scene  # noqa: E402
 from dalembert.settings import Settings  # noqa: E402
+from engine_runs import run_case  # noqa: E402
 
 DT = 1e-3
 # Drake's SAP (lagged approximation, point contact) holds the box that must stick at a measured creep of 6.5e-4 m/s
@@ -40,16 +39,9 @@ CONTINUOUS_AFTER_TOL = 1e-4
 
 
 def run(name, options=None, integrator="discrete", **params):
-    adapter = get_adapter("drake")
-    case = make_case(name, **params)
     settings = (Settings(integrator, dt=DT, options=options or {}) if integrator == "discrete" else
                 Settings(integrator, rtol=1e-6, options=options or {}))
-    adapter.check(case.scene, case.times, settings)
-    assert adapter.unsupported(case.scene, settings) is None
-    prepared = adapter.prepare(case.scene, case.times, settings)
-    outcome = adapter.run(prepared)
-    drifts = invariants.summary(case.scene, outcome.trajectory, case.conserved, case.invariants).drifts
-    return case, prepared, outcome, drifts
+    return run_case("drake", name, settings, **params)
 
 
 def test_block_that_must_stick_creeps_below_the_bound_with_sap():

@@ -9,13 +9,13 @@ import pytest
 
 pytest.importorskip("exudyn")
 
-from dalembert import invariants  # noqa: E402
 from dalembert.adapters import get_adapter  # noqa: E402
 from dalembert.adapters.exudyn import contact  # noqa: E402
 from dalembert.case import make_case  # noqa: E402
 from dalembert.kinds import CONTACT_EFFECTS  # noqa: E402
 from dalembert.scene import Body, ContactPair, Geom, Joint, Plane, Scene  # noqa: E402
 from dalembert.settings import Settings  # noqa: E402
+from engine_runs import run_case  # noqa: E402
 
 ADAPTER = get_adapter("exudyn")
 # The ball starts rolling 0.03 ms after the closed form's onset at dt = 1e-3 (t* = 0.2912 s; the same at 1e-4):
@@ -34,14 +34,7 @@ AFTER_BOUND = 1e-3
 
 
 def run(name, dt, integrator="generalized-alpha", options=None, **params):
-    case = make_case(name, **params)
-    settings = Settings(integrator, dt=dt, options=options or {})
-    ADAPTER.check(case.scene, case.times, settings)
-    assert ADAPTER.unsupported(case.scene, settings) is None
-    prepared = ADAPTER.prepare(case.scene, case.times, settings)
-    outcome = ADAPTER.run(prepared)
-    drifts = invariants.summary(case.scene, outcome.trajectory, case.conserved, case.invariants).drifts
-    return prepared, outcome, drifts
+    return run_case("exudyn", name, Settings(integrator, dt=dt, options=options or {}), **params)[1:]
 
 
 def test_exudyn_declares_contact_and_its_options():

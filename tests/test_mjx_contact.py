@@ -9,11 +9,11 @@ import pytest
 
 pytest.importorskip("mujoco.mjx")
 
-from dalembert import invariants  # noqa: E402
 from dalembert.adapters import get_adapter  # noqa: E402
 from dalembert.case import make_case  # noqa: E402
 from dalembert.kinds import CONTACT_EFFECTS  # noqa: E402
 from dalembert.settings import Settings  # noqa: E402
+from engine_runs import run_case  # noqa: E402
 
 ADAPTER = get_adapter("mjx")
 DT = 1e-3
@@ -36,14 +36,7 @@ AFTER_BOUND = 3e-2
 
 
 def run(name, options=None, **params):
-    case = make_case(name, **params)
-    settings = Settings("euler", dt=DT, options=options or {})
-    ADAPTER.check(case.scene, case.times, settings)
-    assert ADAPTER.unsupported(case.scene, settings) is None
-    prepared = ADAPTER.prepare(case.scene, case.times, settings)
-    outcome = ADAPTER.run(prepared)
-    drifts = invariants.summary(case.scene, outcome.trajectory, case.conserved, case.invariants).drifts
-    return prepared, outcome, drifts
+    return run_case("mjx", name, Settings("euler", dt=DT, options=options or {}), **params)[1:]
 
 
 def test_mjx_declares_contact_and_mujocos_contact_options():

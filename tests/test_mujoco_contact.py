@@ -9,11 +9,11 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from dalembert import invariants  # noqa: E402
 from dalembert.adapters import get_adapter  # noqa: E402
 from dalembert.adapters.mujoco import contact  # noqa: E402
 from dalembert.case import make_case  # noqa: E402
 from dalembert.settings import Settings  # noqa: E402
+from engine_runs import run_case  # noqa: E402
 
 DT = 1e-3
 # MuJoCo's elliptic cone with noslip post-processing holds the box that must stick: measured creep 7.0e-6 m/s
@@ -26,15 +26,7 @@ ROLL_ONSET_BOUND = 1e-2
 
 
 def run(name, options=None, **params):
-    adapter = get_adapter("mujoco")
-    case = make_case(name, **params)
-    settings = Settings("implicitfast", dt=DT, options=options or {})
-    adapter.check(case.scene, case.times, settings)
-    assert adapter.unsupported(case.scene, settings) is None
-    prepared = adapter.prepare(case.scene, case.times, settings)
-    outcome = adapter.run(prepared)
-    drifts = invariants.summary(case.scene, outcome.trajectory, case.conserved, case.invariants).drifts
-    return case, prepared, outcome, drifts
+    return run_case("mujoco", name, Settings("implicitfast", dt=DT, options=options or {}), **params)
 
 
 def test_block_that_must_stick_creeps_below_the_bound_with_elliptic_noslip():
