@@ -68,7 +68,8 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     rtols : list of float or None — tolerances of adaptive integrators (default 1e-6, 1e-9)
     params : dict or None — case parameters, e.g. ``{"t_final": 2.0}``; a list sweeps
         (``{"spin": [5, 50]}``), a tuple is a vector, a str is the command line's text
-    options : dict or None — engine options for every run (default: each engine's variants)
+    options : dict or None — engine options for every run (default: each engine's variants); a list of
+        values, or the command line's ``"lin:a,b,n"`` / ``"log:a,b,n"``, sweeps one (each value its own run)
     jobs : int or None — worker processes (default and cap: every core)
     timeout : float or None — per-run limit, s (default 600)
     quick : bool — time each run once after its warm-up (``--quick``)

@@ -91,7 +91,8 @@ def _parser():
     r.add_argument("--dt", action="append", type=_floats, help="step sizes in s, comma-separated (default 1e-2,1e-3)")
     r.add_argument("--rtol", action="append", type=_floats, help="tolerances for adaptive integrators (default 1e-6,1e-9)")
     r.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="case parameter override")
-    r.add_argument("--option", action="append", default=[], metavar="KEY=VALUE", help="engine option (every run)")
+    r.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                   help="engine option (every run); KEY=V1,V2 or KEY=log:a,b,n / lin:a,b,n sweeps it, a run each")
     r.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     r.add_argument("--timeout", type=float, default=None, help="per-run limit in s (default 600)")
     r.add_argument("--quick", action="store_true",

@@ -23,13 +23,14 @@ their product.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from dalembert.registry import suggest
 
-__all__ = ["Selection", "select", "numbers", "names", "given", "pairs", "sweep", "MAX_RUNS", "MAX_MODEL_PARTS"]
+__all__ = ["Selection", "select", "numbers", "names", "given", "pairs", "values", "sweep", "option_sweep", "MAX_RUNS",
+           "MAX_MODEL_PARTS"]
 
 # A guard against a slip of the keyboard (lin:1,2,100000000 for lin:1,2,10): the default matrix is
 # a few hundred runs and the largest shipped sweeps (the stability maps) a few hundred more; a
@@ -100,44 +101,71 @@ def names(flag, values, notes):
     return unique
 
 
-def sweep(factory, key, text, force=False):
-    """The values ``text`` gives parameter ``key`` of ``factory`` (one or several: a sweep), each
-    typed as the parameter's default; ValueError naming ``--param`` otherwise, and for a sweep of
-    more than ``MAX_RUNS`` values or a whole number above ``MAX_MODEL_PARTS`` unless ``force``."""
-    from dalembert.case import parse_param
-
-    default = factory.params[key]
+def values(flag, key, text, real, separator=",", force=False):
+    """The values ``text`` gives ``key`` of ``flag`` (``--param`` or ``--option``): a ``log:``/``lin:``
+    grid as floats (only where ``real``: the key takes a real number), else the texts between
+    ``separator``s as written. ValueError naming the flag on a malformed grid, an empty value, or
+    more than ``MAX_RUNS`` values unless ``force``."""
     grid = text.split(":", 1)
     if len(grid) == 2 and grid[0] in ("log", "lin"):
-        if not isinstance(default, float):
-            raise ValueError(f"--param {key}={text}: a {grid[0]}: grid sweeps a real number; {key!r} is "
-                             f"{type(default).__name__} like {default!r}")
+        if real is not True:
+            raise ValueError(f"{flag} {key}={text}: a {grid[0]}: grid sweeps a real number; {key!r} is {real}")
         try:
             a, b, n = (float(x) for x in grid[1].split(","))
         except ValueError:
-            raise ValueError(f"--param {key}={text}: write {grid[0]}:FIRST,LAST,COUNT") from None
+            raise ValueError(f"{flag} {key}={text}: write {grid[0]}:FIRST,LAST,COUNT") from None
         if not (math.isfinite(n) and n >= 2 and n == int(n)) or (grid[0] == "log" and not (a > 0 and b > 0)):
-            raise ValueError(f"--param {key}={text}: COUNT must be an integer >= 2"
+            raise ValueError(f"{flag} {key}={text}: COUNT must be an integer >= 2"
                              + (", FIRST and LAST positive" if grid[0] == "log" else ""))
         if n > MAX_RUNS and not force:
-            raise ValueError(f"--param {key}={text}: {n:.0f} values, more than {MAX_RUNS} runs of each selected "
+            raise ValueError(f"{flag} {key}={text}: {n:.0f} values, more than {MAX_RUNS} runs of each selected "
                              "integrator — check COUNT, or pass --force if the sweep is meant")
         points = (np.geomspace if grid[0] == "log" else np.linspace)(a, b, int(n))
         return [float(v) for v in points]
-    parts = text.split(";") if isinstance(default, tuple) else text.split(",")
+    parts = text.split(separator)
     if any(not p.strip() for p in parts):
-        raise ValueError(f"--param {key}={text}: an empty value — separate values with "
-                         + ("';' (a vector's numbers with ',')" if isinstance(default, tuple) else "','"))
+        raise ValueError(f"{flag} {key}={text}: an empty value — separate values with "
+                         + ("';' (a vector's numbers with ',')" if separator == ";" else "','"))
     if len(parts) > MAX_RUNS and not force:
-        raise ValueError(f"--param {key}: {len(parts)} values, more than {MAX_RUNS} runs — pass --force if the "
+        raise ValueError(f"{flag} {key}: {len(parts)} values, more than {MAX_RUNS} runs — pass --force if the "
                          "sweep is meant")
-    values = [parse_param(factory, f"{key}={p}")[1] for p in parts]
-    big = [v for v in values if type(v) is int and v > MAX_MODEL_PARTS]
+    return [p.strip() for p in parts]
+
+
+def sweep(factory, key, text, force=False):
+    """The values ``text`` gives parameter ``key`` of ``factory`` (one or several: a sweep, read by
+    ``values``), each typed as the parameter's default; ValueError naming ``--param`` otherwise, and
+    for a whole number above ``MAX_MODEL_PARTS`` unless ``force``."""
+    from dalembert.case import parse_param
+
+    default = factory.params[key]
+    real = True if isinstance(default, float) else f"{type(default).__name__} like {default!r}"
+    found = values("--param", key, text, real, ";" if isinstance(default, tuple) else ",", force)
+    if found and isinstance(found[0], float):
+        return found
+    typed = [parse_param(factory, f"{key}={p}")[1] for p in found]
+    big = [v for v in typed if type(v) is int and v > MAX_MODEL_PARTS]
     if big and not force:
         raise ValueError(f"--param {key}={big[0]}: a model of more than {MAX_MODEL_PARTS} parts ({key!r} counts "
                          f"{factory.units.get(key, 'parts')}) takes minutes to build and hours to run — check the "
                          "value, or pass --force if it is meant")
-    return list(dict.fromkeys(values))
+    return list(dict.fromkeys(typed))
+
+
+def option_sweep(key, text, declared, force=False):
+    """The values ``text`` gives engine option ``key`` (one or several: a sweep, read by ``values``
+    as ``--param``'s are), as texts (a grid's numbers written by ``repr``: the text a run's settings
+    and key hold), each checked against every ``Option`` that declares ``key`` (``declared``);
+    ValueError naming ``--option`` and the fix."""
+    choices = sorted({c for o in declared for c in o.choices})
+    real = True if not choices else f"one of {', '.join(map(str, choices))}"
+    found = [repr(v) if isinstance(v, float) else v for v in values("--option", key, text, real, ",", force)]
+    for value in found:
+        for option in declared:
+            problem = replace(option, only=()).problem(key, value, None)  # which integrator takes it: expand's
+            if problem:
+                raise ValueError(f"--option {key}={value}: {problem.split(': ', 1)[1]}")
+    return list(dict.fromkeys(found))
 
 
 def pairs(flag, texts):
@@ -150,7 +178,7 @@ def pairs(flag, texts):
         key, value = text.split("=", 1)
         if key in pairs:
             raise ValueError(f"{flag} {key}: given twice ({pairs[key]!r} and {value!r}) — give it once"
-                             + (" (several values sweep it: KEY=V1,V2)" if flag == "--param" else ""))
+                             + (" (several values sweep it: KEY=V1,V2)" if flag in ("--param", "--option") else ""))
         pairs[key] = value
     return pairs
 
@@ -194,16 +222,20 @@ def select(args, cores):
         if not owners:
             known = {k for f in selected for k in f.params}
             raise ValueError(f"--param {key}: no selected case has this parameter{suggest(key, known)}")
-        values = sweep(owners[0], key, value, args.force)
-        params[key] = values if len(values) > 1 else values[0]
+        swept = sweep(owners[0], key, value, args.force)
+        params[key] = swept if len(swept) > 1 else swept[0]
     variants = sum(math.prod(len(v) for k, v in params.items() if k in f.params and isinstance(v, list))
                    for f in selected)
     if variants > MAX_RUNS and not args.force:  # each variant is at least one run; refused before any is built
         raise ValueError(f"--param: the sweeps make {variants} case variants, more than {MAX_RUNS} runs — sweep "
                          "fewer values, or pass --force if the matrix is meant")
-    options = pairs("--option", args.option)
-    specs, skipped = expand(cases, tag_list, engines, integrators, dts or None, rtols or None, params,
-                            options, force=args.force)
+    options = {key: option_sweep(key, text, _declared(key, engines), args.force)
+               for key, text in pairs("--option", args.option).items()}
+    if math.prod(len(v) for v in options.values()) > MAX_RUNS and not args.force:
+        raise ValueError(f"--option: the sweeps make {math.prod(len(v) for v in options.values())} option sets, "
+                         f"more than {MAX_RUNS} runs — sweep fewer values, or pass --force if the matrix is meant")
+    specs, skipped = _each_option_set(options, lambda chosen: expand(
+        cases, tag_list, engines, integrators, dts or None, rtols or None, params, chosen, force=args.force))
     if len(specs) > MAX_RUNS and not args.force:
         raise ValueError(f"the selection is {len(specs)} runs, more than {MAX_RUNS} — select fewer cases, engines, "
                          "integrators, steps or sweep values, or pass --force if the matrix is meant")
@@ -254,10 +286,40 @@ def _maps(engines, integrators, force, tags, registry, options):
     for _, plan in MAPS.items():
         if not tags & set(plan.tags):
             continue
-        values = sweep(registry[plan.case], plan.parameter, plan.values, force)
-        first, _ = expand([plan.case], None, engines, integrators, list(plan.bracket), None,
-                          {**plan.params, plan.parameter: values}, options, force=force)
+        swept = sweep(registry[plan.case], plan.parameter, plan.values, force)
+        first, _ = _each_option_set(options, lambda chosen: expand(
+            [plan.case], None, engines, integrators, list(plan.bracket), None,
+            {**plan.params, plan.parameter: swept}, chosen, force=force))
         first = [s for s in first if s.settings.dt is not None]
         if first:
             out.append((plan, first))
     return out
+
+
+def _declared(key, engines):
+    """Every ``Option`` that declares engine option ``key``, on the named engines (default: every registered
+    one); an engine that cannot be named is left to ``expand`` to refuse."""
+    from dalembert.adapters import adapter_names, get_adapter
+
+    found = []
+    for e in engines or adapter_names():
+        try:
+            adapter = get_adapter(e)
+        except (KeyError, ImportError):
+            continue
+        if key in adapter.options:
+            found.append(adapter.options[key])
+    return found
+
+
+def _each_option_set(options, expand_one):
+    """``expand_one(chosen)`` (``matrix.expand`` of one option set) for each set the option sweeps make (their
+    product; ``options``: key -> values), its specs joined in order, a run made by several sets (an engine that
+    takes none of the options runs its own variants each time) kept once: ``(specs, skipped)``."""
+    import itertools
+
+    specs, skipped = {}, []
+    for chosen in itertools.product(*options.values()):
+        more, skipped = expand_one(dict(zip(options, chosen)))
+        specs.update(dict.fromkeys(more))
+    return list(specs), skipped

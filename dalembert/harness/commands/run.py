@@ -114,6 +114,14 @@ def _texts(flag, values, to_text):
     return list(values)
 
 
+def _option_text(key, value):
+    """A Python option value as the command line writes it (``--option KEY=TEXT``): a list sweeps
+    (``[0.01, 0.02]`` is ``0.01,0.02``), anything else is its ``str`` (the text a run's settings hold)."""
+    if isinstance(value, (list, tuple)):
+        return f"{key}={','.join(str(v) for v in value)}"
+    return f"{key}={value}"
+
+
 def _connect(address, debug=False):
     """A Dask client on ``address``; ValueError naming ``--scheduler`` when it cannot be reached
     (before anything is written). Dask's own log is kept to its critical messages (a lost
@@ -252,7 +260,9 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     params : dict or list of str or None — case parameters, ``{"t_final": 2.0}`` (a list of values
         sweeps: ``{"spin": [5, 50]}``; a tuple is a vector; a str is the command line's text,
         ``"log:5,500,7"``) or the command line's ``["t_final=2"]``
-    options : dict or list of str or None — engine options for every run that takes them
+    options : dict or list of str or None — engine options for every run that takes them (a list of
+        values sweeps: ``{"contact_timeconst": [0.01, 0.02]}``, each its own run; a str is the command
+        line's text, ``"log:0.002,0.05,5"``) or the command line's ``["cone=elliptic"]``
     jobs : int or None — worker processes (default and cap: the cores)
     timeout : float or None — per-run limit, s (default 600)
     quick : bool — time each run once after its warm-up, not until its timing is steady
@@ -301,7 +311,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     else:
         args = SimpleNamespace(case=cases, tag=tags, engine=engines, integrator=integrators, dt=_groups(dts),
                                rtol=_groups(rtols), param=_texts("--param", params, _param_text),
-                               option=_texts("--option", options, lambda k, v: f"{k}={v}"), jobs=jobs,
+                               option=_texts("--option", options, _option_text), jobs=jobs,
                                timeout=timeout, out=out, search=search, resolution=resolution, no_maps=no_maps,
                                force=force)
         chosen = select(args, os.cpu_count() or 1)
