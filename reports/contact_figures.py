@@ -1,5 +1,6 @@
-"""The contact cases' figures: each engine's motion against the closed form, and the creep of every engine
-setting on a log scale (the panels come from ``reports.sections.contact``). Drawn with the helpers of
+"""The contact cases' figures: each engine's motion against the closed form, the creep of every engine
+setting on a log scale (the panels come from ``reports.sections.contact``), and a contact map: a contact metric
+over an engine option against the step (``reports.sections.contact_maps``). Drawn with the helpers of
 ``reports.figures``, in its style.
 """
 
@@ -8,14 +9,18 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from matplotlib.colors import LogNorm
+from matplotlib.patches import Rectangle
 from matplotlib.ticker import MaxNLocator
 
 from dalembert.reports.figures import PANEL_H, ROW_W, TOLERANCE_STYLE, grid, plt, svg, thin
 
-__all__ = ["contact_panels", "creep_bars", "TRUTH_STYLE"]
+__all__ = ["contact_panels", "creep_bars", "contact_map", "TRUTH_STYLE", "MAP_CMAP", "BEYOND_HATCH"]
 
 TRUTH_STYLE = dict(color="k", ls="--", lw=1.6)  # the closed form, over the engines' lines
 LABEL_ROOM = 4.0  # factor of room right of the longest bar on a log axis, for the value written after it
+MAP_CMAP = "viridis"  # perceptually uniform and colour-blind safe: a contact map's log colour scale
+BEYOND_HATCH = "///"  # a contact map's cell beyond the case's bound: hatched and outlined in the tolerance's colour
 
 
 def contact_panels(panels):
@@ -75,5 +80,45 @@ def creep_bars(bars, colours, bound, xlabel):
     ax.set_yticks(range(len(bars)), [f"{e} {label}".strip() for e, label, _ in bars])
     ax.invert_yaxis()
     ax.set_xlabel(xlabel)
+    fig.tight_layout()
+    return svg(fig)
+
+
+def contact_map(panels, xs, ys, xlabel, ylabel):
+    """A contact metric over an engine option (rows) against the step (columns): a cell per run on a log colour
+    scale, its value written in it, a cell beyond the case's bound hatched and outlined.
+
+    Parameters
+    ----------
+    panels : list of dict — ``title``, ``values`` ndarray (len(ys), len(xs)) in the colour bar's unit (NaN: no run,
+        or one that stored no value; 0 is written, not coloured: a log scale has no 0), ``beyond`` bool ndarray of
+        the same shape (the cells past the case's bound), ``unit`` (the colour bar's label)
+    xs, ys : sequence of float — the columns' steps (s) and the rows' option values, ascending
+    xlabel, ylabel : str
+    """
+    fig, axes = grid(len(panels), ncols=2, sharex=False, sharey=False, height=PANEL_H + 0.6)
+    for ax, p in zip(axes, panels):
+        values = np.asarray(p["values"], dtype=float)
+        positive = values[np.isfinite(values) & (values > 0)]
+        lo, hi = (positive.min(), positive.max()) if positive.size else (1.0, 10.0)
+        norm = LogNorm(lo, hi if hi > lo else lo * 10.0)
+        shown = np.ma.masked_where(~(np.isfinite(values) & (values > 0)), values)
+        mesh = ax.pcolormesh(np.arange(len(xs) + 1) - 0.5, np.arange(len(ys) + 1) - 0.5, shown, cmap=MAP_CMAP,
+                             norm=norm, shading="flat")
+        for (i, j), value in np.ndenumerate(values):
+            if p["beyond"][i, j]:
+                ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1.0, 1.0, fill=False, hatch=BEYOND_HATCH,
+                                       edgecolor=TOLERANCE_STYLE["color"], lw=1.2))
+            if math.isfinite(value):  # dark text on the scale's bright top half, white on its dark bottom
+                bright = value > 0 and norm(value) > 0.5
+                ax.text(j, i, f"{value:.2g}", ha="center", va="center", fontsize=7,
+                        color="k" if bright else "w" if value > 0 else "k")
+        ax.set_xticks(range(len(xs)), [f"{x:.3g}" for x in xs], rotation=30)
+        ax.set_yticks(range(len(ys)), [f"{y:.3g}" for y in ys])
+        ax.grid(False)
+        ax.set_title(p["title"])
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+        fig.colorbar(mesh, ax=ax, label=p["unit"])
     fig.tight_layout()
     return svg(fig)

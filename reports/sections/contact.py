@@ -19,6 +19,7 @@ from dalembert.reports.findings import CREEP_METRIC, run_name, settings_text
 from dalembert.reports.formatting import value_text
 from dalembert.reports.page import Part
 from dalembert.reports.sections.common import declared, has_contact, is_metric
+from dalembert.reports.sections.contact_maps import contact_maps
 from dalembert.reports.tables import Cell, Table, num
 from dalembert.reports.work_precision import sweep_key
 
@@ -57,6 +58,9 @@ def contact(rep, f, name):
                          + [[Cell(run_name(r))] + [num(v, "{:.4g}") for v in values(traj)] for r, traj in trajs]),
                    note_constant=False)
     _creep(part, rep, f, name, runs)
+    maps = contact_maps(rep, f, name)
+    part.html += maps.html
+    part.md += maps.md
     return part
 
 
