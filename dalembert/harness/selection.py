@@ -178,7 +178,7 @@ def pairs(flag, texts):
         key, value = text.split("=", 1)
         if key in pairs:
             raise ValueError(f"{flag} {key}: given twice ({pairs[key]!r} and {value!r}) — give it once"
-                             + (" (several values sweep it: KEY=V1,V2)" if flag in ("--param", "--option") else ""))
+                             + (" (several values sweep it: KEY=V1,V2)" if flag == "--param" else ""))
         pairs[key] = value
     return pairs
 
