@@ -44,7 +44,7 @@ BAD_RUNS = [  # (flags of `dalembert run`, phrase of the message)
     (["--jobs", "0"], "--jobs: must be at least 1"),
     (["--out", ""], "--out: empty"),
     (["--engine", "mujoco", "--option", "node=ep"], "--option node: no selected engine's integrator takes it"),
-    (["--engine", "exudyn", "--option", "node=quaternion"], "options.node: unknown 'quaternion'"),
+    (["--engine", "exudyn", "--option", "node=quaternion"], "--option node=quaternion: unknown 'quaternion' — use one of rotvec-lg, ep, rxyz"),
     (["--case", "free_tops"], "did you mean 'free_top'"),
     (["--resume", "nowhere"], "is not a results directory"),
 ]
