@@ -24,6 +24,7 @@ is the parent's ``X_EB``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable
@@ -33,7 +34,7 @@ import numpy as np
 from dalembert.registry import suggest
 from dalembert.scene import SPRING_EFFECT
 
-__all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome", "Prepared", "option_value"]
+__all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome", "Prepared", "option_value", "typed_options"]
 
 
 @dataclass(frozen=True)
@@ -58,6 +59,7 @@ class Option:
     description : str — what it chooses, one line (``dalembert engines --verbose``)
     minimum, maximum : float or None — a number's closed bounds
     exclusive_minimum : float or None — a number's open lower bound (``> exclusive_minimum``)
+    integer : bool — a number that must be whole (an iteration count)
     only : tuple of str — the integrators that take it (empty: every integrator whose ``IntegratorSpec.options``
         names it)
     """
@@ -68,12 +70,15 @@ class Option:
     minimum: float | None = None
     maximum: float | None = None
     exclusive_minimum: float | None = None
+    integer: bool = False
     only: tuple = ()
 
     def allowed(self):
         """The values it takes, in words: ``"tree, equality"`` or ``"a number in [0, 1]"``."""
         if self.choices:
             return ", ".join(str(c) for c in self.choices)
+        if self.integer:
+            return f"a whole number >= {self.minimum:g}" if self.minimum is not None else "a whole number"
         if self.exclusive_minimum is not None:
             return f"a number > {self.exclusive_minimum:g}" + (f", <= {self.maximum:g}" if self.maximum is not None else "")
         if self.minimum is not None or self.maximum is not None:
@@ -96,9 +101,18 @@ class Option:
         if ((self.minimum is not None and not number >= self.minimum)
                 or (self.maximum is not None and not number <= self.maximum)
                 or (self.exclusive_minimum is not None and not number > self.exclusive_minimum)
-                or number != number):
+                or not math.isfinite(number)):
             return f"options.{name}: {number!r} is out of range — give {self.allowed()}"
+        if self.integer and number != int(number):
+            return f"options.{name}: {number!r} is not a whole number — give {self.allowed()}"
         return None
+
+    def typed(self, value):
+        """``value`` (as given: option values are text) as the engine takes it: a choice as text, a number as a
+        float, or an int where ``integer``; None stays None (the engine's own default)."""
+        if value is None or self.choices:
+            return value
+        return int(float(value)) if self.integer else float(value)
 
 
 def option_value(options, settings, key):
@@ -109,6 +123,14 @@ def option_value(options, settings, key):
     ``mujoco.mjcf.MJCF_OPTIONS``); a key it does not declare is a KeyError, not a silent default.
     """
     return settings.options.get(key, options[key].default)
+
+
+def typed_options(options, settings):
+    """Every option of ``options`` (name -> ``Option``) that a run with ``settings`` takes, as the engine takes it
+    (``Option.typed`` of ``option_value``): a module's parsed view of the declaration that ``Adapter.check`` has
+    checked, so no module parses or checks its own options again. ``settings`` None: the declared defaults."""
+    given = {} if settings is None else settings.options
+    return {key: option.typed(given.get(key, option.default)) for key, option in options.items()}
 
 
 @dataclass(frozen=True, eq=False)

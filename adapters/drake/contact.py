@@ -53,7 +53,7 @@ import math
 import numpy as np
 
 from dalembert import spatial
-from dalembert.adapters.base import Option
+from dalembert.adapters.base import Option, typed_options
 
 __all__ = ["CONTACT_OPTIONS", "SOLVERS", "MODELS", "STIFFNESS_DEFAULT", "DISSIPATION_DEFAULT", "STICTION_TOLERANCE",
            "contact_options", "restitution_dissipation", "why_not", "add_geometry", "set_solver", "exclude_unnamed",
@@ -95,15 +95,13 @@ CONTACT_OPTIONS = {
 
 
 def contact_options(settings):
-    """The contact options of ``settings`` with their defaults: dict ``solver`` (str), ``stiffness`` (N/m),
-    ``dissipation`` (s/m), ``impact_speed`` (m/s or None). Checked by ``Adapter.check`` (``CONTACT_OPTIONS``)."""
-    o = settings.options if settings is not None else {}
-    speed = o.get("impact_speed")
-    return {"solver": o.get("contact_solver", SOLVERS[0]),
-            "stiffness": float(o.get("point_contact_stiffness", STIFFNESS_DEFAULT)),
-            "dissipation": float(o.get("hunt_crossley_dissipation", DISSIPATION_DEFAULT)),
-            "impact_speed": None if speed is None else float(speed),
-            "model": o.get("contact_model", MODELS[0])}
+    """The contact options of ``settings`` (None: the defaults) with their declared defaults (``CONTACT_OPTIONS``,
+    checked by ``Adapter.check``): dict ``solver`` (str), ``stiffness`` (N/m), ``dissipation`` (s/m),
+    ``impact_speed`` (m/s or None), ``model`` (str)."""
+    o = typed_options(CONTACT_OPTIONS, settings)
+    return {"solver": o["contact_solver"], "stiffness": o["point_contact_stiffness"],
+            "dissipation": o["hunt_crossley_dissipation"], "impact_speed": o["impact_speed"],
+            "model": o["contact_model"]}
 
 
 def _restitution_of(a):

@@ -124,7 +124,6 @@ class ExudynAdapter(Adapter):
         super().check(scene, times, settings)
         if settings.integrator in ADAPTIVE and settings.rtol is None:
             raise ValueError(f"rtol: {settings.integrator!r} is adaptive — give rtol (and atol)")
-        contact.contact_options(settings)  # (the declared options parsed as the model takes them)
 
     def unsupported(self, scene, settings):
         reason = super().unsupported(scene, settings)

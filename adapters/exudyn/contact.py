@@ -37,12 +37,11 @@ import numpy as np
 
 from dalembert import contact as geometry
 from dalembert import spatial
-from dalembert.adapters.base import Option
+from dalembert.adapters.base import Option, typed_options
 
 __all__ = ["OPTIONS", "CONTACT_OPTIONS", "STIFFNESS_DEFAULT", "FRICTION_ZONE_DEFAULT", "PLANE_EXTENT", "ELEMENTS",
            "LOADED_FRICTION_DT_MAX", "contact_options", "why_not", "add_contacts", "audit"]
 
-OPTIONS = ("contact_stiffness", "friction_zone")
 # 1e6 N/m: a 1-kg body's contact period 2 pi sqrt(m/k) = 6.3 ms spans six steps at dt = 1e-3, and the 4.4-m/s
 # impact of the 1-m drop (bouncing_ball) penetrates 1.8 mm (measured; the case's tolerance is 2 mm).
 STIFFNESS_DEFAULT = 1e6
@@ -55,6 +54,7 @@ CONTACT_OPTIONS = {
                             description=f"slip speed below which friction is proportional to it, m/s (Exudyn's "
                                         f"frictionProportionalZone, its default {FRICTION_ZONE_DEFAULT:g})"),
 }
+OPTIONS = tuple(CONTACT_OPTIONS)
 # The plane's triangle contains the disc of this radius (m) about the plane's point: far beyond any case's travel.
 PLANE_EXTENT = 1e3
 ELEMENTS = ("ObjectContactSphereSphere", "ObjectContactSphereTriangle")
@@ -68,20 +68,10 @@ LINEAR, GONTHIER = 0, 2
 
 
 def contact_options(settings):
-    """The contact options of ``settings`` with their defaults: dict ``stiffness`` (N/m) and ``friction_zone``
-    (m/s), each a positive float. A ValueError names a bad one and the fix."""
-    out = {}
-    for key, name, default in (("contact_stiffness", "stiffness", STIFFNESS_DEFAULT),
-                               ("friction_zone", "friction_zone", FRICTION_ZONE_DEFAULT)):
-        raw = settings.options.get(key, default)
-        try:
-            value = float(raw)
-        except (TypeError, ValueError):
-            value = float("nan")
-        if not (math.isfinite(value) and value > 0.0):
-            raise ValueError(f"options.{key}: {raw!r} is not a positive number — e.g. {key}={default:g}")
-        out[name] = value
-    return out
+    """The contact options of ``settings`` with their declared defaults (``CONTACT_OPTIONS``, checked by
+    ``Adapter.check``), as floats: dict ``stiffness`` (N/m) and ``friction_zone`` (m/s)."""
+    o = typed_options(CONTACT_OPTIONS, settings)
+    return {"stiffness": o["contact_stiffness"], "friction_zone": o["friction_zone"]}
 
 
 def why_not(scene, settings, rigid, explicit):

@@ -94,10 +94,6 @@ class MujocoAdapter(Adapter):
 
         return mujoco.__version__
 
-    def check(self, scene, times, settings):
-        super().check(scene, times, settings)
-        contact.contact_options(settings)  # (the declared options parsed as MuJoCo takes them)
-
     def unsupported(self, scene, settings):
         reason = super().unsupported(scene, settings)
         if reason and "loop:distance" in reason:

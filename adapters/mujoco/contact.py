@@ -35,12 +35,11 @@ import math
 import numpy as np
 
 from dalembert import spatial
-from dalembert.adapters.base import Option
+from dalembert.adapters.base import Option, typed_options
 
 __all__ = ["OPTIONS", "CONTACT_OPTIONS", "CONES", "TIMECONST_DEFAULT", "SOLIMP", "contact_options", "restitution_dampratio", "why_not",
            "geom_lines", "plane_lines", "pair_lines", "option_attributes", "audit"]
 
-OPTIONS = ("cone", "impratio", "noslip_iterations", "contact_timeconst")
 CONES = ("pyramidal", "elliptic")
 # MuJoCo's defaults (its XML reference: option cone, impratio, noslip_iterations; solref 0.02 1; solimp).
 TIMECONST_DEFAULT = 0.02
@@ -49,12 +48,13 @@ CONTACT_OPTIONS = {
     "cone": Option(CONES, CONES[0], "MuJoCo's friction cone: pyramidal (its default) or elliptic"),
     "impratio": Option(default=1.0, exclusive_minimum=0.0,
                        description="ratio of frictional to normal constraint impedance (MuJoCo's default 1)"),
-    "noslip_iterations": Option(default=0, minimum=0.0,
+    "noslip_iterations": Option(default=0, minimum=0.0, integer=True,
                                 description="noslip solver iterations after the main solver (MuJoCo's default 0)"),
     "contact_timeconst": Option(default=TIMECONST_DEFAULT, exclusive_minimum=0.0,
                                 description=f"solref's time constant of every contact pair, s (MuJoCo's default "
                                             f"{TIMECONST_DEFAULT:g})"),
 }
+OPTIONS = tuple(CONTACT_OPTIONS)  # the options every integrator takes
 SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
 
 
@@ -63,27 +63,12 @@ def _f(x):
 
 
 def contact_options(settings):
-    """The contact options of ``settings`` with their defaults: dict ``cone`` (str), ``impratio`` (float > 0),
-    ``noslip_iterations`` (int >= 0), ``timeconst`` (float > 0, s). A ValueError names a bad one and the fix."""
-    o = settings.options
-    cone = o.get("cone", CONES[0])
-    if cone not in CONES:
-        raise ValueError(f"options.cone: unknown {cone!r} — use one of {list(CONES)}")
-    out = {"cone": cone}
-    for key, name, kind, default, ok, what in (
-            ("impratio", "impratio", float, 1.0, lambda v: v > 0.0, "a positive ratio (MuJoCo's default 1)"),
-            ("noslip_iterations", "noslip_iterations", int, 0, lambda v: v >= 0, "a whole number >= 0 (default 0)"),
-            ("contact_timeconst", "timeconst", float, TIMECONST_DEFAULT, lambda v: v > 0.0,
-             f"a positive time constant in s (MuJoCo's default {TIMECONST_DEFAULT:g})")):
-        raw = o.get(key, default)
-        try:
-            value = kind(raw)
-        except (TypeError, ValueError):
-            raise ValueError(f"options.{key}: {raw!r} is not {what} — e.g. {key}={default}") from None
-        if not (math.isfinite(value) and ok(value)):
-            raise ValueError(f"options.{key}: {raw!r} is not {what} — e.g. {key}={default}")
-        out[name] = value
-    return out
+    """The contact options of ``settings`` with their declared defaults (``CONTACT_OPTIONS``, checked by
+    ``Adapter.check``), as MuJoCo takes them: dict ``cone`` (str), ``impratio`` (float), ``noslip_iterations``
+    (int), ``timeconst`` (float, s)."""
+    o = typed_options(CONTACT_OPTIONS, settings)
+    return {"cone": o["cone"], "impratio": o["impratio"], "noslip_iterations": o["noslip_iterations"],
+            "timeconst": o["contact_timeconst"]}
 
 
 def restitution_dampratio(e):
