@@ -94,7 +94,7 @@ def _child(P, R, r_PJ, r_JC, w, alpha_bias, Jw, Jv_slide, v_slide, a_slide):
     """A child's ``kinematics`` entry from its parent's ``P``: its COM reached through the joint (``r_PJ``: parent
     COM -> joint point, slid; ``r_JC``: joint point -> child COM), with its rotation ``R``, angular velocity
     ``w``, angular bias ``alpha_bias`` and angular Jacobian ``Jw`` and the slide's terms. One state or many (a
-    leading sample axis on every array: ``Kane._kinematics_stacked``): the same operations either way."""
+    leading sample axis on every array: ``Kane.kinematics`` of a stack): the same operations either way."""
     Jv = P["Jv"] - spatial.skew(r_PJ) @ P["Jw"] + Jv_slide - spatial.skew(r_JC) @ Jw
     v = P["v"] + spatial.cross(P["w"], r_PJ) + v_slide + spatial.cross(w, r_JC)
     a_bias = (P["a_bias"] + spatial.cross(P["alpha_bias"], r_PJ) + spatial.cross(P["w"], spatial.cross(P["w"], r_PJ))
@@ -214,11 +214,6 @@ class Kane:
             out[j.child] = _child(P, R, r_PJ, r_JC, w, alpha_bias, Jw, Jv_slide, v_slide, a_slide)
         return out
 
-    def _kinematics_stacked(self, Q, U):
-        """``kinematics`` at m states at once, ``Q`` (m, nq), ``U`` (m, nv) (the name the loops' stacked read-back
-        calls)."""
-        return self.kinematics(Q, U)
-
     # -------------------------------------------------------------- dynamics
     def _solve(self, t, q, u):
         M, f, kin = self.mass_and_forces(t, q, u)
@@ -254,14 +249,6 @@ class Kane:
             f += _tdot(k["Jv"], F - m * k["a_bias"])  # generalized active + inertia forces
             f += _tdot(k["Jw"], T - _dot(I_W, k["alpha_bias"]) - spatial.cross(k["w"], _dot(I_W, k["w"])))
         return M, f, kin
-
-    def _mass_and_forces_stacked(self, Q, U):
-        """``mass_and_forces`` at m states at once (the name the loops' stacked solve calls)."""
-        return self.mass_and_forces(None, Q, U)
-
-    def _mass_stacked(self, kin):
-        """``mass_matrix`` of stacked kinematics (the name the loops' stacked projection calls)."""
-        return self.mass_matrix(kin)
 
     def _solve_stacked(self, Q, U):
         """``_solve`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): ``udot`` (m, nv) and the stacked

@@ -141,7 +141,7 @@ class ClosedLoops(Kane):
         index-1 system, its rank cut per state (``lstsq.svd_cut``); ``udot`` (m, nv) and the stacked kinematics
         with the loop forces on their bodies and, under ``("loops",)``, each loop's on its body b (m, 3)."""
         Q, U = self._project_stacked(Q, U)
-        M, f, kin = self._mass_and_forces_stacked(Q, U)
+        M, f, kin = self.mass_and_forces(None, Q, U)
         _, J, b, found = self._constraints_stacked(kin)
         Li = _inverse_cholesky(M)
         LiT = Li.swapaxes(-1, -2)
@@ -181,8 +181,8 @@ class ClosedLoops(Kane):
         """``project`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): each state's Gauss-Newton iterations
         stop where its own stop (``PROJECTION_TOL``, or no halving), as ``project``'s."""
         zero = np.zeros_like(U)
-        kin = self._kinematics_stacked(Q, zero)  # (one pass serves the metric and the first rows, as in ``project``)
-        Li = _inverse_cholesky(self._mass_stacked(kin))
+        kin = self.kinematics(Q, zero)  # (one pass serves the metric and the first rows, as in ``project``)
+        Li = _inverse_cholesky(self.mass_matrix(kin))
         LiT = Li.swapaxes(-1, -2)
         phi, J, _, _ = self._constraints_stacked(kin)
         Q, last, going = Q.copy(), np.full(len(Q), np.inf), np.ones(len(Q), dtype=bool)
@@ -195,7 +195,7 @@ class ClosedLoops(Kane):
             last[i] = worst[i]
             Ur, inv_S, Vr = svd_cut(J[i] @ LiT[i], closure.RANK_RTOL)
             Q[i] = cfg.retract(self.blocks, Q[i], _mv(LiT[i], -_mv(Vr, _mtv(Ur, phi[i]) * inv_S)))
-            phi[i], J[i], _, _ = self._constraints_stacked(self._kinematics_stacked(Q[i], zero[i]))
+            phi[i], J[i], _, _ = self._constraints_stacked(self.kinematics(Q[i], zero[i]))
         Ur, inv_S, Vr = svd_cut(J @ LiT, closure.RANK_RTOL)
         w = np.linalg.solve(LiT, U[..., None])[..., 0]  # L^T v
         return Q, _mv(LiT, w - _mv(Vr, _mtv(Vr, w)))
