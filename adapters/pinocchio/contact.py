@@ -58,7 +58,6 @@ import numpy as np
 from dalembert import contact as geometry
 from dalembert.adapters.base import Option, typed_options
 from dalembert.rotations import frame_with_z
-from dalembert.scene import WORLD
 
 __all__ = ["CONTACT_OPTIONS", "OPTIONS", "SOLVERS", "CONTACT_MARGIN", "IMPACT_SPEED", "TOLERANCE_DEFAULT", "ITERATIONS_DEFAULT",
            "INTEGRATOR", "why_not", "solver_settings", "read_settings", "solve_cone", "cone_coefficients", "Contacts",
@@ -67,11 +66,14 @@ __all__ = ["CONTACT_OPTIONS", "OPTIONS", "SOLVERS", "CONTACT_MARGIN", "IMPACT_SP
 INTEGRATOR = "euler"  # the one integrator that steps contact: semi-implicit Euler, impulses at the velocity level
 SOLVERS = ("admm", "pgs")
 # Absolute feasibility and complementarity tolerance of the cone solve (m/s for the velocities, N s for the
-# impulses). At pin's own default, 1e-6, the box that must stick on block_on_incline creeps 2.8e-7 m/s (ADMM) and
-# 1e-5 m/s (PGS) at dt = 1e-3; at 1e-10, 1.8e-11 and 6e-11 m/s (measured): the solve's residual is the creep.
-TOLERANCE_DEFAULT = 1e-10
-# Iterations of the cone solve at most, pin's own default for both solvers: at TOLERANCE_DEFAULT the contact cases
-# take at most 66 (ADMM, the sliding ball) and 14 (PGS, the box's 4 corners), measured at dt = 1e-3.
+# impulses): the solve's residual slip is a sticking contact's creep. Measured on block_on_incline (the box must
+# stick): at pin's own default, 1e-6, it creeps 2.8e-7 m/s (ADMM) and 1e-5 m/s (PGS) at dt = 1e-3; at 1e-10,
+# 1.8e-11 and 6e-11 m/s at dt = 1e-3 but 9.2e-8 m/s with PGS at 1e-4 (PGS stops on its impulses' change, which
+# shrinks with the step, at a residual slip of 3.4e-7 m/s); at 1e-12 both leave a slip below 2e-12 m/s at either
+# step, in at most 23 iterations.
+TOLERANCE_DEFAULT = 1e-12
+# Iterations of the cone solve at most, pin's own default for both solvers, far above what the contact cases take
+# at TOLERANCE_DEFAULT (the audit's contact_solves.max_iterations; none stops short: its unconverged count).
 ITERATIONS_DEFAULT = 1000
 CONTACT_OPTIONS = {
     "contact_solver": Option(SOLVERS, SOLVERS[0], "Pinocchio's cone solver of each contact step: ADMM "
@@ -255,7 +257,7 @@ class Contacts:
 
         pm = self.pm
         jid = pm.carrier[body]
-        if body == WORLD or jid == 0:
+        if jid == 0:  # a body welded to the world
             return np.zeros((3, pm.model.nv))
         J6 = pin.getJointJacobian(pm.model, pm.data, jid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
         r = p - pm.data.oMi[jid].translation
