@@ -14,6 +14,7 @@ from dalembert.adapters import check_adapter, get_adapter  # noqa: E402
 from dalembert.adapters.pinocchio import contact  # noqa: E402
 from dalembert.case import make_case  # noqa: E402
 from dalembert.metrics import apexes  # noqa: E402
+from dalembert.rotations import frame_with_z  # noqa: E402
 from dalembert.scene import Body, ContactPair, Geom, Joint  # noqa: E402
 from dalembert.settings import Settings  # noqa: E402
 
@@ -202,3 +203,49 @@ def test_contact_options_belong_to_euler_only():
 
 def test_a_contact_free_scene_is_not_refused_for_contact():
     assert ADAPTER.unsupported(make_case("pivoted_rod").scene, Settings("rk4", dt=1e-3)) is None
+
+
+# ---------------------------------------------------------------- the contact Jacobian
+def _touching(scene, body, point, normal):
+    """``scene`` with a sphere of 0.05 m at ``point`` of ``body`` and a plane of ``normal`` touching it there."""
+    from dalembert import contact as geometry
+    from dalembert.scene import Plane
+
+    geom = Geom(body, "sphere", (0.05,), point=point, name="tip")
+    poses = geometry.initial_poses(dataclasses.replace(scene, geoms=[geom]))
+    R = poses[body]["R"][0]
+    centre = poses[body]["p"][0] + R @ np.asarray(point)
+    n = np.asarray(normal, dtype=float) / np.linalg.norm(normal)
+    return dataclasses.replace(scene, geoms=[geom], planes=[Plane("floor", n, centre - 0.05 * n)],
+                               contacts=[ContactPair("tip", "floor", 0.3)])
+
+
+@pytest.mark.parametrize("name,body", [("pivoted_rod", "rod"), ("free_top", "top")])
+def test_the_contact_rows_are_the_contact_points_velocity_in_its_frame(name, body):
+    """On a revolute joint and a FreeFlyer, the rows J (t1, t2, n) of a sphere touching a plane, times a
+    velocity v, are the velocity of the sphere's material point at the contact, in the contact frame: the
+    central difference of that material point's position along ``integrate(q, +-eps v)`` (eps = 1e-6; the
+    difference's error is eps^2 times the point's acceleration along v)."""
+    scene = _touching(make_case(name).scene, body, (0.3, 0.1, -0.2), (0.2, -0.3, 1.0))
+    prepared = ADAPTER.prepare(scene, np.array([0.0, 0.1]), Settings("euler", dt=0.1))
+    pm, contacts = prepared.pm, prepared.contacts
+    q = prepared.q0
+    J, gap, mu, e = contacts.points(q)
+    assert J.shape == (3, pm.model.nv) and abs(gap[0]) < 1e-12 and mu[0] == 0.3 and e[0] == 0.0
+    X = pm.data.oMf[pm.frame_ids[body]]
+    n = scene.planes[0].unit_normal
+    point_B = X.inverse().act(np.asarray(scene.planes[0].point))  # the contact point (on the plane), in B
+
+    def at(dq):
+        qq = pin.integrate(pm.model, q, dq)
+        pin.forwardKinematics(pm.model, pm.data, qq)
+        pin.updateFramePlacements(pm.model, pm.data)
+        return pm.data.oMf[pm.frame_ids[body]].act(point_B)
+
+    rng = np.random.default_rng(7)
+    frame = frame_with_z(n)
+    for _ in range(3):
+        v = rng.normal(size=pm.model.nv)
+        eps = 1e-6
+        velocity = (at(eps * v) - at(-eps * v)) / (2.0 * eps)
+        assert np.allclose(J @ v, frame.T @ velocity, atol=1e-8)

@@ -259,7 +259,8 @@ class Contacts:
         jid = pm.carrier[body]
         if jid == 0:  # a body welded to the world
             return np.zeros((3, pm.model.nv))
-        J6 = pin.getJointJacobian(pm.model, pm.data, jid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        # (reshaped: the bindings hand a one-column Jacobian, nv = 1, back as a vector)
+        J6 = pin.getJointJacobian(pm.model, pm.data, jid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED).reshape(6, -1)
         r = p - pm.data.oMi[jid].translation
         skew = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
         return J6[:3] - skew @ J6[3:]
