@@ -249,3 +249,14 @@ def test_the_contact_rows_are_the_contact_points_velocity_in_its_frame(name, bod
         eps = 1e-6
         velocity = (at(eps * v) - at(-eps * v)) / (2.0 * eps)
         assert np.allclose(J @ v, frame.T @ velocity, atol=1e-8)
+
+
+def test_contact_with_welds_as_constraints_is_refused_and_runs_with_welds_as_a_tree():
+    """A cap welded on the bouncing ball: as a constraint (pin.constraintDynamics, acceleration level) it is not
+    merged with the contact's impulses, and the reason says to weld it into the tree, which runs."""
+    scene = make_case("bouncing_ball").scene
+    scene = dataclasses.replace(scene, bodies=[*scene.bodies, Body("cap", 0.1, np.eye(3) * 1e-4)],
+                                joints=[*scene.joints, Joint("weld", "ball", "cap", parent_point=[0.0, 0.0, 0.1])])
+    reason = ADAPTER.unsupported(scene, Settings("euler", dt=1e-3, options={"welds": "constraint"}))
+    assert reason.startswith("contacts: with welds as constraints or loop closures") and "welds=tree" in reason
+    assert ADAPTER.unsupported(scene, Settings("euler", dt=1e-3)) is None
