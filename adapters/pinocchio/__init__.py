@@ -7,8 +7,9 @@ correction, reactions), ``integrators`` (the fixed-step and
 adaptive loops in Python), ``native`` (the fixed-step loop compiled from
 ``stepper.cpp``; ``python -m dalembert.adapters.pinocchio.native`` builds it),
 ``readback`` (the sampled states in body terms, joint and loop reactions),
-``audit`` (what the run simulated, read back from the model), ``adapter``
-(``PinocchioAdapter``).
+``audit`` (what the run simulated, read back from the model), ``contact``
+(the contact time-stepper: the scene's pairs detected each step, one cone problem solved by pin's ADMM
+or PGS, semi-implicit Euler with impulses), ``adapter`` (``PinocchioAdapter``).
 """
 
 from dalembert.adapters.pinocchio.adapter import PinocchioAdapter

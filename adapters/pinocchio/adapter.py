@@ -11,7 +11,13 @@ closures (``loops``: ball and revolute; distance is unsupported) run
 ``pin.constraintDynamics``, which the compiled loop does not have: their
 fixed-step runs take the Python loop. Spring-dampers (``springs``) are external
 forces at every evaluation, in every loop; the audit identifies each one's
-stiffness, damping and rest length from the dynamics the run used.
+stiffness, damping and rest length from the dynamics the run used. Contact
+(``contact``: Pinocchio solves a contact problem at one instant but steps none)
+is the adapter's own time-stepper on ``euler``: the scene's pairs detected each
+step, one cone complementarity problem solved by ``pin.ADMMConstraintSolver``
+or ``pin.PGSConstraintSolver`` (option ``contact_solver``), impulses at the
+velocity level, in Python; other integrators, constraints and box-box pairs
+refuse contact scenes (``contact.why_not``).
 """
 
 from __future__ import annotations
@@ -21,14 +27,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dalembert import contact
-from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
-from dalembert.adapters.pinocchio import loops
+from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared, typed_options
+from dalembert.adapters.pinocchio import contact, loops
 from dalembert.adapters.pinocchio.audit import audit
 from dalembert.adapters.pinocchio.integrators import STAGES, adaptive, fixed_step
 from dalembert.adapters.pinocchio.model import WELDS, PinocchioModel
 from dalembert.adapters.pinocchio.readback import REACTING, read_back
-from dalembert.scene import EFFECTS, SPRING_EFFECTS
+from dalembert.scene import CONTACT_EFFECTS, EFFECTS, SPRING_EFFECTS
 from dalembert.settings import steps_per_interval
 
 __all__ = ["PinocchioAdapter", "PinocchioPrepared"]
@@ -36,12 +41,6 @@ __all__ = ["PinocchioAdapter", "PinocchioPrepared"]
 # Fixed-step loops: compiled (stepper.cpp, the default) or the Python one
 # (the same integrators, kept as the readable specification and the fallback).
 LOOPS = ("native", "python")
-# Why a contact scene is refused (class names as pin 4.1 exports them): Pinocchio solves a contact problem at one
-# instant but does not integrate one through time.
-CONTACT_REASON = ("Pinocchio 4 solves contact problems (pin.ADMMConstraintSolver / pin.PGSConstraintSolver on a "
-                  "Delassus operator) but has no time-stepper: a contact time-stepper would be built in the adapter "
-                  "(collision detection between the scene's pairs, the Delassus operator from constraintDynamics' "
-                  "Jacobians, one solve per step)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,6 +56,8 @@ class PinocchioPrepared(Prepared):
     steps : ndarray (n - 1,) of int, or None — steps per sample interval (fixed-step integrators; None: adaptive)
     native : native.NativeModel or None — the compiled loop (``stepper.cpp``), where it runs
     native_error : str — why the compiled loop could not be loaded or built ("" where it was, or was not asked for)
+    contacts : contact.Contacts or None — the scene's contact pairs as the contact time-stepper detects them (None:
+        no contact pairs)
     """
 
     pm: object
@@ -65,20 +66,24 @@ class PinocchioPrepared(Prepared):
     steps: np.ndarray | None
     native: object = None
     native_error: str = ""
+    contacts: object = None
 
 
 class PinocchioAdapter(Adapter):
     """Pinocchio (``pin``), integrators owned by the adapter."""
 
     name = "pinocchio"
-    # loop:distance: loops.DISTANCE_REASON
-    effects = EFFECTS | SPRING_EFFECTS | frozenset(f"loop:{k}" for k in loops.LOOP_KINDS)
+    # loop:distance: loops.DISTANCE_REASON; contact: euler only, the rest as contact.why_not says
+    effects = EFFECTS | SPRING_EFFECTS | frozenset(f"loop:{k}" for k in loops.LOOP_KINDS) | CONTACT_EFFECTS
     options = {
         "loop": Option(LOOPS, LOOPS[0], "the fixed-step loop: compiled (stepper.cpp) or the Python one"),
         "welds": Option(WELDS, WELDS[0], "welds as one rigid body (tree) or as constraints (pin.constraintDynamics)"),
+        **contact.CONTACT_OPTIONS,  # contact_solver, contact_tolerance, contact_iterations (euler)
     }
     integrators = {
-        "euler": IntegratorSpec(True, ("loop", "welds"), "semi-implicit Euler on the group"),
+        "euler": IntegratorSpec(True, ("loop", "welds", *contact.OPTIONS),
+                                "semi-implicit Euler on the group; with contact, the contact time-stepper (impulses "
+                                "from pin's ADMM or PGS cone solver each step)"),
         "rk4": IntegratorSpec(True, ("loop", "welds"), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)"),
         "rk4-naive": IntegratorSpec(True, ("loop", "welds"), "RK4 with stagewise integrate, no dexp^-1 correction"),
         "rk45": IntegratorSpec(False, ("welds",), "scipy RK45 in local coordinates"),
@@ -91,7 +96,9 @@ class PinocchioAdapter(Adapter):
         return pinocchio.__version__
 
     def unsupported(self, scene, settings):
-        if (why := contact.not_mapped(scene, self.name, CONTACT_REASON)):  # contact: no time-stepper in pin 4
+        constrained = bool(scene.loops) or (self.option(settings, "welds") == "constraint"
+                                            and any(j.kind == "weld" for j in scene.joints))
+        if (why := contact.why_not(scene, settings, constrained)):  # contact: euler, welds as a tree, no box-box
             return why
         if any(lp.kind == "distance" for lp in scene.loops):
             return loops.DISTANCE_REASON
@@ -117,7 +124,8 @@ class PinocchioAdapter(Adapter):
         return out
 
     def describe(self, scene, settings):
-        return PinocchioModel(scene, self.option(settings, "welds")).summary + "\n"
+        pm = PinocchioModel(scene, self.option(settings, "welds"))
+        return pm.summary + "\n" + "".join(f"{line}\n" for line in contact.Contacts(pm, scene).summary())
 
     def prepare(self, scene, times, settings):
         from dalembert.adapters.pinocchio import native
@@ -127,13 +135,14 @@ class PinocchioAdapter(Adapter):
         times = np.asarray(times, dtype=float)
         steps = steps_per_interval(times, settings.dt) if settings.dt else None
         compiled, error = None, ""
+        contacts = contact.Contacts(pm, scene) if scene.contacts else None
         # the compiled loop is loaded (or built) here, with the model, never inside a timed run
-        if steps is not None and self.option(settings, "loop") == "native" and not pm.constrained:
+        if steps is not None and self.option(settings, "loop") == "native" and not pm.constrained and not contacts:
             try:
                 compiled = native.NativeModel(pm)
             except RuntimeError as e:  # not built here: the Python loop runs, saying why
                 error = str(e)
-        return PinocchioPrepared(scene, times, settings, pm, q0, v0, steps, compiled, error)
+        return PinocchioPrepared(scene, times, settings, pm, q0, v0, steps, compiled, error, contacts)
 
     # ------------------------------------------------------------ stepping
     def run(self, prepared):
@@ -145,6 +154,11 @@ class PinocchioAdapter(Adapter):
             s = p.settings
             Q, V, n_steps, n_rhs = adaptive(p.pm, method.upper(), p.q0, p.v0, p.times, s.rtol, s.atol)
             info["loop"] = "Python around scipy solve_ivp"
+        elif p.contacts is not None:  # the contact time-stepper (contact.why_not: euler only)
+            options = typed_options(contact.CONTACT_OPTIONS, p.settings)
+            Q, V, n_steps, n_rhs, info["contact"] = contact.fixed_step(p.pm, p.contacts, options, p.q0, p.v0,
+                                                                       p.times, p.steps)
+            info["loop"] = "Python (the contact time-stepper, adapters/pinocchio/contact.py: the compiled loop has none)"
         else:
             Q, V, n_steps, n_rhs, info["loop"] = self._fixed_loop(p, method)
         wall = time.perf_counter() - start

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dalembert.adapters.pinocchio import loops, springs
+from dalembert.adapters.pinocchio import contact, loops, springs
 from dalembert.scene import AXIS_KINDS
 
 __all__ = ["audit"]
@@ -31,13 +31,14 @@ def audit(prepared, outcome):
         "integrator": prepared.settings.integrator,
         "loop": outcome.info.get("loop", ""),
         "pinocchio_version": pinocchio.__version__,
-        "contacts": 0,
+        "contacts": len(prepared.scene.contacts),  # pairs, each detected every step (contact)
         "constraint_rows": int(sum(cm.residualSize() for cm in pm.cmodels)) if pm.constrained else 0,
         # what Pinocchio's joints could add on their own: none is set (springs are external forces only)
         "joint_passive_effects": {name: float(np.abs(getattr(model, name)).max(initial=0.0))
                                   for name in ("damping", "friction", "armature", "rotorInertia")},
         **(_loop_audit(pm) if pm.loop_contacts else {}),
         **(_spring_audit(prepared, outcome) if pm.springs else {}),
+        **contact.audit(prepared, outcome),
     }
 
 
