@@ -191,6 +191,20 @@ def test_joint_rates_pass_pybullets_default_clamp():
     assert traj.joints["rod"].v[-1, 0] == pytest.approx(exact[-1], rel=1e-3)
 
 
+def test_a_blow_up_is_nan_from_there_on_not_an_exception():
+    """The heavy top (150 rad/s) at dt = 2e-3: semi-implicit Euler blows up (at 1.18 s); PyBullet steps on through
+    it, and the run is NaN from the first non-finite sample, with the time in its message (with a finite rate
+    clamp the blow-up would be held at the clamp, finite)."""
+    case = make_case("heavy_top", t_final=2.0)
+    outcome = run(case.scene, case.times, 2e-3)[1]
+    t_bad = outcome.trajectory.first_nonfinite_time()
+    assert t_bad is not None and f"t = {t_bad:g} s" in outcome.info["message"]
+    after = case.times >= t_bad
+    assert np.isnan(outcome.trajectory.bodies["top"].position[after]).all()
+    assert np.isfinite(outcome.trajectory.bodies["top"].position[~after]).all()
+    assert outcome.n_steps < int(round(case.t_final / 2e-3))
+
+
 @pytest.mark.parametrize("name,effect,why", [("four_bar", "loop:revolute", "createConstraint"),
                                              ("flyball_governor", "spring_damper", "no spring-damper element"),
                                              ("bouncing_ball", "contact", "collision shapes")])

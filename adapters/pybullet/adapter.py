@@ -107,7 +107,7 @@ class PybulletAdapter(Adapter):
 
         p = prepared
         X, wall, diverged_at = simulate(p)
-        n_steps = int(p.steps[:diverged_at - 1].sum()) if diverged_at else int(p.steps.sum())
+        n_steps = int(p.steps[:diverged_at].sum()) if diverged_at else int(p.steps.sum())
         info = {"message": f"PyBullet: non-finite state at t = {p.times[diverged_at]:g} s" if diverged_at else ""}
 
         def read():

@@ -59,9 +59,10 @@ MODEL_OPTIONS = {
 }
 
 # The joint-rate clamp with defaults=scene: btMultiBody clamps every joint rate to maxJointVelocity (100 rad/s
-# by default: measured, a pendulum set spinning at 200 rad/s runs at 100). A rate no run reaches short of a
-# blow-up; not infinity, which the engine would multiply by zero somewhere.
-NO_VELOCITY_CLAMP = 1e100
+# by default: measured, a pendulum set spinning at 200 rad/s runs at 100). Infinity, not merely a large number: a
+# finite clamp holds a blow-up at that number (measured with 1e100: the heavy top at dt = 2e-3 ran on at
+# 1.6e100 rad/s, finite), where the harness must see it go non-finite.
+NO_VELOCITY_CLAMP = float("inf")
 
 
 def engine():
@@ -145,6 +146,7 @@ class PybulletModel:
     parts : dict body name -> Part
     floating : tuple of int — the multibodies with a floating base (one per free root body)
     links : dict multibody id -> tuple of link indices (every link of it, in order)
+    link_lists : tuple of (multibody id, list of link indices) — those with links, as PyBullet's calls take them
     defaults : str — option ``defaults``: scene or engine
     solver : str — option ``solver``
     """
@@ -153,6 +155,7 @@ class PybulletModel:
     parts: dict
     floating: tuple
     links: dict
+    link_lists: tuple
     defaults: str
     solver: str
 
@@ -242,7 +245,8 @@ def build(scene, settings):
     pb.setGravity(*scene.gravity, physicsClientId=c)
     pb.setTimeStep(float(settings.dt), physicsClientId=c)
     pb.setPhysicsEngineParameter(constraintSolverType=getattr(pb, SOLVERS[opts["solver"]]), physicsClientId=c)
-    model = PybulletModel(c, parts, tuple(floating), links, opts["defaults"], opts["solver"])
+    link_lists = tuple((mb, list(ls)) for mb, ls in links.items() if ls)
+    model = PybulletModel(c, parts, tuple(floating), links, link_lists, opts["defaults"], opts["solver"])
     weakref.finalize(model, _disconnect, c)
     model.state0(scene)
     return model

@@ -75,21 +75,36 @@ def read_state(pb, model, out):
     """Copy the client's state into ``out`` (``state_size``,): per floating base ``(x y z, qx qy qz qw, v_W,
     w_W)``; per link, its joint's positions padded to 4 and rates padded to 3 (PyBullet's multi-dof layout:
     a spherical joint's ``(x, y, z, w)`` and rate in E axes)."""
-    c, k = model.client, 0
+    return pack(model, snapshot(pb, model), out)
+
+
+def snapshot(pb, model):
+    """The client's state as PyBullet's calls return it (a list of their tuples), unpacked by ``pack``: the
+    cheapest copy a sample can take (its unpacking waits until the stepping's clock has stopped)."""
+    c = model.client
+    out = []
     for mb in model.floating:
-        pos, orn = pb.getBasePositionAndOrientation(mb, physicsClientId=c)
-        lin, ang = pb.getBaseVelocity(mb, physicsClientId=c)
+        out.append(pb.getBasePositionAndOrientation(mb, physicsClientId=c))
+        out.append(pb.getBaseVelocity(mb, physicsClientId=c))
+    for mb, links in model.link_lists:
+        out.append(pb.getJointStatesMultiDof(mb, links, physicsClientId=c))
+    return out
+
+
+def pack(model, snap, out):
+    """A ``snapshot`` as a row of ``read_state``'s layout, written into ``out``; returns ``out``."""
+    k, i = 0, 0
+    for _ in model.floating:
+        (pos, orn), (lin, ang) = snap[i], snap[i + 1]
         out[k:k + 13] = (*pos, *orn, *lin, *ang)
-        k += 13
-    for mb, links in model.links.items():
-        if not links:
-            continue
-        for q, v, *_ in pb.getJointStatesMultiDof(mb, list(links), physicsClientId=c):
-            out[k:k + 4] = 0.0
+        k, i = k + 13, i + 2
+    for _ in model.link_lists:
+        for q, v, *_ in snap[i]:
+            out[k:k + 7] = 0.0
             out[k:k + len(q)] = q
-            out[k + 4:k + 7] = 0.0
             out[k + 4:k + 4 + len(v)] = v
             k += 7
+        i += 1
     return out
 
 
@@ -112,15 +127,20 @@ def write_state(pb, model, row):
 
 
 def simulate(p):
-    """Run ``p`` from its initial state: ``(X (n, state_size), wall s, sample where it diverged or None)``."""
+    """Run ``p`` from its initial state: ``(X (n, state_size), wall s, sample where it diverged or None)``.
+
+    Each sample's state is copied out as PyBullet returns it (``snapshot``) and unpacked after the clock
+    stops; a blow-up is found there too (PyBullet steps on through NaN without complaint), NaN from the first
+    sample with a non-finite coordinate on."""
     pb = engine()
     model, c = p.model, p.model.client
     model.state0(p.scene)
     X = np.full((len(p.times), state_size(model)), np.nan)
     read_state(pb, model, X[0])
-    step, plan = pb.stepSimulation, p.loads
+    step, plan, shot = pb.stepSimulation, p.loads, snapshot
+    snaps = []
     start = time.perf_counter()
-    for k, nstep in enumerate(p.steps, 1):
+    for nstep in p.steps:
         if plan:
             for _ in range(nstep):
                 apply_loads(pb, c, plan)
@@ -128,8 +148,13 @@ def simulate(p):
         else:
             for _ in range(nstep):
                 step(physicsClientId=c)
-        read_state(pb, model, X[k])
-        if not np.all(np.isfinite(X[k])):
-            X[k] = np.nan
-            return X, time.perf_counter() - start, k
-    return X, time.perf_counter() - start, None
+        snaps.append(shot(pb, model))
+    wall = time.perf_counter() - start
+    for k, snap in enumerate(snaps, 1):
+        pack(model, snap, X[k])
+    bad = ~np.all(np.isfinite(X), axis=1)
+    if bad.any():
+        first = int(np.argmax(bad))
+        X[first:] = np.nan
+        return X, wall, first
+    return X, wall, None
