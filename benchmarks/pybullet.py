@@ -2,7 +2,7 @@
 
     python -m benchmarks.pybullet
 
-Per case PyBullet runs (loops, springs and contact refused) at dt = 1e-3: the adapter's stepping time per
+Per case PyBullet runs (loops and springs refused) at dt = 1e-3: the adapter's stepping time per
 simulated second (``Outcome.wall_s``: its step loop with the loads applied before each step, the state copied
 out at every sample and checked for a blow-up) and a bare loop of the same steps on the same prepared model from
 the same initial state (the loads applied as PyBullet requires, before every step, and nothing else), in the same
@@ -17,7 +17,7 @@ import time
 from benchmarks.bare import adapter_against_bare
 from dalembert import Settings
 from dalembert.adapters import get_adapter
-from dalembert.adapters.pybullet.model import engine
+from dalembert.adapters.pybullet.model import engine, rebuild
 from dalembert.adapters.pybullet.stepping import apply_loads
 from dalembert.case import load_cases
 
@@ -29,7 +29,10 @@ def bare_loop(prepared):
     """``stepSimulation`` as many times as the run steps, loads applied before each; its wall time, s."""
     pb = engine()
     model, plan = prepared.model, prepared.loads
-    model.state0(prepared.scene)
+    if prepared.scene.contacts:  # as the adapter's run: a fresh world (model.rebuild)
+        rebuild(model, prepared.scene, prepared.settings)
+    else:
+        model.state0(prepared.scene)
     c, step, n = model.client, pb.stepSimulation, int(prepared.steps.sum())
     t0 = time.perf_counter()
     if plan:

@@ -13,10 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared
+from dalembert.adapters.pybullet import contact
 from dalembert.adapters.pybullet.audit import audit
 from dalembert.adapters.pybullet.model import MODEL_OPTIONS, build, engine
 from dalembert.adapters.pybullet.stepping import load_plan, simulate
-from dalembert.scene import CONTACT_EFFECTS, EFFECTS, LOOP_EFFECTS, SPRING_EFFECT
+from dalembert.scene import CONTACT_EFFECTS, EFFECTS, SPRING_EFFECT
 from dalembert.settings import steps_per_interval
 
 __all__ = ["PybulletAdapter", "PybulletPrepared"]
@@ -28,9 +29,6 @@ NOT_MAPPED = {
              "ERP-stabilized), not mapped yet; a revolute loop has no multibody hinge constraint at all"),
     SPRING_EFFECT: ("linear spring-dampers: PyBullet has no spring-damper element between bodies; it would be "
                     "the adapter's own force, applied from Python before every step, not the engine's"),
-    "contact": ("contact: the scene's geoms, planes and pairs are not mapped onto PyBullet's collision shapes "
-                "yet (each pair's friction and restitution through changeDynamics, only the named pairs "
-                "colliding through setCollisionFilterPair)"),
 }
 # Compiled mass properties must be the scene's to this relative accuracy: PyBullet stores the mass and the
 # principal moments as given (doubles), and a non-diagonal inertia costs an eigen-solve (a few ulps).
@@ -60,9 +58,9 @@ class PybulletAdapter(Adapter):
     ``scene`` | ``engine``; ``solver`` = ``si`` | ``pgs`` | ``dantzig``."""
 
     name = "pybullet"
-    # free, revolute, prismatic, ball and weld joints; gravity; world and follower forces and torques.
-    # Loops, springs and contact: NOT_MAPPED.
-    effects = EFFECTS
+    # free, revolute, prismatic, ball and weld joints; gravity; world and follower forces and torques; contact of
+    # free bodies' geoms and planes, hard (``contact``). Loops and springs: NOT_MAPPED.
+    effects = EFFECTS | CONTACT_EFFECTS
     options = MODEL_OPTIONS
     integrators = {
         "euler": IntegratorSpec(True, tuple(MODEL_OPTIONS),
@@ -76,11 +74,9 @@ class PybulletAdapter(Adapter):
     def unsupported(self, scene, settings):
         missing = scene.effects - self.effects
         if not missing:
-            return None
+            return contact.why_not(scene)
         notes = [why for key, why in NOT_MAPPED.items()
                  if any(m == key or m.startswith(key + ":") for m in missing)]
-        if missing & CONTACT_EFFECTS and NOT_MAPPED["contact"] not in notes:
-            notes.append(NOT_MAPPED["contact"])
         return f"{self.name} adapter cannot represent {', '.join(sorted(missing))} ({'; '.join(notes)})"
 
     def describe(self, scene, settings):

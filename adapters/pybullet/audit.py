@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dalembert.adapters.pybullet import contact
 from dalembert.adapters.pybullet.model import NO_VELOCITY_CLAMP, SOLVERS, engine
 from dalembert.adapters.pybullet.stepping import apply_loads, read_state, state_size, write_state
 
@@ -38,6 +39,7 @@ def audit(prepared, outcome):
     outcome.trajectory  # reads back, once, if nothing has yet
     shapes = sum(len(pb.getCollisionShapeData(mb, link, physicsClientId=c))
                  for mb, links in model.links.items() for link in (-1, *links))
+    shapes += sum(len(pb.getCollisionShapeData(mb, -1, physicsClientId=c)) for mb in model.planes.values())
     return {
         "gravity": tuple(float(params[f"gravityAcceleration{a}"]) for a in "XYZ"),
         "integrator": "semi-implicit Euler (btMultiBody: velocities, then positions from the new velocities)",
@@ -62,6 +64,7 @@ def audit(prepared, outcome):
                              "100 rad/s, sleeping allowed"),
         "velocity_odd_acceleration": velocity_odd_acceleration(prepared),
         "max_motor_force": outcome.info["read"]["max_motor_force"],
+        **contact.audit(pb, model, prepared.scene),
     }
 
 

@@ -13,7 +13,8 @@
   Jc coincides with the parent joint frame Jp, so revolute and prismatic q and v go in and out
   unchanged. A spherical joint turns E, not L: its quaternion and rate are the scene's conjugated by
   ``R_LE`` (measured: ``R_WE = R_WJp R_LE R(q_bullet)``, the rate in E axes): ``ball_to_bullet``.
-* Nothing the scene does not call for: no collision shapes (so no contact), and, with option
+* Nothing the scene does not call for: no collision shapes but the scene's contact geoms and planes, only its
+  named pairs colliding (``contact``), and, with option
   ``defaults=scene`` (the default), PyBullet's own defaults switched off — the multibody's linear and
   angular damping (0.04 each: a linear plus a quadratic drag on every body), the velocity motor
   PyBullet puts on every revolute and prismatic joint (target rate 0: it holds the joint still), the
@@ -43,7 +44,7 @@ from dalembert.adapters.base import Option
 from dalembert.scene import WORLD
 
 __all__ = ["engine", "PybulletModel", "Part", "build", "MODEL_OPTIONS", "SOLVERS", "NO_VELOCITY_CLAMP",
-           "ball_to_bullet", "ball_from_bullet", "summary"]
+           "ball_to_bullet", "ball_from_bullet", "summary", "rebuild"]
 
 # dalembert name -> PyBullet's constraint solver (setPhysicsEngineParameter constraintSolverType):
 # sequential impulse (PyBullet's default), projected Gauss-Seidel, Dantzig's LCP.
@@ -147,6 +148,7 @@ class PybulletModel:
     floating : tuple of int — the multibodies with a floating base (one per free root body)
     links : dict multibody id -> tuple of link indices (every link of it, in order)
     link_lists : tuple of (multibody id, list of link indices) — those with links, as PyBullet's calls take them
+    planes : dict plane name -> multibody id — the scene's planes, static (``contact``)
     defaults : str — option ``defaults``: scene or engine
     solver : str — option ``solver``
     """
@@ -156,6 +158,7 @@ class PybulletModel:
     floating: tuple
     links: dict
     link_lists: tuple
+    planes: dict
     defaults: str
     solver: str
 
@@ -181,12 +184,36 @@ class PybulletModel:
 def build(scene, settings):
     """Build ``scene`` in a new PyBullet client with the options of ``settings`` (``MODEL_OPTIONS``), at its
     initial state; a ``PybulletModel``."""
-    from dalembert.adapters.base import typed_options
-
     pb = engine()
-    opts = typed_options(MODEL_OPTIONS, settings)
     c = pb.connect(pb.DIRECT)
+    model = _construct(pb, c, scene, settings)
+    weakref.finalize(model, _disconnect, c)
+    return model
+
+
+def rebuild(model, scene, settings):
+    """Empty ``model``'s client (``resetSimulation``) and build ``scene`` in it again, at its initial state: the
+    world as ``build`` left it. Bullet keeps contact state across steps that no reset of the bodies' states
+    clears (persistent contact manifolds, their cached impulses and friction directions: measured, a second run
+    of the block on the incline differed from the first from its first step, by 1e-17 m, after the bodies had
+    been moved apart and collision detection run); a scene with contact is rebuilt before every run, so that
+    each run is the first. The same calls give the same ids (checked)."""
+    pb = engine()
+    pb.resetSimulation(physicsClientId=model.client)
+    again = _construct(pb, model.client, scene, settings)
+    if (again.links, again.planes, again.floating) != (model.links, model.planes, model.floating):
+        raise RuntimeError(f"PyBullet rebuilt {scene.name!r} with other ids: {again.links} {again.planes}, "
+                           f"not {model.links} {model.planes}")
+
+
+def _construct(pb, c, scene, settings):
+    """Build ``scene`` in client ``c`` (empty), at its initial state; a ``PybulletModel``."""
+    from dalembert.adapters.base import typed_options
+    from dalembert.adapters.pybullet import contact
+
+    opts = typed_options(MODEL_OPTIONS, settings)
     frames = {b.name: principal_frame(b) for b in scene.bodies}
+    shapes = contact.base_shapes(pb, c, scene, frames)
     parts, floating, links = {}, [], {}
     # where each body's link frame L sits in its body frame B: X_BL (a base's L is E)
     X_BL = {}
@@ -230,7 +257,8 @@ def build(scene, settings):
             mb = pb.createMultiBody(baseMass=0.0, basePosition=[0, 0, 0], baseOrientation=[0, 0, 0, 1],
                                     physicsClientId=c, **kw)
         else:
-            mb = pb.createMultiBody(baseMass=base.mass, physicsClientId=c, **kw)
+            mb = pb.createMultiBody(baseMass=base.mass, baseCollisionShapeIndex=shapes.get(base.name, -1),
+                                    physicsClientId=c, **kw)
             floating.append(mb)
             pb.changeDynamics(mb, -1, localInertiaDiagonal=list(frames[base.name][0]), physicsClientId=c)
             parts[base.name] = Part(base.name, mb, -1, frames[base.name][1].T, np.eye(3), "free")
@@ -242,12 +270,12 @@ def build(scene, settings):
         links[mb] = tuple(range(len(members)))
         if opts["defaults"] == "scene":
             _defaults_off(pb, c, mb, members, scene)
+    planes = contact.build(pb, c, scene, parts)
     pb.setGravity(*scene.gravity, physicsClientId=c)
     pb.setTimeStep(float(settings.dt), physicsClientId=c)
     pb.setPhysicsEngineParameter(constraintSolverType=getattr(pb, SOLVERS[opts["solver"]]), physicsClientId=c)
     link_lists = tuple((mb, list(ls)) for mb, ls in links.items() if ls)
-    model = PybulletModel(c, parts, tuple(floating), links, link_lists, opts["defaults"], opts["solver"])
-    weakref.finalize(model, _disconnect, c)
+    model = PybulletModel(c, parts, tuple(floating), links, link_lists, planes, opts["defaults"], opts["solver"])
     model.state0(scene)
     return model
 

@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from dalembert import spatial
-from dalembert.adapters.pybullet.model import engine
+from dalembert.adapters.pybullet.model import engine, rebuild
 
 __all__ = ["simulate", "apply_loads", "load_plan", "read_state", "state_size"]
 
@@ -134,7 +134,10 @@ def simulate(p):
     sample with a non-finite coordinate on."""
     pb = engine()
     model, c = p.model, p.model.client
-    model.state0(p.scene)
+    if p.scene.contacts:  # Bullet's contact state outlives a reset of the bodies' states (model.rebuild)
+        rebuild(model, p.scene, p.settings)
+    else:
+        model.state0(p.scene)
     X = np.full((len(p.times), state_size(model)), np.nan)
     read_state(pb, model, X[0])
     step, plan, shot = pb.stepSimulation, p.loads, snapshot
