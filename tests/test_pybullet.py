@@ -264,6 +264,14 @@ def test_a_repeated_contact_run_is_the_first():
     assert np.array_equal(first.position, second.position) and np.array_equal(first.quaternion, second.quaternion)
 
 
+def test_the_solver_iterations_reach_the_engine():
+    """Option ``solver_iterations`` as PyBullet reports it back (its default 50 otherwise)."""
+    case = make_case("block_on_incline", t_final=0.1)
+    assert _run_with_audit(case.scene, case.times, 1e-2)[1]["solver_iterations"] == 50
+    audit = _run_with_audit(case.scene, case.times, 1e-2, solver_iterations="7", solver="pgs")[1]
+    assert audit["solver_iterations"] == 7 and audit["solver"] == "CONSTRAINT_SOLVER_LCP_PGS"
+
+
 def test_only_the_named_pairs_collide():
     """The two spheres of sphere_collision without their pair pass through each other untouched."""
     case = make_case("sphere_collision")

@@ -55,7 +55,7 @@ class PybulletPrepared(Prepared):
 
 class PybulletAdapter(Adapter):
     """PyBullet (``pybullet`` 3.2.7): semi-implicit Euler on its Featherstone multibodies. Options: ``defaults`` =
-    ``scene`` | ``engine``; ``solver`` = ``si`` | ``pgs`` | ``dantzig``."""
+    ``scene`` | ``engine``; ``solver`` = ``si`` | ``pgs`` | ``dantzig``; ``solver_iterations``."""
 
     name = "pybullet"
     # free, revolute, prismatic, ball and weld joints; gravity; world and follower forces and torques; contact of
@@ -64,7 +64,8 @@ class PybulletAdapter(Adapter):
     options = MODEL_OPTIONS
     integrators = {
         "euler": IntegratorSpec(True, tuple(MODEL_OPTIONS),
-                                "semi-implicit Euler (PyBullet's one integrator: stepSimulation at a fixed step)"),
+                                "semi-implicit Euler, first order (PyBullet's one integrator: stepSimulation at a "
+                                "fixed step)"),
     }
 
     def version(self):

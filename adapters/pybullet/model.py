@@ -22,7 +22,7 @@
   them all, so that their effect is measured. Joint damping and friction are zero and no joint has a
   limit either way (``createMultiBody``'s defaults; read back in the audit).
 * Gravity from the scene (PyBullet's default is zero), the step ``dt`` (``setTimeStep``: PyBullet's one
-  integrator is semi-implicit Euler), the constraint solver from option ``solver``.
+  integrator is semi-implicit Euler), the constraint solver and its iterations from options ``solver`` and ``solver_iterations``.
 
 PyBullet's quaternions are ``(x, y, z, w)``: converted only through ``dalembert.spatial``. ``import
 pybullet`` writes a build-time banner to the process's stderr from C: ``engine`` silences it at the
@@ -55,8 +55,10 @@ MODEL_OPTIONS = {
                        "scene: PyBullet's damping, joint motors, joint-rate clamp and sleeping off; engine: kept, "
                        "so that their effect is measured"),
     "solver": Option(tuple(SOLVERS), "si",
-                     "the constraint solver (it solves only constraint rows: none in a tree scene with "
-                     "defaults=scene; the motors' rows with defaults=engine)"),
+                     "the constraint solver (it solves only constraint rows: the contacts', and the motors' with "
+                     "defaults=engine; none in a tree scene with defaults=scene)"),
+    "solver_iterations": Option(default=50, minimum=1.0, integer=True,
+                                description="the constraint solver's iterations per step (PyBullet's default 50)"),
 }
 
 # The joint-rate clamp with defaults=scene: btMultiBody clamps every joint rate to maxJointVelocity (100 rad/s
@@ -273,7 +275,8 @@ def _construct(pb, c, scene, settings):
     planes = contact.build(pb, c, scene, parts)
     pb.setGravity(*scene.gravity, physicsClientId=c)
     pb.setTimeStep(float(settings.dt), physicsClientId=c)
-    pb.setPhysicsEngineParameter(constraintSolverType=getattr(pb, SOLVERS[opts["solver"]]), physicsClientId=c)
+    pb.setPhysicsEngineParameter(constraintSolverType=getattr(pb, SOLVERS[opts["solver"]]),
+                                 numSolverIterations=opts["solver_iterations"], physicsClientId=c)
     link_lists = tuple((mb, list(ls)) for mb, ls in links.items() if ls)
     model = PybulletModel(c, parts, tuple(floating), links, link_lists, planes, opts["defaults"], opts["solver"])
     model.state0(scene)
