@@ -67,6 +67,13 @@ def test_the_import_prints_nothing():
     assert (done.stdout, done.stderr) == ("", "")
 
 
+def test_without_pybullet_the_engine_is_not_installed(monkeypatch):
+    """``version`` raises ImportError (``dalembert engines`` then says "not installed")."""
+    monkeypatch.setitem(sys.modules, "pybullet", None)  # what ``import pybullet`` finds when it is missing
+    with pytest.raises(ImportError):
+        ADAPTER.version()
+
+
 @pytest.mark.parametrize("make", [chain_case, free_body_world_loads_case,
                                   lambda: make_case("kovalevskaya_top", t_final=1.0),
                                   lambda: make_case("particle_box_welded", t_final=0.5)],

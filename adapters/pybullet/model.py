@@ -72,8 +72,9 @@ def engine():
     """The ``pybullet`` module, imported with the process's stderr (fd 2) sent to /dev/null for the
     import: the module's C initializer prints ``pybullet build time: ...`` there, which a Python-level
     redirect cannot catch. ImportError when it is not installed."""
-    if "pybullet" in sys.modules:
-        return sys.modules["pybullet"]
+    loaded = sys.modules.get("pybullet")
+    if loaded is not None:
+        return loaded
     sys.stderr.flush()
     saved, null = os.dup(2), os.open(os.devnull, os.O_WRONLY)
     try:
