@@ -47,7 +47,6 @@ def read_back(p, X):
     q_WE = {b.name: nan(4) for b in scene.bodies}
     vel = {b.name: nan(3) for b in scene.bodies}
     omega = {b.name: nan(3) for b in scene.bodies}
-    jq, jv = {}, {}
     by_link = {(part.mb, part.link): part for part in model.parts.values()}
     jointed = [part for part in model.parts.values() if part.kind != "free"]
     force_E = {part.body: nan(3) for part in jointed}
@@ -58,15 +57,12 @@ def read_back(p, X):
         for link in links:
             offset[(mb, link)] = k
             k += 7
-    bases = {part.mb: (i, part) for part in model.parts.values() if part.link < 0
-             for i, mb in enumerate(model.floating) if mb == part.mb}
+    for i, mb in enumerate(model.floating):  # a base's states are its columns of X, every sample at once
+        name = by_link[(mb, -1)].body
+        s = X[:, 13 * i:13 * i + 13]
+        com[name], q_WE[name], vel[name], omega[name] = s[:, :3], _wxyz(s[:, 3:7]), s[:, 7:10], s[:, 10:13]
     for row in np.flatnonzero(np.all(np.isfinite(X), axis=1)):
-        x = X[row]
-        for mb, (i, part) in bases.items():
-            s = x[13 * i:13 * i + 13]
-            com[part.body][row], q_WE[part.body][row] = s[:3], _wxyz(s[3:7])
-            vel[part.body][row], omega[part.body][row] = s[7:10], s[10:13]
-        write_state(pb, model, x)
+        write_state(pb, model, X[row])
         for mb, links in model.links.items():
             if not links:
                 continue
