@@ -20,6 +20,7 @@ BUILTIN = {
     "exudyn": "dalembert.adapters.exudyn:ExudynAdapter",
     "drake": "dalembert.adapters.drake:DrakeAdapter",
     "mjx": "dalembert.adapters.mjx:MjxAdapter",
+    "pybullet": "dalembert.adapters.pybullet:PybulletAdapter",
 }
 
 _REGISTRY = Registry("engine")
