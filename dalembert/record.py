@@ -16,8 +16,9 @@ identity        ``key``, ``schema_version``, ``case``, ``case_version``, ``param
                 vector as JSON: swept values filter like any column), ``engine``,
                 ``engine_version``, ``adapter_distribution`` and ``adapter_version`` (the
                 installed distribution that provides the adapter: ``dalembert`` for a built-in,
-                the plugin's package for an entry point), ``integrator``, ``dt`` (s), ``rtol``,
-                ``atol``, ``options`` (JSON), ``settings`` (a label)
+                the plugin's package for an entry point), ``integrator``, ``integrator_order``
+                (the order of accuracy the integrator declares, ``IntegratorSpec.order``; null when
+                none), ``dt`` (s), ``rtol``, ``atol``, ``options`` (JSON), ``settings`` (a label)
 outcome         ``status``, ``message``, ``t_final`` (s), ``t_diverged`` (s),
                 ``traceback``
 cost            ``build_s``, ``wall_s_median``, ``wall_s_min``, ``wall_s_max`` (stepping
@@ -42,8 +43,8 @@ without ``schema_version``, ``verdict``, ``verdict_reason`` and ``provenance``;
 ``from_row`` reads it with an empty verdict, so ``compare`` works across the change.
 Schemas 1 and 2 have no ``wall_s_repeats``: ``from_row`` reads them with none (an empty tuple), the
 median, min and max being all they kept.
-Schemas 1 to 3 have no ``adapter_distribution``, ``adapter_version`` nor ``not_measured``: ``from_row``
-reads them as "" (not recorded) and no names; their ``within_tolerance`` reads as it was judged then (a
+Schemas 1 to 3 have no ``adapter_distribution``, ``adapter_version``, ``integrator_order`` nor ``not_measured``:
+``from_row`` reads them as "" (not recorded), None and no names; their ``within_tolerance`` reads as it was judged then (a
 bound whose quantity the run did not report counted as within).
 """
 
@@ -139,6 +140,8 @@ class RunRecord:
         version (``dalembert.adapters.registry.adapter_distribution``; "" when not recorded: schemas 1 to 3, or an
         adapter registered from a module no distribution provides)
     settings : Settings — integrator, fixed step ``dt`` (s) or tolerances ``rtol``/``atol``, engine options
+    integrator_order : int or None — the order of accuracy the engine declares for the integrator when the run ran
+        (``IntegratorSpec.order``; None when it declares none, and in stores of schemas 1 to 3)
     status : str — one of ``STATUSES``; message : str — why, for anything but ``ok``
     t_final : float — the case's horizon, s; t_diverged : float or None — first non-finite sample, s
     cost : Cost
@@ -168,6 +171,7 @@ class RunRecord:
     engine_version: str = ""
     adapter_distribution: str = ""
     adapter_version: str = ""
+    integrator_order: int | None = None
     t_final: float = _NAN
     t_diverged: float | None = None
     cost: Cost = field(default_factory=Cost)
@@ -223,7 +227,7 @@ class RunRecord:
                "case_version": self.case_version, "params": json.dumps(self.params, sort_keys=True, default=list),
                "engine": self.engine, "engine_version": self.engine_version,
                "adapter_distribution": self.adapter_distribution, "adapter_version": self.adapter_version,
-               "integrator": self.settings.integrator,
+               "integrator": self.settings.integrator, "integrator_order": self.integrator_order,
                "dt": self.settings.dt, "rtol": self.settings.rtol, "atol": self.settings.atol,
                "options": json.dumps(dict(self.settings.options), sort_keys=True), "settings": self.settings_label,
                **{f"param_{k}": json.dumps(list(v)) if isinstance(v, (tuple, list)) else v
@@ -270,6 +274,7 @@ class RunRecord:
             params={k: tuple(v) if isinstance(v, list) else v for k, v in json.loads(row.get("params") or "{}").items()},
             status=row["status"], message=row.get("message") or "", engine_version=row.get("engine_version") or "",
             adapter_distribution=_text(row.get("adapter_distribution")), adapter_version=_text(row.get("adapter_version")),
+            integrator_order=None if _opt(row.get("integrator_order")) is None else int(row["integrator_order"]),
             t_final=_num(row.get("t_final")), t_diverged=_opt(row.get("t_diverged")),
             cost=Cost(**{f.name: _cost_field(f.name, row[f.name]) for f in fields(Cost) if f.name in row}),
             errors=errors, drifts=drifts, drift_rates=rates, growths=growths,

@@ -43,18 +43,20 @@ def test_a_bound_the_run_did_not_report_is_not_measured_never_within():
 def test_not_measured_is_stored_and_older_rows_read_as_judged():
     record = RunRecord("k", "c", "v", "e", Settings("rk4", 1e-3), status="ok",
                        judgement=judge("ok", "", {"orientation": 1e-8}, {"energy": 0.0}, TOLERANCES),
-                       adapter_distribution="dalembert-pybullet", adapter_version="0.2.0")
+                       adapter_distribution="dalembert-pybullet", adapter_version="0.2.0", integrator_order=4)
     row = json.loads(json.dumps(record.to_row()))
     assert row["not_measured"] == "reaction_force" and row["within_tolerance"] is None
     back = RunRecord.from_row(row)
     assert back.judgement == record.judgement and back.to_row() == row
-    assert (back.adapter_distribution, back.adapter_version) == ("dalembert-pybullet", "0.2.0")
+    assert (back.adapter_distribution, back.adapter_version, back.integrator_order) == ("dalembert-pybullet", "0.2.0", 4)
     # a schema-3 row: no such columns; its stored within_tolerance as it was judged then
-    old = {k: v for k, v in row.items() if k not in ("not_measured", "adapter_distribution", "adapter_version")}
+    old = {k: v for k, v in row.items()
+           if k not in ("not_measured", "adapter_distribution", "adapter_version", "integrator_order")}
     old |= {"schema_version": 3, "within_tolerance": True}
     back = RunRecord.from_row(old)
     assert back.judgement.not_measured == () and back.judgement.within_tolerance is True
-    assert (back.adapter_distribution, back.adapter_version, back.schema_version) == ("", "", 3)
+    assert (back.adapter_distribution, back.adapter_version, back.integrator_order, back.schema_version) == (
+        "", "", None, 3)
 
 
 def test_the_runs_table_and_the_validation_table_say_not_measured():

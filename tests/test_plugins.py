@@ -14,11 +14,21 @@ from dalembert.harness.cli import main
 from dalembert.store import Store
 
 GOOD = """
+from dataclasses import dataclass
+
+from dalembert.adapters.base import IntegratorSpec
 from dalembert.adapters.reference import ReferenceAdapter
 
 
+@dataclass(frozen=True)
+class OrderedSpec(IntegratorSpec):
+    order: int = 4
+
+
 class FakeAdapter(ReferenceAdapter):
-    '''The reference adapter under another name: a plugin that works.'''
+    '''The reference adapter under another name: a plugin that works (its RK4 declaring its order).'''
+
+    integrators = {**ReferenceAdapter.integrators, "rk4": OrderedSpec(True, ("formulation",), "classical RK4", 4)}
 """
 BROKEN = """
 raise ImportError("No module named 'pybullet_engine'")
@@ -94,3 +104,4 @@ def test_a_plugin_run_records_its_distribution(site, tmp_path):
                      "--param", "t_final=0.5", "--quick", "--jobs", "1", "--out", str(out)]) == 0
     (record,) = Store(out).records()
     assert record.ok and (record.adapter_distribution, record.adapter_version) == ("dalembert_fake", "1.2.3")
+    assert record.integrator_order == 4  # the order its integrator declares, stored for the report's observed order

@@ -97,6 +97,9 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
         adapter = get_adapter(spec.engine, spec.adapter)
         found["engine_version"] = adapter.version()
         found["adapter_distribution"], found["adapter_version"] = adapter_distribution(spec.engine)
+        # the order it declares (``IntegratorSpec.order``, where the contract has it): the report sets the
+        # observed order beside it from the store alone
+        found["integrator_order"] = getattr(adapter.integrators.get(spec.settings.integrator), "order", None)
         case, version = built_case(spec.case, spec.params)  # built once per worker, not once per run
         found["t_final"] = case.t_final
         changed = check_version(spec.case, spec.case_version, version, "the matrix was made for")
