@@ -144,14 +144,15 @@ def report(store, out_dir=None):
     return _report(store, out_dir)
 
 
-def compare(before, after, threshold=2.0, cost_threshold=None, across_versions=False):
+def compare(before, after, threshold=2.0, cost_threshold=None, across_versions=False, pair_options=None):
     """Compare two stores (Stores or paths) as ``dalembert compare`` does; a
-    ``dalembert.reports.compare.Comparison`` (``.regressed``, ``.changes``, ``.only_in_a``, ...;
-    ``dalembert.reports.compare.to_json`` turns it into plain data)."""
+    ``dalembert.reports.compare.Comparison`` (``.regressed``, ``.unpaired``: why nothing pairs, ``.changes``,
+    ``.only_in_a``, ...; ``dalembert.reports.compare.to_json`` turns it into plain data). ``pair_options``:
+    ``({"cone": "pyramidal"}, {"cone": "elliptic"})``, as ``--pair-options``."""
     from dalembert.reports.compare import compare_stores
 
     a, b = (s if isinstance(s, Store) else load(s, any_schema=True) for s in (before, after))
-    return compare_stores(a, b, threshold, cost_threshold, across_versions)
+    return compare_stores(a, b, threshold, cost_threshold, across_versions, pair_options)
 
 
 def trajectories(store, keys=(), case=None, engine=None, integrator=None, dt=None, rtol=None, options=None):
