@@ -29,6 +29,23 @@ class FakeAdapter(ReferenceAdapter):
     '''The reference adapter under another name: a plugin that works (its RK4 declaring its order).'''
 
     integrators = {**ReferenceAdapter.integrators, "rk4": OrderedSpec(True, ("formulation",), "classical RK4", 4)}
+
+
+class NoReactionsAdapter(FakeAdapter):
+    '''The same, reading back no joint reactions (as an engine that cannot report them).'''
+
+    def run(self, prepared):
+        from dalembert.adapters.base import Outcome
+        from dalembert.trajectory import Trajectory
+
+        out = super().run(prepared)
+
+        def read_back():
+            t = out.trajectory
+            return Trajectory(t.t, t.bodies, t.joints,
+                              {k: v for k, v in t.extras.items() if not k.startswith("reaction_force:")})
+
+        return Outcome(read_back, out.wall_s, out.n_steps, out.n_rhs, out.info)
 """
 BROKEN = """
 raise ImportError("No module named 'pybullet_engine'")
@@ -51,12 +68,13 @@ def site(tmp_path, monkeypatch):
     """Three plugins: ``fake`` that works, ``broken`` that cannot be imported, and one named ``mujoco``."""
     site = tmp_path / "site"
     site.mkdir()
-    _distribution(site, "dalembert_fake", "1.2.3", {"fake": "fake_engine:FakeAdapter"}, "fake_engine", GOOD)
+    _distribution(site, "dalembert_fake", "1.2.3", {"fake": "fake_engine:FakeAdapter",
+                                                     "noreact": "fake_engine:NoReactionsAdapter"}, "fake_engine", GOOD)
     _distribution(site, "dalembert_broken", "0.3", {"broken": "broken_engine:Adapter"}, "broken_engine", BROKEN)
     _distribution(site, "dalembert_shadow", "2.0", {"mujoco": "fake_engine:FakeAdapter"})
     monkeypatch.syspath_prepend(str(site))
     yield site
-    for name in ("fake", "broken"):
+    for name in ("fake", "noreact", "broken"):
         registry._REGISTRY._items.pop(name, None)  # (loaded in this process by the test)
 
 
@@ -105,3 +123,20 @@ def test_a_plugin_run_records_its_distribution(site, tmp_path):
     (record,) = Store(out).records()
     assert record.ok and (record.adapter_distribution, record.adapter_version) == ("dalembert_fake", "1.2.3")
     assert record.integrator_order == 4  # the order its integrator declares, stored for the report's observed order
+
+
+def test_reactions_an_engine_does_not_report_are_not_measured_not_within(site, tmp_path, capsys):
+    """The pivoted rod bounds its reactions: the same motion without them is "not measured", never within."""
+    runs = {}
+    for engine in ("fake", "noreact"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PluginWarning)
+            assert main(["run", "--case", "pivoted_rod", "--engine", engine, "--integrator", "rk4", "--dt", "1e-3",
+                         "--param", "t_final=0.5", "--quick", "--jobs", "1", "--out", str(tmp_path / engine),
+                         "--strict=tolerance"]) == 0
+        (runs[engine],) = Store(tmp_path / engine).records()
+    assert runs["fake"].judgement.within_tolerance is True and "reaction_force" in runs["fake"].errors
+    j = runs["noreact"].judgement
+    assert "reaction_force" not in runs["noreact"].errors
+    assert j.not_measured == ("reaction_force",) and j.within_tolerance is None and j.beyond == ()
+    assert "not measured, so not within tolerance either" in capsys.readouterr().err
