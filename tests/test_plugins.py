@@ -89,6 +89,7 @@ def test_a_broken_plugin_is_named_and_left_out_and_the_others_list(site, capsys)
     captured = capsys.readouterr()
     assert "fake" in captured.out and "reference" in captured.out and "broken" not in captured.out
     assert "dalembert: warning: plugin engine 'broken'" in captured.err  # one line, the command line's
+    assert "(adapter from dalembert_fake 1.2.3)" in next(x for x in captured.out.splitlines() if x.startswith("fake"))
     with pytest.raises(ImportError, match="plugin engine 'broken' .*dalembert_broken 0.3.*pybullet_engine"):
         get_adapter("broken")
 
