@@ -9,8 +9,8 @@ import pytest
 
 from dalembert.judge import Judgement
 from dalembert.record import RunRecord
-from dalembert.reports.order import (DEFAULT_FLOOR, FLOOR_MARGIN, ORDER_MARGIN, left_out, observed_orders,
-                                     step_pairs)
+from dalembert.reports.order import (DEFAULT_FLOOR, FLOOR_MARGIN, ORDER_MARGIN, SATURATED_ANGLE, SINGLE_FLOOR,
+                                     left_out, observed_orders, step_pairs)
 from dalembert.reports.sections.order import observed_order
 from dalembert.settings import Settings
 
@@ -24,7 +24,7 @@ def _case(name, floor=None, contacts=()):
 
 
 def _runs(case, engine, integrator, order, dts=(1e-2, 5e-3, 2.5e-3, 1.25e-3), constant=10.0, status="ok",
-          verdicts=None, declared=None):
+          verdicts=None, declared=None, audit=None):
     """Runs whose headline error is exactly ``constant * dt ** order`` (a known order), their integrator declaring
     ``declared``."""
     out = []
@@ -32,13 +32,14 @@ def _runs(case, engine, integrator, order, dts=(1e-2, 5e-3, 2.5e-3, 1.25e-3), co
         verdict = (verdicts or {}).get(i, "stable")
         out.append(RunRecord(f"{case}-{engine}-{integrator}-{i}", case, "v1", engine, Settings(integrator, dt),
                              status=status, errors={"orientation": (constant * dt ** order, 0.0)},
-                             judgement=Judgement((), verdict, "", True), integrator_order=declared))
+                             judgement=Judgement((), verdict, "", True), integrator_order=declared,
+                             audit=dict(audit or {})))
     return out
 
 
 def test_a_known_order_is_observed_and_matches_its_declaration():
     case = _case("top")
-    runs = _runs("top", "eng", "rk4", 4, declared=4) + _runs("top", "eng", "euler", 1, declared=1)
+    runs = _runs("top", "eng", "rk4", 4, declared=4) + _runs("top", "eng", "euler", 1, declared=1, constant=1.0)
     pairs = step_pairs([(case, runs, "orientation")])
     assert len(pairs) == 6 and {p.dts for p in pairs if p.integrator == "rk4"} == {(1e-2, 5e-3), (5e-3, 2.5e-3),
                                                                                      (2.5e-3, 1.25e-3)}
@@ -90,6 +91,17 @@ def test_only_pairs_in_the_asymptotic_range_count():
     assert step_pairs([(_case("block", contacts=("c",)), _runs("block", "eng", "rk4", 4), "orientation")],
                       excluded) == []
     assert excluded == {"of a contact case": 3} and left_out(excluded) == "3 of a contact case"
+    # an angle error of a tenth of a radian or more has saturated: the first pair (0.1 rad -> 0.05) is out
+    excluded = {}
+    assert len(step_pairs([(_case("top"), _runs("top", "eng", "euler", 1), "orientation")], excluded)) == 2
+    assert excluded == {"with an angle error saturated": 1} and 0.1 == SATURATED_ANGLE
+    # a single-precision run's floor is its own: its audit's, or SINGLE_FLOOR (10 dt^4 reaches 1e-4 at ~1.8e-2 s)
+    single = _runs("top", "eng", "rk4", 4, audit={"precision": "float32", "float32_floor": float("nan")})
+    excluded = {}
+    assert step_pairs([(_case("top"), single, "orientation")], excluded) == [] and SINGLE_FLOOR * FLOOR_MARGIN > 1e-7
+    assert excluded == {"at the roundoff floor": 3}
+    single = _runs("top", "eng", "rk4", 4, audit={"precision": "float32", "float32_floor": 1e-12})
+    assert len(step_pairs([(_case("top"), single, "orientation")])) == 2  # its audit's floor (1e-12), not SINGLE_FLOOR
     # adaptive runs (no dt) and cases without a headline quantity are not pairs
     assert step_pairs([(_case("top"), _runs("top", "eng", "rk4", 4), None)]) == []
     assert DEFAULT_FLOOR * FLOOR_MARGIN < 1e-10  # the default floor leaves errors of real runs usable
@@ -100,7 +112,8 @@ def test_the_section_shows_declared_observed_cases_and_flag():
     rep = SimpleNamespace(found=[
         SimpleNamespace(case=hinge, runs=_runs("hinge", "eng", "rk4", 4, declared=4), quantity="orientation"),
         SimpleNamespace(case=ball, runs=_runs("ball", "eng", "rk4", 2, declared=4), quantity="orientation"),
-        SimpleNamespace(case=hinge, runs=_runs("hinge", "eng", "euler", 1, declared=1), quantity="orientation")])
+        SimpleNamespace(case=hinge, runs=_runs("hinge", "eng", "euler", 1, declared=1, constant=1.0),
+                        quantity="orientation")])
     part = observed_order(rep)
     html = "".join(part.html)
     assert "Observed order of convergence" in html

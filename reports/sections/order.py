@@ -1,9 +1,10 @@
-"""Observed order: per engine and fixed-step integrator, the order of convergence its step pairs show
+"""Observed order: per engine and fixed-step integrator (and options), the order of convergence its step pairs show
 (``reports.order``: the rule for which pairs count), beside the order the integrator declares."""
 
 from __future__ import annotations
 
-from dalembert.reports.order import FLOOR_MARGIN, ORDER_MARGIN, left_out, observed_orders, step_pairs
+from dalembert.reports.order import (FLOOR_MARGIN, ORDER_MARGIN, SATURATED_ANGLE, left_out, observed_orders,
+                                     step_pairs)
 from dalembert.reports.page import Part
 from dalembert.reports.tables import MISSING, Cell, Table
 
@@ -22,14 +23,16 @@ def observed_order(rep):
     part.heading("Observed order of convergence", 2, anchor="observed-order")
     flagged = [o for o in found if o.flagged or o.below]
     skipped = left_out(excluded)
-    part.para("Per engine and fixed-step integrator, the order p = log(e1/e2) / log(dt1/dt2) of each pair of runs at "
+    part.para("Per engine, fixed-step integrator and options, the order p = log(e1/e2) / log(dt1/dt2) of each pair of runs at "
               "successive steps of the matrix (one case, options and parameters; e the case's headline error, the max "
               "over the horizon), beside the order the integrator declares. Only pairs in the asymptotic range count: "
-              f"both runs finished without diverging, both errors at least {FLOOR_MARGIN:g} times the case's roundoff "
-              "floor, no contact (an event's timing error is first order whatever the integrator)"
+              f"both runs finished without diverging, both errors at least {FLOOR_MARGIN:g} times the run's roundoff "
+              f"floor (the case's; a float32 run's own), an angle error below {SATURATED_ANGLE:g} rad (larger ones "
+              "saturate), no contact (an event's timing error is first order whatever the integrator)"
               + (f"; left out: {skipped}" if skipped else "") + ". Flagged: a median more than "
               f"{ORDER_MARGIN:g} below the declared order (and the cases whose own median is)."
-              + (f" {len(flagged)} flagged: " + ", ".join(f"{o.engine} {o.integrator}" for o in flagged) + "."
+              + (f" {len(flagged)} flagged: " + ", ".join(" ".join(x for x in (o.engine, o.integrator, o.options) if x)
+                                                        for o in flagged) + "."
                  if flagged else ""))
     head = ["engine", "integrator", "declared", "observed median (range)", "pairs", "cases", "flag"]
     rows = []
@@ -37,7 +40,7 @@ def observed_order(rep):
         on = ", ".join(o.below)
         flag = ((f"below declared (on {on})" if o.below != o.cases else "below declared") if o.flagged
                 else f"below on {on}" if o.below else "")
-        rows.append([Cell(o.engine), Cell(o.integrator),
+        rows.append([Cell(o.engine), Cell(" ".join(x for x in (o.integrator, o.options) if x), wrap=True),
                      Cell(str(o.declared) if o.declared is not None else MISSING, o.declared if o.declared else -1.0,
                           title="" if o.declared is not None else "its runs stored no declared order (or several)"),
                      Cell(f"{o.median:.2f} ({o.low:.2f} to {o.high:.2f})", o.median,
