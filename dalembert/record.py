@@ -43,8 +43,9 @@ without ``schema_version``, ``verdict``, ``verdict_reason`` and ``provenance``;
 ``from_row`` reads it with an empty verdict, so ``compare`` works across the change.
 Schemas 1 and 2 have no ``wall_s_repeats``: ``from_row`` reads them with none (an empty tuple), the
 median, min and max being all they kept.
-Schemas 1 to 3 have no ``adapter_distribution``, ``adapter_version``, ``integrator_order`` nor ``not_measured``:
-``from_row`` reads them as "" (not recorded), None and no names; their ``within_tolerance`` reads as it was judged then (a
+Schemas 1 to 3 have no ``adapter_distribution``, ``adapter_version``, ``integrator_order`` nor
+``not_measured``: ``from_row`` reads them as "" (not recorded), None and no names; their
+``within_tolerance`` reads as it was judged then (a
 bound whose quantity the run did not report counted as within).
 """
 
@@ -273,7 +274,8 @@ class RunRecord:
                               json.loads(row.get("options") or "{}")),
             params={k: tuple(v) if isinstance(v, list) else v for k, v in json.loads(row.get("params") or "{}").items()},
             status=row["status"], message=row.get("message") or "", engine_version=row.get("engine_version") or "",
-            adapter_distribution=_text(row.get("adapter_distribution")), adapter_version=_text(row.get("adapter_version")),
+            adapter_distribution=_text(row.get("adapter_distribution")),
+            adapter_version=_text(row.get("adapter_version")),
             integrator_order=None if _opt(row.get("integrator_order")) is None else int(row["integrator_order"]),
             t_final=_num(row.get("t_final")), t_diverged=_opt(row.get("t_diverged")),
             cost=Cost(**{f.name: _cost_field(f.name, row[f.name]) for f in fields(Cost) if f.name in row}),

@@ -233,7 +233,8 @@ def unpaired_reason(records_a, records_b, pairing=()):
     out = []
     for what, of in (("cases", lambda r: r.case), ("engines", lambda r: r.engine),
                      ("parameters", lambda r: json.dumps(r.params, sort_keys=True, default=list)),
-                     ("integrators", lambda r: r.settings.integrator), ("steps and tolerances", lambda r: r.sweep_label),
+                     ("integrators", lambda r: r.settings.integrator),
+                     ("steps and tolerances", lambda r: r.sweep_label),
                      ("engine options", lambda r: r.options_label or "(defaults)")):
         xa, xb = {of(r) for r in records_a}, {of(r) for r in records_b}
         if not xa & xb:

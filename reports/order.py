@@ -36,8 +36,8 @@ import math
 import statistics
 from dataclasses import dataclass
 
-__all__ = ["FLOOR_MARGIN", "DEFAULT_FLOOR", "SINGLE_FLOOR", "SATURATED_ANGLE", "ORDER_MARGIN", "StepPair", "ObservedOrder", "step_pairs",
-           "observed_orders", "left_out"]
+__all__ = ["FLOOR_MARGIN", "DEFAULT_FLOOR", "SINGLE_FLOOR", "SATURATED_ANGLE", "ORDER_MARGIN", "StepPair",
+           "ObservedOrder", "step_pairs", "observed_orders", "left_out"]
 
 # An error 100 times its roundoff floor carries at most ~1 % of roundoff, which moves the order observed over a
 # decade of step by at most log10(1.01) ~ 0.004 (over a halving, 0.015): well inside ORDER_MARGIN.
@@ -186,8 +186,8 @@ def _params(r):
 
 
 def observed_orders(pairs, margin=ORDER_MARGIN):
-    """Per engine, integrator and options, its ``ObservedOrder`` (``margin``: how far below the declared order a median is
-    flagged), sorted by engine and integrator."""
+    """Per engine, integrator and options, its ``ObservedOrder`` (``margin``: how far below the declared order a
+    median is flagged), sorted by engine, integrator and options."""
     groups = {}
     for p in pairs:
         groups.setdefault((p.engine, p.integrator, p.options), []).append(p)

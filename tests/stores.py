@@ -42,7 +42,8 @@ def base(store):
 # The fields of a record's ``settings`` and ``judgement`` (as its row's columns name them), which
 # ``changed`` takes flat.
 SETTINGS_FIELDS = ("integrator", "dt", "rtol", "atol", "options")
-JUDGEMENT_FIELDS = {"beyond": "beyond", "verdict": "verdict", "verdict_reason": "reason", "not_measured": "not_measured",
+JUDGEMENT_FIELDS = {"beyond": "beyond", "verdict": "verdict", "verdict_reason": "reason",
+                    "not_measured": "not_measured",
                     "within_tolerance": "within_tolerance"}
 
 

@@ -48,7 +48,8 @@ def test_not_measured_is_stored_and_older_rows_read_as_judged():
     assert row["not_measured"] == "reaction_force" and row["within_tolerance"] is None
     back = RunRecord.from_row(row)
     assert back.judgement == record.judgement and back.to_row() == row
-    assert (back.adapter_distribution, back.adapter_version, back.integrator_order) == ("dalembert-pybullet", "0.2.0", 4)
+    assert (back.adapter_distribution, back.adapter_version, back.integrator_order) == (
+        "dalembert-pybullet", "0.2.0", 4)
     # a schema-3 row: no such columns; its stored within_tolerance as it was judged then
     old = {k: v for k, v in row.items()
            if k not in ("not_measured", "adapter_distribution", "adapter_version", "integrator_order")}

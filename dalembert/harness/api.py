@@ -106,10 +106,10 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
                           f"finish with api.run(resume={outcome.store.path!r})", outcome)
     if outcome.exit_status:
         first = outcome.failing[0]
+        why = first.status if not first.ok else "beyond " + " ".join(first.judgement.beyond)
         raise MatrixError(f"strict: {len(outcome.failing)} run(s) failed, diverged or timed out"
                           + (" or are beyond their case's tolerance" if outcome.strict == "tolerance" else "")
-                          + f" (first: {first.key}: {first.status if not first.ok else 'beyond ' + ' '.join(first.judgement.beyond)})",
-                          outcome)
+                          + f" (first: {first.key}: {why})", outcome)
     df = outcome.store.table()
     df.attrs["store"] = outcome.store.path
     return df

@@ -119,8 +119,8 @@ def to_markdown(store):
             cells += [_fmt(r.checks.get(c, math.nan)) for c in checks]
             within = r.judgement.within_tolerance
             # a bound the run did not report is not measured: neither yes nor no (``dalembert.judge``)
-            shown = (f"not measured: {', '.join(r.judgement.not_measured)}" if within is None and r.judgement.not_measured
-                     else _fmt(bool(within)))
+            missing = r.judgement.not_measured
+            shown = f"not measured: {', '.join(missing)}" if within is None and missing else _fmt(bool(within))
             cells.append("— (the truth itself)" if is_the_truth(r, case) else shown)
             lines.append("| " + " | ".join(cells) + " |")
         lines.append("")

@@ -23,31 +23,35 @@ def observed_order(rep):
     part.heading("Observed order of convergence", 2, anchor="observed-order")
     flagged = [o for o in found if o.flagged or o.below]
     skipped = left_out(excluded)
-    part.para("Per engine, fixed-step integrator and options, the order p = log(e1/e2) / log(dt1/dt2) of each pair of runs at "
-              "successive steps of the matrix (one case, options and parameters; e the case's headline error, the max "
-              "over the horizon), beside the order the integrator declares. Only pairs in the asymptotic range count: "
-              f"both runs finished without diverging, both errors at least {FLOOR_MARGIN:g} times the run's roundoff "
-              f"floor (the case's; a float32 run's own), an angle error below {SATURATED_ANGLE:g} rad (larger ones "
-              "saturate), no contact (an event's timing error is first order whatever the integrator)"
-              + (f"; left out: {skipped}" if skipped else "") + ". Flagged: a median more than "
-              f"{ORDER_MARGIN:g} below the declared order (and the cases whose own median is)."
-              + (f" {len(flagged)} flagged: " + ", ".join(" ".join(x for x in (o.engine, o.integrator, o.options) if x)
-                                                        for o in flagged) + "."
-                 if flagged else ""))
+    named = ", ".join(_line(o) for o in flagged)
+    part.para("Per engine, fixed-step integrator and options, the order p = log(e1/e2) / log(dt1/dt2) of each pair "
+              "of runs at successive steps of the matrix (one case, options and parameters; e the case's headline "
+              "error, the max over the horizon), beside the order the integrator declares. Only pairs in the "
+              f"asymptotic range count: both runs finished without diverging, both errors at least {FLOOR_MARGIN:g} "
+              f"times the run's roundoff floor (the case's; a float32 run's own), an angle error below "
+              f"{SATURATED_ANGLE:g} rad (larger ones saturate), no contact (an event's timing error is first order "
+              "whatever the integrator)" + (f"; left out: {skipped}" if skipped else "") + ". Flagged: a median more "
+              f"than {ORDER_MARGIN:g} below the declared order (and the cases whose own median is)."
+              + (f" {len(flagged)} flagged: {named}." if flagged else ""))
     head = ["engine", "integrator", "declared", "observed median (range)", "pairs", "cases", "flag"]
     rows = []
     for o in found:
         on = ", ".join(o.below)
         flag = ((f"below declared (on {on})" if o.below != o.cases else "below declared") if o.flagged
                 else f"below on {on}" if o.below else "")
+        each = "; ".join(" ".join(x for x in (p.case, p.options, f"dt {p.dts[0]:g} -> {p.dts[1]:g}: {p.order:.2f}") if x)
+                         for p in o.pairs)  # every pair, on hover
         rows.append([Cell(o.engine), Cell(" ".join(x for x in (o.integrator, o.options) if x), wrap=True),
                      Cell(str(o.declared) if o.declared is not None else MISSING, o.declared if o.declared else -1.0,
                           title="" if o.declared is not None else "its runs stored no declared order (or several)"),
-                     Cell(f"{o.median:.2f} ({o.low:.2f} to {o.high:.2f})", o.median,
-                          title="; ".join(f"{p.case} {p.options} dt {p.dts[0]:g} -> {p.dts[1]:g}: {p.order:.2f}".replace(
-                              "  ", " ") for p in o.pairs)),
+                     Cell(f"{o.median:.2f} ({o.low:.2f} to {o.high:.2f})", o.median, title=each),
                      Cell(str(len(o.pairs)), len(o.pairs)), Cell(", ".join(o.cases), wrap=True),
-                     Cell(flag or "", wrap=True)])
+                     Cell(flag, wrap=True)])
     part.table(Table(head, rows, row_classes=["diverged" if o.flagged or o.below else "" for o in found]),
                note_constant=False)
     return part
+
+
+def _line(o):
+    """``engine integrator options`` of an ``ObservedOrder``."""
+    return " ".join(x for x in (o.engine, o.integrator, o.options) if x)

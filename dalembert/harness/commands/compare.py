@@ -37,8 +37,8 @@ def pair_options(texts):
     out = tuple(pairs("--pair-options", [p for p in text.split(",") if p]) for text in texts)
     for side, options in zip("AB", out):
         if not options:
-            raise ValueError(f"--pair-options: {side}'s options are empty — give KEY=VALUE[,KEY=VALUE] for each side, "
-                             "e.g. --pair-options cone=pyramidal cone=elliptic")
+            raise ValueError(f"--pair-options: {side}'s options are empty — give KEY=VALUE[,KEY=VALUE] for each "
+                             "side, e.g. --pair-options cone=pyramidal cone=elliptic")
     if out[0] == out[1]:
         raise ValueError(f"--pair-options: both sides are {texts[0]!r} — that pairs runs as they are; give the two "
                          "configurations to set against each other")
