@@ -151,6 +151,12 @@ def test_pair_options_sets_two_configurations_of_one_engine_against_each_other(s
     assert "4 runs in both" in out and "4 of A's 8 runs and 4 of B's 8" in out
     assert main(["compare", both.path, both.path, "--pair-options", "cone=pyramidal", "cone=pyramidal"]) == 2
     assert "both sides are" in capsys.readouterr().err
+    # "default": the runs that leave the option to the engine (the store as run, without options)
+    cmp = compare_stores(store, elliptic, pair_options=({"cone": "default"}, {"cone": "elliptic"}))
+    assert not cmp.changes and "engine options differ" in cmp.unpaired  # B's runs also set noslip=10
+    cmp = compare_stores(store, elliptic, pair_options=({"cone": "default", "noslip": "default"},
+                                                        {"cone": "elliptic", "noslip": "10"}))
+    assert len(cmp.changes) == 4 and not cmp.only_in_a
 
 
 def test_a_quantity_missing_after_is_called_out_and_fails(store, tmp_path, capsys):

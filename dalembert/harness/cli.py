@@ -163,8 +163,9 @@ def _parser():
                     help="compare runs whose case version differs (e.g. after a change that only reworded a "
                          "case or re-hashed it); by default they are flagged, not compared")
     cp.add_argument("--pair-options", nargs=2, metavar=("A_OPTIONS", "B_OPTIONS"),
-                    help="pair two configurations of one engine: A's runs with A_OPTIONS (KEY=VALUE[,KEY=VALUE]) "
-                         "against B's with B_OPTIONS, all else equal (A and B may be one directory)")
+                    help="pair two configurations of one engine: A's runs with A_OPTIONS (KEY=VALUE[,KEY=VALUE]; "
+                         "KEY=default: the option not given) against B's with B_OPTIONS, all else equal (A and B "
+                         "may be one directory)")
     cp.add_argument("--only-changed", action="store_true", help="print only the runs that changed")
     cp.add_argument("--json", metavar="FILE", help="also write the comparison as JSON (- for stdout, instead of the text)")
     cp.add_argument("--csv", metavar="FILE",
