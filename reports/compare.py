@@ -6,7 +6,8 @@ options. A run whose case version differs between the stores is listed as not
 compared (unless asked: ``across_versions``, e.g. when only the way versions are
 computed changed). Two configurations of one engine pair when asked
 (``pair_options``: A's runs with ``cone=pyramidal`` against B's with
-``cone=elliptic``, all else equal; the two stores may be one directory). When
+``cone=elliptic``, all else equal; the two stores may be one directory; ``noslip=default`` pairs the runs
+that leave the option to the engine). When
 nothing pairs, ``Comparison.unpaired`` says why (the cases, engines, settings or
 options that differ): ``dalembert compare`` then exits non-zero, for a gate that
 compared nothing has checked nothing.
@@ -78,9 +79,14 @@ def _same_value(stored, given):
         return False
 
 
+# The value that pairs a run that does not set an option (it ran with the engine's default): ``noslip=default``.
+UNSET = "default"
+
+
 def _has(r, options):
-    """Run ``r`` was run with every one of ``options`` (key -> value as text)."""
-    return all(k in r.settings.options and _same_value(r.settings.options[k], v) for k, v in options.items())
+    """Run ``r`` was run with every one of ``options`` (key -> value as text; ``UNSET``: the option not given)."""
+    given = r.settings.options
+    return all(k not in given if v == UNSET else k in given and _same_value(given[k], v) for k, v in options.items())
 
 
 def label(r):
@@ -260,9 +266,10 @@ def _timed_once(manifests):
 def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_versions=False, pair_options=None):
     """Compare ``store_a`` (before) with ``store_b`` (after); a ``Comparison``.
 
-    ``pair_options``: ``(options_a, options_b)``, each a dict key -> value (as text): compare A's runs with
-    ``options_a`` against B's with ``options_b``, every other option and setting equal (two configurations of one
-    engine; ``store_a`` and ``store_b`` may be one store). Runs without them are left out of the comparison.
+    ``pair_options``: ``(options_a, options_b)``, each a dict key -> value (as text; ``UNSET``, "default": the
+    option not given): compare A's runs with ``options_a`` against B's with ``options_b``, every other option and
+    setting equal (two configurations of one engine; ``store_a`` and ``store_b`` may be one store). Runs without
+    them are left out of the comparison.
     """
     ra, rb = store_a.records(), store_b.records()
     manifests = store_a.manifest(), store_b.manifest()
