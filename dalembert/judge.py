@@ -19,6 +19,13 @@ Within tolerance means every named tolerance of the case holds: errors against
 the truth (``dalembert.errors.QUANTITIES``) and drifts of conserved quantities.
 The bounds are the case's named tolerances, each with its reason; nothing here
 invents a bound.
+
+A bounded quantity the run did not report (an engine that reads back no
+reactions) is *not measured*: never within tolerance, never beyond it. It is
+listed in ``Judgement.not_measured``, and ``within_tolerance`` is then None
+(not established) unless some measured quantity is beyond (False): True means
+every bound was measured and holds. Stores written before this kept no
+``not_measured``; their stored ``within_tolerance`` is read as it was judged.
 """
 
 from __future__ import annotations
@@ -46,13 +53,18 @@ class Judgement:
     beyond : tuple of str — names of the case's tolerances the run exceeds (empty unless ``ok``)
     verdict : str — one of ``VERDICTS``
     reason : str — why the verdict is not ``stable`` ("" when it is)
-    within_tolerance : bool or None — every tolerance holds; None for a run that did not finish
+    within_tolerance : bool or None — every tolerance was measured and holds (True), some measured one is
+        exceeded (False); None for a run that did not finish, or when nothing measured is beyond and some bound
+        was not measured
+    not_measured : tuple of str — names of the case's tolerances whose quantity the run did not report
+        (empty in stores written before it was judged)
     """
 
     beyond: tuple
     verdict: str
     reason: str
     within_tolerance: bool | None
+    not_measured: tuple = ()
 
 
 def judge(status, message, errors, drifts, tolerances, growths=None):
@@ -74,27 +86,31 @@ def judge(status, message, errors, drifts, tolerances, growths=None):
     -------
     Judgement
 
-    A bounded quantity the run did not report counts as within; a non-finite one
-    as beyond.
+    A bounded quantity the run did not report (absent, or None) is not measured
+    (``Judgement.not_measured``), never within; a non-finite one is beyond.
     """
     if status != "ok":
         return Judgement((), status, message, None)
+    values = {name: (errors if name in QUANTITIES else drifts).get(name) for name in tolerances}
+    missing = tuple(name for name, value in values.items() if value is None)
     beyond = tuple(name for name, tol in tolerances.items()
-                   if not (errors if name in QUANTITIES else drifts).get(name, 0.0) <= tol.value)
+                   if values[name] is not None and not values[name] <= tol.value)
+    within = False if beyond else None if missing else True
     for name, value in (growths or {}).items():
         if value > BLOWUP:  # NaN (no true scale) compares False
             return Judgement(beyond, "diverged", f"{name} changed by {value:.3g} times its scale in the true motion "
-                                                 "(a blow-up, though finite)", False)
+                                                 "(a blow-up, though finite)", False, missing)
     drifted = []
     for name, tol in tolerances.items():
         value = drifts.get(name)
         if value is None:
             continue
         if math.isnan(value):
-            return Judgement(beyond, "diverged", f"{name} drift is not finite", False)
+            return Judgement(beyond, "diverged", f"{name} drift is not finite", False, missing)
         if value > BLOWUP:
-            return Judgement(beyond, "diverged", f"{name} changed by {value:.3g} times its scale (blow-up)", False)
+            return Judgement(beyond, "diverged", f"{name} changed by {value:.3g} times its scale (blow-up)", False,
+                             missing)
         if value > tol.value:
             drifted.append(f"{name} drift {value:.2e} > {tol.value:g}")
     verdict, reason = ("drifts", "; ".join(drifted)) if drifted else ("stable", "")
-    return Judgement(beyond, verdict, reason, not beyond)
+    return Judgement(beyond, verdict, reason, within, missing)

@@ -8,14 +8,17 @@ verdict, judged once when it ran (``dalembert.judge``), is stored with it.
 name is spelled; every reader (report, compare, export, tests) goes through them.
 A row is strict JSON: non-finite numbers are stored as null (the status says why).
 
-Columns (``SCHEMA_VERSION`` 3):
+Columns (``SCHEMA_VERSION`` 4):
 
 ==============  ==================================================================
 identity        ``key``, ``schema_version``, ``case``, ``case_version``, ``params``
                 (JSON), ``param_<name>`` per given case parameter (a number, or a
                 vector as JSON: swept values filter like any column), ``engine``,
-                ``engine_version``, ``integrator``, ``dt`` (s), ``rtol``, ``atol``,
-                ``options`` (JSON), ``settings`` (a label)
+                ``engine_version``, ``adapter_distribution`` and ``adapter_version`` (the
+                installed distribution that provides the adapter: ``dalembert`` for a built-in,
+                the plugin's package for an entry point), ``integrator``, ``integrator_order``
+                (the order of accuracy the integrator declares, ``IntegratorSpec.order``; null when
+                none), ``dt`` (s), ``rtol``, ``atol``, ``options`` (JSON), ``settings`` (a label)
 outcome         ``status``, ``message``, ``t_final`` (s), ``t_diverged`` (s),
                 ``traceback``
 cost            ``build_s``, ``wall_s_median``, ``wall_s_min``, ``wall_s_max`` (stepping
@@ -28,8 +31,8 @@ drifts          ``drift_<name>``, ``drift_rate_<name>`` (1/s) per conserved quan
                 ``growth_<name>`` (its change in units of its scale on the true motion), built-in or
                 declared by the case (``dalembert.case.Invariant``: its label is in the store's case record)
 checks          ``orthonormality``, ``quaternion_norm``, ``joint_residual`` (maxima)
-judgement       ``within_tolerance``, ``beyond_tolerance`` (names, space-separated),
-                ``verdict``, ``verdict_reason``
+judgement       ``within_tolerance``, ``beyond_tolerance`` and ``not_measured`` (names,
+                space-separated), ``verdict``, ``verdict_reason``
 engine          ``audit`` (JSON), ``model`` (text), ``provenance`` (JSON: host, pid, threads:
                 the width its BLAS and OpenMP pools were given)
 files           ``trajectory`` (path relative to the store)
@@ -40,6 +43,10 @@ without ``schema_version``, ``verdict``, ``verdict_reason`` and ``provenance``;
 ``from_row`` reads it with an empty verdict, so ``compare`` works across the change.
 Schemas 1 and 2 have no ``wall_s_repeats``: ``from_row`` reads them with none (an empty tuple), the
 median, min and max being all they kept.
+Schemas 1 to 3 have no ``adapter_distribution``, ``adapter_version``, ``integrator_order`` nor
+``not_measured``: ``from_row`` reads them as "" (not recorded), None and no names; their
+``within_tolerance`` reads as it was judged then (a
+bound whose quantity the run did not report counted as within).
 """
 
 from __future__ import annotations
@@ -54,8 +61,8 @@ from dalembert.settings import Settings
 __all__ = ["SCHEMA_VERSION", "READABLE_SCHEMAS", "STATUSES", "BAD_STATUSES", "CHECKS", "Cost", "RunRecord",
            "SchemaError", "UNJUDGED"]
 
-SCHEMA_VERSION = 3
-READABLE_SCHEMAS = (1, 2, 3)
+SCHEMA_VERSION = 4
+READABLE_SCHEMAS = (1, 2, 3, 4)
 
 # ok: finished; unsupported: the engine cannot represent the scene (reason in
 # message); diverged: NaN/inf or blow-up (time in message); failed: an error;
@@ -130,7 +137,12 @@ class RunRecord:
     case, case_version : str — the case and the content hash of the version run
     params : dict — the case parameters given (the rest are the factory's defaults)
     engine, engine_version : str
+    adapter_distribution, adapter_version : str — the installed distribution that provides the adapter and its
+        version (``dalembert.adapters.registry.adapter_distribution``; "" when not recorded: schemas 1 to 3, or an
+        adapter registered from a module no distribution provides)
     settings : Settings — integrator, fixed step ``dt`` (s) or tolerances ``rtol``/``atol``, engine options
+    integrator_order : int or None — the order of accuracy the engine declares for the integrator when the run ran
+        (``IntegratorSpec.order``; None when it declares none, and in stores of schemas 1 to 3)
     status : str — one of ``STATUSES``; message : str — why, for anything but ``ok``
     t_final : float — the case's horizon, s; t_diverged : float or None — first non-finite sample, s
     cost : Cost
@@ -158,6 +170,9 @@ class RunRecord:
     status: str = "failed"
     message: str = ""
     engine_version: str = ""
+    adapter_distribution: str = ""
+    adapter_version: str = ""
+    integrator_order: int | None = None
     t_final: float = _NAN
     t_diverged: float | None = None
     cost: Cost = field(default_factory=Cost)
@@ -211,7 +226,9 @@ class RunRecord:
         """The flat, strict-JSON row (column names in the module docstring)."""
         row = {"key": self.key, "schema_version": self.schema_version, "case": self.case,
                "case_version": self.case_version, "params": json.dumps(self.params, sort_keys=True, default=list),
-               "engine": self.engine, "engine_version": self.engine_version, "integrator": self.settings.integrator,
+               "engine": self.engine, "engine_version": self.engine_version,
+               "adapter_distribution": self.adapter_distribution, "adapter_version": self.adapter_version,
+               "integrator": self.settings.integrator, "integrator_order": self.integrator_order,
                "dt": self.settings.dt, "rtol": self.settings.rtol, "atol": self.settings.atol,
                "options": json.dumps(dict(self.settings.options), sort_keys=True), "settings": self.settings_label,
                **{f"param_{k}": json.dumps(list(v)) if isinstance(v, (tuple, list)) else v
@@ -227,7 +244,7 @@ class RunRecord:
         row.update(self.checks)
         j = self.judgement
         row.update(within_tolerance=j.within_tolerance, beyond_tolerance=" ".join(j.beyond),
-                   verdict=j.verdict, verdict_reason=j.reason,
+                   not_measured=" ".join(j.not_measured), verdict=j.verdict, verdict_reason=j.reason,
                    audit=json.dumps(self.audit, sort_keys=True, default=str), model=self.model,
                    provenance=json.dumps(self.provenance, sort_keys=True), trajectory=self.trajectory)
         return {k: _strict(v) for k, v in row.items()}
@@ -257,13 +274,17 @@ class RunRecord:
                               json.loads(row.get("options") or "{}")),
             params={k: tuple(v) if isinstance(v, list) else v for k, v in json.loads(row.get("params") or "{}").items()},
             status=row["status"], message=row.get("message") or "", engine_version=row.get("engine_version") or "",
+            adapter_distribution=_text(row.get("adapter_distribution")),
+            adapter_version=_text(row.get("adapter_version")),
+            integrator_order=None if _opt(row.get("integrator_order")) is None else int(row["integrator_order"]),
             t_final=_num(row.get("t_final")), t_diverged=_opt(row.get("t_diverged")),
             cost=Cost(**{f.name: _cost_field(f.name, row[f.name]) for f in fields(Cost) if f.name in row}),
             errors=errors, drifts=drifts, drift_rates=rates, growths=growths,
             checks={c: _num(row[c]) for c in CHECKS if row.get(c) is not None},
             judgement=Judgement(beyond=tuple((row.get("beyond_tolerance") or "").split()),
                                 verdict=row.get("verdict") or "", reason=row.get("verdict_reason") or "",
-                                within_tolerance=None if within is None or within != within else bool(within)),
+                                within_tolerance=None if within is None or within != within else bool(within),
+                                not_measured=tuple(_text(row.get("not_measured")).split())),
             audit=json.loads(row["audit"]) if isinstance(row.get("audit"), str) else {},
             model=row.get("model") if isinstance(row.get("model"), str) else "",
             provenance=json.loads(row["provenance"]) if isinstance(row.get("provenance"), str) else {},
@@ -288,6 +309,11 @@ def _strict(v):
     if isinstance(v, float) and not math.isfinite(v):
         return None
     return v
+
+
+def _text(v):
+    """An optional stored text: "" when absent or null (pandas reads a missing column as NaN)."""
+    return v if isinstance(v, str) else ""
 
 
 def _num(v):

@@ -4,13 +4,21 @@ both, each error and the cost before, after and their ratio; runs in one store o
 Runs are matched by case, parameters, engine, integrator, dt, tolerances and
 options. A run whose case version differs between the stores is listed as not
 compared (unless asked: ``across_versions``, e.g. when only the way versions are
-computed changed).
+computed changed). Two configurations of one engine pair when asked
+(``pair_options``: A's runs with ``cone=pyramidal`` against B's with
+``cone=elliptic``, all else equal; the two stores may be one directory; ``noslip=default`` pairs the runs
+that leave the option to the engine). When
+nothing pairs, ``Comparison.unpaired`` says why (the cases, engines, settings or
+options that differ): ``dalembert compare`` then exits non-zero, for a gate that
+compared nothing has checked nothing.
 
 An error is worse when it grows by more than ``threshold`` times, better when it
 shrinks by as much (errors at roundoff level, below ``ERROR_FLOOR``, are
 compared as if they were ``ERROR_FLOOR``); a run that finished before and now
-fails, diverges or times out is worse too. Either is a regression: the exit status
-of ``dalembert compare`` (the CI gate).
+fails, diverges or times out is worse too, and so is an error or a conserved
+quantity measured before and missing after (an engine that stopped reporting
+reactions: "missing after"). Each is a regression: the exit status of
+``dalembert compare`` (the CI gate).
 
 Cost is the stepping wall time. Timings are noisy, so a cost is slower only when
 the two runs' measured spreads do not overlap (the fastest repeat after is slower
@@ -29,7 +37,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from dalembert.errors import QUANTITIES
 from dalembert.identity import check_version, run_identity
@@ -40,7 +48,7 @@ from dalembert.reports.work_precision import headline_quantity
 from dalembert.terminal import printable
 
 __all__ = ["ERROR_FLOOR", "COST_NOTICE", "Change", "Comparison", "compare_stores", "to_text", "to_json",
-           "csv_rows", "MACHINE_FIELDS"]
+           "csv_rows", "MACHINE_FIELDS", "unpaired_reason"]
 
 # Errors below this are roundoff; a change among them is neither better nor worse.
 ERROR_FLOOR = 1e-13
@@ -52,9 +60,33 @@ MACHINE_FIELDS = ("cpu", "cores", "os", "python", "host")
 CHANGES = ("worse", "better", "status", "same")
 
 
-def _key(r):
-    """What identifies a run across stores: its ``dalembert.identity.RunIdentity``."""
-    return run_identity(r.case, r.params, r.engine, r.settings)
+def _key(r, drop=()):
+    """What identifies a run across stores: its ``dalembert.identity.RunIdentity`` (the options named in
+    ``drop`` left out: the ones ``pair_options`` sets apart)."""
+    settings = r.settings
+    if drop:
+        settings = replace(settings, options={k: v for k, v in settings.options.items() if k not in drop})
+    return run_identity(r.case, r.params, r.engine, settings)
+
+
+def _same_value(stored, given):
+    """An option value as stored (typed) against one given as text: ``10`` is ``"10"`` and ``"10.0"``."""
+    if str(stored) == given:
+        return True
+    try:
+        return float(stored) == float(given)
+    except (TypeError, ValueError):
+        return False
+
+
+# The value that pairs a run that does not set an option (it ran with the engine's default): ``noslip=default``.
+UNSET = "default"
+
+
+def _has(r, options):
+    """Run ``r`` was run with every one of ``options`` (key -> value as text; ``UNSET``: the option not given)."""
+    given = r.settings.options
+    return all(k not in given if v == UNSET else k in given and _same_value(given[k], v) for k, v in options.items())
 
 
 def label(r):
@@ -74,6 +106,8 @@ class Change:
     regression : bool — counts against the exit status
     notes : tuple of str — what changed, in words
     errors : dict quantity -> (before, after, ratio) — max errors (ratio NaN when either is missing)
+    missing : tuple of str — errors (quantity names) and conserved quantities (``drift:<name>``) the run
+        measured before and not after, both having finished (a regression)
     cost_ratio : float — median stepping time after / before
     cost_change : str — "slower", "faster" or "same" (judged against both spreads); "unjudged" when
         either store timed each run once (single samples: no spread to judge against)
@@ -87,6 +121,7 @@ class Change:
     errors: dict
     cost_ratio: float
     cost_change: str
+    missing: tuple = ()
 
     @property
     def label(self):
@@ -106,6 +141,8 @@ class Comparison:
     threshold: float = 2.0
     cost_threshold: float | None = None
     stats: dict = field(default_factory=dict)
+    unpaired: str = ""  # why nothing pairs ("" when some run does)
+    pairing: tuple = ()  # (A's options, B's options) set apart by ``pair_options``; () when runs pair as they are
 
     @property
     def regressed(self):
@@ -147,19 +184,22 @@ def _change(a, b, threshold, cost_threshold, costs_judged=True):
     worse = [q for q, (_, _, r) in errors.items() if r > threshold]
     better = [q for q, (_, _, r) in errors.items() if r < 1.0 / threshold]
     notes = [f"{q} x{errors[q][2]:.3g}" for q in worse + better]
+    missing = ([q for q in errors if q in a.errors and q not in b.errors]
+               + [f"drift:{n}" for n in a.drifts if n not in b.drifts]) if a.ok and b.ok else []
+    notes += [f"{q} missing after" for q in missing]
     if a.judgement.verdict and b.judgement.verdict and a.judgement.verdict != b.judgement.verdict:
         notes.append(f"verdict {a.judgement.verdict} -> {b.judgement.verdict}")
     if cost_change in ("slower", "faster"):
         notes.append(f"cost x{cost_ratio:.3g} ({cost_change}, beyond both spreads)")
     blew_up = b.judgement.verdict == "diverged" and a.judgement.verdict not in ("diverged", "")
-    regression = bool(worse) or cost_regressed or blew_up
+    regression = bool(worse) or bool(missing) or cost_regressed or blew_up
     if regression or cost_change == "slower":
         change = "worse"
     elif better or cost_change == "faster":
         change = "better"
     else:
         change = "status" if notes else "same"
-    return Change(a, b, change, regression, tuple(notes), errors, cost_ratio, cost_change)
+    return Change(a, b, change, regression, tuple(notes), errors, cost_ratio, cost_change, tuple(missing))
 
 
 def _differences(ma, mb, records_a, records_b):
@@ -174,7 +214,42 @@ def _differences(ma, mb, records_a, records_b):
     engines = [f"{e} {va[e]} -> {vb[e]}" for e in sorted(set(va) & set(vb)) if va[e] != vb[e]]
     if engines:
         out.append("engine versions differ: " + ", ".join(engines))
+    aa, ab = _adapters(records_a), _adapters(records_b)
+    adapters = [f"{e} ({' and '.join(sorted(aa[e]))} -> {' and '.join(sorted(ab[e]))})"
+                for e in sorted(set(aa) & set(ab)) if aa[e] != ab[e]]
+    if adapters:
+        out.append("adapter versions differ (the package that provides the engine's adapter): " + ", ".join(adapters))
     return out
+
+
+def _adapters(records):
+    """engine -> the set of ``distribution version`` its runs recorded (runs of stores that kept none left out)."""
+    out = {}
+    for r in records:
+        if r.adapter_distribution:
+            out.setdefault(r.engine, set()).add(f"{r.adapter_distribution} {r.adapter_version}")
+    return out
+
+
+def unpaired_reason(records_a, records_b, pairing=()):
+    """Why no run of ``records_a`` pairs with one of ``records_b``, in words: what the stores hold differs
+    (cases, parameters, engines, integrators, steps or tolerances, options), or one holds no run."""
+    if not records_a or not records_b:
+        return f"{'A' if not records_a else 'B'} holds no run{' with the options paired' if pairing else ''}"
+    out = []
+    for what, of in (("cases", lambda r: r.case), ("engines", lambda r: r.engine),
+                     ("parameters", lambda r: json.dumps(r.params, sort_keys=True, default=list)),
+                     ("integrators", lambda r: r.settings.integrator),
+                     ("steps and tolerances", lambda r: r.sweep_label),
+                     ("engine options", lambda r: r.options_label or "(defaults)")):
+        xa, xb = {of(r) for r in records_a}, {of(r) for r in records_b}
+        if not xa & xb:
+            out.append(f"{what} differ (A: {', '.join(sorted(xa))}; B: {', '.join(sorted(xb))})")
+    if not out:
+        out.append("each holds what the other does, but never in the same combination")
+    fix = ("; to compare two configurations of one engine, pair their options: --pair-options A_OPTIONS B_OPTIONS"
+           if not pairing and any("engine options" in x for x in out) else "")
+    return "no run pairs: " + "; ".join(out) + fix
 
 
 def _timed_once(manifests):
@@ -188,12 +263,31 @@ def _timed_once(manifests):
             "more on a loaded one — costs are shown, not judged (no cost is called slower or faster)")
 
 
-def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_versions=False):
-    """Compare ``store_a`` (before) with ``store_b`` (after); a ``Comparison``."""
+def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_versions=False, pair_options=None):
+    """Compare ``store_a`` (before) with ``store_b`` (after); a ``Comparison``.
+
+    ``pair_options``: ``(options_a, options_b)``, each a dict key -> value (as text; ``UNSET``, "default": the
+    option not given): compare A's runs with ``options_a`` against B's with ``options_b``, every other option and
+    setting equal (two configurations of one engine; ``store_a`` and ``store_b`` may be one store). Runs without
+    them are left out of the comparison.
+    """
     ra, rb = store_a.records(), store_b.records()
     manifests = store_a.manifest(), store_b.manifest()
     once = _timed_once(manifests)
-    a, b = {_key(r): r for r in ra}, {_key(r): r for r in rb}
+    warnings = []
+    pairing = ()
+    if pair_options:
+        opts_a, opts_b = (dict(o) for o in pair_options)
+        pairing = (opts_a, opts_b)
+        drop = set(opts_a) | set(opts_b)
+        kept_a, kept_b = [r for r in ra if _has(r, opts_a)], [r for r in rb if _has(r, opts_b)]
+        warnings.append(f"pairing A's runs with {_words(opts_a)} against B's with {_words(opts_b)}, all else equal: "
+                        f"{len(ra) - len(kept_a)} of A's {len(ra)} runs and {len(rb) - len(kept_b)} of B's {len(rb)} "
+                        "without those options are left out")
+        a, b = {_key(r, drop): r for r in kept_a}, {_key(r, drop): r for r in kept_b}
+    else:
+        kept_a, kept_b = ra, rb
+        a, b = {_key(r): r for r in ra}, {_key(r): r for r in rb}
     changes, not_compared = [], []
     for key in sorted(set(a) & set(b), key=str):
         x, y = a[key], b[key]
@@ -207,9 +301,17 @@ def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_
     only_a = tuple(sorted((a[k] for k in set(a) - set(b)), key=label))
     only_b = tuple(sorted((b[k] for k in set(b) - set(a)), key=label))
     stats = {c: sum(1 for x in changes if x.change == c) for c in CHANGES}
+    unpaired = "" if changes or not_compared else unpaired_reason(kept_a, kept_b, pairing)
+    if not changes and not_compared:
+        unpaired = (f"no run compared: the {len(not_compared)} run(s) in both are of another case version "
+                    "(compare them anyway with --across-versions)")
     return Comparison(tuple(changes), only_a, only_b, tuple(not_compared),
-                      tuple(_differences(*manifests, ra, rb) + ([once] if once else [])),
-                      (store_a.path, store_b.path), threshold, cost_threshold, stats)
+                      tuple(warnings + _differences(*manifests, kept_a, kept_b) + ([once] if once else [])),
+                      (store_a.path, store_b.path), threshold, cost_threshold, stats, unpaired, pairing)
+
+
+def _words(options):
+    return " ".join(f"{k}={v}" for k, v in sorted(options.items()))
 
 
 # ---------------------------------------------------------------------------------------------- output
@@ -246,6 +348,10 @@ def _lines(c, only_changed, threshold):
     if not (only_changed and mark == " "):
         out.append(f"{mark} {_fmt(ca.wall_s_median):>10} {_fmt(cb.wall_s_median):>10} {c.cost_ratio:>8.3g}  "
                    f"{'cost (s)':<24} {c.label}  [{spread}]")
+    for q in c.missing:
+        unit = f" ({QUANTITIES[q]})" if q in QUANTITIES else ""
+        before = c.a.max_error(q) if q in QUANTITIES else c.a.drifts.get(q.split(":", 1)[1], math.nan)
+        out.append(f"+ {_fmt(before):>10} {'missing':>10} {'':>8}  {q + unit:<24} {c.label}: missing after")
     if c.a.judgement.verdict != c.b.judgement.verdict and c.a.judgement.verdict and c.b.judgement.verdict:
         out.append(f"{'+' if c.b.judgement.verdict == 'diverged' else '!'} {'':>10} {'':>10} {'':>8}  {'verdict':<24} "
                    f"{c.label}: {c.a.judgement.verdict} -> {c.b.judgement.verdict}")
@@ -258,6 +364,8 @@ def to_text(cmp, only_changed=False):
     count. Every line's control characters escaped (``printable``): it is for a terminal."""
     out = [f"before: {cmp.paths[0]}", f"after:  {cmp.paths[1]}"] if cmp.paths else []
     out += [f"warning: {w}" for w in cmp.warnings]
+    if cmp.unpaired:
+        out.append(f"nothing compared: {cmp.unpaired}")
     body = [line for c in cmp.changes for line in _lines(c, only_changed, cmp.threshold)]
     if body:
         out += ["", f"  {'before':>10} {'after':>10} {'ratio':>8}  {'quantity':<24} run",
@@ -297,6 +405,7 @@ def _cost_json(cost):
 def to_json(cmp):
     """The comparison as a JSON-able dict: before/after/ratio per run for every error and the cost."""
     runs = [{**_identity(c.b), "change": c.change, "regression": c.regression, "notes": list(c.notes),
+             "missing_after": list(c.missing),
              "status": {"before": c.a.status, "after": c.b.status},
              "verdict": {"before": c.a.judgement.verdict, "after": c.b.judgement.verdict},
              "errors": {q: {"unit": QUANTITIES[q], "before": _num(x), "after": _num(y), "ratio": _num(r)}
@@ -305,7 +414,8 @@ def to_json(cmp):
                       "ratio": _num(c.cost_ratio), "change": c.cost_change}} for c in cmp.changes]
     return {"before": cmp.paths[0] if cmp.paths else None, "after": cmp.paths[1] if cmp.paths else None,
             "threshold": cmp.threshold, "cost_threshold": cmp.cost_threshold, "warnings": list(cmp.warnings),
-            "regressed": cmp.regressed, "counts": dict(cmp.stats), "runs": runs,
+            "regressed": cmp.regressed, "counts": dict(cmp.stats), "runs": runs, "unpaired": cmp.unpaired or None,
+            "pair_options": ({"a": cmp.pairing[0], "b": cmp.pairing[1]} if cmp.pairing else None),
             "only_in_a": [_identity(r) for r in cmp.only_in_a], "only_in_b": [_identity(r) for r in cmp.only_in_b],
             "not_compared": [{**_identity(y), "reason": why} for _, y, why in cmp.not_compared]}
 
@@ -323,6 +433,7 @@ def csv_rows(cmp):
         ident = {**_identity(c.b), "params": json.dumps(c.b.params, sort_keys=True, default=list), "in": "both"}
         for q, (x, y, r) in c.errors.items():
             change = {"+": "worse", "-": "better"}.get(_mark(r, cmp.threshold), "same") if math.isfinite(r) else ""
+            change = "missing after" if q in c.missing else change
             rows.append({**ident, "quantity": q, "unit": QUANTITIES[q], "before": x, "after": y, "ratio": r,
                          "change": change})
         ca, cb = c.a.cost, c.b.cost

@@ -34,6 +34,7 @@ from dalembert.reports.sections.hazards import hazards
 from dalembert.reports.sections.header import header
 from dalembert.reports.sections.loops import loops
 from dalembert.reports.sections.maps import maps
+from dalembert.reports.sections.order import observed_order
 from dalembert.reports.sections.parity import parity
 from dalembert.reports.sections.runs import every_run
 from dalembert.reports.sections.scaling import scaling
@@ -95,7 +96,8 @@ def build_report(store, out_dir=None):
                  colours=figures.engine_colours({r.engine for r in records}))
     summary, summary_rows = findings(rep)
     mapped_part, mapped = maps(rep)
-    parts = [header(rep), summary, hazards(rep), mapped_part, loops(rep), scaling(rep), parity(rep)]
+    parts = [header(rep), summary, hazards(rep), mapped_part, loops(rep), scaling(rep), observed_order(rep),
+             parity(rep)]
     for f in found:
         parts += _case_sections(rep, f, names, mapped)
     html_path, md_path = write_page([p for p in parts if p], out_dir)

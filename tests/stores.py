@@ -43,6 +43,7 @@ def base(store):
 # ``changed`` takes flat.
 SETTINGS_FIELDS = ("integrator", "dt", "rtol", "atol", "options")
 JUDGEMENT_FIELDS = {"beyond": "beyond", "verdict": "verdict", "verdict_reason": "reason",
+                    "not_measured": "not_measured",
                     "within_tolerance": "within_tolerance"}
 
 

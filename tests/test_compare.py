@@ -11,6 +11,7 @@ from dataclasses import replace
 import pytest
 
 from dalembert.harness.cli import main
+from dalembert.record import SCHEMA_VERSION
 from dalembert.reports.compare import compare_stores, to_json
 from dalembert.store import Store
 from stores import small_store, tamper
@@ -146,7 +147,7 @@ def test_a_schema_1_store_compares_with_a_current_one(store, tmp_path, capsys):
         json.dump(row, open(path, "w"))
     assert main(["compare", old.path, store.path]) == 0
     captured = capsys.readouterr()
-    assert "schemas 1 and 3" in captured.err and "4 runs in both: 0 worse" in captured.out
+    assert f"schemas 1 and {SCHEMA_VERSION}" in captured.err and "4 runs in both: 0 worse" in captured.out
 
 
 def test_quick_stores_costs_are_single_samples_shown_not_judged(store, tmp_path, capsys):

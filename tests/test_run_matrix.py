@@ -267,7 +267,7 @@ def test_resume_refuses_a_case_that_changed(tmp_path, capsys):
                  "--param", "t_final=0.5", "--out", str(out)]) == 0
     store = Store(out)
     assert {"schema_version", "verdict", "verdict_reason"} <= set(store.table().columns)
-    assert store.schema_version() == store.rows()[0]["schema_version"] == 3
+    assert store.schema_version() == store.rows()[0]["schema_version"] == 4
     manifest = store.manifest()
     manifest["specs"][0]["case_version"] = "0123456789ab"  # as if the case's code had changed since
     store.write_manifest(manifest)

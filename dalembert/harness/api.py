@@ -77,7 +77,8 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     out : str or None — the new store's directory (default ``results/<time>``); must not hold a run
     resume : str or None — finish this store instead (no flag that makes a matrix with it)
     search, resolution : "dt" and float or None — the stability-boundary search (``--search dt``)
-    no_maps, force, strict : bool — as ``--no-maps``, ``--force``, ``--strict``
+    no_maps, force : bool — as ``--no-maps``, ``--force``
+    strict : bool or str — as ``--strict`` (True) or ``--strict=tolerance`` ("tolerance")
     timing : dalembert.harness.execute.Timing or None — how each run is timed (not with ``quick``)
     progress : callable or None — ``progress(done, total, failures, record)`` after each run
     debug : bool — keep Dask's own log
@@ -104,8 +105,11 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
         raise MatrixError(f"{len(outcome.lost)} run(s) lost to the infrastructure (first: {outcome.lost[0][1]}) — "
                           f"finish with api.run(resume={outcome.store.path!r})", outcome)
     if outcome.exit_status:
-        raise MatrixError(f"strict: {len(outcome.bad)} run(s) failed, diverged or timed out (first: "
-                          f"{outcome.bad[0].key}: {outcome.bad[0].status})", outcome)
+        first = outcome.failing[0]
+        why = first.status if not first.ok else "beyond " + " ".join(first.judgement.beyond)
+        raise MatrixError(f"strict: {len(outcome.failing)} run(s) failed, diverged or timed out"
+                          + (" or are beyond their case's tolerance" if outcome.strict == "tolerance" else "")
+                          + f" (first: {first.key}: {why})", outcome)
     df = outcome.store.table()
     df.attrs["store"] = outcome.store.path
     return df
@@ -140,14 +144,15 @@ def report(store, out_dir=None):
     return _report(store, out_dir)
 
 
-def compare(before, after, threshold=2.0, cost_threshold=None, across_versions=False):
+def compare(before, after, threshold=2.0, cost_threshold=None, across_versions=False, pair_options=None):
     """Compare two stores (Stores or paths) as ``dalembert compare`` does; a
-    ``dalembert.reports.compare.Comparison`` (``.regressed``, ``.changes``, ``.only_in_a``, ...;
-    ``dalembert.reports.compare.to_json`` turns it into plain data)."""
+    ``dalembert.reports.compare.Comparison`` (``.regressed``, ``.unpaired``: why nothing pairs, ``.changes``,
+    ``.only_in_a``, ...; ``dalembert.reports.compare.to_json`` turns it into plain data). ``pair_options``:
+    ``({"cone": "pyramidal"}, {"cone": "elliptic"})``, as ``--pair-options``."""
     from dalembert.reports.compare import compare_stores
 
     a, b = (s if isinstance(s, Store) else load(s, any_schema=True) for s in (before, after))
-    return compare_stores(a, b, threshold, cost_threshold, across_versions)
+    return compare_stores(a, b, threshold, cost_threshold, across_versions, pair_options)
 
 
 def trajectories(store, keys=(), case=None, engine=None, integrator=None, dt=None, rtol=None, options=None):

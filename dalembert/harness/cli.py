@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 
 from dalembert.harness.commands import cases, compare, engines, export, report, show_model, truth, validate
 from dalembert.harness.commands import run as run_command
@@ -112,9 +113,10 @@ def _parser():
     r.add_argument("--force", action="store_true",
                    help="allow sizes refused by default (usually a typo): runs of more than 1e8 steps, matrices or "
                         "sweeps of more than 1e4 runs, models of more than 1000 parts")
-    r.add_argument("--strict", action="store_true",
+    r.add_argument("--strict", nargs="?", const="status", default=False, choices=["status", "tolerance"],
                    help="exit 1 when any run failed, diverged or timed out (for CI; by default those are "
-                        "findings in the report, and the exit is 0 once every run is stored)")
+                        "findings in the report, and the exit is 0 once every run is stored); --strict=tolerance: "
+                        "also when a finished run is beyond its case's tolerance")
 
     rp = sub.add_parser("report", help="write report.html, report.md and summary.csv for a results directory",
                         epilog="example:\n  dalembert report results/latest",
@@ -149,7 +151,8 @@ def _parser():
 
     cp = sub.add_parser("compare", help="compare two results directories; non-zero exit on a regression",
                         epilog="examples:\n  dalembert compare results/before results/after --threshold 2\n"
-                               "  dalembert compare A B --only-changed --json changes.json",
+                               "  dalembert compare A B --only-changed --json changes.json\n"
+                               "  dalembert compare S S --pair-options cone=pyramidal cone=elliptic",
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     cp.add_argument("run_a")
     cp.add_argument("run_b")
@@ -159,6 +162,10 @@ def _parser():
     cp.add_argument("--across-versions", action="store_true",
                     help="compare runs whose case version differs (e.g. after a change that only reworded a "
                          "case or re-hashed it); by default they are flagged, not compared")
+    cp.add_argument("--pair-options", nargs=2, metavar=("A_OPTIONS", "B_OPTIONS"),
+                    help="pair two configurations of one engine: A's runs with A_OPTIONS (KEY=VALUE[,KEY=VALUE]; "
+                         "KEY=default: the option not given) against B's with B_OPTIONS, all else equal (A and B "
+                         "may be one directory)")
     cp.add_argument("--only-changed", action="store_true", help="print only the runs that changed")
     cp.add_argument("--json", metavar="FILE", help="also write the comparison as JSON (- for stdout, instead of the text)")
     cp.add_argument("--csv", metavar="FILE",
@@ -208,6 +215,17 @@ def _refuse_empty(parser, args):
                              "default)")
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    """A plugin left out (``adapters.registry.PluginWarning``) as the command line's one-line warning; any other
+    warning as Python shows it."""
+    from dalembert.adapters.registry import PluginWarning
+
+    if issubclass(category, PluginWarning):
+        print(f"dalembert: warning: {printable(message)}", file=file or sys.stderr)
+    else:
+        print(warnings.formatwarning(message, category, filename, lineno, line), end="", file=file or sys.stderr)
+
+
 def main(argv=None):
     """Run one command; every error a user can cause is a one-line message (``--debug``: the
     traceback), an unexpected one says so and how to report it."""
@@ -215,7 +233,9 @@ def main(argv=None):
     args = parser.parse_args(argv)
     try:
         _refuse_empty(parser, args)
-        return COMMANDS[args.command](args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            return COMMANDS[args.command](args)
     except BrokenPipeError:  # the reader left (e.g. `dalembert cases | head`): not an error
         try:  # Python's documented recipe: stdout to /dev/null, so the final flush cannot fail again
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

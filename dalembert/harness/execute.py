@@ -86,6 +86,7 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
     """
     from dalembert import invariants
     from dalembert.adapters import get_adapter
+    from dalembert.adapters.registry import adapter_distribution
     from dalembert.errors import trajectory_errors
     from dalembert.harness.truths import built_case
     from dalembert.store import trajectory_to_npz
@@ -95,6 +96,10 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
     try:
         adapter = get_adapter(spec.engine, spec.adapter)
         found["engine_version"] = adapter.version()
+        found["adapter_distribution"], found["adapter_version"] = adapter_distribution(spec.engine)
+        # the order it declares (``IntegratorSpec.order``, where the contract has it): the report sets the
+        # observed order beside it from the store alone
+        found["integrator_order"] = getattr(adapter.integrators.get(spec.settings.integrator), "order", None)
         case, version = built_case(spec.case, spec.params)  # built once per worker, not once per run
         found["t_final"] = case.t_final
         changed = check_version(spec.case, spec.case_version, version, "the matrix was made for")

@@ -117,8 +117,11 @@ def to_markdown(store):
                      str(r.cost.n_rhs)]
             cells += [_fmt(r.max_error(q)) for q in errors] + [_fmt(r.drifts.get(n, math.nan)) for n in drifts]
             cells += [_fmt(r.checks.get(c, math.nan)) for c in checks]
-            within = bool(r.judgement.within_tolerance)
-            cells.append("— (the truth itself)" if is_the_truth(r, case) else _fmt(within))
+            within = r.judgement.within_tolerance
+            # a bound the run did not report is not measured: neither yes nor no (``dalembert.judge``)
+            missing = r.judgement.not_measured
+            shown = f"not measured: {', '.join(missing)}" if within is None and missing else _fmt(bool(within))
+            cells.append("— (the truth itself)" if is_the_truth(r, case) else shown)
             lines.append("| " + " | ".join(cells) + " |")
         lines.append("")
     return "\n".join(lines)

@@ -1,6 +1,7 @@
 """Every run of one case in a sortable table: settings, status, cost and its spread, each error,
 each conserved quantity's drift (the case's declared ones too, relative to their scale in their
-unit), each metric in its unit, what is beyond the tolerance, and the stored verdict."""
+unit), each metric in its unit, what is beyond the tolerance (and what the run did not measure), and the stored
+verdict."""
 
 from __future__ import annotations
 
@@ -15,6 +16,12 @@ from dalembert.reports.tables import MISSING, Cell, Table, num
 from dalembert.reports.work_precision import cost_per_sim_s, sweep_key
 
 __all__ = ["every_run"]
+
+
+def _beyond_text(j):
+    """The tolerances a finished run exceeds, then those it did not measure (never within: ``dalembert.judge``)."""
+    return "; ".join(x for x in (", ".join(j.beyond), "not measured: " + ", ".join(j.not_measured)
+                                  if j.not_measured else "") if x)
 
 
 def every_run(rep, f):
@@ -39,7 +46,7 @@ def every_run(rep, f):
                   if math.isfinite(r.cost.wall_s_min) else Cell(MISSING, math.nan))
         rows.append([Cell(r.engine), Cell(settings_text(r), wrap=True), status, num(cost_per_sim_s(r), "{:.2g}"),
                      spread] + [num(r.max_error(q)) for q in errs] + [num(shown_value(r, n, f.case)) for n in drifts]
-                    + [Cell(", ".join(r.judgement.beyond) if r.ok else MISSING, wrap=True),
+                    + [Cell(_beyond_text(r.judgement) if r.ok else MISSING, wrap=True),
                        Cell(r.judgement.verdict, title=r.judgement.reason)])
     part.heading("Every run", 3)
     part.table(Table(head, rows, row_ids=[f"run-{r.key}" for r in runs],

@@ -1,5 +1,7 @@
 """``dalembert compare``: two results directories run by run (``dalembert.reports.compare``); a
-regression is exit 1."""
+regression is exit 1, and a comparison in which nothing pairs is exit 2 with the reason (a gate that
+compared nothing has checked nothing). ``--pair-options A_OPTIONS B_OPTIONS`` pairs two configurations of
+one engine (``cone=pyramidal cone=elliptic``; A and B may be one store)."""
 
 from __future__ import annotations
 
@@ -15,13 +17,32 @@ __all__ = ["run", "main"]
 
 
 def run(run_a, run_b, threshold=2.0, cost_threshold=None, across_versions=False, only_changed=False, json=None,
-        csv=None):
+        csv=None, pair_options=None):
     """Compare the stores ``run_a`` and ``run_b`` and print (or write: ``json``, ``csv``, ``-`` for
-    standard output) the comparison; returns the exit status (1 on a regression)."""
+    standard output) the comparison; returns the exit status (1 on a regression, 2 when nothing pairs).
+    ``pair_options``: ``(A_OPTIONS, B_OPTIONS)``, each ``"key=value[,key=value]"``, as ``--pair-options``."""
     from types import SimpleNamespace
 
     return main(SimpleNamespace(run_a=run_a, run_b=run_b, threshold=threshold, cost_threshold=cost_threshold,
-                                across_versions=across_versions, only_changed=only_changed, json=json, csv=csv))
+                                across_versions=across_versions, only_changed=only_changed, json=json, csv=csv,
+                                pair_options=pair_options))
+
+
+def pair_options(texts):
+    """``--pair-options``' two texts (``key=value[,key=value]``) as two dicts; ValueError naming the flag."""
+    from dalembert.harness.selection import pairs
+
+    if texts is None:
+        return None
+    out = tuple(pairs("--pair-options", [p for p in text.split(",") if p]) for text in texts)
+    for side, options in zip("AB", out):
+        if not options:
+            raise ValueError(f"--pair-options: {side}'s options are empty — give KEY=VALUE[,KEY=VALUE] for each "
+                             "side, e.g. --pair-options cone=pyramidal cone=elliptic")
+    if out[0] == out[1]:
+        raise ValueError(f"--pair-options: both sides are {texts[0]!r} — that pairs runs as they are; give the two "
+                         "configurations to set against each other")
+    return out
 
 
 def main(args):
@@ -34,6 +55,7 @@ def main(args):
     from dalembert.reports.compare import CSV_COLUMNS, compare_stores, csv_rows, to_json, to_text
 
     try:
+        paired = pair_options(getattr(args, "pair_options", None))
         stores = [_open(d, READABLE_SCHEMAS) for d in (args.run_a, args.run_b)]
         for flag, path in (("--json", args.json), ("--csv", args.csv)):
             if path is not None:
@@ -48,7 +70,7 @@ def main(args):
         print(f"dalembert: note: the stores have schemas {schemas[0]} and {schemas[1]}; runs are matched by case, "
               "engine and settings", file=sys.stderr)
     cmp = compare_stores(*stores, threshold=args.threshold, cost_threshold=args.cost_threshold,
-                         across_versions=args.across_versions)
+                         across_versions=args.across_versions, pair_options=paired)
     outputs = []  # (flag, path, text)
     if args.json is not None:
         outputs.append(("--json", args.json, json.dumps(to_json(cmp), indent=1, allow_nan=False) + "\n"))
@@ -64,4 +86,6 @@ def main(args):
         output.write(path, text, flag)
         if path != output.STDOUT:
             print(f"wrote {printable(path)}", file=sys.stderr)
+    if cmp.unpaired:
+        return _fail(f"{cmp.unpaired} — nothing was compared, so nothing is known about a regression")
     return 1 if cmp.regressed else 0

@@ -1,5 +1,6 @@
-"""``dalembert engines``: each registered engine, its version (or why it is not installed), the
-effects it supports and its integrators (``verbose``: their options and descriptions)."""
+"""``dalembert engines``: each registered engine, its version (or why it is not installed), the package
+that provides its adapter where it is not dalembert (a plugin), the effects it supports and its integrators
+(``verbose``: their options and descriptions). A plugin left out is named in a warning (``adapters.registry``)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ __all__ = ["run", "main"]
 def run(verbose=False):
     """Print every registered engine; returns the exit status, 0."""
     from dalembert.adapters import adapter_names, get_adapter
+    from dalembert.adapters.registry import OWN_DISTRIBUTION, adapter_distribution
 
     for name in adapter_names():
         adapter = get_adapter(name)
@@ -16,7 +18,9 @@ def run(verbose=False):
             version = adapter.version()
         except ImportError as e:
             version = f"not installed ({e})"
-        print(f"{name:<10} {version}")
+        dist, dist_version = adapter_distribution(name)
+        plugin = f"  (adapter from {dist} {dist_version})" if dist and dist != OWN_DISTRIBUTION else ""
+        print(f"{name:<10} {version}{plugin}")
         print(f"    effects: {', '.join(sorted(adapter.effects))}")
         for integ, spec in adapter.integrators.items():
             knobs = "dt" if spec.fixed_step else "rtol, atol"

@@ -48,7 +48,7 @@ class Outcome:
     records: list  # RunRecord per stored run
     lost: list  # [(key, reason)]: runs lost to the infrastructure, not stored (--resume runs them)
     interrupted: bool = False  # Ctrl-C or SIGTERM: every finished run stored, the rest not run
-    strict: bool = False
+    strict: bool | str = False  # ``STRICT``: False, True (= "status") or "tolerance"
 
     @property
     def bad(self):
@@ -56,13 +56,48 @@ class Outcome:
         return [r for r in self.records if r.status in BAD_STATUSES]
 
     @property
+    def beyond(self):
+        """The finished records beyond one of their case's tolerances (``Judgement.within_tolerance`` False)."""
+        return [r for r in self.records if r.ok and r.judgement.within_tolerance is False]
+
+    @property
+    def not_measured(self):
+        """The finished records with a bounded quantity they did not report, none beyond (within not established)."""
+        return [r for r in self.records if r.ok and r.judgement.within_tolerance is None and r.judgement.not_measured]
+
+    @property
+    def failing(self):
+        """What fails the matrix under ``strict``: the bad records, and with ``"tolerance"`` those beyond too."""
+        if not self.strict:
+            return []
+        return self.bad + (self.beyond if self.strict == "tolerance" else [])
+
+    @property
     def exit_status(self):
-        """The command line's: 130 interrupted, 4 runs lost, 1 a bad run under ``strict``, else 0."""
+        """The command line's: 130 interrupted, 4 runs lost, 1 a failing run under ``strict``, else 0."""
         if self.interrupted:
             return 130
         if self.lost:
             return 4
-        return 1 if self.strict and self.bad else 0
+        return 1 if self.failing else 0
+
+
+# ``--strict``'s levels: "status" fails a matrix with a run that failed, diverged or timed out; "tolerance" also
+# with a finished run beyond its case's tolerance (a bound the run did not measure fails neither: it is named).
+STRICT = ("status", "tolerance")
+
+
+def strict_level(value):
+    """``strict`` as ``Outcome`` takes it: False, or one of ``STRICT`` (True is "status"); ValueError naming
+    ``--strict`` otherwise."""
+    if value is False or value is None:
+        return False
+    if value is True:
+        return "status"
+    if value in STRICT:
+        return value
+    raise ValueError(f"--strict: {value!r} is not a level — use --strict (failed, diverged or timed-out runs) or "
+                     "--strict=tolerance (those and runs beyond their case's tolerance)")
 
 
 def _groups(values):
@@ -274,7 +309,8 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     no_maps : bool — leave out the stability maps the selected tags carry
     force : bool — allow sizes refused by default (``selection.MAX_RUNS``, ``MAX_MODEL_PARTS``,
         ``matrix.MAX_STEPS_PER_RUN``)
-    strict : bool — make a failed, diverged or timed-out run the outcome's failure (exit 1)
+    strict : bool or str — make a failed, diverged or timed-out run the outcome's failure (exit 1): True or
+        "status"; "tolerance" also a finished run beyond its case's tolerance (``STRICT``)
     timing : dalembert.harness.execute.Timing or None — how each run is timed (not with ``quick``)
     progress : callable or None — ``progress(done, total, failures, record)`` after each run
     debug : bool — keep Dask's own log
@@ -293,6 +329,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     from dalembert.harness.selection import select
     from dalembert.harness.truths import build
 
+    strict = strict_level(strict)
     for keyword, value in (("out", out), ("resume", resume), ("scheduler", scheduler), ("search", search)):
         if value is not None:
             given(_flag(keyword), value)
@@ -363,7 +400,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
 
 def main(args):
     """``dalembert run`` on the command line: ``run`` with the flags of ``args``, a summary on
-    standard error, the exit status (0, 1 with ``--strict`` and a bad run, 4 runs lost, 130
+    standard error, the exit status (0, 1 with ``--strict`` and a failing run, 4 runs lost, 130
     interrupted)."""
     flags = {KEYWORDS.get(k, k): v for k, v in vars(args).items() if k not in ("command",)}
     _stop_on_sigterm()
@@ -375,6 +412,14 @@ def main(args):
         by_status[r.status] = by_status.get(r.status, 0) + 1
     print(f"dalembert: {len(outcome.records)} runs stored in {outcome.store.path}: "
           + ", ".join(f"{n} {s}" for s, n in sorted(by_status.items())), file=sys.stderr)
+    if outcome.beyond:
+        print(f"dalembert: {len(outcome.beyond)} finished run(s) beyond their case's tolerance (first: "
+              f"{outcome.beyond[0].key}: {', '.join(outcome.beyond[0].judgement.beyond)})"
+              + ("" if outcome.strict == "tolerance" else "; --strict=tolerance fails on them"), file=sys.stderr)
+    if outcome.not_measured:
+        names = sorted({n for r in outcome.not_measured for n in r.judgement.not_measured})
+        print(f"dalembert: {len(outcome.not_measured)} finished run(s) with bounded quantities they do not report "
+              f"({', '.join(names)}): not measured, so not within tolerance either", file=sys.stderr)
     if outcome.lost:  # the infrastructure's failure, not the runs': nothing stored, --resume runs them
         print(f"dalembert: {len(outcome.lost)} run(s) not run, lost to the infrastructure (first: "
               f"{outcome.lost[0][1]}) — finish with: dalembert run --resume {outcome.store.path}", file=sys.stderr)
