@@ -103,7 +103,7 @@ def passing_bodies(geoms=True, speed=1.0, gap=0.2):
 class Pendulum:
     """A uniform rod (``mass`` kg, ``length`` m, radius 0.01 m) hung from the world at (0, 0, 1) m by a revolute
     joint whose frame is turned 90 deg about z: its axis (1, 0, 0) in the joint frame is the world's y axis.
-    The COM hangs ``length / 2`` below the pivot.
+    The COM hangs ``length / 2`` below the pivot; the child joint frame is turned 30 deg about the rod's axis.
 
     Known answers (rigid-body pendulum, any mechanics text; e.g. Goldstein, Classical Mechanics, 3rd ed., 1.3):
     about the pivot its moment is ``J = I_c + m l^2`` (``l = length / 2``); released at rest at ``theta0`` it
@@ -117,8 +117,12 @@ class Pendulum:
         self.body = Body.cylinder("rod", self.mass, self.length, 0.01, axis=2)
         self.arm = 0.5 * self.length  # pivot to COM, m
         turn = tuple(spatial.quat_from_axis_angle(np.array([0.0, 0.0, 1.0]), 0.5 * math.pi))
+        # the child joint frame turned 30 deg about the rod's own axis: the rod's attitude shows it, its motion
+        # (axisymmetric about that axis) does not
+        twist = tuple(spatial.quat_from_axis_angle(np.array([0.0, 0.0, 1.0]), math.pi / 6.0))
         self.joint = Joint("revolute", "world", "rod", q0=(self.theta0,), v0=(0.0,), axis=(1.0, 0.0, 0.0),
-                           parent_point=(0.0, 0.0, 1.0), parent_quat=turn, child_point=(0.0, 0.0, self.arm))
+                           parent_point=(0.0, 0.0, 1.0), parent_quat=turn, child_point=(0.0, 0.0, self.arm),
+                           child_quat=twist)
         self.axis_W = spatial.quat_to_matrix(np.array(turn)) @ np.array([1.0, 0.0, 0.0])
         # the rod's moment about the joint axis: the cylinder's transverse moment (its axis is z, the joint's
         # axis lies in its xy plane) plus the parallel-axis term
@@ -171,7 +175,7 @@ def scene_needing(tag):
         p = Pendulum(0.3)
         kind = tag.split(":")[1]
         loop = Loop(kind, "world", "rod", point_a=p.joint.parent_point, point_b=p.joint.child_point,
-                    quat_a=p.joint.parent_quat, axis=p.joint.axis if kind == "revolute" else None)
+                    quat_a=p.joint.parent_quat, quat_b=p.joint.child_quat, axis=p.joint.axis if kind == "revolute" else None)
         if kind == "distance":
             loop = Loop(kind, "world", "rod", point_a=(0.0, 0.0, 1.5), point_b=(0.0, 0.0, 0.0),
                         length=float(np.linalg.norm(np.array([0.0, 0.0, 1.5]) - _com(p))))
