@@ -75,12 +75,16 @@ def hinge_axis(ctx):
     b = traj.bodies["rod"]
     expected = spatial.initial_body_states(p.scene)["rod"]
     problems = []
-    if float(np.linalg.norm(b.position[0] - expected["p"])) > POSE_TOL or \
-            float(spatial.rotation_angle(b.quaternion[0], spatial.matrix_to_quat(expected["R"]))) > ATTITUDE_TOL:
+    frames = ("the joint frames: parent_point/parent_quat in the parent's frame, child_point/child_quat in the "
+              "child's, q0 about the axis in the joint frame")
+    if float(np.linalg.norm(b.position[0] - expected["p"])) > POSE_TOL:
         problems.append(Problem("hinge_axis", f"the hinged rod starts at {_v(b.position[0])} m, expected "
-                                f"{_v(expected['p'])} (its joint frames at q0 = 0.3 rad)",
-                                "the joint frames: parent_point/parent_quat in the parent's frame, child_point/"
-                                "child_quat in the child's, q0 about the axis in the joint frame"))
+                                f"{_v(expected['p'])} (its joint frames at q0 = 0.3 rad)", frames))
+    turned = float(spatial.rotation_angle(b.quaternion[0], spatial.matrix_to_quat(expected["R"])))
+    if turned > ATTITUDE_TOL:
+        problems.append(Problem("hinge_axis", f"the hinged rod's first attitude is {turned:.3g} rad from its joint "
+                                "frames' at q0 = 0.3 rad (the child frame turned 30 deg about the rod)",
+                                frames + "; and the quaternion's order (w, x, y, z: spin_frames)"))
     w = b.angular_velocity
     across = w - np.outer(w @ p.axis_W, p.axis_W)
     scale = float(np.max(np.linalg.norm(w, axis=1)))
