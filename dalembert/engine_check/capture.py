@@ -31,7 +31,7 @@ def _flush_c():
     """Flush C's stdio buffers (an engine's printf to a pipe or file is block-buffered)."""
     try:
         ctypes.CDLL(None).fflush(None)
-    except (OSError, AttributeError):
+    except (OSError, AttributeError, TypeError):  # no C library to flush (Windows: CDLL(None) is a TypeError)
         pass
 
 
