@@ -109,6 +109,14 @@ class ContactEverywhere(TinyRigidAdapter):
         return replace(super().build(scene), collision_radius=0.05)
 
 
+class OwnClock(TinyRigidAdapter):
+    """Samples reported at the engine's accumulated time (n dt, off the times asked by roundoff)."""
+
+    def read_back(self, prepared, states):
+        traj = super().read_back(prepared, states)
+        return Trajectory(traj.t + 1e-12, traj.bodies, traj.joints, traj.extras)
+
+
 class GravityAndQuaternion(GravityNotSet, QuaternionXYZW):
     pass
 
@@ -200,6 +208,11 @@ def test_every_problem_is_listed_not_the_first(register):
     """Two faults at once: both found, each by its own probe."""
     found = check_engine(register("both", GravityAndQuaternion))
     assert {"free_fall [euler]", "spin_frames [euler]"} <= {p.probe for p in found.problems}
+
+
+def test_a_built_in_case_run_off_its_times_is_found(register):
+    found = check_engine(register("own_clock", OwnClock))
+    assert [p.probe for p in found.problems if "not at exactly the times" in p.saw] == ["supported_cases"]
 
 
 def test_output_from_c_and_python_is_captured():

@@ -10,7 +10,7 @@ import numpy as np
 
 from dalembert.engine_check import NotApplicable, Problem, probe, scenes
 
-__all__ = ["ORDER_MARGIN", "ORDER_FLOOR", "ORDER_STEPS", "MIN_SUPPORTED_CASES", "observed_order"]
+__all__ = ["ORDER_MARGIN", "ORDER_FLOOR", "ORDER_STEPS", "MIN_SUPPORTED_CASES", "CASE_SAMPLES", "observed_order"]
 
 # The observed order log2(e(h) / e(h/2)) converges to the declared order as h shrinks, until roundoff takes over
 # (in float32, MJX's default, already at the ladder's middle: its RK4 reads 4.91, 3.02, 0.05 down the ladder). The
@@ -26,6 +26,9 @@ ORDER_FLOOR = 1e-11
 # The fixed steps (s) of the order probe, each half the one before, over its 0.2 s horizon (w h from 0.34 down to
 # 0.02 on its pendulum).
 ORDER_STEPS = (0.04, 0.02, 0.01, 0.005, 0.0025)
+# The built-in case the supported_cases probe runs is run this many samples (a start: the contract's sampling and
+# bodies, not its accuracy, which the matrix judges).
+CASE_SAMPLES = 3
 # An adapter must run at least this many of the built-in cases (one that runs none passes every other probe
 # vacuously, and the matrix stores nothing for it).
 MIN_SUPPORTED_CASES = 1
@@ -181,24 +184,38 @@ def quiet(ctx):
 
 @probe("supported_cases", per_integrator=False)
 def supported_cases(ctx):
-    """The adapter runs at least MIN_SUPPORTED_CASES of the built-in cases (an adapter that runs nothing fails)."""
+    """The adapter accepts at least MIN_SUPPORTED_CASES of the built-in cases (an adapter that runs nothing fails),
+    and the first of them runs its first CASE_SAMPLES samples: at exactly the case's times, every body of its scene."""
     from dalembert.adapters.contract import CONTRACT_TOL
     from dalembert.case import load_cases
     from dalembert.settings import Settings
 
-    names, every = [], load_cases()
+    taken, every = [], load_cases()
     for name, factory in every.items():
         case = factory()
         interval = float(case.times[1] - case.times[0])
         for integ, spec in ctx.adapter.integrators.items():
             s = Settings(integ, dt=interval) if spec.fixed_step else Settings(integ, rtol=CONTRACT_TOL, atol=CONTRACT_TOL)
             if not ctx.adapter.unsupported(case.scene, s):
-                names.append(name)
+                taken.append((case, s))
                 break
-    ctx.notes.append(f"supports {len(names)} of {len(every)} built-in cases")
-    if len(names) < MIN_SUPPORTED_CASES:
+    ctx.notes.append(f"supports {len(taken)} of {len(every)} built-in cases")
+    if len(taken) < MIN_SUPPORTED_CASES:
         return [Problem("supported_cases", f"supports none of the {len(every)} built-in cases (needs at least "
                         f"{MIN_SUPPORTED_CASES}): declares effects {sorted(ctx.adapter.effects) or 'none'}",
                         "Adapter.effects: declare the Scene.effects tags the adapter builds (EFFECTS: gravity, "
                         "joint:<kind>, load:<...>); unsupported() refuses the rest")]
-    return []
+    case, s = taken[0]
+    times = case.times[:CASE_SAMPLES]
+    traj = ctx.simulate(case.scene, times, s)[1][0].trajectory
+    where = f"{case.name} ({s.label()}, its first {CASE_SAMPLES} samples)"
+    problems = []
+    if not np.array_equal(traj.t, times):
+        problems.append(Problem("supported_cases", f"{where}: sampled at {traj.t.tolist()}, not at exactly the times "
+                                f"asked, {times.tolist()}", "run() samples at exactly prepared.times (the engine's own "
+                                "time may drift by roundoff: step whole intervals, and report the times asked)"))
+    if set(traj.bodies) != {b.name for b in case.scene.bodies}:
+        problems.append(Problem("supported_cases", f"{where}: the trajectory's bodies {sorted(traj.bodies)} are not "
+                                f"the scene's {sorted(b.name for b in case.scene.bodies)}",
+                                "the read-back gives every body of the scene, by its name"))
+    return problems
