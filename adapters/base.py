@@ -39,11 +39,13 @@ __all__ = ["Adapter", "IntegratorSpec", "Option", "Outcome", "Prepared", "option
 
 @dataclass(frozen=True)
 class IntegratorSpec:
-    """What an engine's integrator takes: ``dt`` (fixed step) or ``rtol``/``atol``, and options."""
+    """What an engine's integrator takes: ``dt`` (fixed step) or ``rtol``/``atol``, and options; ``order``: the
+    order of accuracy it declares (None: not declared), which ``dalembert check-engine`` measures."""
 
     fixed_step: bool
     options: tuple = ()
     description: str = ""
+    order: int | None = None
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,14 @@ Each ``check_*`` function raises ``CaseCheckError`` (an ``AssertionError``, so p
 as a failed test) naming the case and what is wrong; ``check_case`` runs them all and reports
 every failure at once. They build the case and run the reference solver, nothing else: no
 engine is needed. Conventions and a walk-through: ``docs/cases.md``.
+
+For engine authors, ``check_engine(name)`` runs ``dalembert check-engine``'s probes on a registered engine
+(``dalembert.engine_check``) and raises ``EngineCheckError`` listing every problem (``docs/engines.md``)::
+
+    from dalembert.testing import check_engine
+
+    def test_my_engine():
+        check_engine("my_engine")
 """
 
 from __future__ import annotations
@@ -29,7 +37,7 @@ from dalembert.kinds import CONTACT_EFFECTS
 from dalembert.settings import Settings
 from dalembert.trajectory import read_csv, write_csv
 
-__all__ = ["CaseCheckError", "check_case", "factory_of", "second_solution", "INITIAL_STATE_TOL",
+__all__ = ["CaseCheckError", "EngineCheckError", "check_case", "check_engine", "factory_of", "second_solution", "INITIAL_STATE_TOL",
            "HARD_HORIZON", "SECOND_RTOL", "REFERENCE_RTOL", "SINGULAR_RTOL", "check_builds", "check_truth_starts_at_initial_state",
            "check_truth_conserves", "check_reference_agrees", "check_floor", "check_csv_round_trip",
            "reference_cannot_judge"]
@@ -254,3 +262,23 @@ def check_case(factory, horizon=None, **params):
         raise CaseCheckError(f"case {case.name!r}: {len(failures)} check(s) failed\n"
                              + "\n".join(f"  - {f}" for f in failures))
     return case
+
+
+class EngineCheckError(AssertionError):
+    """An engine's adapter that a probe of ``dalembert check-engine`` found wrong; the message lists every problem."""
+
+
+def check_engine(name, integrators=None, options=None):
+    """Run ``dalembert check-engine``'s probes on the engine registered as ``name`` (``dalembert.engine_check``);
+    raise ``EngineCheckError`` listing every problem (its probe, what it saw, what to look at).
+
+    ``integrators``, ``options``: as ``dalembert.engine_check.check_engine``. Returns the ``EngineCheck`` (its notes:
+    the figures measured, the probes that did not apply).
+    """
+    from dalembert.engine_check import check_engine as probe_engine
+
+    found = probe_engine(name, integrators, options)
+    if found.problems:
+        raise EngineCheckError(f"engine {name!r}: {len(found.problems)} problem(s)\n"
+                               + "\n".join(f"  - {p}" for p in found.problems))
+    return found

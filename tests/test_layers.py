@@ -8,6 +8,8 @@ core (it reads stores, never runs anything); ``dalembert.harness`` joins them al
 ``dalembert.testing`` (the case contract for case authors, ``check_case``) is a top-level
 module but not core: it runs the reference solver, so it is its own layer, allowed the core
 and the reference (like the cases it checks), and the harness may use it.
+``dalembert.engine_check`` (the probes of ``dalembert check-engine``) runs adapters: it is allowed the
+core, the reference and the adapters; ``dalembert.testing.check_engine`` and the harness use it.
 Every import counts, including those inside functions.
 """
 
@@ -24,7 +26,7 @@ import pytest
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 with open(os.path.join(ROOT, "pyproject.toml"), "rb") as _fh:
     SETUPTOOLS = tomllib.load(_fh)["tool"]["setuptools"]
-LAYERS = ("reference", "cases", "adapters", "reports", "harness", "testing")
+LAYERS = ("reference", "cases", "adapters", "reports", "engine_check", "harness", "testing")
 # layer -> the layers it may import ("core" is dalembert's own top-level modules)
 ALLOWED = {
     "core": {"core"},
@@ -32,7 +34,8 @@ ALLOWED = {
     "cases": {"core", "reference", "cases"},
     "adapters": {"core", "reference", "adapters"},
     "reports": {"core", "reports"},
-    "testing": {"core", "reference", "testing"},
+    "engine_check": {"core", "reference", "adapters", "engine_check"},
+    "testing": {"core", "reference", "testing", "engine_check"},
     "harness": {"core", *LAYERS},
 }
 
@@ -56,14 +59,15 @@ def _modules():
                 if f.endswith(".py"):
                     name = prefix if f == "__init__.py" else f"{prefix}.{f[:-3]}"
                     out[name] = os.path.join(here, f)
-    harness = os.path.join(ROOT, "dalembert", "harness")
-    for here, dirs, files in os.walk(harness):
-        dirs[:] = [d for d in dirs if os.path.exists(os.path.join(here, d, "__init__.py"))]
-        rel = os.path.relpath(here, harness)
-        prefix = "dalembert.harness" + ("" if rel == "." else "." + rel.replace(os.sep, "."))
-        for f in files:
-            if f.endswith(".py"):
-                out[prefix + ("" if f == "__init__.py" else "." + f[:-3])] = os.path.join(here, f)
+    for layer in ("harness", "engine_check"):  # the layers that live inside dalembert/
+        top = os.path.join(ROOT, "dalembert", layer)
+        for here, dirs, files in os.walk(top):
+            dirs[:] = [d for d in dirs if os.path.exists(os.path.join(here, d, "__init__.py"))]
+            rel = os.path.relpath(here, top)
+            prefix = f"dalembert.{layer}" + ("" if rel == "." else "." + rel.replace(os.sep, "."))
+            for f in files:
+                if f.endswith(".py"):
+                    out[prefix + ("" if f == "__init__.py" else "." + f[:-3])] = os.path.join(here, f)
     return out
 
 

@@ -13,7 +13,7 @@ import os
 import sys
 import warnings
 
-from dalembert.harness.commands import cases, compare, engines, export, report, show_model, truth, validate
+from dalembert.harness.commands import cases, check_engine, compare, engines, export, report, show_model, truth, validate
 from dalembert.harness.commands import run as run_command
 from dalembert.harness.commands.console import fail as _fail
 from dalembert.terminal import printable
@@ -27,6 +27,7 @@ EPILOG = """examples:
   dalembert export results/top --case free_top --engine reference --integrator rk4 --dt 1e-3 --csv top.csv
   dalembert truth free_top_intermediate --param t_final=5 --csv top.csv
   dalembert validate --case pivoted_rod
+  dalembert check-engine mujoco --integrator rk4
 """
 
 
@@ -183,6 +184,19 @@ def _parser():
     sm.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
                     help="engine option (repeatable), e.g. joints=redundant for Exudyn")
 
+    ce = sub.add_parser("check-engine", help="probe an engine's adapter with known answers; exit 1 on any problem",
+                        epilog="examples:\n  dalembert check-engine mujoco\n  dalembert check-engine mjx --integrator "
+                               "euler --option precision=float64\n\nThe probes and what each looks for: "
+                               "docs/engines.md (check-engine).", formatter_class=argparse.RawDescriptionHelpFormatter)
+    ce.add_argument("engine")
+    ce.add_argument("--integrator", action="append", default=None,
+                    help="integrator to probe (repeatable; default: the first for the motion probes, every fixed-step "
+                         "one for the order probe)")
+    ce.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                    help="engine option for every run whose integrator takes it (repeatable)")
+    ce.add_argument("--verbose", "-v", action="store_true", help="also print the notes (figures measured, probes "
+                                                                 "that did not apply)")
+
     v = sub.add_parser("validate", help="run every case (not tagged hard) with the reference solver against its truth",
                        epilog="example:\n  dalembert validate --case pivoted_rod",
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -198,7 +212,7 @@ USER_ERRORS = (ValueError, KeyError, ImportError, OSError)
 # Each command's module (its ``main(args)``).
 COMMANDS = {"cases": cases.main, "engines": engines.main, "run": run_command.main, "report": report.main,
             "show-model": show_model.main, "validate": validate.main, "truth": truth.main, "export": export.main,
-            "compare": compare.main}
+            "compare": compare.main, "check-engine": check_engine.main}
 
 
 def _refuse_empty(parser, args):
