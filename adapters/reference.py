@@ -46,10 +46,10 @@ class ReferenceAdapter(Adapter):
                               "how the equations are written (default: newton-euler for free bodies, kane otherwise)"),
     }
     integrators = {
-        "dop853": IntegratorSpec(False, ("formulation",), "scipy DOP853, adaptive 8th order"),
-        "rk4": IntegratorSpec(True, ("formulation",), "classical RK4 on embedded coordinates"),
-        "rkmk4": IntegratorSpec(True, ("formulation",), "Runge-Kutta-Munthe-Kaas 4 on the Lie group"),
-        "euler": IntegratorSpec(True, ("formulation",), "symplectic (semi-implicit) Euler on the group"),
+        "dop853": IntegratorSpec(False, ("formulation",), "scipy DOP853, adaptive 8th order", order=8),
+        "rk4": IntegratorSpec(True, ("formulation",), "classical RK4 on embedded coordinates", order=4),
+        "rkmk4": IntegratorSpec(True, ("formulation",), "Runge-Kutta-Munthe-Kaas 4 on the Lie group", order=4),
+        "euler": IntegratorSpec(True, ("formulation",), "symplectic (semi-implicit) Euler on the group", order=1),
     }
 
     def version(self):

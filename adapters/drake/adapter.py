@@ -63,6 +63,10 @@ FIXED = {
 # second (measured at rtol 1e-8: 13-25 s of stepping for 0.5 s of a fast top or the violent rod):
 # they are offered fixed-step only.
 ADAPTIVE = ("rk3", "rk5", "bs3", "radau3")
+# The order each scheme is built to (Drake's integrator documentation; Hairer & Wanner II for Radau IIA); the
+# discrete plant's step is first order (semi-implicit Euler with SAP's implicit velocity update).
+ORDER = {"explicit-euler": 1, "semi-explicit-euler": 1, "rk2": 2, "rk3": 3, "rk5": 5, "bs3": 3, "implicit-euler": 1,
+         "velocity-implicit-euler": 1, "radau1": 1, "radau3": 3, "discrete": 1}
 ADAPTIVE_SUFFIX = "-adaptive"
 
 
@@ -72,11 +76,12 @@ OPTIONS = tuple(contact.CONTACT_OPTIONS)
 
 
 def _integrators():
-    out = {k: IntegratorSpec(True, OPTIONS, f"Drake {v}") for k, v in FIXED.items()}
-    out.update({k + ADAPTIVE_SUFFIX: IntegratorSpec(False, OPTIONS, f"Drake {FIXED[k]}, error-controlled")
+    out = {k: IntegratorSpec(True, OPTIONS, f"Drake {v}", order=ORDER[k]) for k, v in FIXED.items()}
+    out.update({k + ADAPTIVE_SUFFIX: IntegratorSpec(False, OPTIONS, f"Drake {FIXED[k]}, error-controlled", order=ORDER[k])
                 for k in ADAPTIVE})
     out["discrete"] = IntegratorSpec(True, OPTIONS,
-                                     "the plant in discrete mode (time_step = dt; SAP, semi-implicit)")
+                                     "the plant in discrete mode (time_step = dt; SAP, semi-implicit)",
+                                     order=ORDER["discrete"])
     return out
 
 

@@ -90,9 +90,9 @@ class MjxAdapter(MujocoAdapter):
     }
     effects = MujocoAdapter.effects  # contact included: MuJoCo's mapping, what MJX lacks refused (``why_not``)
     integrators = {
-        "euler": IntegratorSpec(True, OPTIONS, "MJX semi-implicit Euler"),
-        "rk4": IntegratorSpec(True, OPTIONS, "MJX classical RK4"),
-        "implicitfast": IntegratorSpec(True, OPTIONS, "MJX implicit in velocity, no Coriolis derivatives"),
+        "euler": IntegratorSpec(True, OPTIONS, "MJX semi-implicit Euler", order=1),
+        "rk4": IntegratorSpec(True, OPTIONS, "MJX classical RK4", order=4),
+        "implicitfast": IntegratorSpec(True, OPTIONS, "MJX implicit in velocity, no Coriolis derivatives", order=1),
     }
 
     def version(self):

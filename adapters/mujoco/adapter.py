@@ -82,11 +82,11 @@ class MujocoAdapter(Adapter):
     effects = EFFECTS | (LOOP_EFFECTS - {"loop:distance"}) | SPRING_EFFECTS | CONTACT_EFFECTS
     options = {**MJCF_OPTIONS, **contact.CONTACT_OPTIONS}  # loads, welds; cone, impratio, ...
     integrators = {
-        "euler": IntegratorSpec(True, OPTIONS, "semi-implicit Euler"),
-        "rk4": IntegratorSpec(True, OPTIONS, "classical RK4"),
-        "implicit": IntegratorSpec(True, OPTIONS, "implicit in velocity (Coriolis and damping)"),
-        "implicitfast": IntegratorSpec(True, OPTIONS, "implicit in velocity, no Coriolis derivatives"),
-        "discrete": IntegratorSpec(True, OPTIONS, "MuJoCo 4's discrete integrator"),
+        "euler": IntegratorSpec(True, OPTIONS, "semi-implicit Euler", order=1),
+        "rk4": IntegratorSpec(True, OPTIONS, "classical RK4", order=4),
+        "implicit": IntegratorSpec(True, OPTIONS, "implicit in velocity (Coriolis and damping)", order=1),
+        "implicitfast": IntegratorSpec(True, OPTIONS, "implicit in velocity, no Coriolis derivatives", order=1),
+        "discrete": IntegratorSpec(True, OPTIONS, "MuJoCo 4's discrete integrator", order=1),
     }
 
     def version(self):

@@ -65,7 +65,7 @@ class PybulletAdapter(Adapter):
     integrators = {
         "euler": IntegratorSpec(True, tuple(MODEL_OPTIONS),
                                 "semi-implicit Euler, first order (PyBullet's one integrator: stepSimulation at a "
-                                "fixed step)"),
+                                "fixed step)", order=1),
     }
 
     def version(self):
