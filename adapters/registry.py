@@ -20,6 +20,7 @@ BUILTIN = {
     "exudyn": "dalembert.adapters.exudyn:ExudynAdapter",
     "drake": "dalembert.adapters.drake:DrakeAdapter",
     "mjx": "dalembert.adapters.mjx:MjxAdapter",
+    "dart": "dalembert.adapters.dart:DartAdapter",
 }
 
 _REGISTRY = Registry("engine")
