@@ -43,7 +43,7 @@ DEFAULTS = ("scene", "engine")
 # The options the model is built by, declared where ``DartModel`` reads them (``DartAdapter.options``).
 MODEL_OPTIONS = {
     "defaults": Option(DEFAULTS, DEFAULTS[0], "scene: everything the scene does not call for off (sleeping, "
-                       "contact, joint limits, damping, springs, friction), read back in the audit; engine: DART's "
+                       "joint limits, damping, springs, friction, commands), read back in the audit; engine: DART's "
                        "own defaults, to measure their effect"),
 }
 # What a fresh DART 6.20 world and skeleton do that a scene never calls for, switched off with
