@@ -5,7 +5,8 @@ scene's; ``run`` steps the world through the sample times (``stepping``) and rea
 (``readback``); ``audit`` (the module) reads the world and skeleton back.
 
 Integrators: DART has one, semi-implicit Euler at a fixed step (``euler``); it offers no error control.
-What it does not represent, each refused with the reason (``UNSUPPORTED``): loop closures, spring-dampers
+Loop closures: ball and revolute, as DART's dynamic joint constraints (``loops``), without reaction forces.
+What it does not represent, each refused with the reason (``UNSUPPORTED``): distance loops, spring-dampers
 between two points and contact.
 """
 
@@ -17,6 +18,7 @@ import numpy as np
 
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared
 from dalembert.adapters.dart.audit import audit
+from dalembert.adapters.dart.loops import DISTANCE_REASON, LOOP_KINDS
 from dalembert.adapters.dart.model import MODEL_OPTIONS, dart_version
 from dalembert.scene import CONTACT_EFFECT, EFFECTS, SPRING_EFFECT
 from dalembert.settings import steps_per_interval
@@ -28,9 +30,7 @@ __all__ = ["DartAdapter", "DartPrepared", "UNSUPPORTED"]
 MASS_PROPERTY_REL_TOL = 1e-12
 # Why DART does not run these effects (what it would take), by effect tag prefix.
 UNSUPPORTED = {
-    "loop:": ("closed kinematic loops: DART 6.20 closes them with its dynamic joint constraints (BallJointConstraint, "
-              "RevoluteJointConstraint), velocity-level LCP rows stabilised by an error-reduction parameter; not yet "
-              "built for this engine, its tree runs, the closure does not"),
+    "loop:distance": DISTANCE_REASON,
     SPRING_EFFECT: ("linear spring-dampers between two points: DART has joint-space springs only "
                     "(Joint.setSpringStiffness); a two-point spring would be an external force set from Python before "
                     "every step; not yet built"),
@@ -58,7 +58,8 @@ class DartAdapter(Adapter):
     Option ``defaults`` = ``scene`` | ``engine`` (``model.MODEL_OPTIONS``)."""
 
     name = "dart"
-    effects = EFFECTS
+    # loops: ball and revolute, DART's dynamic joint constraints (``loops``); a distance loop is refused
+    effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS)
     options = MODEL_OPTIONS
     integrators = {
         "euler": IntegratorSpec(True, tuple(MODEL_OPTIONS),

@@ -29,6 +29,7 @@ def audit(prepared, outcome):
                       "world-frame loads set again before every step from the pose at the step's start"
                       if any(ld.frame == "world" for ld in model.scene.loads) else
                       "BodyNode external force/torque in body axes, set once (follower loads)"),
+        **_loop_audit(model),
         "steps": int(outcome.n_steps),
         "dart_version": dart_version(),
     }
@@ -84,3 +85,19 @@ def _bodies(model):
         out[name] = {"mass": float(node.getMass()), "com": [float(v) for v in node.getLocalCOM()],
                      "inertia": np.asarray(inertia.getMoment(), dtype=float).tolist()}
     return out
+
+
+def _loop_audit(model):
+    """The loops as DART's constraint solver holds them: each constraint's type and rows, DART's class-wide
+    constraint parameters, the boxed-LCP solvers, and why no reaction is read back (none: empty)."""
+    if not model.scene.loops:
+        return {}
+    from dalembert.adapters.dart.loops import REACTIONS_REASON, parameters
+
+    solver = model.world.getConstraintSolver()
+    return {
+        "loops": {lp.name: f"{type(c).__name__}, {c.getDimension()} rows" for lp, c in zip(model.scene.loops, model.loops)},
+        "loop_parameters": parameters(),
+        "lcp_solvers": [type(solver.getBoxedLcpSolver()).__name__, type(solver.getSecondaryBoxedLcpSolver()).__name__],
+        "reactions": REACTIONS_REASON,
+    }

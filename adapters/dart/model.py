@@ -16,6 +16,7 @@
   measured, its linear part comes out turned by ``R_WB``); a ``BallJoint``'s positions are the rotation vector of ``R_JpJc``, its
   velocities the relative angular velocity in Jc axes (the scene's ``v``); revolute and prismatic
   coordinates are the scene's.
+* Loop closures (``Scene.loops``) as DART's ball and revolute joint constraints (``loops``).
 * Gravity set from the scene (DART's default is -9.81 in z). Loads as the body's external force and
   torque (``loads``). No shapes: nothing can collide in a scene without contact pairs.
 * Nothing the scene does not call for (``ENGINE_DEFAULTS``): with option ``defaults=scene`` (the default)
@@ -83,6 +84,7 @@ class DartModel:
     nodes : dict body name -> dartpy.dynamics.BodyNode
     joints : dict joint (child) name -> dartpy.dynamics.Joint
     dofs : dict joint name -> slice of the skeleton's generalized coordinates (positions and velocities alike)
+    loops : list of dartpy.constraint.DynamicJointConstraint — the scene's loops (``loops.add_loops``), in order
     defaults : str — option ``defaults``: ``scene`` or ``engine``
     """
 
@@ -111,6 +113,8 @@ class DartModel:
             start = joint.getIndexInSkeleton(0) if n else 0
             self.dofs[name] = slice(start, start + n)
         self.q0, self.v0 = self.initial_state()
+        self.loops = []
+        self.reset()  # the loops' constraints built at the initial state
 
     def _add(self, j, body):
         import dartpy
@@ -183,11 +187,18 @@ class DartModel:
         return np.asarray(dartpy.dynamics.BallJoint.convertToPositions(np.asarray(R, dtype=float)), dtype=float)
 
     def reset(self):
-        """The skeleton at the initial state, the world's clock at 0, no constraint impulses."""
+        """The skeleton at the initial state, the world's clock at 0, no constraint impulses, and the loops'
+        constraints built afresh there (a constraint kept from a previous run carries that run's state: measured,
+        a repeated run of the n-four-bar differed from the first)."""
         self.world.reset()
         self.skeleton.setPositions(self.q0)
         self.skeleton.setVelocities(self.v0)
         self.skeleton.resetAccelerations()
+        if self.scene.loops:
+            from dalembert.adapters.dart.loops import add_loops
+
+            self.world.getConstraintSolver().removeAllConstraints()
+            self.loops = add_loops(self)
 
     @property
     def summary(self):

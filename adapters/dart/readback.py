@@ -11,6 +11,7 @@ Joint reactions: DART's ``BodyNode.getBodyForce``, the spatial force the parent 
 its joint, in the node's frame at its origin (the COM), as DART's forward dynamics computes it
 (``computeForwardDynamics`` at the sampled state, with the loads applied as in a step); its force part in world
 axes, ``R_WB f_B``, is the force the joint exerts ON the child (checked on the pendulum: ``m a_COM - m g``).
+None in a scene with loops (``loops.REACTIONS_REASON``).
 """
 
 from __future__ import annotations
@@ -32,7 +33,8 @@ def read_back(p, Q, V):
     skeleton = model.skeleton
     n, names = len(times), [b.name for b in scene.bodies]
     nodes = [model.nodes[name] for name in names]
-    jointed = [j.child for j in scene.joints if j.kind != "free"]
+    # reactions: every joint's but a free one's, in a tree (``loops.REACTIONS_REASON``: none in a scene with loops)
+    jointed = [] if scene.loops else [j.child for j in scene.joints if j.kind != "free"]
     R = np.full((n, len(names), 3, 3), np.nan)
     pos, vel, omega = (np.full((n, len(names), 3), np.nan) for _ in range(3))
     force = np.full((n, len(names), 3), np.nan)  # the joint's force on the body, body axes
