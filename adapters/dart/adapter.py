@@ -6,8 +6,9 @@ scene's; ``run`` steps the world through the sample times (``stepping``) and rea
 
 Integrators: DART has one, semi-implicit Euler at a fixed step (``euler``); it offers no error control.
 Loop closures: ball and revolute, as DART's dynamic joint constraints (``loops``), without reaction forces.
-What it does not represent, each refused with the reason (``UNSUPPORTED``): distance loops, spring-dampers
-between two points and contact.
+Contact: one pair, DART's hard contact (``contact``). What it does not represent, each refused with the reason
+(``UNSUPPORTED``, ``contact.why_not``): distance loops, spring-dampers between two points, more than one contact
+pair.
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared
 from dalembert.adapters.dart.audit import audit
 from dalembert.adapters.dart.loops import DISTANCE_REASON, LOOP_KINDS
 from dalembert.adapters.dart.model import MODEL_OPTIONS, dart_version
-from dalembert.scene import CONTACT_EFFECT, EFFECTS, SPRING_EFFECT
+from dalembert.adapters.dart import contact
+from dalembert.scene import CONTACT_EFFECTS, EFFECTS, SPRING_EFFECT
 from dalembert.settings import steps_per_interval
 
 __all__ = ["DartAdapter", "DartPrepared", "UNSUPPORTED"]
@@ -34,8 +36,6 @@ UNSUPPORTED = {
     SPRING_EFFECT: ("linear spring-dampers between two points: DART has joint-space springs only "
                     "(Joint.setSpringStiffness); a two-point spring would be an external force set from Python before "
                     "every step; not yet built"),
-    CONTACT_EFFECT: ("contact: DART's collision detectors (FCL, DART, Bullet, ODE) and its boxed-LCP hard contact "
-                     "with Coulomb friction and restitution; not yet mapped from the scene's geoms and pairs"),
 }
 
 
@@ -59,7 +59,8 @@ class DartAdapter(Adapter):
 
     name = "dart"
     # loops: ball and revolute, DART's dynamic joint constraints (``loops``); a distance loop is refused
-    effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS)
+    # contact: one pair, DART's hard contact (``contact``)
+    effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS) | CONTACT_EFFECTS
     options = MODEL_OPTIONS
     integrators = {
         "euler": IntegratorSpec(True, tuple(MODEL_OPTIONS),
@@ -77,7 +78,7 @@ class DartAdapter(Adapter):
     def unsupported(self, scene, settings):
         missing = sorted(scene.effects - self.effects)
         if not missing:
-            return None
+            return contact.why_not(scene)
         notes = []
         for prefix, reason in UNSUPPORTED.items():
             if any(m.startswith(prefix) for m in missing) and reason not in notes:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dalembert.adapters.dart import contact
 from dalembert.adapters.dart.model import dart_version
 
 __all__ = ["audit", "defaults"]
@@ -30,6 +31,7 @@ def audit(prepared, outcome):
                       if any(ld.frame == "world" for ld in model.scene.loads) else
                       "BodyNode external force/torque in body axes, set once (follower loads)"),
         **_loop_audit(model),
+        **contact.audit(model),
         "steps": int(outcome.n_steps),
         "dart_version": dart_version(),
     }

@@ -18,7 +18,7 @@
   coordinates are the scene's.
 * Loop closures (``Scene.loops``) as DART's ball and revolute joint constraints (``loops``).
 * Gravity set from the scene (DART's default is -9.81 in z). Loads as the body's external force and
-  torque (``loads``). No shapes: nothing can collide in a scene without contact pairs.
+  torque (``loads``). No shapes but a contact pair's (``contact``): nothing collides that the scene does not name.
 * Nothing the scene does not call for (``ENGINE_DEFAULTS``): with option ``defaults=scene`` (the default)
   every joint's limits, damping, spring, Coulomb friction are zero or off (written explicitly, whatever DART's
   defaults), every actuator a force actuator with no command, and the world's deactivation (DART 6.20's
@@ -84,6 +84,7 @@ class DartModel:
     nodes : dict body name -> dartpy.dynamics.BodyNode
     joints : dict joint (child) name -> dartpy.dynamics.Joint
     dofs : dict joint name -> slice of the skeleton's generalized coordinates (positions and velocities alike)
+    contact : dict geom or plane name -> dartpy.dynamics.ShapeNode — the scene's contact shapes (``contact``)
     loops : list of dartpy.constraint.DynamicJointConstraint — the scene's loops (``loops.add_loops``), in order
     defaults : str — option ``defaults``: ``scene`` or ``engine``
     """
@@ -113,6 +114,9 @@ class DartModel:
             start = joint.getIndexInSkeleton(0) if n else 0
             self.dofs[name] = slice(start, start + n)
         self.q0, self.v0 = self.initial_state()
+        from dalembert.adapters.dart.contact import add_contact
+
+        self.contact = add_contact(self)  # shape nodes by geom or plane name (none without contact pairs)
         self.loops = []
         self.reset()  # the loops' constraints built at the initial state
 
