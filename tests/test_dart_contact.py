@@ -15,12 +15,12 @@ pytest.importorskip("dartpy")
 ADAPTER = get_adapter("dart")
 
 # Two spheres meeting head on (restitution 0.8, frictionless), dt = 1e-3: the velocities after the impact against
-# Newton's, measured 1.35e-5 m/s (the same at 1e-4: the impact is solved as one LCP); 7x. A restitution of 1 on
-# the pair (the two shapes' product taken as the larger) would be 0.36 m/s off, one of 0 0.72 m/s.
+# Newton's, measured 1.35e-5 m/s (the same at 1e-4: the impact is solved as one LCP); 7x. Without the self-collision
+# check switched on the spheres pass through each other (measured: the test fails).
 SPHERES_VELOCITY_TOL = 1e-4
 # The ball launched sliding (mu = 0.1), dt = 1e-4: the velocities against the closed form's slide then roll,
-# measured 3.7e-9 m/s (9.0e-8 at 1e-3); 30x. A friction of 1 (the two shapes' combination taken as the larger)
-# would end the slide ten times sooner.
+# measured 3.7e-9 m/s (9.0e-8 at 1e-3); 30x. With the pair's friction 1 instead of 0.1 the slide ends ten times
+# sooner (measured: the test fails).
 SLIDE_TO_ROLL_VELOCITY_TOL = 1e-7
 # The ball dropped on the ground (restitution 0.5), dt = 1e-4: the position against the closed form's bounces,
 # measured 3.1e-4 m (the impact lands on a step, 1e-4 s at ~4.4 m/s) and the apex 6.4e-5 m; 3x.

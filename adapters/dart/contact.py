@@ -13,8 +13,11 @@ shape; read back for the audit.
   Coulomb friction box per contact and Newton's restitution on the approach speed; penetration is corrected by
   DART's error reduction.
 * DART keeps friction and restitution per shape and combines a pair's from its two shapes. The pair's values go on
-  its first geom (``a``) and 1 on the other side (a plane or a geom): DART's rules (friction the smaller of the
-  two; restitution their product) then give the pair's own. So every geom and plane may be in one pair, a
+  its first geom (``a``) and 1 on the other side (a plane or a geom), which leaves them the pair's (measured:
+  friction the smaller of the two shapes', the slide-to-roll ball the same with 0.5 or 1 on the ground; with 1 on
+  the ground, the bounce's apex and the two spheres' velocities after are Newton's with the first shape's
+  restitution; with 0.5 on the ground as well the ball's restitution came out 0.06, neither the product nor the
+  smaller: other combinations are not characterised here). So every geom and plane may be in one pair, a
   friction coefficient may not exceed 1, and only one pair is built: DART's collision filter, which would keep
   shapes of different pairs from touching each other, is an attribute of the constraint solver's collision
   option, which dartpy 6.20 returns as a copy (it cannot be set), so a second pair would let unnamed shapes touch
@@ -31,8 +34,8 @@ __all__ = ["why_not", "add_contact", "audit", "GROUND"]
 
 # The skeleton that carries the scene's planes (a body welded to the world, not mobile).
 GROUND = "dalembert_planes"
-# The value on the other side of a pair: neutral in DART's combination of friction (the smaller) and
-# restitution (the product).
+# The value on the other side of a pair: neutral in DART's combination of friction (the smaller, measured) and of
+# restitution (measured on the bounce and the two spheres; module docstring).
 NEUTRAL = 1.0
 
 
@@ -46,7 +49,7 @@ def why_not(scene):
     pair = scene.contacts[0]
     if pair.friction > NEUTRAL:
         return (f"contact: {pair.name}.friction {pair.friction:g} > 1 (DART combines two shapes' friction by the "
-                "smaller, and the other side's neutral value is 1)")
+                "smaller, and the other side holds 1, the value that leaves a pair's restitution its own)")
     return None
 
 
@@ -110,6 +113,6 @@ def audit(model):
         "contact_detector": type(solver.getCollisionDetector()).__name__,
         "self_collision_check": bool(model.skeleton.getSelfCollisionCheck()),
         "adjacent_body_check": bool(model.skeleton.getAdjacentBodyCheck()),
-        "contact_model": ("hard: boxed LCP (Dantzig) per step, Coulomb friction box, Newton restitution; a pair's "
-                          "friction the smaller of its shapes', its restitution their product"),
+        "contact_model": ("hard: boxed LCP (Dantzig) per step, Coulomb friction box, Newton restitution; the pair's "
+                          "values on its first shape, 1 on the other (DART combines the two shapes')"),
     }
