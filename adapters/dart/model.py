@@ -13,19 +13,20 @@
 * DART's coordinates (converted only through ``dalembert.spatial``): a ``FreeJoint``'s positions are the
   rotation vector of ``R_WB`` and ``p_WB``; its velocities are solved from the body's spatial velocity in body
   axes, ``(w_WB_B, R_WB^T v_WB_W)``, through the joint's own relative Jacobian (they are not that velocity:
-  measured, its linear part comes out turned by ``R_WB``); a ``BallJoint``'s positions are the rotation vector of ``R_JpJc``, its
-  velocities the relative angular velocity in Jc axes (the scene's ``v``); revolute and prismatic
-  coordinates are the scene's.
+  measured, its linear part comes out turned by ``R_WB``); a ``BallJoint``'s positions are the rotation vector
+  of ``R_JpJc``, its velocities the relative angular velocity in Jc axes (the scene's ``v``); revolute and
+  prismatic coordinates are the scene's.
 * Loop closures (``Scene.loops``) as DART's ball and revolute joint constraints (``loops``).
 * Gravity set from the scene (DART's default is -9.81 in z). Loads as the body's external force and
   torque (``loads``). No shapes but a contact pair's (``contact``): nothing collides that the scene does not name.
 * Nothing the scene does not call for (``ENGINE_DEFAULTS``): with option ``defaults=scene`` (the default)
   every joint's limits, damping, spring, Coulomb friction are zero or off (written explicitly, whatever DART's
   defaults), every actuator a force actuator with no command, and the world's deactivation (DART 6.20's
-  sleeping: a body resting in a contact island for a while is frozen) is switched off. Contact needs shapes and
-  there are none (the constraint solver's collision group is read back empty); its ``enableContact`` flag cannot
-  be set from dartpy 6.20 (``getCollisionOption`` returns a copy) and is read back as DART leaves it. ``defaults=engine`` keeps what DART sets on a fresh world and skeleton, so that
-  their effect can be measured; the audit reads each back either way.
+  sleeping: a body resting in a contact island for a while is frozen) is switched off. Contact needs shapes, and
+  only a contact pair's exist (the constraint solver's collision group is read back); its ``enableContact`` flag
+  cannot be set from dartpy 6.20 (``getCollisionOption`` returns a copy) and is read back as DART leaves it.
+  ``defaults=engine`` keeps what DART sets on a fresh world and skeleton, so that their effect can be measured;
+  the audit reads each back either way.
 """
 
 from __future__ import annotations
@@ -49,7 +50,9 @@ MODEL_OPTIONS = {
 }
 # What a fresh DART 6.20 world and skeleton do that a scene never calls for, switched off with
 # ``defaults=scene`` (each read back in the audit: ``audit.defaults``). Read from dartpy 6.20.0 on a fresh
-# ``World()``: deactivation enabled, linear 0.01 m/s, angular 0.05 rad/s, 0.5 s until sleep; joints' limits not
+# ``World()``: deactivation enabled, linear 0.01 m/s, angular 0.05 rad/s, 0.5 s until sleep (it acts on bodies in a
+# contact island: measured, a box sliding frictionless at 0.5 mm/s stops 0.5 s in; every built-in case runs bit for
+# bit the same either way, tests/test_dart*.py); joints' limits not
 # enforced, damping, springs, friction zero, force actuators; contact enabled in the constraint solver's collision
 # option (not settable from dartpy; no shapes, so nothing collides).
 ENGINE_DEFAULTS = ("deactivation (sleeping)",)
