@@ -16,9 +16,8 @@ DART has no distance constraint (its dynamic joint constraints are ball, revolut
 ``DISTANCE_REASON``.
 
 Reactions: DART reports a constraint's impulse only as generalized forces of the whole skeleton
-(``Skeleton.getConstraintForces``), not per loop or per joint, so in a scene with loops neither the loops' nor
-the joints' reaction forces are read back (``REACTIONS_REASON``; the joint reactions of forward dynamics alone
-would leave the loops' forces out).
+(``Skeleton.getConstraintForces``), not per loop: the read-back takes one step from each sample and finds a loop's
+force by Newton's second law on one of its bodies (``readback``); ``REACTIONS_REASON`` says so in the audit.
 """
 
 from __future__ import annotations
@@ -33,8 +32,10 @@ __all__ = ["LOOP_KINDS", "DISTANCE_REASON", "REACTIONS_REASON", "add_loops", "pa
 LOOP_KINDS = ("ball", "revolute")
 DISTANCE_REASON = ("a distance loop: DART 6.20 has no distance constraint (its dynamic joint constraints are ball, "
                    "revolute, weld and cylindrical); a massless rod would be a body of its own")
-REACTIONS_REASON = ("not read back in a scene with loops: DART reports constraint impulses only as the skeleton's "
-                    "generalized forces, not per loop or joint")
+REACTIONS_REASON = ("joints' from BodyNode.getBodyForce after one World.step from each sample (the constraint "
+                    "impulses are in it only then); each loop's by Newton's second law on one of its bodies over that "
+                    "step (DART reports constraint impulses only as the skeleton's generalized forces); none for a "
+                    "loop both of whose bodies other loops hold too")
 
 
 def add_loops(model):
