@@ -79,3 +79,13 @@ def test_a_distance_loop_is_refused_with_the_reason():
                                                  point_b=(0.0, 0.0, -0.5), length=1.0),))
     reason = ADAPTER.unsupported(scene, Settings("euler", dt=1e-3))
     assert "loop:distance" in reason and "no distance constraint" in reason
+
+
+def test_the_four_bar_s_constraint_blows_up_at_small_steps_and_the_run_says_so():
+    """A finding, kept visible: DART 6.20's revolute constraint on the (planar, so redundant) four-bar loop runs at
+    dt >= 5e-5 and turns non-finite within the first 0.01 s at dt <= 2e-5 (measured at 2e-5, 1.25e-5, 1e-5);
+    DART warns and steps on with an identity transform, and the run is NaN from that sample with DART's message."""
+    case = make_case("four_bar", t_final=0.02)
+    outcome = ADAPTER.run(ADAPTER.prepare(case.scene, case.times, Settings("euler", dt=1e-5)))
+    assert outcome.trajectory.first_nonfinite_time() == pytest.approx(0.01)
+    assert outcome.info["message"].startswith("DART: Warning") and "Non-finite" in outcome.info["message"]

@@ -114,10 +114,14 @@ def simulate(p):
 
 
 def plain(text):
-    """DART's console text without its terminal colour codes, stripped."""
+    """DART's console text as a run's message: its first warning, without the terminal's colour codes, and how
+    many more lines it wrote within the first ``LOG_KEEP_CHARS`` ("": nothing)."""
     import re
 
-    return re.sub(r"\x1b\[[0-9;]*m", "", text).strip()
+    lines = [line.strip() for line in re.sub(r"\x1b\[[0-9;]*m", "", text).splitlines() if line.strip()]
+    if len(lines) <= 1:
+        return "".join(lines)
+    return f"{lines[0]} (and {len(lines) - 1} more lines, the first {LOG_KEEP_CHARS} characters read)"
 
 
 def _march(p, log, poll_steps):
