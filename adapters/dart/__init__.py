@@ -2,7 +2,8 @@
 
 Modules by job: ``model`` (the world and skeleton, DART's coordinates, what is switched off), ``stepping``
 (``World.step`` from sample to sample, the loads), ``readback`` (DART's states in body terms, joint reactions),
-``audit`` (what the run simulated, read back from the world), ``adapter`` (``DartAdapter``). DART itself is
+``audit`` (what the run simulated, read back from the world), ``loops`` (ball and revolute loop closures as
+DART's joint constraints), ``contact`` (one contact pair as DART's hard contact), ``adapter`` (``DartAdapter``). DART itself is
 imported only inside functions.
 """
 

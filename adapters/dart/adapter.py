@@ -5,7 +5,8 @@ scene's; ``run`` steps the world through the sample times (``stepping``) and rea
 (``readback``); ``audit`` (the module) reads the world and skeleton back.
 
 Integrators: DART has one, semi-implicit Euler at a fixed step (``euler``); it offers no error control.
-Loop closures: ball and revolute, as DART's dynamic joint constraints (``loops``), without reaction forces.
+Loop closures: ball and revolute, as DART's dynamic joint constraints (``loops``; their reactions by Newton's law,
+``readback``).
 Contact: one pair, DART's hard contact (``contact``). What it does not represent, each refused with the reason
 (``UNSUPPORTED``, ``contact.why_not``): distance loops, spring-dampers between two points, more than one contact
 pair.
