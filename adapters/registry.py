@@ -31,6 +31,7 @@ BUILTIN = {
     "drake": "dalembert.adapters.drake:DrakeAdapter",
     "mjx": "dalembert.adapters.mjx:MjxAdapter",
     "pybullet": "dalembert.adapters.pybullet:PybulletAdapter",
+    "dart": "dalembert.adapters.dart:DartAdapter",
 }
 # The entry-point group third-party adapters register in (a package's ``[project.entry-points."dalembert.adapters"]``).
 GROUP = "dalembert.adapters"
