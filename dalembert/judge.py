@@ -45,7 +45,7 @@ class Judgement:
     ----------
     beyond : tuple of str — names of the case's tolerances the run exceeds (empty unless ``ok``)
     verdict : str — one of ``VERDICTS``
-    reason : str — why the verdict is not ``stable`` ("" when it is)
+    reason : str — why the verdict is not ``stable`` ("" when it is), and the bounded quantities not measured
     within_tolerance : bool or None — every tolerance holds; None for a run that did not finish
     """
 
@@ -74,8 +74,10 @@ def judge(status, message, errors, drifts, tolerances, growths=None):
     -------
     Judgement
 
-    A bounded quantity the run did not report counts as within; a non-finite one
-    as beyond.
+    An error the run did not report counts as within; a declared quantity with no drift (a
+    ``dalembert.metrics.Metric`` the run does not measure, e.g. a contact force its engine does not
+    report) is not measured: never within, so a run with one and nothing beyond has
+    ``within_tolerance`` None, and the reason names it. A non-finite one counts as beyond.
     """
     if status != "ok":
         return Judgement((), status, message, None)
@@ -95,6 +97,19 @@ def judge(status, message, errors, drifts, tolerances, growths=None):
         if value > BLOWUP:
             return Judgement(beyond, "diverged", f"{name} changed by {value:.3g} times its scale (blow-up)", False)
         if value > tol.value:
-            drifted.append(f"{name} drift {value:.2e} > {tol.value:g}")
+            drifted.append(_beyond_text(name, value, tol))
     verdict, reason = ("drifts", "; ".join(drifted)) if drifted else ("stable", "")
-    return Judgement(beyond, verdict, reason, not beyond)
+    unmeasured = [name for name in tolerances if name not in QUANTITIES and name not in drifts]
+    if unmeasured:
+        reason = "; ".join(filter(None, [reason, f"not measured: {', '.join(unmeasured)}"]))
+    return Judgement(beyond, verdict, reason, False if beyond else (None if unmeasured else True))
+
+
+def _beyond_text(name, value, tol):
+    """Why ``name`` is beyond its bound: a declared invariant's drift as a number ("energy drift 1.20e-03 >
+    0.0001"), a metric's figure and bound in its unit ("creep 1.80e-03 m/s > bound 0.0001 m/s": its ``tol`` is a
+    ``dalembert.metrics.MetricTolerance``)."""
+    unit = getattr(tol, "unit", None)
+    if unit is None:
+        return f"{name} drift {value:.2e} > {tol.value:g}"
+    return f"{name} {tol.in_unit(value):.2e} {unit} > bound {tol.in_unit(tol.value):g} {unit}"

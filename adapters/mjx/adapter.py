@@ -25,7 +25,11 @@ noslip pass — only MJX's Warp backend, a GPU one, has: ``mujoco.mjx._src``
 would ignore the option silently, and the run would be one without noslip), and,
 from MJX itself, a frictionless pair (condim 1) under the elliptic cone
 (``mjx.make_data``: "condim=1 with ConeType.ELLIPTIC not implemented") and any
-geometry pair MJX has no collision function for (``mjx.put_model``).
+geometry pair MJX has no collision function for (``mjx.put_model``). Contact forces are not
+read back (the quantities made from them are "not measured" on MJX): its rollout keeps
+``qpos``/``qvel`` per sample only, and MuJoCo C's ``mj_contactForce`` on those states would be
+MuJoCo C's solver, not MJX's own (``Data.efc_force`` of a ``mjx.forward`` at each sample would
+be: not yet done).
 """
 
 from __future__ import annotations
@@ -151,7 +155,8 @@ class MjxAdapter(MujocoAdapter):
 
         def read():
             Qh, Vh = to_host(Q, V, p.qpos0, p.qvel0, len(p.times))
-            traj, info["audit"] = read_back(p, Qh, Vh)
+            # no contact forces: MuJoCo C's solver at MJX's states would not be MJX's own (the docstring)
+            traj, info["audit"] = read_back(p, Qh, Vh, contact_forces=False)
             return traj
 
         return Outcome(read, wall, n_steps, n_steps * STAGES[p.settings.integrator], info)
