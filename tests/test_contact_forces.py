@@ -74,9 +74,10 @@ def test_every_engine_that_reports_forces_rolls_the_ball_with_m_g_cos_and_two_se
         assert name in drifts  # measured where the engine reports forces
 
 
-def test_exudyn_reports_the_force_on_the_first_sphere_of_a_pair_of_spheres():
-    pytest.importorskip("exudyn")
-    case, traj, f, _ = _forces("exudyn", "generalized-alpha", 1e-3, "sphere_collision")
+@pytest.mark.parametrize("engine, integrator", [("mujoco", "implicitfast"), ("exudyn", "generalized-alpha")])
+def test_the_force_of_a_pair_of_spheres_is_the_one_on_its_first_sphere(engine, integrator):
+    pytest.importorskip(engine)
+    case, traj, f, _ = _forces(engine, integrator, 1e-3, "sphere_collision")
     pair = case.scene.contacts[0]
     push = contact.normal_force(case.scene, pair, traj)
     assert push.max() > 0.0 and push.min() >= 0.0  # pushing the spheres apart, never pulling
