@@ -53,6 +53,7 @@ contact options; read back from the plant and its SceneGraph for the audit.
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
@@ -62,7 +63,7 @@ from dalembert.adapters.base import Option, typed_options
 
 __all__ = ["CONTACT_OPTIONS", "SOLVERS", "MODELS", "STIFFNESS_DEFAULT", "DISSIPATION_DEFAULT", "STICTION_TOLERANCE",
            "contact_options", "restitution_dissipation", "why_not", "add_geometry", "set_solver", "exclude_unnamed",
-           "candidates", "audit", "summary_lines", "read_forces"]
+           "candidates", "audit", "summary_lines", "read_forces", "HALF_SPACE_WARNING"]
 
 SOLVERS = ("sap", "tamsi")
 # Why frictional contact runs in discrete mode only (measured on Drake 1.51, this adapter).
@@ -180,6 +181,27 @@ def why_not(scene, settings):
     return None
 
 
+# Drake warns, once per process, that a rigid HalfSpace with proximity properties is invisible to deformable contact
+# ("Rigid (non-deformable) half spaces are not currently supported for deformable contact; registration is allowed,
+# but no contact data will be reported"). A scene's plane is a HalfSpace and no scene has a deformable body, so the
+# warning never concerns a run: dropped, that exact message alone, from Drake's logger (``_quiet_half_spaces``).
+HALF_SPACE_WARNING = "half spaces are not currently supported for deformable contact"
+
+
+class _HalfSpaceWarning(logging.Filter):
+    """Drops Drake's ``HALF_SPACE_WARNING`` and nothing else."""
+
+    def filter(self, record):
+        return HALF_SPACE_WARNING not in record.getMessage()
+
+
+def _quiet_half_spaces():
+    """Install ``_HalfSpaceWarning`` on Drake's logger (once per process)."""
+    logger = logging.getLogger("drake")
+    if not any(isinstance(f, _HalfSpaceWarning) for f in logger.filters):
+        logger.addFilter(_HalfSpaceWarning())
+
+
 def add_geometry(plant, scene, bodies, settings):
     """Register the scene's geoms and planes with ``plant`` (before ``Finalize``) and set point contact and the
     discrete approximation; return ``(scene_graph, ids)``, ``ids`` a dict geom or plane name -> ``GeometryId``.
@@ -213,6 +235,8 @@ def add_geometry(plant, scene, bodies, settings):
         X_BG = RigidTransform(RotationMatrix(spatial.quat_to_matrix(np.asarray(g.quat) / np.linalg.norm(g.quat))),
                               np.asarray(g.point, dtype=float))
         ids[g.name] = plant.RegisterCollisionGeometry(bodies[g.body], X_BG, shape, g.name, props(g.name))
+    if scene.planes:
+        _quiet_half_spaces()
     for pl in scene.planes:
         X_WG = HalfSpace.MakePose(pl.unit_normal, np.asarray(pl.point, dtype=float))
         ids[pl.name] = plant.RegisterCollisionGeometry(plant.world_body(), X_WG, HalfSpace(), pl.name,
