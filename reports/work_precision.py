@@ -47,7 +47,7 @@ def cost_per_sim_s(r):
 
 def line_label(r):
     """A work-precision line: ``engine integrator`` and its options."""
-    return " ".join(x for x in (r.engine, r.settings.integrator, r.options_label) if x)
+    return " ".join(x for x in (r.engine, r.settings.integrator, r.options_text) if x)
 
 
 def sweep_key(r):

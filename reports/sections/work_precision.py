@@ -26,7 +26,7 @@ def work_precision(rep, f, name):
     for pts in lines.values():
         r = pts[0].run
         panel = panels.setdefault((r.engine, bool(r.settings.options), r.options_label), dict(
-            title=" ".join(x for x in (r.engine, r.options_label) if x), engine=r.engine, lines=[]))
+            title=" ".join(x for x in (r.engine, r.options_text) if x), engine=r.engine, lines=[]))
         panel["lines"].append(dict(integrator=r.settings.integrator,
                                    points=[(p.cost, p.error, p.run.sweep_label) for p in pts]))
     panels = [panels[k] for k in sorted(panels)]
@@ -40,7 +40,7 @@ def work_precision(rep, f, name):
     for label, pts in sorted(lines.items()):
         r = pts[0].run
         best = min(pts, key=lambda p: p.error)
-        cells = [Cell(r.engine), Cell(r.settings.integrator), Cell(r.options_label or "defaults"),
+        cells = [Cell(r.engine), Cell(r.settings.integrator), Cell(r.options_text or "defaults"),
                  num(best.error), Cell(best.run.sweep_label)]
         for t in ACCURACY_TARGETS:
             p = cheapest_reaching(pts, t)
