@@ -72,7 +72,7 @@ def ball_rolling_incline(angle=math.radians(20.0), mu=0.5, radius=0.1, mass=1.0,
                           {scene.contacts[0].name: force})
 
     slip = Metric("slip", "largest slip speed of the contact point (the closed form rolls: none)", "m/s", 1.0,
-                  SLIP_TOL, lambda scene, traj: slip_speed(scene, traj))
+                  SLIP_TOL, lambda scene, traj: slip_speed(scene, traj), headline=True)
     return Case("ball_rolling_incline", scene, t_final, sample_times(t_final, sample_interval, "ball_rolling_incline"),
                 exact=truth, conserved=("energy",),
                 tolerances=dict(position=POSITION_TOL, velocity=VELOCITY_TOL, orientation=ORIENTATION_TOL,

@@ -95,7 +95,8 @@ def ball_slide_to_roll(v0=1.0, omega0=0.0, mu=0.1, radius=0.1, mass=1.0, g=9.81,
 
         metrics += [
             Metric("roll_onset_error", f"when the slip speed falls to {ONSET_FRACTION:g} of its initial value, "
-                                       "against the closed form's (s)", "s", 1.0, ONSET_TOL, onset_error),
+                                       "against the closed form's (s)", "s", 1.0, ONSET_TOL, onset_error,
+                   headline=True),
             Metric("roll_speed_error", "the speed at t_final against the rolling speed (5 v0 + 2 omega0 R) / 7", "m/s",
                    1.0, ROLL_SPEED_TOL,
                    lambda scene, traj: constant(traj, traj.bodies["ball"].velocity[-1, 0] - exact.roll_speed)),

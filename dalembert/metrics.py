@@ -47,10 +47,14 @@ class Metric(Invariant):
     ----------
     name, description, unit, scale, tolerance : as ``Invariant``'s; ``description`` says what is measured and
         against what truth
+    headline : bool — the case's headline figure, which a report ranks runs by (``InvariantLabel.headline``);
+        at most one per case, the first declared one counts
     series : callable ``(scene, traj) -> ndarray (n,)`` — the figure at each sample of ``traj``, in ``unit``;
         the stored value is ``max |series| / scale`` (dimensionless); or None where the run does not measure it
         (made from what the engine reports, e.g. a contact force, and this engine reports none)
     """
+
+    headline: bool = False
 
     def __post_init__(self):
         if isinstance(self.tolerance, Tolerance) and not isinstance(self.tolerance, MetricTolerance):
@@ -60,7 +64,7 @@ class Metric(Invariant):
     @property
     def label(self):
         """The ``InvariantLabel`` a store keeps, of kind "metric"."""
-        return InvariantLabel(self.name, self.description, self.unit, float(self.scale), "metric")
+        return InvariantLabel(self.name, self.description, self.unit, float(self.scale), "metric", bool(self.headline))
 
     def drift_series(self, scene, traj):
         """``|series(t)| / scale`` at each sample, ndarray (n,), dimensionless; None when the run does not measure
