@@ -29,12 +29,13 @@ from dalembert.adapters.mujoco.stepping import apply_xfrc
 __all__ = ["read_back"]
 
 
-def read_back(p, Q, V, contact_forces=True):
+def read_back(p, Q, V, contact_forces=None):
     """The ``Trajectory`` of the sampled states ``Q (n, nq)``, ``V (n, nv)`` (NaN rows stay
     NaN), with the reaction forces on jointed children (N, world axes) as extras; and the
-    audit figures read on the way (contacts, constraint rows, passive forces). ``contact_forces``: read each
-    contact pair's force (``contact.force_reader``) as the extras ``contact_force:<pair>``; MJX's read-back,
-    whose states MuJoCo's own solver did not make, reads none.
+    audit figures read on the way (contacts, constraint rows, passive forces), and each contact pair's force
+    (``contact.force_reader``) as the extras ``contact_force:<pair>``. ``contact_forces`` (n, n_pairs, 3): the
+    pairs' forces another solver computed at these states, stored in their place (MJX's own, ``mjx.contact``:
+    MuJoCo C's solver did not make MJX's states).
 
     MuJoCo recomputes each sample (one ``mj_forward``, plus ``mj_rnePostConstraint`` where
     reactions are read); what it computed is copied out per sample, and the conversion to the
@@ -64,8 +65,8 @@ def read_back(p, Q, V, contact_forces=True):
     loop_force = {name: np.full((n, 3), np.nan) for name in loops}
     tendons = spring_tendon_ids(model, scene)
     other_passive = np.zeros(n)  # |qfrc_passive - the springs' J^T f|: any passive force that is not a spring's
-    contact_forces = force_reader(model, scene) if contact_forces else None
-    pair_force = np.full((n, len(scene.contacts), 3), np.nan)
+    reader = force_reader(model, scene) if contact_forces is None else None
+    pair_force = np.full((n, len(scene.contacts), 3), np.nan) if contact_forces is None else contact_forces
     if p.load_path == "actuator":
         d.ctrl[:] = 1.0
     finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)
@@ -84,8 +85,8 @@ def read_back(p, Q, V, contact_forces=True):
         for name, (kind, eq_ids, sites) in loops.items():
             loop_force[name][k] = _loop_force(d, kind, eq_ids, sites)
         passive[k] = d_passive
-        if contact_forces is not None:
-            pair_force[k] = contact_forces(d)
+        if reader is not None:
+            pair_force[k] = reader(d)
         if tendons:
             J = _tendon_jacobian(model, d)
             springs_q = np.zeros(model.nv)
@@ -131,8 +132,7 @@ def read_back(p, Q, V, contact_forces=True):
         joints[j.child] = JointStates(Q[:, a:a + len(j.q0)], V[:, v:v + len(j.v0)])
     extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
     extras.update({f"reaction_force:{name}": f for name, f in loop_force.items()})
-    if contact_forces is not None:
-        extras.update({FORCE_PREFIX + pair.name: pair_force[:, i] for i, pair in enumerate(scene.contacts)})
+    extras.update({FORCE_PREFIX + pair.name: pair_force[:, i] for i, pair in enumerate(scene.contacts)})
     audit = {"max_contacts": int(max_ncon), "max_constraint_rows": int(max_nefc),
              "max_abs_passive_force": float(np.abs(passive).max(initial=0.0))}
     if tendons:
