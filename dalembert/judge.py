@@ -19,6 +19,13 @@ Within tolerance means every named tolerance of the case holds: errors against
 the truth (``dalembert.errors.QUANTITIES``) and drifts of conserved quantities.
 The bounds are the case's named tolerances, each with its reason; nothing here
 invents a bound.
+
+A bounded quantity the run did not report (an engine that reads back no
+reactions) is *not measured*: never within tolerance, never beyond it. It is
+listed in ``Judgement.not_measured``, and ``within_tolerance`` is then None
+(not established) unless some measured quantity is beyond (False): True means
+every bound was measured and holds. Stores written before this kept no
+``not_measured``; their stored ``within_tolerance`` is read as it was judged.
 """
 
 from __future__ import annotations
@@ -45,14 +52,19 @@ class Judgement:
     ----------
     beyond : tuple of str — names of the case's tolerances the run exceeds (empty unless ``ok``)
     verdict : str — one of ``VERDICTS``
-    reason : str — why the verdict is not ``stable`` ("" when it is), and the bounded quantities not measured
-    within_tolerance : bool or None — every tolerance holds; None for a run that did not finish
+    reason : str — why the verdict is not ``stable`` ("" when it is)
+    within_tolerance : bool or None — every tolerance was measured and holds (True), some measured one is
+        exceeded (False); None for a run that did not finish, or when nothing measured is beyond and some bound
+        was not measured
+    not_measured : tuple of str — names of the case's tolerances whose quantity the run did not report
+        (empty in stores written before it was judged)
     """
 
     beyond: tuple
     verdict: str
     reason: str
     within_tolerance: bool | None
+    not_measured: tuple = ()
 
 
 def judge(status, message, errors, drifts, tolerances, growths=None):
@@ -74,39 +86,38 @@ def judge(status, message, errors, drifts, tolerances, growths=None):
     -------
     Judgement
 
-    An error the run did not report counts as within; a declared quantity with no drift (a
-    ``dalembert.metrics.Metric`` the run does not measure, e.g. a contact force its engine does not
-    report) is not measured: never within, so a run with one and nothing beyond has
-    ``within_tolerance`` None, and the reason names it. A non-finite one counts as beyond.
+    A bounded quantity the run did not report (absent, or None) is not measured
+    (``Judgement.not_measured``), never within; a non-finite one is beyond.
     """
     if status != "ok":
         return Judgement((), status, message, None)
+    values = {name: (errors if name in QUANTITIES else drifts).get(name) for name in tolerances}
+    missing = tuple(name for name, value in values.items() if value is None)
     beyond = tuple(name for name, tol in tolerances.items()
-                   if not (errors if name in QUANTITIES else drifts).get(name, 0.0) <= tol.value)
+                   if values[name] is not None and not values[name] <= tol.value)
+    within = False if beyond else None if missing else True
     for name, value in (growths or {}).items():
         if value > BLOWUP:  # NaN (no true scale) compares False
             return Judgement(beyond, "diverged", f"{name} changed by {value:.3g} times its scale in the true motion "
-                                                 "(a blow-up, though finite)", False)
+                                                 "(a blow-up, though finite)", False, missing)
     drifted = []
     for name, tol in tolerances.items():
         value = drifts.get(name)
         if value is None:
             continue
         if math.isnan(value):
-            return Judgement(beyond, "diverged", f"{name} drift is not finite", False)
+            return Judgement(beyond, "diverged", f"{name} drift is not finite", False, missing)
         if value > BLOWUP:
-            return Judgement(beyond, "diverged", f"{name} changed by {value:.3g} times its scale (blow-up)", False)
+            return Judgement(beyond, "diverged", f"{name} changed by {value:.3g} times its scale (blow-up)", False,
+                             missing)
         if value > tol.value:
             drifted.append(_beyond_text(name, value, tol))
     verdict, reason = ("drifts", "; ".join(drifted)) if drifted else ("stable", "")
-    unmeasured = [name for name in tolerances if name not in QUANTITIES and name not in drifts]
-    if unmeasured:
-        reason = "; ".join(filter(None, [reason, f"not measured: {', '.join(unmeasured)}"]))
-    return Judgement(beyond, verdict, reason, False if beyond else (None if unmeasured else True))
+    return Judgement(beyond, verdict, reason, within, missing)
 
 
 def _beyond_text(name, value, tol):
-    """Why ``name`` is beyond its bound: a declared invariant's drift as a number ("energy drift 1.20e-03 >
+    """Why ``name`` is beyond its bound: a conserved quantity's drift as a number ("energy drift 1.20e-03 >
     0.0001"), a metric's figure and bound in its unit ("creep 1.80e-03 m/s > bound 0.0001 m/s": its ``tol`` is a
     ``dalembert.metrics.MetricTolerance``)."""
     unit = getattr(tol, "unit", None)

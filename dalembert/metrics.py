@@ -81,7 +81,7 @@ class Metric(Invariant):
     def drift(self, scene, traj):
         """The largest ``drift_series`` over the trajectory (NaN when a value is not finite); None when not
         measured: the harness then stores nothing under the metric's name, and the judge counts it as not
-        measured, never as within its bound (``dalembert.judge``)."""
+        measured (``Judgement.not_measured``), never as within its bound (``dalembert.judge``)."""
         d = self.drift_series(scene, traj)
         if d is None:
             return None
