@@ -152,4 +152,5 @@ def test_the_contact_forces_table_shows_each_runs_figures_and_not_measured_where
     assert "not measured" in rows["force-blind"] and "not measured" not in rows["mujoco"]
     assert " N" in rows["mujoco"] and " W" in rows["mujoco"]  # the normal-force error in N, the residuals in W
     (blind,) = [r for r in s.records() if r.engine == "force-blind"]
-    assert "normal_force_error" not in blind.drifts and blind.judgement.within_tolerance is None
+    # not measured is never within: MuJoCo's default creep is beyond its bound, so the run is not within (False)
+    assert "normal_force_error" not in blind.drifts and blind.judgement.within_tolerance is False
