@@ -9,7 +9,8 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.case import Case, Tolerance, case
-from dalembert.cases._contact import TAGS, body_truth, penetration, require, slip_speed
+from dalembert.cases._contact import TAGS, body_truth, normal_force_error, penetration, require, slip_speed
+from dalembert.contact_residuals import residual_metrics
 from dalembert.cases._sampling import sample_times
 from dalembert.metrics import Metric
 from dalembert.reference.closed_form import RollingBall
@@ -23,6 +24,17 @@ ENERGY_TOL = Tolerance(1e-2, "relative to the largest kinetic energy; a contact 
                              "what is lost is the engine's (a yielding or slipping contact)")
 SLIP_TOL = Tolerance(1e-3, "m/s; the contact point must not slip: 0.04 % of the final speed")
 PENETRATION_TOL = Tolerance(1e-3, "m; 1 % of the 0.1-m radius")
+# The normal force where the engine reports one (``_contact.normal_force_error``), relative to m g cos(angle).
+NORMAL_FORCE_TOL = Tolerance(1e-2, "of m g cos(angle); the ball stays on the plane, so its contact carries the "
+                                   "weight's normal part: 1 % more or less accelerates it off the plane at 0.1 m/s^2")
+# ContactBench's residuals where the engine reports contact forces (``dalembert.contact_residuals``), over the load.
+RESIDUAL_TOLS = dict(
+    signorini_residual=Tolerance(1e-3, "m/s (W over the load in N); the load times the contact's normal speed: a "
+                                       "loaded contact sinking or lifting at 1 mm/s leaves PENETRATION_TOL in 1 s"),
+    cone_residual=Tolerance(1e-2, "of the load; friction 1 % of the normal force beyond Coulomb's cone"),
+    dissipation_residual=Tolerance(1e-3, "m/s (W over the load in N); a rolling contact that slips at SLIP_TOL with "
+                                         "friction short of the cone's edge, at full load"),
+)
 
 
 @case(tags=(*TAGS, "friction", "rolling"),
@@ -52,14 +64,18 @@ def ball_rolling_incline(angle=math.radians(20.0), mu=0.5, radius=0.1, mass=1.0,
 
     def truth(t):
         t = np.asarray(t, dtype=float)
+        # the plane's force on the ball: the normal force, and static friction 2/7 m g sin(angle) up the slope
+        force = np.tile(exact.normal_force * normal - exact.friction_force * downhill, (len(t), 1))
         return body_truth(t, "ball", p0 + exact.distance(t)[:, None] * downhill,
                           spatial.quat_from_axis_angle(axis, exact.angle_turned(t)),
-                          exact.speed(t)[:, None] * downhill, exact.spin(t)[:, None] * axis)
+                          exact.speed(t)[:, None] * downhill, exact.spin(t)[:, None] * axis,
+                          {scene.contacts[0].name: force})
 
     slip = Metric("slip", "largest slip speed of the contact point (the closed form rolls: none)", "m/s", 1.0,
-                  SLIP_TOL, lambda scene, traj: slip_speed(scene, traj))
+                  SLIP_TOL, lambda scene, traj: slip_speed(scene, traj), headline=True)
     return Case("ball_rolling_incline", scene, t_final, sample_times(t_final, sample_interval, "ball_rolling_incline"),
                 exact=truth, conserved=("energy",),
                 tolerances=dict(position=POSITION_TOL, velocity=VELOCITY_TOL, orientation=ORIENTATION_TOL,
                                 angular_velocity=RATE_TOL, energy=ENERGY_TOL),
-                invariants=(penetration(PENETRATION_TOL), slip))
+                invariants=(penetration(PENETRATION_TOL), slip, normal_force_error(exact.normal_force, NORMAL_FORCE_TOL),
+                            *residual_metrics(0, exact.normal_force, RESIDUAL_TOLS)))

@@ -7,7 +7,8 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.case import Case, Tolerance, case
-from dalembert.cases._contact import TAGS, body_truth, penetration, require, slip_speed
+from dalembert.cases._contact import TAGS, body_truth, normal_force_error, penetration, require, slip_speed
+from dalembert.contact_residuals import residual_metrics
 from dalembert.cases._sampling import sample_times
 from dalembert.invariants import kinetic_energy
 from dalembert.metrics import Metric, constant, first_crossing
@@ -31,6 +32,17 @@ PENETRATION_TOL = Tolerance(1e-3, "m; 1 % of the 0.1-m radius")
 ONSET_FRACTION = 0.01
 # Rolling slip is measured from this long after t* (s): an onset late by less is ONSET_TOL's to judge.
 ONSET_GRACE = 0.05
+# The normal force where the engine reports one (``_contact.normal_force_error``), relative to m g.
+NORMAL_FORCE_TOL = Tolerance(1e-2, "of m g; the ball stays on the level plane, so its contact carries its weight: "
+                                   "1 % more or less accelerates it off the plane at 0.1 m/s^2")
+# ContactBench's residuals where the engine reports contact forces (``dalembert.contact_residuals``), over m g.
+RESIDUAL_TOLS = dict(
+    signorini_residual=Tolerance(1e-3, "m/s (W over the weight in N); the weight times the contact's normal speed: "
+                                       "a loaded contact sinking or lifting at 1 mm/s leaves PENETRATION_TOL in 1 s"),
+    cone_residual=Tolerance(1e-2, "of the weight; friction 1 % of the normal force beyond Coulomb's cone"),
+    dissipation_residual=Tolerance(1e-3, "m/s (W over the weight in N); a sliding contact whose friction falls short "
+                                         "of mu m g, or a rolling one that slips, by ROLL_SLIP_TOL at full load"),
+)
 
 
 @case(tags=(*TAGS, "friction", "rolling"),
@@ -61,11 +73,16 @@ def ball_slide_to_roll(v0=1.0, omega0=0.0, mu=0.1, radius=0.1, mass=1.0, g=9.81,
     def truth(t):
         t = np.asarray(t, dtype=float)
         n, zero = len(t), np.zeros(len(t))
+        # the plane's force on the ball: its weight's reaction, and mu m g against the slip until it rolls
+        friction = np.where(t < exact.roll_time, -np.sign(exact.initial_slip) * mu * mass * g, 0.0)
+        force = np.stack([friction, zero, np.full(n, mass * g)], -1)
         return body_truth(t, "ball", np.stack([exact.distance(t), zero, np.full(n, radius)], -1),
                           spatial.quat_from_axis_angle([0.0, 1.0, 0.0], exact.angle(t)),
-                          np.stack([exact.speed(t), zero, zero], -1), np.stack([zero, exact.spin(t), zero], -1))
+                          np.stack([exact.speed(t), zero, zero], -1), np.stack([zero, exact.spin(t), zero], -1),
+                          {scene.contacts[0].name: force})
 
-    metrics = [penetration(PENETRATION_TOL)]
+    metrics = [penetration(PENETRATION_TOL), normal_force_error(mass * g, NORMAL_FORCE_TOL),
+               *residual_metrics(0, mass * g, RESIDUAL_TOLS)]
     t_star = exact.roll_time
     if t_star < t_final:
         level = ONSET_FRACTION * abs(exact.initial_slip)
@@ -78,7 +95,8 @@ def ball_slide_to_roll(v0=1.0, omega0=0.0, mu=0.1, radius=0.1, mass=1.0, g=9.81,
 
         metrics += [
             Metric("roll_onset_error", f"when the slip speed falls to {ONSET_FRACTION:g} of its initial value, "
-                                       "against the closed form's (s)", "s", 1.0, ONSET_TOL, onset_error),
+                                       "against the closed form's (s)", "s", 1.0, ONSET_TOL, onset_error,
+                   headline=True),
             Metric("roll_speed_error", "the speed at t_final against the rolling speed (5 v0 + 2 omega0 R) / 7", "m/s",
                    1.0, ROLL_SPEED_TOL,
                    lambda scene, traj: constant(traj, traj.bodies["ball"].velocity[-1, 0] - exact.roll_speed)),

@@ -9,7 +9,8 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.case import Case, Tolerance, case
-from dalembert.cases._contact import TAGS, body_truth, penetration, require
+from dalembert.cases._contact import TAGS, body_truth, normal_force_error, penetration, require
+from dalembert.contact_residuals import residual_metrics
 from dalembert.cases._sampling import sample_times
 from dalembert.metrics import Metric, constant, first_crossing
 from dalembert.reference.closed_form import SlidingBlock
@@ -35,6 +36,18 @@ STOP_FRACTION = 0.01
 # STOP_TOL's to judge, and a compliant contact settles into its steady state (2.5 of MuJoCo's default 0.02-s time
 # constants) — the creep is the steady rate, not the settling.
 STOP_GRACE = 0.05
+# The normal force where the engine reports one (``_contact.normal_force_error``), relative to m g cos(angle).
+NORMAL_FORCE_TOL = Tolerance(1e-2, "of m g cos(angle); the box neither lifts nor tips, so its contact carries the "
+                                   "weight's normal part: 1 % more or less accelerates it off the plane at 0.1 m/s^2")
+# ContactBench's residuals where the engine reports contact forces (``dalembert.contact_residuals``), over the load.
+RESIDUAL_TOLS = dict(
+    signorini_residual=Tolerance(1e-3, "m/s (W over the load in N); the load times the contact's normal speed: a "
+                                       "loaded contact sinking or lifting at 1 mm/s leaves PENETRATION_TOL in 1 s"),
+    cone_residual=Tolerance(1e-2, "of the load; friction 1 % of the normal force beyond Coulomb's cone"),
+    dissipation_residual=Tolerance(1e-4, "m/s (W over the load in N); slip short of full friction dissipates too "
+                                         "little: at the cone's margin (mu cos - sin = 0.13 of the weight here) "
+                                         "CREEP_TOL's slip gives 1.3e-5, the bound leaves 8x"),
+)
 
 
 @case(tags=(*TAGS, "friction"),
@@ -69,13 +82,16 @@ def block_on_incline(angle=math.radians(20.0), mu=0.5, v0=0.0, mass=1.0, size=(0
     def truth(t):
         t = np.asarray(t, dtype=float)
         s, v = exact.displacement(t), exact.speed(t)
+        # the plane's force on the box: the normal force, and friction up the slope (closed form's friction_force)
+        force = exact.normal_force * normal - np.asarray(exact.friction_force(t))[:, None] * downhill
         return body_truth(t, "box", p0 + s[:, None] * downhill, np.tile(q, (len(t), 1)), v[:, None] * downhill,
-                          np.zeros((len(t), 3)))
+                          np.zeros((len(t), 3)), {scene.contacts[0].name: force})
 
     def speed_down(traj):
         return traj.bodies["box"].velocity @ downhill
 
-    metrics = [penetration(PENETRATION_TOL)]
+    metrics = [penetration(PENETRATION_TOL), normal_force_error(exact.normal_force, NORMAL_FORCE_TOL),
+               *residual_metrics(0, exact.normal_force, RESIDUAL_TOLS)]
     stop = exact.stop_time
     if stop is not None and stop + STOP_GRACE < t_final:  # a phase that must stick
         begin = int(np.searchsorted(times, stop + STOP_GRACE))
@@ -87,7 +103,7 @@ def block_on_incline(angle=math.radians(20.0), mu=0.5, v0=0.0, mass=1.0, size=(0
 
         metrics.append(Metric("creep", "mean speed of the box along the slope while the closed form sticks (its "
                                        f"displacement from {STOP_GRACE:g} s after the stop to t_final, over that time)",
-                              "m/s", 1.0, CREEP_TOL, creep))
+                              "m/s", 1.0, CREEP_TOL, creep, headline=True))
     if stop is not None and 0.0 < stop < t_final:
         level = STOP_FRACTION * v0
         true_stop = first_crossing(times, exact.speed(times), level)
@@ -97,7 +113,8 @@ def block_on_incline(angle=math.radians(20.0), mu=0.5, v0=0.0, mass=1.0, size=(0
             return constant(traj, (traj.t[-1] if found is None else found) - true_stop)
 
         metrics.append(Metric("stop_time_error", f"when the speed down the slope falls to {STOP_FRACTION:g} v0, "
-                                                 "against the closed form's (s)", "s", 1.0, STOP_TOL, stop_error))
+                                                 "against the closed form's (s)", "s", 1.0, STOP_TOL, stop_error,
+                              headline=not any(m.name == "creep" for m in metrics)))
     return Case("block_on_incline", scene, t_final, times, exact=truth,
                 tolerances=dict(position=POSITION_TOL, velocity=VELOCITY_TOL, orientation=ORIENTATION_TOL,
                                 angular_velocity=RATE_TOL),

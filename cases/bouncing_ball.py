@@ -97,6 +97,7 @@ def bouncing_ball(height=1.0, restitution=0.5, radius=0.1, mass=1.0, g=9.81, t_f
             return constant(traj, max(abs(a - b) for a, b in zip(tops, true_tops[:counted_tops])))
 
         metrics.append(Metric("apex_error", f"largest error of the first {counted_tops} apex heights e^(2k) h, "
-                                            "relative to the drop height", "m", height, APEX_TOL, apex_error))
+                                            "relative to the drop height", "m", height, APEX_TOL, apex_error,
+                              headline=True))
     return Case("bouncing_ball", scene, t_final, times, exact=truth,
                 tolerances=dict(position=POSITION_TOL, velocity=VELOCITY_TOL), invariants=tuple(metrics))

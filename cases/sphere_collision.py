@@ -70,7 +70,7 @@ def sphere_collision(restitution=0.8, m1=1.0, m2=3.0, r1=0.1, r2=0.1, v1=1.0, v2
 
         metrics.append(Metric("velocity_after_error", "largest error of the two velocities at t_final against "
                                                       "the closed form's after the impact, relative to v1 - v2",
-                              "m/s", v1 - v2, AFTER_TOL, after_error))
+                              "m/s", v1 - v2, AFTER_TOL, after_error, headline=True))
     return Case("sphere_collision", scene, t_final, times, exact=truth, conserved=("linear_momentum",),
                 tolerances=dict(position=POSITION_TOL, velocity=VELOCITY_TOL, linear_momentum=MOMENTUM_TOL),
                 invariants=tuple(metrics))

@@ -273,7 +273,8 @@ class CaseRecord:
                 "truth": self.truth,
                 # (a metric's kind is written, an invariant's left out: stores without metrics keep their files)
                 "invariants": [{"name": i.name, "description": i.description, "unit": i.unit, "scale": i.scale,
-                                **({"kind": i.kind} if i.kind != "invariant" else {})}
+                                **({"kind": i.kind} if i.kind != "invariant" else {}),
+                                **({"headline": True} if i.headline else {})}
                                for i in self.invariants], "units": dict(self.units)}
 
     @classmethod
@@ -284,7 +285,7 @@ class CaseRecord:
                    {k: Tolerance(t["value"], t["reason"]) for k, t in data["tolerances"].items()},
                    tuple(data["conserved"]), tuple(data["tags"]), dict(data["floor"]), data["truth"],
                    tuple(InvariantLabel(i["name"], i["description"], i["unit"], float(i["scale"]),
-                                        i.get("kind", "invariant"))
+                                        i.get("kind", "invariant"), bool(i.get("headline", False)))
                          for i in data.get("invariants", ())), dict(data.get("units", {})))
 
 

@@ -9,8 +9,15 @@ The *slip velocity* of a geom on a plane is the tangential velocity (world, m/s)
 the geom's centre on the plane: a sphere's contact point, the centre of a box's face lying on the plane. It is
 zero while the contact sticks or rolls.
 
+The *contact force* of a pair is what an engine reports, where it reports one: the total force (N, world axes) the
+pair's contact exerts ON its *subject*, the geom of a geom-plane pair, or the first geom ``a`` of a pair of geoms,
+stored per sample in the trajectory's extras as ``contact_force:<pair>`` (n, 3) (an engine that does not report
+it stores nothing: the quantities made from it are then not measured). Its *normal force* is its component along
+the contact normal: the plane's normal, or from the other geom's centre to the subject's for a pair of spheres.
+
 Used by the scene's checks (no pair may start interpenetrating: ``scene_checks.INITIAL_OVERLAP_TOL``) and by the
-contact cases' metrics (``dalembert.metrics.Metric``: penetration depth, creep).
+contact cases' metrics (``dalembert.metrics.Metric``: penetration depth, creep, normal force,
+``dalembert.contact_residuals``).
 """
 
 from __future__ import annotations
@@ -21,7 +28,11 @@ import numpy as np
 
 from dalembert.rotations import cross, quat_to_matrix
 
-__all__ = ["poses_of", "initial_poses", "gap", "depth", "slip_velocity", "geom_and_plane", "not_mapped"]
+__all__ = ["FORCE_PREFIX", "poses_of", "initial_poses", "gap", "depth", "contact_point_velocity", "slip_velocity",
+           "geom_and_plane", "subject", "contact_force", "normal_force", "not_mapped"]
+
+# The trajectory extras key of a pair's contact force, ``FORCE_PREFIX + pair.name`` (n, 3), N, world, ON its subject.
+FORCE_PREFIX = "contact_force:"
 
 # A box's 8 corners in its own axes, as multiples of its half edge lengths.
 _CORNERS = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
@@ -111,16 +122,55 @@ def depth(scene, poses):
     return worst
 
 
-def slip_velocity(scene, pair, poses):
-    """The slip velocity (m/s, world) of a geom-plane ``pair`` at each sample, ndarray (n, 3): the tangential
-    velocity of the body point at the foot of the geom's centre on the plane."""
+def contact_point_velocity(scene, pair, poses):
+    """The velocity (m/s, world) of the body point at the foot of a geom-plane ``pair``'s geom centre on the plane,
+    at each sample, ndarray (n, 3): its component along the plane's normal is the contact's normal velocity
+    (positive: leaving the plane), the rest its slip velocity."""
     geom, plane = geom_and_plane(scene, pair)
     pose = poses[geom.body]
     n, p0 = plane.unit_normal, np.asarray(plane.point)
     c, _ = _geom_frame(geom, pose)
     foot = c - np.outer((c - p0) @ n, n)
-    v = pose["v"] + cross(pose["w"], foot - pose["p"])
+    return pose["v"] + cross(pose["w"], foot - pose["p"])
+
+
+def slip_velocity(scene, pair, poses):
+    """The slip velocity (m/s, world) of a geom-plane ``pair`` at each sample, ndarray (n, 3): the tangential
+    velocity of the body point at the foot of the geom's centre on the plane."""
+    n = geom_and_plane(scene, pair)[1].unit_normal
+    v = contact_point_velocity(scene, pair, poses)
     return v - np.outer(v @ n, n)
+
+
+def subject(scene, pair):
+    """The name of the geom ``pair``'s contact force acts on: the geom of a geom-plane pair, else ``pair.a``."""
+    gp = geom_and_plane(scene, pair)
+    return gp[0].name if gp is not None else pair.a
+
+
+def contact_force(traj, pair):
+    """The contact force (N, world) ON ``pair``'s subject at each sample of ``traj``, ndarray (n, 3), as the engine
+    reported it; None when the engine reported none (not measured)."""
+    f = traj.extras.get(FORCE_PREFIX + pair.name)
+    return None if f is None else np.asarray(f, dtype=float)
+
+
+def normal_force(scene, pair, traj):
+    """The normal component (N) of ``pair``'s contact force at each sample of ``traj``, ndarray (n,): along the
+    plane's normal for a geom-plane pair, along the line from ``b``'s centre to ``a``'s for two geoms (positive:
+    pushing them apart); None when the engine reported no force, or for a pair of geoms other than two spheres."""
+    f = contact_force(traj, pair)
+    if f is None:
+        return None
+    gp = geom_and_plane(scene, pair)
+    if gp is not None:
+        return f @ gp[1].unit_normal
+    a, b = scene.geom(pair.a), scene.geom(pair.b)
+    if a.kind != "sphere" or b.kind != "sphere":
+        return None
+    poses = poses_of(traj)
+    d = _geom_frame(a, poses[a.body])[0] - _geom_frame(b, poses[b.body])[0]
+    return np.einsum("ni,ni->n", f, d / np.linalg.norm(d, axis=-1, keepdims=True))
 
 
 def not_mapped(scene, engine, would_take=None):

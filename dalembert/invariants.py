@@ -462,7 +462,8 @@ def summary(scene, traj, conserved=(), declared=(), truth=None):
     measured = {name: _measured(name, scene, traj) for name in conserved}  # each series once
     changes = {name: _change(name, x) for name, (x, _) in measured.items()}
     drifts = {name: float(np.max(_per_scale(changes[name], scale))) for name, (_, scale) in measured.items()}
-    drifts.update({inv.name: inv.drift(scene, traj) for inv in declared})
+    declared_drifts = {inv.name: inv.drift(scene, traj) for inv in declared}
+    drifts.update({name: d for name, d in declared_drifts.items() if d is not None})  # None: a metric not measured
     rates = {name: _rate(traj.t, x, scale) for name, (x, scale) in measured.items()
              if name in ("energy", "energy_balance")}
     checks = {"orthonormality": float(np.max(orthonormality_error(scene, traj))),

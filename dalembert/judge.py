@@ -44,6 +44,16 @@ BLOWUP = 100.0
 VERDICTS = ("stable", "drifts", "diverged", "failed", "timeout", "unsupported")
 
 
+def _beyond_text(name, value, tol):
+    """Why ``name`` is beyond its bound: a conserved quantity's drift as a number ("energy drift 1.20e-03 >
+    0.0001"), a metric's figure and bound in its unit ("creep 1.80e-03 m/s > bound 0.0001 m/s": its ``tol`` is a
+    ``dalembert.metrics.MetricTolerance``)."""
+    unit = getattr(tol, "unit", None)
+    if unit is None:
+        return f"{name} drift {value:.2e} > {tol.value:g}"
+    return f"{name} {tol.in_unit(value):.2e} {unit} > bound {tol.in_unit(tol.value):g} {unit}"
+
+
 @dataclass(frozen=True)
 class Judgement:
     """How a run measured up to its case.
@@ -111,6 +121,6 @@ def judge(status, message, errors, drifts, tolerances, growths=None):
             return Judgement(beyond, "diverged", f"{name} changed by {value:.3g} times its scale (blow-up)", False,
                              missing)
         if value > tol.value:
-            drifted.append(f"{name} drift {value:.2e} > {tol.value:g}")
+            drifted.append(_beyond_text(name, value, tol))
     verdict, reason = ("drifts", "; ".join(drifted)) if drifted else ("stable", "")
     return Judgement(beyond, verdict, reason, within, missing)

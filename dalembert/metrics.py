@@ -19,9 +19,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dalembert.tolerance import Invariant, InvariantLabel
+from dalembert.tolerance import Invariant, InvariantLabel, Tolerance
 
-__all__ = ["Metric", "constant", "first_crossing", "apexes"]
+__all__ = ["Metric", "MetricTolerance", "constant", "first_crossing", "apexes"]
+
+
+@dataclass(frozen=True)
+class MetricTolerance(Tolerance):
+    """A ``Metric``'s bound as its case holds it: the ``Tolerance`` (value dimensionless, over ``scale``) with the
+    metric's ``unit`` and ``scale``, so a verdict can say the figure and its bound in the metric's unit ("creep
+    1.80e-03 m/s > bound 0.0001 m/s"). Made by ``Metric`` from the ``Tolerance`` it is given; the case's version
+    and the store keep the value and the reason alone, as for every tolerance."""
+
+    unit: str = ""
+    scale: float = 1.0
+
+    def in_unit(self, value):
+        """``value`` (dimensionless, over ``scale``) in the metric's unit."""
+        return value * self.scale
 
 
 @dataclass(frozen=True, eq=False)
@@ -32,22 +47,45 @@ class Metric(Invariant):
     ----------
     name, description, unit, scale, tolerance : as ``Invariant``'s; ``description`` says what is measured and
         against what truth
+    headline : bool — the case's headline figure, which a report ranks runs by (``InvariantLabel.headline``);
+        at most one per case, the first declared one counts
     series : callable ``(scene, traj) -> ndarray (n,)`` — the figure at each sample of ``traj``, in ``unit``;
-        the stored value is ``max |series| / scale`` (dimensionless)
+        the stored value is ``max |series| / scale`` (dimensionless); or None where the run does not measure it
+        (made from what the engine reports, e.g. a contact force, and this engine reports none)
     """
+
+    headline: bool = False
+
+    def __post_init__(self):
+        if isinstance(self.tolerance, Tolerance) and not isinstance(self.tolerance, MetricTolerance):
+            object.__setattr__(self, "tolerance", MetricTolerance(self.tolerance.value, self.tolerance.reason,
+                                                                  str(self.unit), self.scale))
 
     @property
     def label(self):
         """The ``InvariantLabel`` a store keeps, of kind "metric"."""
-        return InvariantLabel(self.name, self.description, self.unit, float(self.scale), "metric")
+        return InvariantLabel(self.name, self.description, self.unit, float(self.scale), "metric", bool(self.headline))
 
     def drift_series(self, scene, traj):
-        """``|series(t)| / scale`` at each sample, ndarray (n,), dimensionless."""
-        x = np.asarray(self.series(scene, traj), dtype=float)
+        """``|series(t)| / scale`` at each sample, ndarray (n,), dimensionless; None when the run does not measure
+        it (its series returned None: a quantity the engine does not report, such as a contact force)."""
+        x = self.series(scene, traj)
+        if x is None:
+            return None
+        x = np.asarray(x, dtype=float)
         if x.shape != traj.t.shape:
             raise ValueError(f"metric {self.name!r}: series returned shape {x.shape}, expected {traj.t.shape} "
                              "(one value per sample)")
         return np.abs(x) / self.scale
+
+    def drift(self, scene, traj):
+        """The largest ``drift_series`` over the trajectory (NaN when a value is not finite); None when not
+        measured: the harness then stores nothing under the metric's name, and the judge counts it as not
+        measured (``Judgement.not_measured``), never as within its bound (``dalembert.judge``)."""
+        d = self.drift_series(scene, traj)
+        if d is None:
+            return None
+        return float(np.max(d)) if np.all(np.isfinite(d)) else float("nan")
 
 
 def constant(traj, value):

@@ -56,7 +56,7 @@ import math
 from dataclasses import asdict, dataclass, field, fields, replace
 
 from dalembert.judge import Judgement
-from dalembert.settings import Settings
+from dalembert.settings import Settings, option_text
 
 __all__ = ["SCHEMA_VERSION", "READABLE_SCHEMAS", "STATUSES", "BAD_STATUSES", "CHECKS", "Cost", "RunRecord",
            "SchemaError", "UNJUDGED"]
@@ -211,8 +211,13 @@ class RunRecord:
 
     @property
     def options_label(self):
-        """Engine options as ``key=value`` words ("" for the defaults)."""
+        """Engine options as ``key=value`` words ("" for the defaults), values exactly as given: a run's identity."""
         return " ".join(f"{k}={v}" for k, v in sorted(self.settings.options.items()))
+
+    @property
+    def options_text(self):
+        """``options_label`` as a report writes it: values by ``settings.option_text`` (4 significant digits)."""
+        return " ".join(f"{k}={option_text(v)}" for k, v in sorted(self.settings.options.items()))
 
     def max_error(self, quantity):
         """The max error over the horizon of ``quantity``, or NaN when not measured."""

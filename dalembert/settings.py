@@ -7,7 +7,26 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Settings", "SettingsError", "steps_per_interval", "knob_problems", "is_numerical_failure"]
+__all__ = ["Settings", "SettingsError", "steps_per_interval", "knob_problems", "is_numerical_failure", "option_text",
+           "OPTION_DIGITS"]
+
+# An option's value in a label a reader reads (a report's legend, a finding): this many significant digits, as
+# ``reports.formatting.value_text`` writes numbers; a ``log:`` grid's values (0.00447213595499958) print as 0.004472.
+# Stored labels and values keep every digit.
+OPTION_DIGITS = 4
+
+
+def option_text(value):
+    """An engine option's value (the text it was given) as a label a reader reads: a number that is not a whole
+    one to ``OPTION_DIGITS`` significant digits, anything else (a name, a whole number) as given."""
+    text = str(value)
+    try:
+        x = float(text)
+    except ValueError:
+        return text
+    if not math.isfinite(x) or x == int(x) and "." not in text and "e" not in text.lower():
+        return text  # a whole number as written (noslip_iterations=10), or inf/nan
+    return f"{x:.{OPTION_DIGITS}g}"
 
 # dt divides a sample interval when interval/dt is within this of an integer
 # (sample times and dt are decimals, never exact in binary).
@@ -88,15 +107,16 @@ class Settings:
         """THE label of these settings (stored as a run's ``settings`` column, written in the reports):
         ``rk4 dt=0.001`` or ``dop853 rtol=1e-09 atol=1e-09``, options appended as ``key=value``.
 
-        ``brief``: leave out an atol equal to the rtol (the default matrix's choice, which would
-        double every adaptive label in a report's text).
+        ``brief``: the label a report writes: leave out an atol equal to the rtol (the default matrix's
+        choice, which would double every adaptive label in a report's text), and write option values by
+        ``option_text`` (0.004472, not 0.00447213595499958); the stored label keeps them as given.
         """
         parts = [self.integrator]
         for name in ("dt", "rtol", "atol"):
             v = getattr(self, name)
             if v is not None and not (brief and name == "atol" and v == self.rtol):
                 parts.append(f"{name}={v:g}")
-        parts += [f"{k}={v}" for k, v in sorted(self.options.items())]
+        parts += [f"{k}={option_text(v) if brief else v}" for k, v in sorted(self.options.items())]
         return " ".join(parts)
 
 

@@ -46,6 +46,8 @@ class InvariantLabel:
     scale : float — the drift is ``max_t |x(t) - x(0)| / scale`` (dimensionless)
     kind : str — "invariant", or "metric" for a ``dalembert.metrics.Metric`` (its stored value is
         ``max_t |x(t)| / scale``: the figure itself, nothing subtracted), so a report shows it as what it is
+    headline : bool — a metric the case declares its headline figure: what a report ranks its runs by in
+        "What accuracy costs" (e.g. the creep of a box that must stick), in place of an error against the truth
     """
 
     name: str
@@ -53,6 +55,7 @@ class InvariantLabel:
     unit: str
     scale: float
     kind: str = "invariant"
+    headline: bool = False
 
 
 @dataclass(frozen=True, eq=False)

@@ -85,7 +85,9 @@ class Trajectory:
     joints : dict joint name -> JointStates — for jointed scenes
     extras : dict name -> ndarray (n, ...) — further named series, e.g.
         ``reaction_force:<joint>`` (n, 3): the force the joint exerts ON its
-        child, world axes, N
+        child, world axes, N; ``contact_force:<pair>`` (n, 3): the total force
+        a contact pair exerts ON its subject (``dalembert.contact``), world axes,
+        N, where the engine reports one (a contact scene's only)
     """
 
     t: np.ndarray

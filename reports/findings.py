@@ -18,7 +18,7 @@ from dalembert.reports.formatting import value_text
 from dalembert.reports.hazards import (CLOSURE_GROWTH, CREEP_METRIC, DISAGREEMENT_FACTOR, ENERGY_HAZARD, ENERGY_LIKE,
                                        HAZARDS, NAMED, Hazard, case_hazards, list_text)
 from dalembert.reports.names import run_name, settings_text, speed_text
-from dalembert.reports.work_precision import cheapest_reaching, headline_quantity, pareto_front, points
+from dalembert.reports.work_precision import cheapest_reaching, headline_metric, headline_quantity, pareto_front, points
 
 # (the hazards' and the names' spellings re-exported: what the report's sections import from here)
 __all__ = ["ACCURACY_TARGETS", "ENERGY_HAZARD", "DISAGREEMENT_FACTOR", "CLOSURE_GROWTH", "HAZARDS", "CREEP_METRIC",
@@ -57,6 +57,7 @@ class CaseFindings:
     engines: tuple  # EngineSummary per engine, by name
     hazards: tuple  # Hazard, in HAZARDS order
     sentences: tuple  # the case's findings in prose
+    headline: object = None  # the case's headline metric (InvariantLabel) where it declares one: engines rank by it
 
     @property
     def unit(self):
@@ -67,6 +68,24 @@ class CaseFindings:
         """The case's tolerance on its headline error, or None."""
         tol = self.case.tolerances.get(self.quantity)
         return tol.value if tol else None
+
+    @property
+    def ranked(self):
+        """What the engines are ranked by (``engines``' reaches, best and front): the headline metric's name, else
+        the headline error ``quantity``."""
+        return self.headline.name if self.headline is not None else self.quantity
+
+    @property
+    def ranked_unit(self):
+        return self.headline.unit if self.headline is not None else self.unit
+
+    @property
+    def ranked_tolerance(self):
+        """The case's bound on ``ranked``, in its unit (a metric's: its tolerance times its scale), or None."""
+        if self.headline is None:
+            return self.tolerance
+        tol = self.case.tolerances.get(self.headline.name)
+        return tol.value * self.headline.scale if tol else None
 
     def hazards_of(self, engine, kind=None):
         return [h for h in self.hazards if h.engine == engine and (kind is None or h.kind == kind)]
@@ -83,26 +102,32 @@ def find(store, records=None):
 
 def _case_findings(case, runs, store=None):
     quantity = headline_quantity(runs)
+    headline = headline_metric(case, runs)
+    ranked = headline.name if headline is not None else quantity
     engines = []
     for engine in sorted({r.engine for r in runs}):
         mine = tuple(r for r in runs if r.engine == engine)
-        pts = points(mine, quantity) if quantity else []
+        pts = points(mine, ranked, case) if ranked else []
         best = min(pts, key=lambda p: p.error) if pts else None
         engines.append(EngineSummary(engine, mine, tuple(Reach(t, cheapest_reaching(pts, t)) for t in ACCURACY_TARGETS),
                                      best, tuple(pareto_front(pts))))
     hazards = case_hazards(engines, runs, case, quantity, store)
-    found = CaseFindings(case, tuple(runs), quantity, tuple(engines), tuple(hazards), ())
+    found = CaseFindings(case, tuple(runs), quantity, tuple(engines), tuple(hazards), (), headline)
     return replace(found, sentences=tuple(_sentences(found)))  # the prose reads the rest
 
 
 # ---------------------------------------------------------------------------------------------- prose
 def _sentences(f):
-    if f.quantity is None:
+    if f.ranked is None:
         return ["No run measured an error against the truth."]
-    unit = f.unit
-    tol = f.tolerance
-    out = [f"Headline error: {f.quantity} ({unit}), the max over the {value_text(f.case.t_final, 's')} horizon"
-           + (f"; the case's tolerance is {tol:g} {unit}." if tol else ".")]
+    unit = f.ranked_unit
+    tol = f.ranked_tolerance
+    if f.headline is not None:  # the case's own headline figure
+        out = [f"Headline figure: {f.headline.name} ({unit}), {f.headline.description}"
+               + (f"; the case's bound is {tol:g} {unit}." if tol else ".")]
+    else:
+        out = [f"Headline error: {f.quantity} ({unit}), the max over the {value_text(f.case.t_final, 's')} horizon"
+               + (f"; the case's tolerance is {tol:g} {unit}." if tol else ".")]
     ranked = sorted((e for e in f.engines if e.best), key=lambda e: e.best.error)
     if ranked:
         top = ranked[0]

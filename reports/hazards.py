@@ -131,7 +131,7 @@ def _shared(runs):
     """What every one of ``runs`` has in common ("all rk44 with node=rxyz"), or ""."""
     parts = []
     for get, word in ((lambda r: r.settings.integrator, ""), (lambda r: r.sweep_label, "at "),
-                      (lambda r: r.options_label, "with ")):
+                      (lambda r: r.options_text, "with ")):
         values = {get(r) for r in runs}
         if len(values) == 1 and next(iter(values)):
             parts.append(word + next(iter(values)))
@@ -339,7 +339,7 @@ def _inert(e, quantity):
         steps = {x.cost.n_steps for x in rs}
         what = [f"{quantity} {r.max_error(quantity):.2e} {unit}".rstrip()] if quantity in r.errors else []
         what += [f"{next(iter(steps))} steps"] if len(steps) == 1 else []
-        options = f" with {r.options_label}" if r.options_label else ""
+        options = f" with {r.options_text}" if r.options_label else ""
         return f"{r.settings.integrator}{options} at rtol {tols}" + (f" ({', '.join(what)} each)" if what else "")
 
     runs = [r for rs in same for r in rs]
@@ -403,7 +403,7 @@ def _disagreements(runs, quantity, case):
         errs = {e: max(r.max_error(quantity), 1e-300) for e, r in finite.items()}
         hi, lo = max(errs.values()), min(errs.values())
         if hi / lo > DISAGREEMENT_FACTOR and (tol is None or hi > tol.value):
-            values = list_text(f"{e} {errs[e]:.2e}" + (f" ({finite[e].options_label})" if finite[e].settings.options else "")
+            values = list_text(f"{e} {errs[e]:.2e}" + (f" ({finite[e].options_text})" if finite[e].settings.options else "")
                            for e in sorted(errs, key=errs.get))
             bound = f" (tolerance {tol.value:g} {unit})" if tol else ""
             out.append(Hazard("disagreement", "", tuple(finite.values()),
@@ -424,13 +424,13 @@ def _unsupported(e):
             by_reason.setdefault(r.message, []).append(r)
     out = []
     for reason, rs in sorted(by_reason.items()):
-        options = {r.options_label for r in rs}
+        options = {r.options_text for r in rs}
         integrators = sorted({r.settings.integrator for r in rs})
         what = list_text(integrators)
         if len(options) == 1 and next(iter(options)):
             what += f" with {next(iter(options))}"
         elif len(options) > 1:
-            what = list_text(sorted({" ".join(x for x in (r.settings.integrator, r.options_label) if x) for r in rs}))
+            what = list_text(sorted({" ".join(x for x in (r.settings.integrator, r.options_text) if x) for r in rs}))
         out.append(Hazard("unsupported", e.engine, tuple(_by_sweep(rs)), f"{e.engine} cannot run {what}: {reason}"))
     return out
 

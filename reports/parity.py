@@ -87,7 +87,7 @@ def parities(records, trajectory_of, floor_of):
                               for n in a.bodies)
             position = max(float(np.max(np.abs(a.bodies[n].position - b.bodies[n].position))) for n in a.bodies)
         step = f"dt={r.settings.dt:g}" if r.settings.dt is not None else f"rtol={r.settings.rtol:g}"
-        label = " ".join(x for x in (r.settings.integrator, step, r.options_label) if x)
+        label = " ".join(x for x in (r.settings.integrator, step, r.options_text) if x)
         out.append(Parity(r.case, r.case_version, r.engine, original, label, str(r.audit.get("precision", "")),
                           orientation, position,
                           _finite(floor_of(r.case, r.case_version).get("orientation")),

@@ -65,7 +65,7 @@ def size_sweeps(records, bodies_of):
             if r.status != "ok" or not math.isfinite(cost) or cost <= 0.0:
                 continue
             step = f"dt={r.settings.dt:g}" if r.settings.dt is not None else f"rtol={r.settings.rtol:g}"
-            label = " ".join(x for x in (r.settings.integrator, r.options_label, step) if x)
+            label = " ".join(x for x in (r.settings.integrator, r.options_text, step) if x)
             lines.setdefault((r.engine, label), []).append((size[r.case_version], cost))
         lines = {k: sorted(v) for k, v in lines.items() if len({n for n, _ in v}) >= 2}
         if lines:

@@ -2,7 +2,9 @@
 
 For one case every finished run is a point: its stepping wall time per simulated
 second (the median of its timed repeats over the case's horizon) against its
-headline error (the max over the horizon). Points group into lines by engine,
+headline error (the max over the horizon), or the case's headline figure where it declares one
+(a contact case's ``dalembert.metrics.Metric`` with ``headline``: the creep of a box that must stick,
+the roll onset of a ball; ``headline_metric``), in its unit. Points group into lines by engine,
 integrator and options, ordered along their sweep from the coarsest step or
 tolerance to the finest. An engine's Pareto front is the best error it reaches
 at each cost: its points that no cheaper point beats. What a target accuracy costs is
@@ -15,7 +17,8 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-__all__ = ["ERROR_DISPLAY_FLOOR", "Point", "headline_quantity", "cost_per_sim_s", "line_label",
+__all__ = ["ERROR_DISPLAY_FLOOR", "Point", "headline_quantity", "headline_metric", "figure_of", "cost_per_sim_s",
+           "line_label",
            "sweep_key", "points", "series", "pareto_front", "cheapest_reaching"]
 
 # Errors of exactly 0 are drawn at this level on log axes (below any double-precision roundoff).
@@ -39,6 +42,25 @@ def headline_quantity(records):
     return None
 
 
+def headline_metric(case, records):
+    """The headline figure ``case`` (a ``CaseRecord``) declares, an ``InvariantLabel`` (the first declared with
+    ``headline``), when a finished run among ``records`` stores it; else None."""
+    label = next((i for i in getattr(case, "invariants", ()) if getattr(i, "headline", False)), None)
+    if label is None or not any(r.ok and label.name in r.drifts for r in records):
+        return None
+    return label
+
+
+def figure_of(r, quantity, case=None):
+    """Run ``r``'s ``quantity``: its max error (``errors``) for an error quantity, or a declared metric of
+    ``case`` in the metric's unit (the stored value times its scale); NaN when not stored."""
+    if case is not None:
+        label = next((i for i in case.invariants if i.name == quantity and i.kind == "metric"), None)
+        if label is not None:
+            return r.drifts.get(quantity, math.nan) * label.scale
+    return r.max_error(quantity)
+
+
 def cost_per_sim_s(r):
     """Median stepping wall time per simulated second (s/s), NaN when not timed."""
     horizon = r.t_final if math.isfinite(r.t_final) and r.t_final > 0 else math.nan
@@ -47,7 +69,7 @@ def cost_per_sim_s(r):
 
 def line_label(r):
     """A work-precision line: ``engine integrator`` and its options."""
-    return " ".join(x for x in (r.engine, r.settings.integrator, r.options_label) if x)
+    return " ".join(x for x in (r.engine, r.settings.integrator, r.options_text) if x)
 
 
 def sweep_key(r):
@@ -55,20 +77,21 @@ def sweep_key(r):
     return (r.settings.dt is None, -(r.settings.dt if r.settings.dt is not None else (r.settings.rtol or 0.0)))
 
 
-def points(records, quantity):
-    """The ``Point`` of every finished run with a finite error and cost, in the records' order."""
+def points(records, quantity, case=None):
+    """The ``Point`` of every finished run with a finite error and cost, in the records' order (``quantity``: an
+    error quantity, or a metric of ``case``: ``figure_of``)."""
     out = []
     for r in records:
-        err, cost = r.max_error(quantity), cost_per_sim_s(r)
+        err, cost = figure_of(r, quantity, case), cost_per_sim_s(r)
         if r.ok and math.isfinite(err) and math.isfinite(cost):
             out.append(Point(cost, max(err, ERROR_DISPLAY_FLOOR), r))
     return out
 
 
-def series(records, quantity):
+def series(records, quantity, case=None):
     """``{line_label: [Point, ...]}``, each line ordered along its sweep (coarse to fine)."""
     out = {}
-    for p in points(records, quantity):
+    for p in points(records, quantity, case):
         out.setdefault(line_label(p.run), []).append(p)
     for pts in out.values():
         pts.sort(key=lambda p: sweep_key(p.run))

@@ -102,3 +102,23 @@ class Unloadable(ReferenceAdapter):
 
     def load(self):
         raise ImportError("no module named 'unloadable_engine' (on purpose)")
+
+
+def _mujoco():
+    from dalembert.adapters.mujoco import MujocoAdapter
+
+    return MujocoAdapter
+
+
+class ForceBlind(_mujoco()):
+    """MuJoCo, but its trajectories carry no contact force: an engine that does not report one (the quantities made
+    from it are then not measured)."""
+
+    def run(self, prepared):
+        from dalembert.contact import FORCE_PREFIX
+
+        out = super().run(prepared)
+        extras = out.trajectory.extras  # (read back once, and kept: Outcome.trajectory is cached)
+        for key in [k for k in extras if k.startswith(FORCE_PREFIX)]:
+            del extras[key]
+        return out

@@ -22,9 +22,9 @@ load_cases()
 
 VERSIONS = {
     "andrews_squeezer": "a3b07d6b2529",
-    "ball_rolling_incline": "860c7556ba69",
-    "ball_slide_to_roll": "c106200e159c",
-    "block_on_incline": "412156e62ff0",
+    "ball_rolling_incline": "6dabc3383a8f",
+    "ball_slide_to_roll": "296c844d86ec",
+    "block_on_incline": "aac4169ede93",
     "bouncing_ball": "573c5418d418",
     "bricard": "7c2b8c4a437c",
     "chain": "8049d7d884a4",

@@ -304,3 +304,22 @@ def test_contact_cases_stay_out_of_the_default_matrix():
     load_cases()
     for name in CONTACT_CASES:
         assert not in_default_matrix(CASES[name])
+
+
+def test_a_metric_beyond_its_bound_is_said_in_its_unit_and_an_invariant_as_before():
+    from dalembert.judge import judge
+
+    case = make_case("block_on_incline")
+    # MuJoCo's default cone: creep 1.8 mm/s where the bound is 0.1 mm/s (the case's CREEP_TOL)
+    verdict = judge("ok", "", {}, {"creep": 1.8e-3, "penetration": 0.0}, {k: case.tolerances[k]
+                                                                          for k in ("creep", "penetration")})
+    assert verdict.reason == "creep 1.80e-03 m/s > bound 0.0001 m/s" and verdict.beyond == ("creep",)
+    # a metric with a scale other than 1: bouncing_ball's apex_error is stored over the drop height (1 m by default)
+    ball = make_case("bouncing_ball", height=2.0)
+    verdict = judge("ok", "", {}, {"apex_error": 0.05}, {"apex_error": ball.tolerances["apex_error"]})
+    bound = ball.tolerances["apex_error"].value * 2.0
+    assert verdict.reason == f"apex_error {0.1:.2e} m > bound {bound:g} m"
+    # a declared invariant keeps its wording
+    rolling = make_case("ball_rolling_incline")
+    verdict = judge("ok", "", {}, {"energy": 0.5}, {"energy": rolling.tolerances["energy"]})
+    assert verdict.reason == f"energy drift 5.00e-01 > {rolling.tolerances['energy'].value:g}"

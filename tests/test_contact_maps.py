@@ -47,14 +47,17 @@ def test_a_sweep_of_an_option_and_the_step_draws_one_cell_per_run(drawn):
     call = calls[0]
     assert call["xs"] == list(DTS) and call["ys"] == list(TIMECONSTS) and call["ylabel"] == "contact_timeconst"
     panels = {p["title"].split(" ")[0]: p for p in call["panels"]}
-    assert set(panels) == {"creep", "penetration"}  # the figures block_on_incline stores
+    # the figures block_on_incline stores: MuJoCo reports contact forces, so the normal force and the residuals too
+    assert set(panels) == {"creep", "penetration", "normal_force_error", "signorini_residual", "cone_residual",
+                           "dissipation_residual"}
     case = next(iter({r.case for r in records}))
     assert case == "block_on_incline"
+    labels = {label.name: label for label in store.case(case, records[0].case_version).invariants}
     for name, panel in panels.items():
         assert panel["values"].shape == (len(TIMECONSTS), len(DTS))
         for r in records:
             i, j = TIMECONSTS.index(float(r.settings.options["contact_timeconst"])), DTS.index(r.settings.dt)
-            assert panel["values"][i, j] == r.drifts[name]  # both metrics have scale 1: shown as stored
+            assert panel["values"][i, j] == r.drifts[name] * labels[name].scale  # a metric shown in its unit
         assert np.isfinite(panel["values"]).all()
     # the creep bound (1e-4 m/s, cases/block_on_incline.py CREEP_TOL): MuJoCo's soft contact creeps past it
     creep = panels["creep"]

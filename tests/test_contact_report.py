@@ -113,3 +113,44 @@ def test_an_engine_that_cannot_run_contact_says_why_in_the_report(tmp_path):
     (r,) = s.records()
     assert r.status == "unsupported" and "contact" in r.message
     assert f"pinocchio cannot run rk4: {r.message}" in _md(s).replace("\\", "")
+
+
+def test_what_accuracy_costs_ranks_a_contact_case_by_its_headline_figure(store):
+    found = {f.case.name: f for f in find(store)}
+    block, ball, pendulum = found["block_on_incline"], found["bouncing_ball"], found["pendulum"]
+    # the headline survives the store (CaseRecord JSON) and ranks the engines in its unit
+    assert (block.ranked, block.ranked_unit) == ("creep", "m/s") and (ball.ranked, ball.ranked_unit) == ("apex_error", "m")
+    (mujoco,) = [e for e in block.engines if e.engine == "mujoco"]
+    run = mujoco.best.run
+    assert mujoco.best.error == run.drifts["creep"]  # creep's scale is 1 m/s: the stored value in m/s
+    assert block.ranked_tolerance == block.case.tolerances["creep"].value
+    (mujoco,) = [e for e in ball.engines if e.engine == "mujoco"]
+    height = ball.case.params["height"]  # apex_error is stored over the drop height
+    assert mujoco.best.error == pytest.approx(mujoco.best.run.drifts["apex_error"] * height, rel=1e-15)
+    assert block.sentences[0].startswith("Headline figure: creep (m/s), mean speed of the box")
+    # a contact-free case ranks by its error against the truth, as before
+    assert pendulum.headline is None and pendulum.ranked == pendulum.quantity
+    assert pendulum.sentences[0].startswith(f"Headline error: {pendulum.quantity}")
+    md = _section(_md(store), "block_on_incline")
+    costs = md.split("### What accuracy costs")[1].split("\n### ")[0]
+    assert "best (m/s)" in costs and "creep against stepping time" in costs
+
+
+def test_the_contact_forces_table_shows_each_runs_figures_and_not_measured_where_none(tmp_path):
+    from broken_adapters import ForceBlind
+
+    from dalembert.adapters.registry import adapter_names, register_adapter
+
+    if "force-blind" not in adapter_names():
+        register_adapter("force-blind", ForceBlind)  # MuJoCo without its contact forces
+    s = small_store(tmp_path / "forces", cases=("block_on_incline",), engines=("mujoco", "force-blind"),
+                    integrators=("euler",), dts=(1e-3,), t_final=0.5)
+    build_report(s)
+    md = _section(_md(s), "block_on_incline")
+    table = md.split("ContactBench's residuals")[1].split("\n\n")[1]
+    rows = {line.split("|")[1].strip().split(" ")[0]: line for line in table.splitlines() if line.startswith("| ")}
+    assert "not measured" in rows["force-blind"] and "not measured" not in rows["mujoco"]
+    assert " N" in rows["mujoco"] and " W" in rows["mujoco"]  # the normal-force error in N, the residuals in W
+    (blind,) = [r for r in s.records() if r.engine == "force-blind"]
+    # not measured is never within: MuJoCo's default creep is beyond its bound, so the run is not within (False)
+    assert "normal_force_error" not in blind.drifts and blind.judgement.within_tolerance is False

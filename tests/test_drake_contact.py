@@ -170,3 +170,17 @@ def test_a_scene_without_contact_gets_no_scene_graph():
     prepared = get_adapter("drake").prepare(case.scene, case.times, Settings("discrete", dt=DT))
     assert prepared.model.scene_graph is None and prepared.model.plant.num_collision_geometries() == 0
     assert get_adapter("drake").audit(prepared, get_adapter("drake").run(prepared)).get("contact_pairs") is None
+
+
+def test_drakes_half_space_warning_is_dropped_and_no_other(caplog):
+    # Drake warns once per process that a rigid half space is invisible to deformable contact (no scene has a
+    # deformable body); a contact scene's plane installs a filter for that message alone on Drake's logger
+    import logging
+
+    run_case("drake", "ball_rolling_incline", Settings("discrete", dt=DT))
+    logger = logging.getLogger("drake")
+    with caplog.at_level(logging.WARNING, logger="drake"):
+        logger.warning("Rigid (non-deformable) half spaces are not currently supported for deformable contact; "
+                       "registration is allowed, but no contact data will be reported.")
+        logger.warning("any other warning of Drake's")
+    assert [r.getMessage() for r in caplog.records] == ["any other warning of Drake's"]

@@ -58,6 +58,19 @@ def test_the_settings_label_is_one_function_and_reads_as_it_always_did():
     assert Settings("rk45", rtol=1e-6, atol=1e-8).label(brief=True) == "rk45 rtol=1e-06 atol=1e-08"
 
 
+def test_a_report_prints_option_values_at_four_digits_and_the_store_keeps_them_exact():
+    from dalembert.reports.findings import settings_text
+
+    # a log: grid's value (0.002 to 0.05 in 5 steps), a whole count, a name
+    options = {"contact_timeconst": "0.00447213595499958", "noslip_iterations": "10", "cone": "elliptic"}
+    r = RunRecord("k", "block_on_incline", "v", "mujoco", Settings("implicitfast", 1e-3, options=options), status="ok")
+    assert r.options_text == "cone=elliptic contact_timeconst=0.004472 noslip_iterations=10"
+    assert settings_text(r) == "implicitfast dt=0.001 " + r.options_text
+    # the stored label and the run's identity keep every digit
+    assert r.to_row()["settings"] == "implicitfast dt=0.001 " + r.options_label
+    assert "contact_timeconst=0.00447213595499958" in r.options_label
+
+
 def test_settings_and_judgement_are_nested_and_the_row_stays_flat():
     """``RunRecord`` holds a ``Settings`` and a ``Judgement``; its row keeps the flat columns every store
     was written with, and reads back into the same nested record."""

@@ -41,6 +41,11 @@ contact options; read back from the plant and its SceneGraph for the audit.
   Hunt-Crossley law is integrated as written, so the restitution mapping holds to the integrator's accuracy
   (sphere_collision, rk3-adaptive at 1e-6: the closed form's velocities to 1.5e-5 m/s). Friction in continuous mode
   is Drake's Stribeck-regularized law, stiff while a contact sticks: unsupported (``CONTINUOUS_FRICTION_REASON``).
+* Contact forces (``read_forces``): per sample, the plant's ``get_contact_results_output_port()`` at the sample's
+  state (in discrete mode the contact results of the step that starts there: the model turns sampled output ports
+  off), every point pair's ``contact_force()`` (on body B, world) and every hydroelastic surface's ``F_Ac_W()``
+  (the spatial force on the body of geometry M, world) whose two geometries are a scene pair's, summed per pair ON
+  the pair's subject (``dalembert.contact.subject``).
   In discrete mode the step is implicit in the contact force, which damps a contact lasting a few steps (the
   point contact's half period ``pi sqrt(m / k)``, ~4 ms for the cases' balls, against dt = 1e-3): measured on
   sphere_collision (e = 0.8 mapped at 1 m/s), restitution 0.29 at dt = 1e-3 and 0.72 at 1e-4, SAP and TAMSI alike.
@@ -48,6 +53,7 @@ contact options; read back from the plant and its SceneGraph for the audit.
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
@@ -57,7 +63,7 @@ from dalembert.adapters.base import Option, typed_options
 
 __all__ = ["CONTACT_OPTIONS", "SOLVERS", "MODELS", "STIFFNESS_DEFAULT", "DISSIPATION_DEFAULT", "STICTION_TOLERANCE",
            "contact_options", "restitution_dissipation", "why_not", "add_geometry", "set_solver", "exclude_unnamed",
-           "candidates",           "audit", "summary_lines"]
+           "candidates", "audit", "summary_lines", "read_forces", "HALF_SPACE_WARNING"]
 
 SOLVERS = ("sap", "tamsi")
 # Why frictional contact runs in discrete mode only (measured on Drake 1.51, this adapter).
@@ -175,6 +181,27 @@ def why_not(scene, settings):
     return None
 
 
+# Drake warns, once per process, that a rigid HalfSpace with proximity properties is invisible to deformable contact
+# ("Rigid (non-deformable) half spaces are not currently supported for deformable contact; registration is allowed,
+# but no contact data will be reported"). A scene's plane is a HalfSpace and no scene has a deformable body, so the
+# warning never concerns a run: dropped, that exact message alone, from Drake's logger (``_quiet_half_spaces``).
+HALF_SPACE_WARNING = "half spaces are not currently supported for deformable contact"
+
+
+class _HalfSpaceWarning(logging.Filter):
+    """Drops Drake's ``HALF_SPACE_WARNING`` and nothing else."""
+
+    def filter(self, record):
+        return HALF_SPACE_WARNING not in record.getMessage()
+
+
+def _quiet_half_spaces():
+    """Install ``_HalfSpaceWarning`` on Drake's logger (once per process)."""
+    logger = logging.getLogger("drake")
+    if not any(isinstance(f, _HalfSpaceWarning) for f in logger.filters):
+        logger.addFilter(_HalfSpaceWarning())
+
+
 def add_geometry(plant, scene, bodies, settings):
     """Register the scene's geoms and planes with ``plant`` (before ``Finalize``) and set point contact and the
     discrete approximation; return ``(scene_graph, ids)``, ``ids`` a dict geom or plane name -> ``GeometryId``.
@@ -208,6 +235,8 @@ def add_geometry(plant, scene, bodies, settings):
         X_BG = RigidTransform(RotationMatrix(spatial.quat_to_matrix(np.asarray(g.quat) / np.linalg.norm(g.quat))),
                               np.asarray(g.point, dtype=float))
         ids[g.name] = plant.RegisterCollisionGeometry(bodies[g.body], X_BG, shape, g.name, props(g.name))
+    if scene.planes:
+        _quiet_half_spaces()
     for pl in scene.planes:
         X_WG = HalfSpace.MakePose(pl.unit_normal, np.asarray(pl.point, dtype=float))
         ids[pl.name] = plant.RegisterCollisionGeometry(plant.world_body(), X_WG, HalfSpace(), pl.name,
@@ -331,3 +360,42 @@ def summary_lines(model):
         lines.append(f"pair {name}: {p['geoms'][0]} - {p['geoms'][1]}, mu {p['friction'][0]!r}, stiffness "
                      f"{p['point_contact_stiffness']:g} N/m, dissipation {p['hunt_crossley_dissipation']!r} s/m")
     return lines
+
+
+def read_forces(model, times, X):
+    """The contact force (N, world) ON each of the scene's pairs' subjects at the plant states ``X (n, nq + nv)``,
+    ndarray (n, n_pairs, 3) (NaN where a state is not finite); None for a scene without contact."""
+    from dalembert.contact import subject
+
+    scene, plant = model.scene, model.plant
+    if not scene.contacts:
+        return None
+    names = {gid: name for name, gid in model.geometry_ids.items()}
+    index = {frozenset((c.a, c.b)): (i, subject(scene, c)) for i, c in enumerate(scene.contacts)}
+    context = model.diagram.CreateDefaultContext()
+    plant_context = plant.GetMyMutableContextFromRoot(context)
+    port = plant.get_contact_results_output_port()
+    out = np.full((len(times), len(scene.contacts), 3), np.nan)
+
+    def add(total, a, b, force_on_b):
+        found = index.get(frozenset((names.get(a), names.get(b))))
+        if found is not None:
+            i, on = found
+            total[i] += force_on_b if names[b] == on else -force_on_b
+
+    for k in np.flatnonzero(np.all(np.isfinite(X), axis=1)):
+        context.SetTime(float(times[k]))
+        plant.SetPositionsAndVelocities(plant_context, X[k])
+        results = port.Eval(plant_context)
+        total = np.zeros((len(scene.contacts), 3))
+        for c in range(results.num_point_pair_contacts()):
+            info = results.point_pair_contact_info(c)
+            pair = info.point_pair()
+            add(total, pair.id_A, pair.id_B, np.asarray(info.contact_force()))
+        for c in range(results.num_hydroelastic_contacts()):
+            info = results.hydroelastic_contact_info(c)
+            surface = info.contact_surface()
+            # F_Ac_W acts on the body of geometry M: the force on N's is its opposite
+            add(total, surface.id_N(), surface.id_M(), np.asarray(info.F_Ac_W().translational()))
+        out[k] = total
+    return out

@@ -12,6 +12,8 @@ Loop reactions (discrete mode) from the constraints' generalized force in the st
 (``loops.LoopForces``), read in the same pass and context as the joints': the
 reaction port and the acceleration port both come from the plant's one cached
 discrete step at the sample's state, so each sample costs one step solve, not two.
+Contact forces per scene pair (``contact.read_forces``, N, world, ON the pair's subject)
+as the extras ``contact_force:<pair>``.
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
+from dalembert.adapters.drake.contact import read_forces
+from dalembert.contact import FORCE_PREFIX
 
 __all__ = ["read_back"]
 
@@ -59,6 +63,9 @@ def read_back(p, X):
         _kinematics(p, X, bodies, jointed, reactions)
     traj_bodies = {name: BodyStates(b["p"], b["q"], b["v"], b["w"]) for name, b in bodies.items()}
     extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
+    forces = read_forces(model, times, X)
+    if forces is not None:
+        extras.update({FORCE_PREFIX + pair.name: forces[:, i] for i, pair in enumerate(scene.contacts)})
     return Trajectory(times, traj_bodies, joints, extras)
 
 

@@ -111,11 +111,15 @@ def _pair_mass(scene, spheres):
     return masses[0] if len(masses) == 1 else masses[0] * masses[1] / (masses[0] + masses[1])
 
 
-def add_contacts(mbs, scene, settings, markers):
+def add_contacts(mbs, scene, settings, markers, sensors):
     """One contact connector per scene pair in ``mbs`` (``markers``: scene body name or ``WORLD`` -> a function of
-    a body point (3,) that adds a rigid marker there, ``model.build``'s). Returns the summary lines."""
+    a body point (3,) that adds a rigid marker there, ``model.build``'s). Returns the summary lines. ``sensors``
+    gets ``__contact:<pair>`` -> ``{"f": sensor}``: the connector's ``Force`` output (Exudyn's documentation of both
+    connectors: "global contact force vector"), the force on its marker 0, the pair's subject sphere (``pair.a``
+    for two spheres), N, world (3,)."""
     import exudyn as exu
-    from exudyn.itemInterface import NodeGenericData, ObjectContactSphereSphere, ObjectContactSphereTriangle
+    from exudyn.itemInterface import (NodeGenericData, ObjectContactSphereSphere, ObjectContactSphereTriangle,
+                                      SensorObject)
 
     from dalembert.scene import WORLD
 
@@ -144,17 +148,19 @@ def add_contacts(mbs, scene, settings, markers):
             # a triangle whose inscribed circle, about p0, has radius PLANE_EXTENT (an equilateral one)
             corners = [p0 + R @ (2.0 * PLANE_EXTENT * np.array([math.cos(a), math.sin(a), 0.0]))
                        for a in (0.0, 2.0 * math.pi / 3.0, 4.0 * math.pi / 3.0)]
-            mbs.AddObject(ObjectContactSphereTriangle(
+            obj = mbs.AddObject(ObjectContactSphereTriangle(
                 name=pair.name, markerNumbers=[m0, markers[WORLD]([0.0, 0.0, 0.0])],
                 sphereRadius=float(spheres[0].size[0]), trianglePoints=exu.Vector3DList([list(c) for c in corners]),
                 includeEdges=0, **common))
             lines.append(f"ObjectContactSphereTriangle {pair.name}: sphere {spheres[0].name} on plane {plane.name}")
         else:
             m1 = markers[spheres[1].body](spheres[1].point)
-            mbs.AddObject(ObjectContactSphereSphere(
+            obj = mbs.AddObject(ObjectContactSphereSphere(
                 name=pair.name, markerNumbers=[m0, m1],
                 spheresRadii=[float(spheres[0].size[0]), float(spheres[1].size[0])], **common))
             lines.append(f"ObjectContactSphereSphere {pair.name}: spheres {spheres[0].name}, {spheres[1].name}")
+        sensors[f"__contact:{pair.name}"] = {"f": mbs.AddSensor(SensorObject(
+            objectNumber=obj, outputVariableType=exu.OutputVariableType.Force))}
         lines[-1] += (f", contactStiffness {k:g} N/m, impactModel {impact['impactModel']}, restitution "
                       f"{pair.restitution}, dynamicFriction {pair.friction:g}")
     return lines

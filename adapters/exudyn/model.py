@@ -284,7 +284,7 @@ def build(scene, settings, assemble=True):
     springs, lines = add_springs(mbs, scene, markers, sensors)
     summary += lines
     # --- contact: one connector per scene pair (``contact``)
-    summary += add_contacts(mbs, scene, settings, markers)
+    summary += add_contacts(mbs, scene, settings, markers, sensors)
     # --- loads
     for ld in scene.loads:
         R_EB = X_EB.get(ld.body, (None, np.eye(3)))[1]  # a rigid body's E is B

@@ -7,7 +7,7 @@ coordinates), or from the bodies' states (redundant ones, ``spatial.joint_coordi
 Reactions: Newton's law per link from the links' acceleration sensors (minimal
 coordinates; ``link_accelerations`` evaluates them again where the solver keeps none
 of the sampled state), each ObjectJointGeneric's ForceLocal (redundant ones), and
-each loop's constraint force (``loop_forces``).
+each loop's constraint force (``loop_forces``); each contact pair's connector force (``contact_force:<pair>``).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.exudyn.model import build
+from dalembert.contact import FORCE_PREFIX
 from dalembert.scene import WORLD
 
 __all__ = ["read_back", "link_accelerations", "loop_forces", "STALE_ACCELERATIONS"]
@@ -119,6 +120,8 @@ def read_back(p, built, values):
         reactions[child] = -np.einsum("...ij,...j->...i", R_WP @ R0, f_local)  # ON the child, world axes
     joints = {k: v if isinstance(v, JointStates) else JointStates(*v) for k, v in joints.items()}
     extras = {f"reaction_force:{c}": f for c, f in {**reactions, **loop_reactions}.items()}
+    # each pair's connector Force, the force on its marker 0: the pair's subject (``contact.add_contacts``)
+    extras.update({FORCE_PREFIX + pair.name: series(f"__contact:{pair.name}", "f", 3) for pair in scene.contacts})
     return Trajectory(times, bodies, joints, extras)
 
 

@@ -25,7 +25,9 @@ noslip pass — only MJX's Warp backend, a GPU one, has: ``mujoco.mjx._src``
 would ignore the option silently, and the run would be one without noslip), and,
 from MJX itself, a frictionless pair (condim 1) under the elliptic cone
 (``mjx.make_data``: "condim=1 with ConeType.ELLIPTIC not implemented") and any
-geometry pair MJX has no collision function for (``mjx.put_model``).
+geometry pair MJX has no collision function for (``mjx.put_model``). Contact forces are MJX's
+own (``mjx.contact``): ``mjx.forward`` at each sampled state, its ``efc_force`` decoded per
+contact as ``mj_contactForce`` does (MuJoCo C's solver on MJX's states would be another solver's).
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from dalembert.adapters.mujoco import MujocoAdapter
 from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.adapter import MujocoPrepared
 from dalembert.adapters.mujoco.readback import read_back
+from dalembert.adapters.mjx.contact import read_forces
 from dalembert.adapters.mjx.stepping import PRECISIONS, chunks, compile_rollout, mjx, precision, run_rollout, to_host
 
 __all__ = ["MjxAdapter", "MjxPrepared"]
@@ -151,7 +154,8 @@ class MjxAdapter(MujocoAdapter):
 
         def read():
             Qh, Vh = to_host(Q, V, p.qpos0, p.qvel0, len(p.times))
-            traj, info["audit"] = read_back(p, Qh, Vh)
+            # the contact forces MJX's own solver gives at its states (``contact.read_forces``), not MuJoCo C's
+            traj, info["audit"] = read_back(p, Qh, Vh, contact_forces=read_forces(p, Qh, Vh))
             return traj
 
         return Outcome(read, wall, n_steps, n_steps * STAGES[p.settings.integrator], info)

@@ -26,6 +26,11 @@ contact options; read back from the compiled model for the audit.
   ratio of frictional to normal impedance, MuJoCo's default 1); ``noslip_iterations`` (MuJoCo's post-processing
   that removes slip, default 0); ``contact_timeconst`` (solref's time constant of every pair, s, default MuJoCo's
   0.02). The contact impedance is MuJoCo's default solimp, ``SOLIMP``.
+* Contact forces (``force_reader``): per sample, after ``mj_forward`` at the sample's state, every active contact
+  of ``data.contact`` whose two geoms are a scene pair's: ``mj_contactForce`` gives its force in the contact frame
+  (normal first, then the two tangents; MuJoCo's ``contact.frame`` rows, the normal pointing from ``geom[0]`` to
+  ``geom[1]``), the force ``geom[0]`` exerts on ``geom[1]``; turned into world axes and summed per pair, ON the
+  pair's subject (``dalembert.contact.subject``). It is the force of the step that starts at the sample's state.
 """
 
 from __future__ import annotations
@@ -38,7 +43,7 @@ from dalembert import spatial
 from dalembert.adapters.base import Option, typed_options
 
 __all__ = ["OPTIONS", "CONTACT_OPTIONS", "CONES", "TIMECONST_DEFAULT", "SOLIMP", "contact_options", "restitution_dampratio", "why_not",
-           "geom_lines", "plane_lines", "pair_lines", "option_attributes", "audit"]
+           "geom_lines", "plane_lines", "pair_lines", "option_attributes", "audit", "force_reader"]
 
 CONES = ("pyramidal", "elliptic")
 # MuJoCo's defaults (its XML reference: option cone, impratio, noslip_iterations; solref 0.02 1; solimp).
@@ -171,3 +176,36 @@ def audit(model, scene):
                                 "a linear oscillator that keeps e of the speed over half its period; MuJoCo's "
                                 "impedance and gravity during the contact make its restitution differ"),
     }
+
+
+def force_reader(model, scene):
+    """A function ``data -> ndarray (n_pairs, 3)``: the contact force (N, world) ON each of ``scene.contacts``'
+    subjects (``dalembert.contact.subject``) at the state ``data`` holds after ``mj_forward``; None for a scene
+    without contact."""
+    import mujoco
+
+    from dalembert.contact import subject
+
+    if not scene.contacts:
+        return None
+    gid = lambda name: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name)  # noqa: E731
+    # per unordered geom pair: (its index in scene.contacts, the subject's geom id)
+    index = {}
+    for i, pair in enumerate(scene.contacts):
+        index[frozenset((gid(pair.a), gid(pair.b)))] = (i, gid(subject(scene, pair)))
+    out6 = np.zeros(6)
+
+    def read(d):
+        total = np.zeros((len(scene.contacts), 3))
+        for c in range(d.ncon):
+            con = d.contact[c]
+            found = index.get(frozenset((int(con.geom[0]), int(con.geom[1]))))
+            if found is None or con.efc_address < 0:  # not a scene pair's, or excluded from the solver
+                continue
+            mujoco.mj_contactForce(model, d, c, out6)
+            f_W = con.frame.reshape(3, 3).T @ out6[:3]  # on geom[1], world
+            i, subject_id = found
+            total[i] += f_W if int(con.geom[1]) == subject_id else -f_W
+        return total
+
+    return read

@@ -10,7 +10,9 @@ the child's subtree (MuJoCo counts them as joint torques, not as external
 forces). A spring's tendon force is not subtracted: MuJoCo counts a spatial
 tendon's force in ``cfrc_ext`` (measured: a hinged body pulled by a tendon of
 tension 10 N has ``cfrc_ext`` the 10 N and ``cfrc_int`` the joint's -10 N), so
-``cfrc_int`` is the joint's reaction already.
+``cfrc_int`` is the joint's reaction already. The contact force of each scene pair
+(``contact.force_reader``, N, world, ON the pair's subject) is read in the same pass, as the
+extras ``contact_force:<pair>``.
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
+from dalembert.contact import FORCE_PREFIX
+from dalembert.adapters.mujoco.contact import force_reader
 from dalembert.adapters.mujoco.mjcf import floating
 from dalembert.adapters.mujoco.springs import spring_tendon_ids, spring_tension
 from dalembert.adapters.mujoco.stepping import apply_xfrc
@@ -25,10 +29,13 @@ from dalembert.adapters.mujoco.stepping import apply_xfrc
 __all__ = ["read_back"]
 
 
-def read_back(p, Q, V):
+def read_back(p, Q, V, contact_forces=None):
     """The ``Trajectory`` of the sampled states ``Q (n, nq)``, ``V (n, nv)`` (NaN rows stay
     NaN), with the reaction forces on jointed children (N, world axes) as extras; and the
-    audit figures read on the way (contacts, constraint rows, passive forces).
+    audit figures read on the way (contacts, constraint rows, passive forces), and each contact pair's force
+    (``contact.force_reader``) as the extras ``contact_force:<pair>``. ``contact_forces`` (n, n_pairs, 3): the
+    pairs' forces another solver computed at these states, stored in their place (MJX's own, ``mjx.contact``:
+    MuJoCo C's solver did not make MJX's states).
 
     MuJoCo recomputes each sample (one ``mj_forward``, plus ``mj_rnePostConstraint`` where
     reactions are read); what it computed is copied out per sample, and the conversion to the
@@ -58,6 +65,8 @@ def read_back(p, Q, V):
     loop_force = {name: np.full((n, 3), np.nan) for name in loops}
     tendons = spring_tendon_ids(model, scene)
     other_passive = np.zeros(n)  # |qfrc_passive - the springs' J^T f|: any passive force that is not a spring's
+    reader = force_reader(model, scene) if contact_forces is None else None
+    pair_force = np.full((n, len(scene.contacts), 3), np.nan) if contact_forces is None else contact_forces
     if p.load_path == "actuator":
         d.ctrl[:] = 1.0
     finite = np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)
@@ -76,6 +85,8 @@ def read_back(p, Q, V):
         for name, (kind, eq_ids, sites) in loops.items():
             loop_force[name][k] = _loop_force(d, kind, eq_ids, sites)
         passive[k] = d_passive
+        if reader is not None:
+            pair_force[k] = reader(d)
         if tendons:
             J = _tendon_jacobian(model, d)
             springs_q = np.zeros(model.nv)
@@ -121,6 +132,7 @@ def read_back(p, Q, V):
         joints[j.child] = JointStates(Q[:, a:a + len(j.q0)], V[:, v:v + len(j.v0)])
     extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
     extras.update({f"reaction_force:{name}": f for name, f in loop_force.items()})
+    extras.update({FORCE_PREFIX + pair.name: pair_force[:, i] for i, pair in enumerate(scene.contacts)})
     audit = {"max_contacts": int(max_ncon), "max_constraint_rows": int(max_nefc),
              "max_abs_passive_force": float(np.abs(passive).max(initial=0.0))}
     if tendons:

@@ -45,7 +45,7 @@ def _representatives(part, store, f, name, truth, reps):
         for r in rs:
             s = time_series.headline_series(store, r, truth, f.quantity)
             if s:
-                label = " ".join(x for x in (r.sweep_label, r.settings.integrator, r.options_label) if x)
+                label = " ".join(x for x in (r.sweep_label, r.settings.integrator, r.options_text) if x)
                 rows[0]["series"].setdefault(e, []).append((label, r.sweep_label, *s))
     for cname in f.case.conserved:
         tol = f.case.tolerances.get(cname)

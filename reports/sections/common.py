@@ -61,7 +61,7 @@ def title(f, several_versions):
 
 def grid_row(r):
     """A run's row in a per-setting grid: engine, integrator and options."""
-    return " ".join(x for x in (r.engine, r.settings.integrator, r.options_label) if x)
+    return " ".join(x for x in (r.engine, r.settings.integrator, r.options_text) if x)
 
 
 def declared(case, name):

@@ -1,8 +1,9 @@
 """A contact case against its closed form: the figure a reader needs for each case (the distance down the slope,
 the speed and the spin, the height and the apex of each bounce, the velocities through an impact), every finished
 run against the stored truth, a table of the figures' events (apex heights, the time the slip ends, the speeds at
-the end) read the same way off the truth and off every run, and the creep speed of every engine and setting on a log
-scale.
+the end) read the same way off the truth and off every run, the creep speed of every engine and setting on a log
+scale, and the contact force each engine reports against the closed form's with ContactBench's residuals
+(``dalembert.contact_residuals``), "not measured" where an engine reports no force.
 
 Read from the store only: the trajectories, the truth and the stored metrics (``RunRecord.drifts`` of a case's
 ``dalembert.metrics.Metric``). A case's figures are chosen by its name (``FIGURES``); its geometry (the plane's
@@ -23,7 +24,7 @@ from dalembert.reports.sections.contact_maps import contact_maps
 from dalembert.reports.tables import Cell, Table, num
 from dalembert.reports.work_precision import sweep_key
 
-__all__ = ["contact", "FIGURES", "CREEP_UNIT", "ROLL_FRACTION"]
+__all__ = ["contact", "FIGURES", "CREEP_UNIT", "ROLL_FRACTION", "FORCE_FIGURES", "NOT_MEASURED"]
 
 # The creep figure's unit: the issue's measurements read in mm/s (1.8 mm/s, MuJoCo's default cone), and the case's
 # bound (0.1 mm/s) sits inside the axis.
@@ -31,6 +32,10 @@ CREEP_UNIT = ("mm/s", 1e-3)
 # The ball rolls from where its slip speed (speed less spin x radius) falls to this fraction of its launch value,
 # read the same way off the truth and every run (the closed form's slip falls linearly: it reaches 1 % at 0.99 t*).
 ROLL_FRACTION = 0.01
+# The figures made from the contact force an engine reports (``cases/_contact.normal_force_error``,
+# ``dalembert.contact_residuals.RESIDUALS``), in the force table's order; and what a run without them shows.
+FORCE_FIGURES = ("normal_force_error", "signorini_residual", "cone_residual", "dissipation_residual")
+NOT_MEASURED = "not measured"
 
 
 def contact(rep, f, name):
@@ -58,6 +63,7 @@ def contact(rep, f, name):
                          + [[Cell(run_name(r))] + [num(v, "{:.4g}") for v in values(traj)] for r, traj in trajs]),
                    note_constant=False)
     _creep(part, rep, f, name, runs)
+    _forces(part, f, runs)
     maps = contact_maps(rep, f, name)
     part.html += maps.html
     part.md += maps.md
@@ -91,6 +97,32 @@ def _creep(part, rep, f, name, runs):
                 "closed form sticks (0)"
                 + (f"; dashed: the case's bound, {value_text(bound, unit)}." if bound else "."),
                 f"{name}-creep")
+
+
+def _forces(part, f, runs):
+    """Per finished run, the figures made from the contact force it reports, in their units against the case's
+    bounds; "not measured" for a run whose engine reports no force (never a value within the bound)."""
+    names = [n for n in FORCE_FIGURES if is_metric(f.case, n)]
+    if not names:
+        return
+    rows = []
+    for r in runs:
+        cells = [Cell(run_name(r))]
+        for n in names:
+            label, tol = declared(f.case, n), f.case.tolerances.get(n)
+            if n not in r.drifts:
+                cells.append(Cell(NOT_MEASURED, float("nan")))
+                continue
+            beyond = " (beyond)" if tol is not None and r.drifts[n] > tol.value else ""
+            cells.append(num(r.drifts[n] * label.scale, "{:.3g}", f" {label.unit}{beyond}"))
+        rows.append(cells)
+    bounds = "; ".join(f"{n}: {declared(f.case, n).description}, bound "
+                       f"{value_text(f.case.tolerances[n].value * declared(f.case, n).scale, declared(f.case, n).unit)}"
+                       for n in names if n in f.case.tolerances)
+    part.para("The contact force each engine reports (its largest normal-force error against the closed form's, "
+              "and ContactBench's residuals, the largest over the run; Le Lidec et al., IEEE T-RO 2024): " + bounds
+              + f". An engine that reports no contact force: {NOT_MEASURED}.")
+    part.table(Table(["run"] + names, rows), note_constant=False)
 
 
 # ---------------------------------------------------------------------------------------------- geometry

@@ -26,7 +26,7 @@ def _summary_table(found, titles):
             cells = [Cell(titles[f], html=f'<a href="#{escape_html(section_id(f))}">{escape_html(titles[f])}</a>',
                           wrap=True), Cell(e.engine)]
             if e.best:
-                cells += [num(e.best.error, suffix=f" {f.unit}"), run_link(e.best.run, wrap=True)]
+                cells += [num(e.best.error, suffix=f" {f.ranked_unit}"), run_link(e.best.run, wrap=True)]
             else:
                 cells += [Cell(MISSING, math.nan), Cell("no finished run")]
             for reach in e.reaches:
@@ -42,7 +42,7 @@ def _summary_table(found, titles):
             cells.append(Cell(str(len(e.runs)), float(len(e.runs))))
             rows.append(cells)
             csv_rows.append(dict(case=f.case.name, case_version=f.case.version, engine=e.engine,
-                                 quantity=f.quantity or "", unit=f.unit,
+                                 quantity=f.ranked or "", unit=f.ranked_unit,
                                  best_error=e.best.error if e.best else math.nan,
                                  best_settings=e.best.run.settings_label if e.best else "",
                                  **{f"cheapest_to_{t:g}": (r.point.run.settings_label if r.point else "never")
@@ -57,9 +57,10 @@ def findings(rep):
     """``(Part, summary rows)``: the findings section and the rows of ``summary.csv``."""
     part, found, titles = Part(), rep.found, rep.titles
     part.heading("Findings", 2, anchor="findings")
-    panels = [dict(title=titles[f], ylabel=f"best {f.quantity} error ({f.unit})",
+    panels = [dict(title=titles[f], ylabel=(f"best {f.ranked} ({f.ranked_unit})" if f.headline is not None else
+                                            f"best {f.quantity} error ({f.unit})"),
                    fronts={e.engine: [(p.cost, p.error) for p in e.front] for e in f.engines if e.front},
-                   floor=f.case.floor.get(f.quantity), tolerance=f.tolerance) for f in found if f.quantity]
+                   floor=f.case.floor.get(f.ranked), tolerance=f.ranked_tolerance) for f in found if f.ranked]
     panels = [p for p in panels if p["fronts"]]
     if panels:
         part.figure(figures.pareto_summary(panels, rep.colours),
