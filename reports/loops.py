@@ -16,7 +16,7 @@ import math
 from dataclasses import dataclass
 
 from dalembert.case import LOOP_RESIDUALS
-from dalembert.reports.work_precision import cheapest_reaching, line_label, points
+from dalembert.reports.work_precision import cheapest_reaching, lines_of, points
 
 __all__ = ["LOOP_TARGET", "RESIDUALS", "LoopLine", "loop_lines"]
 
@@ -67,9 +67,7 @@ def _worst(values):
 def loop_lines(records, quantity, target=LOOP_TARGET):
     """The ``LoopLine`` of every engine line in ``records`` (the finished runs of one closed-loop case),
     by engine and line; ``quantity`` is the case's headline error quantity."""
-    lines = {}
-    for p in points(records, quantity):
-        lines.setdefault((p.run.engine, line_label(p.run)), []).append(p)
+    lines = {(pts[0].run.engine, label): pts for label, pts in lines_of(points(records, quantity)).items()}
     out = []
     for (engine, line), pts in sorted(lines.items()):
         runs = [p.run for p in pts]

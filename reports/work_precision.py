@@ -18,7 +18,7 @@ import math
 from typing import NamedTuple
 
 __all__ = ["ERROR_DISPLAY_FLOOR", "Point", "headline_quantity", "headline_metric", "figure_of", "cost_per_sim_s",
-           "line_label",
+           "line_label", "lines_of",
            "sweep_key", "points", "series", "pareto_front", "cheapest_reaching"]
 
 # Errors of exactly 0 are drawn at this level on log axes (below any double-precision roundoff).
@@ -68,8 +68,27 @@ def cost_per_sim_s(r):
 
 
 def line_label(r):
-    """A work-precision line: ``engine integrator`` and its options."""
+    """A work-precision line: ``engine integrator`` and its options (as a reader reads them, ``options_text``)."""
     return " ".join(x for x in (r.engine, r.settings.integrator, r.options_text) if x)
+
+
+def lines_of(pts):
+    """``{label: [Point, ...]}``: the points grouped by line, a line being one engine, integrator and exact options.
+
+    The label is ``line_label``; where two lines' options differ only beyond the digits a reader is shown, each
+    keeps its options exactly as given (``options_label``), so that no two lines merge.
+    """
+    exact = {}
+    for p in pts:
+        exact.setdefault((p.run.engine, p.run.settings.integrator, p.run.options_label), []).append(p)
+    labels = {}
+    for key, group in exact.items():
+        labels.setdefault(line_label(group[0].run), []).append(key)
+    out = {}
+    for label, keys in labels.items():
+        for key in keys:
+            out[label if len(keys) == 1 else " ".join(x for x in key if x)] = exact[key]
+    return out
 
 
 def sweep_key(r):
@@ -90,9 +109,7 @@ def points(records, quantity, case=None):
 
 def series(records, quantity, case=None):
     """``{line_label: [Point, ...]}``, each line ordered along its sweep (coarse to fine)."""
-    out = {}
-    for p in points(records, quantity, case):
-        out.setdefault(line_label(p.run), []).append(p)
+    out = lines_of(points(records, quantity, case))
     for pts in out.values():
         pts.sort(key=lambda p: sweep_key(p.run))
     return out

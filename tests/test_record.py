@@ -89,3 +89,19 @@ def test_settings_and_judgement_are_nested_and_the_row_stays_flat():
     back = RunRecord.from_row(row)
     assert back.settings == record.settings and back.judgement == record.judgement
     assert back.to_row() == row
+
+
+def test_lines_whose_options_differ_beyond_the_digits_shown_do_not_merge():
+    """Two runs of one engine and integrator whose option values print alike at four digits are two
+    work-precision lines, each labelled by its exact options; one line alone keeps the short label."""
+    from dalembert.reports.work_precision import Point, lines_of
+
+    def run(value, dt):
+        return RunRecord(f"k{value}{dt}", "block_on_incline", "v", "mujoco",
+                         Settings("implicitfast", dt, options={"impratio": value}), status="ok")
+
+    pts = [Point(1.0, 1e-3, run(v, dt)) for v in ("3.16227766", "3.16227767") for dt in (1e-3, 1e-4)]
+    lines = lines_of(pts)
+    assert sorted(lines) == ["mujoco implicitfast impratio=3.16227766", "mujoco implicitfast impratio=3.16227767"]
+    assert all(len(v) == 2 for v in lines.values())
+    assert list(lines_of(pts[:2])) == ["mujoco implicitfast impratio=3.162"]
