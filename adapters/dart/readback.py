@@ -15,7 +15,8 @@ the joint exerts ON the child (checked on the pendulum: ``m a_COM - m g``). In a
 state and the force read after it (the force of the step that starts at the sample, first order in the step:
 measured on the four-bar 9.0e-3 of the largest reaction at dt = 1e-3, 9.0e-4 at 1e-4). DART reports a loop's
 constraint impulse only as the skeleton's generalized forces, so a loop's force is Newton's second law on one of
-its bodies over that step (``_loop_forces``: 7.1e-3 and 7.1e-4 on the four-bar).
+its bodies over that step (``_loop_forces``: 7.1e-3 and 7.1e-4 on the four-bar). Each contact pair's force, ON its
+subject, N, world (``contact.read_forces``), is read after the same step: the extras ``contact_force:<pair>``.
 """
 
 from __future__ import annotations
@@ -23,7 +24,9 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
+from dalembert.adapters.dart.contact import read_forces
 from dalembert.adapters.dart.stepping import apply_loads
+from dalembert.contact import FORCE_PREFIX
 from dalembert.scene import WORLD
 
 __all__ = ["read_back"]
@@ -31,7 +34,8 @@ __all__ = ["read_back"]
 
 def read_back(p, Q, V):
     """The ``Trajectory`` of the sampled skeleton states ``Q``, ``V`` (n, ndofs) (NaN rows stay NaN), with the
-    reaction force on every revolute, prismatic, ball or welded child (N, world axes, on the child) as extras."""
+    reaction force on every revolute, prismatic, ball or welded child (N, world axes, on the child) and every contact
+    pair's force on its subject (N, world axes, the step from the sample: ``contact.read_forces``) as extras."""
     from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
     model, scene, times = p.model, p.scene, p.times
@@ -44,6 +48,7 @@ def read_back(p, Q, V):
     pos, vel, omega = (np.full((n, len(names), 3), np.nan) for _ in range(3))
     force = np.full((n, len(names), 3), np.nan)  # the joint's force on the body, body axes
     accel = np.full((n, len(names), 3), np.nan)  # constrained: the COM's acceleration over the step, world
+    pair_force = np.full((n, len(scene.contacts), 3), np.nan)
     finite = np.flatnonzero(np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1))
     apply_loads(model)  # world loads in body axes are set again at each sample's pose below
     world_loads = any(ld.frame == "world" for ld in scene.loads)
@@ -59,12 +64,16 @@ def read_back(p, Q, V):
             T = node.getWorldTransform()
             R[k, b], pos[k, b] = T.rotation(), T.translation()
             vel[k, b], omega[k, b] = node.getLinearVelocity(), node.getAngularVelocity()
-        if not (jointed or scene.loops):
+        if not (jointed or scene.loops or scene.contacts):
             continue
         if constrained:
             model.world.step(False)
             for b, node in enumerate(nodes):
                 accel[k, b] = (node.getLinearVelocity() - vel[k, b]) / h
+            if scene.contacts:
+                pair_force[k] = read_forces(model)
+                if not (jointed or scene.loops):
+                    continue
         else:
             skeleton.computeForwardDynamics()
         for b, node in enumerate(nodes):
@@ -91,6 +100,7 @@ def read_back(p, Q, V):
     on_child = {c: (R[:, order[c]] @ force[:, order[c], :, None])[..., 0] for c in jointed}  # world axes
     extras = {f"reaction_force:{c}": f for c, f in on_child.items()}
     extras.update(_loop_forces(scene, order, R, accel, on_child))
+    extras.update({FORCE_PREFIX + pair.name: pair_force[:, i] for i, pair in enumerate(scene.contacts)})
     return Trajectory(times, bodies, joints, extras)
 
 

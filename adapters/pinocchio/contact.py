@@ -39,6 +39,12 @@ impulses over the step, as MuJoCo's and Drake's discrete solvers), on semi-impli
    penetrating point's normal gap by its depth to first order, ``M^-1 J_n^T pinv(G_nn) depth``: it adds no
    velocity, so no energy, where a Baumgarte term on the velocity would launch a resting body.
 
+Contact forces (``read_forces``, the read-back's ``contact_force:<pair>``): a point's impulse ``lambda`` over the
+step is ``R lambda`` ON body a (``R = (t1, t2, n)``, world axes), so a pair's force on its subject (body a: the geom
+of a geom-plane pair, the first sphere of two) is the sum of its points' ``R lambda / h``: the mean contact force
+over the step. Read at the step that starts at each sample (as MuJoCo's and Drake's read-backs), by solving that
+step again from the sampled state: the same arithmetic as the run's (``Stepper``), so the same impulses.
+
 A step with no active point is the contact-free ``euler`` step but for the FreeFlyers' frame (step 3): a body in
 free flight keeps its velocity exactly, where ``euler`` turns it by explicit Euler. The audit (``audit``) states the
 mapping (mu as the cone's coefficient; restitution by Newton's law at the velocity level) and reads the
@@ -61,7 +67,7 @@ from dalembert.rotations import frame_with_z
 
 __all__ = ["CONTACT_OPTIONS", "OPTIONS", "SOLVERS", "CONTACT_MARGIN", "IMPACT_SPEED", "TOLERANCE_DEFAULT", "ITERATIONS_DEFAULT",
            "INTEGRATOR", "why_not", "solver_settings", "read_settings", "solve_cone", "cone_coefficients", "Contacts",
-           "fixed_step", "audit"]
+           "Stepper", "fixed_step", "read_forces", "audit"]
 
 INTEGRATOR = "euler"  # the one integrator that steps contact: semi-implicit Euler, impulses at the velocity level
 SOLVERS = ("admm", "pgs")
@@ -270,13 +276,19 @@ class Contacts:
         the velocity of body a's material point relative to body b's (or the plane) in its contact frame
         ``(t1, t2, n)``, ``n`` pushing a out of b; k = 0: ``J`` is None. Refreshes the model's kinematics and
         joint Jacobians at ``q``."""
+        return self.detect(q)[:4]
+
+    def detect(self, q):
+        """``points(q)`` and, per point, the index of its pair in ``scene.contacts`` (k,) and its contact frame
+        ``R = (t1, t2, n)`` as columns, world axes (k, 3, 3): a point's impulse ``lambda`` (its three rows) is
+        ``R lambda`` ON body a, world axes."""
         import pinocchio as pin
 
         model, data = self.pm.model, self.pm.data
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
-        rows, gaps, mus, es = [], [], [], []
-        for pair, a, b, plane in self.pairs:
+        rows, gaps, mus, es, owners, frames = [], [], [], [], [], []
+        for index, (pair, a, b, plane) in enumerate(self.pairs):
             e = pair.restitution or 0.0
             found = []  # (point (3,) world, normal (3,), gap)
             if plane is not None:
@@ -298,54 +310,79 @@ class Contacts:
                 if gap > CONTACT_MARGIN:
                     continue
                 Jrel = self._point_jacobian(a.body, p) - (self._point_jacobian(b.body, p) if b is not None else 0.0)
-                rows.append(frame_with_z(n).T @ Jrel)
+                R = frame_with_z(n)
+                rows.append(R.T @ Jrel)
                 gaps.append(gap)
                 mus.append(pair.friction)
                 es.append(e)
+                owners.append(index)
+                frames.append(R)
         if not rows:
-            return None, np.zeros(0), np.zeros(0), np.zeros(0)
-        return np.concatenate(rows), np.array(gaps), np.array(mus), np.array(es)
+            return None, np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, dtype=int), np.zeros((0, 3, 3))
+        return (np.concatenate(rows), np.array(gaps), np.array(mus), np.array(es), np.array(owners),
+                np.stack(frames))
 
 
-def fixed_step(pm, contacts, options, q0, v0, times, steps):
-    """The contact time-stepper (the module's docstring) with ``steps[k]`` steps per sample interval:
-    ``(Q (n, nq), V (n, nv), steps taken, RHS evaluations, stats)``, NaN after a non-finite state
-    (``dalembert.stepping.march``). ``options``: ``typed_options(CONTACT_OPTIONS, settings)``. ``stats``: dict
-    ``contact_steps`` (steps with an active point), ``max_points``, ``max_iterations`` and ``unconverged``
-    (the cone solves that stopped at ``contact_iterations`` short of the tolerance)."""
-    import pinocchio as pin
+class Stepper:
+    """One step of the contact time-stepper (the module's docstring) on a ``PinocchioModel`` ``pm`` with its
+    ``Contacts`` ``contacts`` and options ``typed_options(CONTACT_OPTIONS, settings)``: ``stepper(t, q, v, h) ->
+    (q+, v+)``; ``forces(q, v, h)`` the contact forces of the step from ``(q, v)``. ``stats``: dict
+    ``contact_steps`` (steps with an active point), ``max_points``, ``max_iterations`` and ``unconverged`` (the
+    cone solves that stopped at ``contact_iterations`` short of the tolerance), ``settings`` (read back)."""
 
-    from dalembert.stepping import march
+    def __init__(self, pm, contacts, options):
+        import pinocchio as pin
 
-    model, data = pm.model, pm.data
-    acc, integrate = pm.acceleration_function(), pin.integrate
-    settings = solver_settings(options["contact_solver"], options["contact_tolerance"], options["contact_iterations"])
-    stats = {"contact_steps": 0, "max_points": 0, "max_iterations": 0, "unconverged": 0,
-             "settings": read_settings(settings)}
+        self.pm, self.contacts = pm, contacts
+        self.acc, self.integrate = pm.acceleration_function(), pin.integrate
+        self.settings = solver_settings(options["contact_solver"], options["contact_tolerance"],
+                                        options["contact_iterations"])
+        self.stats = {"contact_steps": 0, "max_points": 0, "max_iterations": 0, "unconverged": 0,
+                      "settings": read_settings(self.settings)}
+        # each FreeFlyer's (q index of its quaternion, v slice of its linear velocity)
+        self.free = [(jm.idx_q + 3, jm.idx_v, jm.idx_v + 3) for jm in pm.model.joints
+                     if jm.shortname() == "JointModelFreeFlyer"]
 
-    # each FreeFlyer's (q index of its quaternion, v slice of its linear velocity)
-    free = [(jm.idx_q + 3, jm.idx_v, jm.idx_v + 3) for jm in model.joints if jm.shortname() == "JointModelFreeFlyer"]
+    def _turn(self, q):
+        """The FreeFlyers' rotations R_WE, from their (x, y, z, w) quaternions."""
+        import pinocchio as pin
 
-    def turn(q):  # the FreeFlyers' rotations R_WE, (x, y, z, w) quaternions
-        return [pin.Quaternion(q[iq + 3], *q[iq:iq + 3]).matrix() for iq, _, _ in free]
+        return [pin.Quaternion(q[iq + 3], *q[iq:iq + 3]).matrix() for iq, _, _ in self.free]
 
-    def step(t, q, v, h):
-        v_free = v + h * acc(q, v)
-        for _, i, j in free:  # the rate of the origin's velocity, not of its components in the turning frame
+    def _free_velocity(self, q, v, h):
+        v_free = v + h * self.acc(q, v)
+        for _, i, j in self.free:  # the rate of the origin's velocity, not of its components in the turning frame
             v_free[i:j] += h * np.cross(v[j:j + 3], v[i:j])
-        v_next, dq = _impulses(q, v, v_free, h)
+        return v_free
+
+    def __call__(self, t, q, v, h):
+        v_next, dq, _ = self._impulses(q, v, self._free_velocity(q, v, h), h)
         move = h * v_next + dq
-        q_next = integrate(model, q, move)
-        for (iq, i, j), R0, R1 in zip(free, turn(q), turn(q_next)):
+        q_next = self.integrate(self.pm.model, q, move)
+        for (iq, i, j), R0, R1 in zip(self.free, self._turn(q), self._turn(q_next)):
             q_next[iq - 3:iq] = q[iq - 3:iq] + R0 @ move[i:j]  # the origin on a straight line, not on exp6's screw
             v_next[i:j] = R1.T @ (R0 @ v_next[i:j])  # the same velocity in the turned frame
         return q_next, v_next
 
-    def _impulses(q, v, v_free, h):
-        """``(v+, dq)``: the velocity after the step's impulses and the depth's displacement (module docstring)."""
-        J, gap, mu, e = contacts.points(q)
+    def forces(self, q, v, h):
+        """The contact force (N, world axes) ON each pair's subject (``dalembert.contact.subject``: body a of the
+        time-stepper's points) over the step of ``h`` s from ``(q, v)``, ndarray (n_pairs, 3): each point's impulse
+        ``R lambda`` over ``h``, summed per pair (zero where a pair has no active point); one more solve (counted in ``stats``)."""
+        _, _, (lam, owners, frames) = self._impulses(q, v, self._free_velocity(q, v, h), h)
+        total = np.zeros((len(self.contacts.pairs), 3))
+        if len(owners):
+            np.add.at(total, owners, np.einsum("kij,kj->ki", frames, lam.reshape(-1, 3)) / h)
+        return total
+
+    def _impulses(self, q, v, v_free, h):
+        """``(v+, dq, (lambda (3k,), pair index (k,), frames (k, 3, 3)))``: the velocity after the step's
+        impulses, the depth's displacement (module docstring) and the impulses, N s, per point (t1, t2, n)."""
+        import pinocchio as pin
+
+        model, data, stats = self.pm.model, self.pm.data, self.stats
+        J, gap, mu, e, owners, frames = self.contacts.detect(q)
         if J is None:
-            return v_free, np.zeros(model.nv)
+            return v_free, np.zeros(model.nv), (np.zeros(0), owners, frames)
         k = len(gap)
         M = pin.crba(model, data, q)
         M = np.triu(M) + np.triu(M, 1).T  # crba fills the upper triangle
@@ -357,7 +394,7 @@ def fixed_step(pm, contacts, options, q0, v0, times, steps):
         impact = approach < -IMPACT_SPEED
         # an impact: Newton's post-step normal speed at least -e approach; else at least -gap / h (close the gap)
         c[normal] += np.where(impact, e * approach, np.maximum(gap, 0.0) / h)
-        lam, info = solve_cone(G, c, mu, settings)
+        lam, info = solve_cone(G, c, mu, self.settings)
         stats["contact_steps"] += 1
         stats["max_points"] = max(stats["max_points"], k)
         stats["max_iterations"] = max(stats["max_iterations"], info["iterations"])
@@ -367,10 +404,34 @@ def fixed_step(pm, contacts, options, q0, v0, times, steps):
         dq = np.zeros(model.nv)
         if depth.any():  # post-stabilisation: the depth out in position only (module docstring, step 5)
             dq = MinvJT[:, normal] @ (np.linalg.pinv(G[np.ix_(normal, normal)]) @ depth)
-        return v_next, dq
+        return v_next, dq, (lam, owners, frames)
 
+
+def fixed_step(pm, contacts, options, q0, v0, times, steps):
+    """The contact time-stepper (the module's docstring, ``Stepper``) with ``steps[k]`` steps per sample interval:
+    ``(Q (n, nq), V (n, nv), steps taken, RHS evaluations, stats)``, NaN after a non-finite state
+    (``dalembert.stepping.march``). ``options``: ``typed_options(CONTACT_OPTIONS, settings)``. ``stats``:
+    ``Stepper.stats``."""
+    from dalembert.stepping import march
+
+    step = Stepper(pm, contacts, options)
     Q, V, n = march(step, q0, v0, times, steps)
-    return Q, V, n, n, stats
+    return Q, V, n, n, step.stats
+
+
+def read_forces(p, Q, V):
+    """The contact force (N, world axes) ON each scene pair's subject at each sample, ndarray (n, n_pairs, 3): the
+    time-stepper's impulses over the step that starts at the sample (``Stepper.forces``; the step the run took
+    from there, as MuJoCo's and Drake's read-backs give theirs), the last sample's at the last interval's step;
+    NaN where the state is not finite. ``p``: the ``PinocchioPrepared`` of a contact scene (its ``contacts``)."""
+    step = Stepper(p.pm, p.contacts, typed_options(CONTACT_OPTIONS, p.settings))
+    times, steps = np.asarray(p.times, dtype=float), np.asarray(p.steps)
+    h = np.diff(times) / steps
+    h = np.append(h, h[-1]) if len(h) else np.array([float(p.settings.dt)])
+    out = np.full((len(times), len(p.scene.contacts), 3), np.nan)
+    for k in np.flatnonzero(np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)):
+        out[k] = step.forces(Q[k], V[k], h[k])
+    return out
 
 
 def audit(prepared, outcome):

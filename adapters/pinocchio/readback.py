@@ -9,7 +9,9 @@ frame), rotated to world axes; with constraints (loops, welds as constraints) th
 sample loop keeps each ``constraintDynamics``' multipliers, frames and Jacobian, and
 the constraints' forces and their share of the tree joints' reactions are resolved
 after it for all samples at once (``PinocchioModel.minimum_norm``,
-``constraint_forces``, ``carried_by``).
+``constraint_forces``, ``carried_by``). A contact scene's pairs' forces, ON each pair's subject (N, world), are
+the contact time-stepper's impulses over the step from each sample (``contact.read_forces``): the extras
+``contact_force:<pair>``.
 """
 
 from __future__ import annotations
@@ -17,7 +19,8 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
-from dalembert.adapters.pinocchio import loops
+from dalembert.adapters.pinocchio import contact, loops
+from dalembert.contact import FORCE_PREFIX
 
 __all__ = ["read_back", "REACTING"]
 
@@ -29,7 +32,8 @@ REACTING = ("revolute", "prismatic", "ball")
 def read_back(p, Q, V):
     """The ``Trajectory`` of the sampled states ``Q (n, nq)``, ``V (n, nv)`` (Pinocchio's, quaternions
     ``(x, y, z, w)``; NaN rows stay NaN), with the reaction force on every revolute, prismatic or ball child
-    and every loop's force on its body b (N, world axes) as extras ``reaction_force:<name>``."""
+    and every loop's force on its body b (N, world axes) as extras ``reaction_force:<name>``, and each contact
+    pair's force on its subject (N, world axes) as ``contact_force:<pair>``."""
     import pinocchio as pin
 
     from dalembert.trajectory import BodyStates, JointStates, Trajectory
@@ -106,4 +110,7 @@ def read_back(p, Q, V):
     traj_bodies = {name: BodyStates(*arrs) for name, arrs in bodies.items()}
     extras = {f"reaction_force:{c}": f for c, f in reactions.items()}
     extras.update({f"reaction_force:{name}": f for name, f in loop_forces.items()})
+    if p.contacts is not None:  # the contact time-stepper's impulses over the step from each sample
+        forces = contact.read_forces(p, Q, V)
+        extras.update({FORCE_PREFIX + pair.name: forces[:, i] for i, pair in enumerate(scene.contacts)})
     return Trajectory(p.times, traj_bodies, joints, extras)

@@ -64,6 +64,8 @@ def audit(prepared, outcome):
                              "100 rad/s, sleeping allowed"),
         "velocity_odd_acceleration": velocity_odd_acceleration(prepared),
         "max_motor_force": outcome.info["read"]["max_motor_force"],
+        # contact: the samples whose contact force the read-back's replay gave (all of them: bit for bit the run's)
+        **{k: v for k, v in outcome.info["read"].items() if k == "contact_force_samples"},
         **contact.audit(pb, model, prepared.scene),
     }
 

@@ -17,6 +17,18 @@ PyBullet's constraint solver, impulses at the contact points); read back from th
   relative normal speed (``restitutionVelocityThreshold``, 0.2 m/s by default): set to 0, so every impact of a
   pair with restitution bounces. Rolling and spinning friction 0 (an ideal Coulomb point contact), the contact
   stiffness and damping unset (hard contact), friction anchors off.
+* Contact forces (``read_forces``): after a step, ``getContactPoints(A, B)`` lists the step's points between two
+  multibodies, each with its ``normalForce`` along ``contactNormalOnB`` (from B towards A) and its two lateral
+  friction forces along their directions: their sum is the force ON A, N, world axes (measured, pybullet 3.2.7, on
+  block_on_incline and ball_rolling_incline with the body as A: equal to the body's ``m (v+ - v) / h - m g`` over
+  the step to 1e-6 N, the print; asked with the plane as A, the normal turns but the friction directions do not, so
+  the subject is always asked as A). Summed per pair ON its subject (``dalembert.contact.subject``). A pair whose
+  two multibodies carry another pair too is not measured (Bullet reports per multibody, not per shape). Bullet's
+  points and their warm-started impulses live in its persistent manifolds, which no reset of a state rebuilds
+  (``model.rebuild``), so the force of the step from a sample cannot be had by setting that state: the run is
+  replayed in a client of its own, built as the run's was, its states checked bit for bit against the run's at
+  every sample, and each sample's force read after the first step from it (the step that starts at the sample, as
+  MuJoCo's and Drake's read-backs give theirs).
 """
 
 from __future__ import annotations
@@ -25,7 +37,7 @@ import numpy as np
 
 from dalembert import spatial
 
-__all__ = ["why_not", "coefficients", "build", "audit", "MAX_FRICTION"]
+__all__ = ["why_not", "coefficients", "build", "audit", "read_forces", "MAX_FRICTION"]
 
 # Bullet's cap on a contact's combined friction (btManifoldResult.cpp, MAX_FRICTION).
 MAX_FRICTION = 10.0
@@ -144,3 +156,64 @@ def audit(pb, model, scene):
     return {"contact_objects": objects, "contact_pairs": pairs,
             "contact_model": "hard: impulses from PyBullet's constraint solver (the solver option), Bullet's "
                              "products of the objects' coefficients, restitution from any approach speed"}
+
+
+def _pair_bodies(scene, model):
+    """Per scene pair, ``(subject's multibody, the other's)`` (``dalembert.contact.subject``), or None where the two
+    multibodies carry another pair too (Bullet's points are per multibody: not measured)."""
+    from dalembert.contact import subject
+
+    owner = {g.name: model.parts[g.body].mb for g in scene.geoms}
+    owner.update(model.planes)
+    couples = [frozenset((owner[p.a], owner[p.b])) for p in scene.contacts]
+    out = []
+    for pair, couple in zip(scene.contacts, couples):
+        s = subject(scene, pair)
+        other = pair.b if s == pair.a else pair.a
+        out.append((owner[s], owner[other]) if couples.count(couple) == 1 else None)
+    return out
+
+
+def _forces(pb, c, bodies):
+    """The force ON each subject (N, world) in the client's last step, ndarray (n_pairs, 3) (NaN: not measured)."""
+    out = np.full((len(bodies), 3), np.nan)
+    for i, ab in enumerate(bodies):
+        if ab is None:
+            continue
+        out[i] = 0.0
+        for pt in pb.getContactPoints(ab[0], ab[1], physicsClientId=c):
+            out[i] += pt[9] * np.asarray(pt[7]) + pt[10] * np.asarray(pt[11]) + pt[12] * np.asarray(pt[13])
+    return out
+
+
+def read_forces(p, X):
+    """The contact force (N, world axes) ON each scene pair's subject over the step that starts at each sample, from
+    a replay of the run (module docstring): ``(forces, replayed)``, ``forces`` a dict pair name -> ndarray (n, 3) of
+    the pairs measured (``_pair_bodies``), NaN for a non-finite sample and from the first sample whose replayed
+    state is not the run's bit for bit; ``replayed``: the number of samples the replay matched. ``p``: the
+    ``PybulletPrepared``, ``X`` (n, state_size) the run's sampled states (``stepping.read_state``)."""
+    from dalembert.adapters.pybullet.model import build as build_model
+    from dalembert.adapters.pybullet.model import engine
+    from dalembert.adapters.pybullet.stepping import apply_loads, load_plan, read_state, state_size
+
+    pb, scene = engine(), p.scene
+    model = build_model(scene, p.settings)  # a fresh client: its first run, as the run's (rebuilt before it)
+    c, plan = model.client, load_plan(model, scene)
+    bodies = _pair_bodies(scene, model)
+    n = len(p.times)
+    out = np.full((n, len(scene.contacts), 3), np.nan)
+    row = np.empty(state_size(model))
+    replayed = 0
+    for k in range(n):
+        read_state(pb, model, row)
+        if not (np.all(np.isfinite(X[k])) and np.array_equal(row, X[k])):
+            break
+        replayed += 1
+        steps = int(p.steps[k]) if k < len(p.steps) else 1  # the last sample: the one step after it
+        for i in range(steps):
+            if plan:
+                apply_loads(pb, c, plan)
+            pb.stepSimulation(physicsClientId=c)
+            if i == 0:
+                out[k] = _forces(pb, c, bodies)
+    return {pair.name: out[:, i] for i, pair in enumerate(scene.contacts) if bodies[i] is not None}, replayed

@@ -17,6 +17,11 @@ checked on a 4-rod chain). What it reports is the engine's, and the harness show
 0.18 relative on the double pendulum and 0.67-0.78 on every joint of a 4-rod chain, the last included; 5/3
 of the centripetal part on a bead sliding along a spinning rod; 160 N off along the axis of the heavy top's
 ball joint at t = 0).
+
+Contact forces: each pair's force ON its subject (N, world) over the step that starts at each sample, from a
+replay of the run in a client of its own (``contact.read_forces``: Bullet's contact state outlives a reset of the
+bodies' states), as the extras ``contact_force:<pair>``; the samples the replay matched bit for bit are the audit's
+``contact_force_samples``.
 """
 
 from __future__ import annotations
@@ -24,6 +29,8 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
+from dalembert.contact import FORCE_PREFIX
+from dalembert.adapters.pybullet.contact import read_forces
 from dalembert.adapters.pybullet.model import ball_from_bullet, engine
 from dalembert.adapters.pybullet.stepping import apply_loads, write_state
 
@@ -36,8 +43,9 @@ def _wxyz(q_xyzw):
 
 def read_back(p, X):
     """The ``Trajectory`` of the sampled states ``X (n, state_size)`` (NaN rows stay NaN), with the reaction
-    force on every revolute, prismatic, ball or welded child (N, world axes, on the child) as extras; and the
-    figures the audit collects on the way (``max_motor_force``)."""
+    force on every revolute, prismatic, ball or welded child (N, world axes, on the child) and each contact pair's
+    force on its subject (N, world axes: ``contact.read_forces``) as extras; and the figures the audit collects on
+    the way (``max_motor_force``, ``contact_force_samples``)."""
     from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
     pb, scene, model = engine(), p.scene, p.scratch
@@ -104,4 +112,8 @@ def read_back(p, X):
             q_JpJc, w_Jc = ball_from_bullet(spatial.xyzw_to_wxyz(X[:, a:a + 4]), X[:, a + 4:a + 7], part.R_LE)
             joints[b.name] = JointStates(q_JpJc, w_Jc)
         extras[f"reaction_force:{b.name}"] = np.einsum("nij,nj->ni", R_WE, force_E[b.name])
-    return Trajectory(p.times, bodies, joints, extras), {"max_motor_force": motor}
+    read = {"max_motor_force": motor}
+    if scene.contacts:
+        forces, read["contact_force_samples"] = read_forces(p, X)
+        extras.update({FORCE_PREFIX + name: f for name, f in forces.items()})
+    return Trajectory(p.times, bodies, joints, extras), read
