@@ -12,7 +12,7 @@ import argparse
 import os
 import sys
 
-from dalembert.harness.commands import cases, compare, engines, export, report, show_model, truth, validate
+from dalembert.harness.commands import cases, compare, engines, export, repro, report, show_model, truth, validate
 from dalembert.harness.commands import run as run_command
 from dalembert.harness.commands.console import fail as _fail
 from dalembert.terminal import printable
@@ -26,6 +26,7 @@ EPILOG = """examples:
   dalembert export results/top --case free_top --engine reference --integrator rk4 --dt 1e-3 --csv top.csv
   dalembert truth free_top_intermediate --param t_final=5 --csv top.csv
   dalembert validate --case pivoted_rod
+  dalembert repro results/top --key free_top__mujoco__rk4__0123456789ab --out top_mujoco.py
 """
 
 
@@ -176,6 +177,16 @@ def _parser():
     sm.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
                     help="engine option (repeatable), e.g. joints=redundant for Exudyn")
 
+    rr = sub.add_parser("repro", help="write one stored run as a standalone script (the engine and numpy, no "
+                                      "dalembert) that reproduces its headline error",
+                        epilog="example:\n  dalembert repro results/latest --key pendulum__mujoco__rk4__0123456789ab "
+                               "--out pendulum_mujoco.py\n\nThe script prints its error and the stored one and exits "
+                               "1 when they differ by more than 1e-9 relative; see dalembert.harness.commands.repro.",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    rr.add_argument("run_dir")
+    rr.add_argument("--key", required=True, help="the run's key (the report's run tables and runs.parquet list them)")
+    rr.add_argument("--out", default="-", metavar="FILE", help="the script (default - : standard output)")
+
     v = sub.add_parser("validate", help="run every case (not tagged hard) with the reference solver against its truth",
                        epilog="example:\n  dalembert validate --case pivoted_rod",
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -191,7 +202,7 @@ USER_ERRORS = (ValueError, KeyError, ImportError, OSError)
 # Each command's module (its ``main(args)``).
 COMMANDS = {"cases": cases.main, "engines": engines.main, "run": run_command.main, "report": report.main,
             "show-model": show_model.main, "validate": validate.main, "truth": truth.main, "export": export.main,
-            "compare": compare.main}
+            "compare": compare.main, "repro": repro.main}
 
 
 def _refuse_empty(parser, args):

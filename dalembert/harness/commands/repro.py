@@ -1,0 +1,196 @@
+"""``dalembert repro``: one stored run as a standalone script that reproduces its headline error.
+
+The script does not import dalembert: it needs the engine and numpy only, so a finding goes upstream as a
+reproduction anyone can run. It holds the engine's part (``Adapter.repro``: the model as the engine's own
+input, the run's settings, the stepping loop in the engine's API), the stored truth at a few samples and
+the error the run stored; it computes its own error on those samples, prints both, and exits 1 when they
+differ by more than ``REPRO_REL_TOL`` relative (0 when they agree).
+
+Which figure: the run's headline error (``reports.work_precision.headline_quantity``: the joint angle for
+jointed cases, else the orientation), its maximum over the horizon as the record stores it
+(``dalembert.errors.error_series``). The samples embedded are ``SPREAD`` spread over the horizon plus the one
+where the stored run's error is largest, so the maximum over them is the stored maximum; the script computes
+the error with the harness's arithmetic (``error_series``: the largest over joints of ``|q - q_true|``; the
+geodesic angle ``2 atan2(|vec(q1* q2)|, |scalar(q1* q2)|)`` of the normalized quaternions).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import numpy as np
+
+from dalembert.harness.commands.console import fail
+
+__all__ = ["REPRO_REL_TOL", "SPREAD", "write", "run", "main"]
+
+# The script's error must equal the stored one to this relative accuracy: the engine repeats its arithmetic
+# bit for bit on one machine (the contract's repeated runs), so what is left is the last bits of an error
+# that is itself a difference of nearby numbers (a 2.8e-9 rad error of a unit quaternion moves by ~1e-16 per
+# ulp of it: 4e-8 relative); 1e-9 is the issue's bar: any real change of the engine shows far above it.
+REPRO_REL_TOL = 1e-9
+# Samples embedded besides the one of the largest error: first, last and evenly between (a few KB of truth).
+SPREAD = 6
+# The quantities a script can reproduce, with their unit and what the truth holds.
+QUANTITIES = {"joint": ("rad or m", "each revolute or prismatic joint's coordinate q, by joint (child) name"),
+              "orientation": ("rad", "each body's attitude q_WB, unit quaternion (w, x, y, z), body axes to world")}
+
+_ERRORS = {
+    "joint": '''
+def error(values, truth):
+    """The largest |q - q_true| over the joints, per sample (rad or m): as the harness measures joints."""
+    return np.max([np.abs(values[name][:, 0] - np.asarray(truth[name])) for name in truth], axis=0)
+''',
+    "orientation": '''
+def normalize(q):
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(q[..., :1] < 0.0, -q, q)
+
+
+def angle(q1, q2):
+    """Geodesic angle between orientations, rad: 2 atan2(|vec(q1* q2)|, |scalar(q1* q2)|) of the normalized
+    quaternions (full relative precision for small angles, which 2 acos |<q1, q2>| has not)."""
+    q1, q2 = normalize(q1), normalize(q2)
+    w1, x1, y1, z1 = np.moveaxis(q1 * np.array([1.0, -1.0, -1.0, -1.0]), -1, 0)
+    w2, x2, y2, z2 = np.moveaxis(q2, -1, 0)
+    d = np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+                  w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                  w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+                  w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], -1)
+    return 2.0 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0]))
+
+
+def error(values, truth):
+    """The largest geodesic angle over the bodies, per sample (rad): as the harness measures orientations."""
+    return np.max([angle(values[name], np.asarray(truth[name])) for name in truth], axis=0)
+''',
+}
+
+
+def _times_source(times):
+    """``TIMES`` as source: exactly ``interval * arange(n)`` where that is what they are, else every number."""
+    n, interval = len(times), float(times[1] - times[0])
+    if np.array_equal(interval * np.arange(n), times):
+        return f"{interval!r} * np.arange({n})  # s, every {interval:g} s"
+    return f"np.array({np.asarray(times).tolist()!r})  # s"
+
+
+def _samples(series):
+    """Indices embedded: ``SPREAD`` evenly from first to last, and the largest error's."""
+    n = len(series)
+    return sorted({int(i) for i in np.linspace(0, n - 1, min(SPREAD, n)).round()} | {int(np.argmax(series))})
+
+
+def write(store, key):
+    """The reproduction script of run ``key`` of ``store`` (a ``dalembert.store.Store``), as text.
+
+    Raises ValueError "where: what — fix" for a key the store does not hold (with the closest keys), a run
+    with no finite stored error, or a run its engine's repro does not cover (``Adapter.repro``)."""
+    import difflib
+
+    from dalembert.adapters import get_adapter
+    from dalembert.errors import error_series
+    from dalembert.reports.work_precision import headline_quantity
+
+    records = {r.key: r for r in store.records()}
+    if key not in records:
+        close = difflib.get_close_matches(key, sorted(records), n=3, cutoff=0.5)
+        hint = f"did you mean {' or '.join(close)}?" if close else "the report's run tables and runs.parquet list them"
+        raise ValueError(f"--key: no run {key!r} in {store.path} — {hint}")
+    r = records[key]
+    quantity = headline_quantity([r])
+    stored = r.max_error(quantity) if quantity else math.nan
+    if r.status != "ok" or not r.trajectory or not math.isfinite(stored):
+        raise ValueError(f"--key: run {key} is {r.status} with no finite stored error "
+                         f"({r.message or 'nothing measured'}) — reproduce a run that finished")
+    if quantity not in QUANTITIES:
+        raise ValueError(f"--key: run {key}'s headline error is {quantity}, which a repro does not compute — "
+                         f"it reproduces {', '.join(QUANTITIES)}")
+    case = store.case(r.case, r.case_version)
+    truth = store.truth(r.case, r.case_version)
+    series = error_series(store.trajectory(key), truth)[quantity]
+    if not float(np.max(series)) == stored:  # the store's own figure, from its own trajectory
+        raise ValueError(f"{store.path}: run {key}'s stored {quantity} error {stored!r} is not that of its stored "
+                         f"trajectory ({float(np.max(series))!r}) — the store was edited or damaged")
+    engine = get_adapter(r.engine).repro(case.scene, truth.t, r.settings, quantity)
+    picks = _samples(series)
+    if quantity == "joint":
+        names = [n for n, j in truth.joints.items() if j.q.shape[1] == 1]
+        embedded = {n: truth.joints[n].q[picks, 0].tolist() for n in names}
+    else:
+        embedded = {n: truth.bodies[n].quaternion[picks].tolist() for n in truth.bodies}
+    unit, what = QUANTITIES[quantity]
+    truth_src = "{\n" + "".join(f"    {n!r}: {v!r},\n" for n, v in embedded.items()) + "}"
+    where = store.path
+    return f'''"""Reproduction of a stored dalembert run: {r.case} on {r.engine} {r.engine_version}, {r.settings.label()}.
+
+Run {key} of the store {where}: the case {r.case} (version {r.case_version}, parameters
+{dict(r.params) or "its defaults"}) stepped by {r.engine} with {r.settings.label()}, compared with the case's truth
+({case.truth or "the store's"}).
+
+The figure reproduced: the run's {quantity} error against the truth, its maximum over the run's {len(truth.t)}
+samples ({unit}), as the store holds it: {stored!r}. The truth is embedded at {len(picks)} of those samples
+(indices {picks}), one of them the sample where the stored run's error is largest ({int(np.argmax(series))}, t =
+{float(truth.t[int(np.argmax(series))])!r} s), so the maximum over them is the stored figure. This script steps
+the engine as the run did, computes the same error on those samples, prints both and exits 1 when they
+differ by more than REPRO_REL_TOL relative (0 when they agree).
+
+Needs only {r.engine} and numpy (python this_file.py). Written by `dalembert repro {where} --key {key}`.
+"""
+
+import sys
+
+import numpy as np
+
+# The run's sample times.
+TIMES = {_times_source(truth.t)}
+
+# ---------------------------------------------------------------- the engine: model, settings, stepping
+{engine}
+# ---------------------------------------------------------------- the stored truth and the stored error
+# The truth at the embedded samples: {what}; {unit}.
+SAMPLES = {picks!r}
+TRUTH = {truth_src}
+STORED_ERROR = {stored!r}  # {unit}: the {quantity} error's maximum over the run, as the store holds it
+STORED_ENGINE_VERSION = {r.engine_version!r}
+# The error computed here must equal the stored one to this relative accuracy (the engine repeats its
+# arithmetic bit for bit; a real change of it shows far above this).
+REPRO_REL_TOL = {REPRO_REL_TOL!r}
+{_ERRORS[quantity]}
+
+def main():
+    values = simulate()
+    mine = float(np.max(error({{name: np.asarray(v)[SAMPLES] for name, v in values.items()}}, TRUTH)))
+    print(f"{r.engine} {{ENGINE_VERSION}} (the stored run: {{STORED_ENGINE_VERSION}}), {r.case}, {r.settings.label()}")
+    print(f"{quantity} error, max over the samples: {{mine!r}} {unit} here, {{STORED_ERROR!r}} stored")
+    same = abs(mine - STORED_ERROR) <= REPRO_REL_TOL * abs(STORED_ERROR)
+    print("reproduced" if same else f"NOT reproduced: relative difference "
+          f"{{abs(mine - STORED_ERROR) / abs(STORED_ERROR) if STORED_ERROR else float('inf'):.3e}} > {{REPRO_REL_TOL:g}}")
+    return 0 if same else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
+'''
+
+
+def run(run_dir, key, out="-"):
+    """Write the reproduction of run ``key`` of the store ``run_dir`` to ``out`` (a file; ``-``: standard
+    output); returns the exit status: 0, or 2 with a message on a bad input or a run no repro covers."""
+    from dalembert import output
+    from dalembert.harness.commands.stores import open_store
+    from dalembert.terminal import printable
+
+    try:
+        output.check(out, "--out")
+        output.write(out, write(open_store(run_dir), key), "--out")
+    except (ValueError, KeyError, ImportError, OSError) as e:
+        return fail(str(e))
+    if out != output.STDOUT:
+        print(f"wrote {printable(output.shown(out))}: run {printable(key)} (python {printable(out)} reproduces it)")
+    return 0
+
+
+def main(args):
+    return run(args.run_dir, args.key, args.out)
