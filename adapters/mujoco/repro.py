@@ -57,7 +57,7 @@ QPOS0 = np.array({p.qpos0.tolist()!r})
 QVEL0 = np.array({p.qvel0.tolist()!r})
 # Steps of the model's timestep between consecutive samples.
 STEPS = {steps_src}
-# The {quantity} is read for these joints or bodies: {what}.
+# Read for each of these: {what}.
 NAMES = {names!r}
 
 

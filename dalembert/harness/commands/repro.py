@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import sys
+import textwrap
 
 import numpy as np
 
@@ -32,18 +33,16 @@ __all__ = ["REPRO_REL_TOL", "SPREAD", "write", "run", "main"]
 REPRO_REL_TOL = 1e-9
 # Samples embedded besides the one of the largest error: first, last and evenly between (a few KB of truth).
 SPREAD = 6
-# The quantities a script can reproduce, with their unit and what the truth holds.
-QUANTITIES = {"joint": ("rad or m", "each revolute or prismatic joint's coordinate q, by joint (child) name"),
-              "orientation": ("rad", "each body's attitude q_WB, unit quaternion (w, x, y, z), body axes to world")}
+# The quantities a script can reproduce, and what the truth holds of each.
+QUANTITIES = {"joint": "each revolute or prismatic joint's coordinate q, by joint (child) name",
+              "orientation": "each body's attitude q_WB, a unit quaternion (w, x, y, z) turning body axes to world"}
 
 _ERRORS = {
-    "joint": '''
-def error(values, truth):
-    """The largest |q - q_true| over the joints, per sample (rad or m): as the harness measures joints."""
+    "joint": '''def error(values, truth):
+    """The largest |q - q_true| over the joints, per sample: as the harness measures joints."""
     return np.max([np.abs(values[name][:, 0] - np.asarray(truth[name])) for name in truth], axis=0)
 ''',
-    "orientation": '''
-def normalize(q):
+    "orientation": '''def normalize(q):
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     return np.where(q[..., :1] < 0.0, -q, q)
 
@@ -109,34 +108,42 @@ def write(store, key):
                          f"it reproduces {', '.join(QUANTITIES)}")
     case = store.case(r.case, r.case_version)
     truth = store.truth(r.case, r.case_version)
-    series = error_series(store.trajectory(key), truth)[quantity]
+    traj = store.trajectory(key)
+    series = error_series(traj, truth)[quantity]
     if not float(np.max(series)) == stored:  # the store's own figure, from its own trajectory
         raise ValueError(f"{store.path}: run {key}'s stored {quantity} error {stored!r} is not that of its stored "
                          f"trajectory ({float(np.max(series))!r}) — the store was edited or damaged")
     engine = get_adapter(r.engine).repro(case.scene, truth.t, r.settings, quantity)
     picks = _samples(series)
     if quantity == "joint":
-        names = [n for n, j in truth.joints.items() if j.q.shape[1] == 1]
-        embedded = {n: truth.joints[n].q[picks, 0].tolist() for n in names}
+        names = [n for n, j in truth.joints.items() if j.q.shape[1] == 1 and n in traj.joints]
+        kinds = {case.scene.joint(n).kind for n in names}
+        unit = "rad" if kinds == {"revolute"} else "m" if kinds == {"prismatic"} else "rad (revolute) or m (prismatic)"
+        embedded = {n: truth.joints[n].q[picks, 0] for n in names}
     else:
-        embedded = {n: truth.bodies[n].quaternion[picks].tolist() for n in truth.bodies}
-    unit, what = QUANTITIES[quantity]
-    truth_src = "{\n" + "".join(f"    {n!r}: {v!r},\n" for n, v in embedded.items()) + "}"
-    where = store.path
+        unit, embedded = "rad", {n: truth.bodies[n].quaternion[picks] for n in truth.bodies}
+    peak = int(np.argmax(series))
+    loop = (r.audit or {}).get("loop")  # Pinocchio's: which stepping loop the run took
+    paragraphs = [
+        f"Run {key} of the store {store.path}: the case {r.case} (version {r.case_version}, parameters "
+        f"{dict(r.params) or 'its defaults'}) stepped by {r.engine} {r.engine_version} with {r.settings.label()}"
+        + (f" ({loop})" if loop else "") + f", against the case's truth ({case.truth}).",
+        f"The figure reproduced: the run's {quantity} error against the truth ({QUANTITIES[quantity]}), its maximum "
+        f"over the run's {len(truth.t)} samples, {unit}, as the store holds it: {stored!r}. The truth is embedded at "
+        f"{len(picks)} of those samples, one of them the sample where the stored run's error is largest (sample "
+        f"{peak}, t = {float(truth.t[peak])!r} s), so the maximum over them is the stored figure. The script steps "
+        f"the engine as the run did, computes the same error on those samples, prints it beside the stored one "
+        f"sample by sample, and exits 1 when the maxima differ by more than REPRO_REL_TOL relative (0 when they "
+        f"agree).",
+        f"Needs only {r.engine} and numpy: python this_file.py. Written by: dalembert repro {store.path} --key {key}",
+    ]
+    doc = "\n\n".join(textwrap.fill(p, 110) for p in paragraphs)
+    rows = "".join(f"    {n!r}: [\n" + "".join(f"        {v.tolist()!r},  # t = {float(truth.t[i])!r} s\n"
+                                                for i, v in zip(picks, values)) + "    ],\n"
+                   for n, values in embedded.items())
     return f'''"""Reproduction of a stored dalembert run: {r.case} on {r.engine} {r.engine_version}, {r.settings.label()}.
 
-Run {key} of the store {where}: the case {r.case} (version {r.case_version}, parameters
-{dict(r.params) or "its defaults"}) stepped by {r.engine} with {r.settings.label()}, compared with the case's truth
-({case.truth or "the store's"}).
-
-The figure reproduced: the run's {quantity} error against the truth, its maximum over the run's {len(truth.t)}
-samples ({unit}), as the store holds it: {stored!r}. The truth is embedded at {len(picks)} of those samples
-(indices {picks}), one of them the sample where the stored run's error is largest ({int(np.argmax(series))}, t =
-{float(truth.t[int(np.argmax(series))])!r} s), so the maximum over them is the stored figure. This script steps
-the engine as the run did, computes the same error on those samples, prints both and exits 1 when they
-differ by more than REPRO_REL_TOL relative (0 when they agree).
-
-Needs only {r.engine} and numpy (python this_file.py). Written by `dalembert repro {where} --key {key}`.
+{doc}
 """
 
 import sys
@@ -149,24 +156,32 @@ TIMES = {_times_source(truth.t)}
 # ---------------------------------------------------------------- the engine: model, settings, stepping
 {engine}
 # ---------------------------------------------------------------- the stored truth and the stored error
-# The truth at the embedded samples: {what}; {unit}.
+# The samples embedded (indices into TIMES); the truth there, {unit}: {QUANTITIES[quantity]};
+# the stored run's error there, {unit}.
 SAMPLES = {picks!r}
-TRUTH = {truth_src}
+TRUTH = {{
+{rows}}}
+STORED_ERRORS = {series[picks].tolist()!r}
 STORED_ERROR = {stored!r}  # {unit}: the {quantity} error's maximum over the run, as the store holds it
 STORED_ENGINE_VERSION = {r.engine_version!r}
 # The error computed here must equal the stored one to this relative accuracy (the engine repeats its
 # arithmetic bit for bit; a real change of it shows far above this).
 REPRO_REL_TOL = {REPRO_REL_TOL!r}
+
 {_ERRORS[quantity]}
 
 def main():
     values = simulate()
-    mine = float(np.max(error({{name: np.asarray(v)[SAMPLES] for name, v in values.items()}}, TRUTH)))
+    mine = error({{name: np.asarray(v)[SAMPLES] for name, v in values.items()}}, TRUTH)
     print(f"{r.engine} {{ENGINE_VERSION}} (the stored run: {{STORED_ENGINE_VERSION}}), {r.case}, {r.settings.label()}")
-    print(f"{quantity} error, max over the samples: {{mine!r}} {unit} here, {{STORED_ERROR!r}} stored")
-    same = abs(mine - STORED_ERROR) <= REPRO_REL_TOL * abs(STORED_ERROR)
+    print(f"{{'t (s)':<22}}  {{'{quantity} error here':<24}}  stored")
+    for i, here, there in zip(SAMPLES, mine, STORED_ERRORS):
+        print(f"{{float(TIMES[i])!r:<22}}  {{float(here)!r:<24}}  {{there!r}}")
+    peak = float(np.max(mine))
+    print(f"{quantity} error, max over the samples: {{peak!r}} {unit} here, {{STORED_ERROR!r}} stored")
+    same = abs(peak - STORED_ERROR) <= REPRO_REL_TOL * abs(STORED_ERROR)
     print("reproduced" if same else f"NOT reproduced: relative difference "
-          f"{{abs(mine - STORED_ERROR) / abs(STORED_ERROR) if STORED_ERROR else float('inf'):.3e}} > {{REPRO_REL_TOL:g}}")
+          f"{{abs(peak - STORED_ERROR) / abs(STORED_ERROR) if STORED_ERROR else float('inf'):.3e}} > {{REPRO_REL_TOL:g}}")
     return 0 if same else 1
 
 
