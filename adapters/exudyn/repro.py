@@ -10,10 +10,11 @@ the horizon, the Newton tolerances and spectral radius of generalized-alpha); th
 ``sampling.solve`` reads them, from a sensor stored by Exudyn on a schedule that leads the sample
 times by ``sampling.SCHEDULE_LEAD`` steps, each at the step that lands on its sample.
 
-Not covered, with the reason in the error: rigid bodies (free bodies, ``joints=redundant``: their
-attitude is read through Exudyn's rotation sensors and turned into quaternions, not a coordinate),
-anything beyond the tree (loads, loops, springs, contact: other objects and markers), and the adaptive
-solvers (driven sample by sample through ``MainSolverExplicit.SolveSteps``).
+The tree's loads (a ``MarkerKinematicTreeRigid`` at the load's point and a ``LoadForceVector`` or
+``LoadTorqueVector``) are written from ``GetMarker`` and ``GetLoad`` alike. Not covered, with the reason in the
+error: rigid bodies (free bodies, ``joints=redundant``: their attitude is read through Exudyn's rotation
+sensors and turned into quaternions, not a coordinate), other objects (loops, springs, contact), and the
+adaptive solvers (driven sample by sample through ``MainSolverExplicit.SolveSteps``).
 """
 
 from __future__ import annotations
@@ -33,6 +34,35 @@ def _matrices(ms):
     return "[" + ", ".join(f"{np.asarray(ms[i], dtype=float).tolist()!r}" for i in range(len(ms))) + "]"
 
 
+def _loads(mbs, tree):
+    """The loads on the tree's links, as the calls that make them (a marker on the link, then the load), or ""."""
+    lines = []
+    for i in range(mbs.systemData.NumberOfMarkers()):
+        m = mbs.GetMarker(i)
+        if m["markerType"] != "KinematicTreeRigid" or int(m["objectNumber"]) != int(tree):
+            raise ValueError(f"scene: marker {i} is a {m['markerType']} — the repro writes a kinematic tree's "
+                             "loads only; no repro for this system")
+        HT = np.asarray(m["localHT"], dtype=float)
+        lines.append(f"markers.append(mbs.AddMarker(MarkerKinematicTreeRigid(objectNumber=tree, linkNumber="
+                     f"{int(m['linkNumber'])}, localHT=exu.HT(rotation={HT[:3, :3].tolist()!r}, "
+                     f"translation={HT[:3, 3].tolist()!r}))))  # at the load's point, link {int(m['linkNumber'])}'s "
+                     "frame (m)")
+    for i in range(mbs.systemData.NumberOfLoads()):
+        ld = mbs.GetLoad(i)
+        kind = {"ForceVector": "LoadForceVector", "TorqueVector": "LoadTorqueVector"}.get(ld["loadType"])
+        if kind is None or ld["loadVectorUserFunction"]:
+            raise ValueError(f"scene: load {i} is a {ld['loadType']} — the repro writes constant force and torque "
+                             "vectors only; no repro for this system")
+        unit = "N" if kind == "LoadForceVector" else "N m"
+        frame = "in the link's frame, turning with it" if ld["bodyFixed"] else "in world axes"
+        lines.append(f"mbs.AddLoad({kind}(markerNumber=markers[{int(ld['markerNumber'])}], loadVector="
+                     f"{np.asarray(ld['loadVector'], dtype=float).tolist()!r}, bodyFixed={bool(ld['bodyFixed'])}))"
+                     f"  # {unit}, {frame}")
+    if not lines:
+        return ""
+    return "\n    ".join(["markers = []"] + lines)
+
+
 def repro(adapter, scene, times, settings, quantity):
     """The Exudyn part of a reproduction of a run of ``scene`` sampled at ``times`` with ``settings``: Python
     source defining ``simulate()`` (``Adapter.repro``); ValueError "where: what — fix" where it does not apply."""
@@ -47,9 +77,10 @@ def repro(adapter, scene, times, settings, quantity):
                          "reproduce a run with joints=minimal")
     built = build(scene, settings)
     mbs = built.mbs
-    if built.tree is None or mbs.systemData.NumberOfObjects() != 1 or mbs.systemData.NumberOfLoads():
-        raise ValueError("scene: the repro writes a lone kinematic tree; this system has other objects or loads "
-                         "(free bodies, loops, springs, contact, loads) — no repro for it")
+    if built.tree is None or mbs.systemData.NumberOfObjects() != 1:
+        raise ValueError("scene: the repro writes a kinematic tree with its loads; this system has other objects "
+                         "(free bodies, loops, springs, contact) — no repro for it")
+    loads_src = _loads(mbs, built.tree)
     node, tree = mbs.GetNode(built.tree_node), mbs.GetObject(built.tree)
     times = np.asarray(times, dtype=float)
     dt = float(settings.dt)
@@ -67,7 +98,8 @@ def repro(adapter, scene, times, settings, quantity):
     names = list(built.links)
     settings_src = "\n    ".join(lines)
     return f'''import exudyn as exu
-from exudyn.itemInterface import NodeGenericODE2, ObjectKinematicTree, SensorNode
+from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerKinematicTreeRigid, NodeGenericODE2,
+                                  ObjectKinematicTree, SensorNode)
 
 # The joints' coordinates, one per link, in link order (rad for RevoluteZ, m for PrismaticZ).
 NAMES = {names!r}
@@ -88,7 +120,7 @@ def system():
                                        initialCoordinates={np.asarray(node["initialCoordinates"]).tolist()!r},
                                        initialCoordinates_t={np.asarray(node["initialCoordinates_t"]).tolist()!r},
                                        numberOfODE2Coordinates={int(node["numberOfODE2Coordinates"])}))
-    mbs.AddObject(ObjectKinematicTree(
+    tree = mbs.AddObject(ObjectKinematicTree(
         nodeNumber=node, jointTypes=[{joint_types}], linkParents={list(tree["linkParents"])!r},
         jointTransformations=exu.Matrix3DList({_matrices(tree["jointTransformations"])}),
         jointOffsets=exu.Vector3DList({_matrices(tree["jointOffsets"])}),
@@ -97,6 +129,7 @@ def system():
         linkMasses={np.asarray(tree["linkMasses"], dtype=float).tolist()!r},
         baseOffset={np.asarray(tree["baseOffset"], dtype=float).tolist()!r},
         gravity={np.asarray(tree["gravity"], dtype=float).tolist()!r}))  # m/s^2, world
+    {loads_src}
     sensor = mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True,
                                       outputVariableType=exu.OutputVariableType.Coordinates))
     mbs.Assemble()

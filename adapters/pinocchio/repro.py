@@ -12,7 +12,8 @@ solve) both loops and the script agree bit for bit. With free or ball joints the
 ``dIntegrate`` with numpy (LAPACK), as the Python loop does; the compiled loop's Eigen LU may differ
 from it in the last bits.
 
-Not covered, with the reason in the error: loads and spring-dampers (external forces rebuilt at every
+Follower loads are the constant per-joint forces ``aba`` takes (``PinocchioModel.const_f``). Not covered, with
+the reason in the error: world-fixed loads and spring-dampers (external forces rebuilt from the pose at every
 evaluation), constraints (loop closures, welds as constraints: ``pin.constraintDynamics`` with the
 adapter's proximal settings and Baumgarte gains) and the adaptive integrators (scipy's, re-centred
 every step: ``integrators.adaptive``).
@@ -110,6 +111,18 @@ def _model_calls(pm, scene):
     return "\n".join(lines)
 
 
+def _loads(pm):
+    """The follower loads as source: ``FEXT``, the constant spatial force on each joint (``pm.const_f``), or ""."""
+    if not pm.const_f:
+        return ""
+    rows = "".join(f"    pin.Force(np.array({np.asarray(pm.const_f[jid].vector).tolist()!r})),  # on joint {jid} "
+                   f"({pm.model.names[jid]})\n" if jid in pm.const_f else f"    pin.Force.Zero(),  # joint {jid}\n"
+                   for jid in range(pm.model.njoints))
+    return ("# The follower loads: per joint, the spatial force (linear N, angular N m) in its LOCAL frame about its "
+            "origin,\n# constant as the body turns.\nFEXT = pin.StdVec_Force()\nfor force in [\n" + rows
+            + "]:\n    FEXT.append(force)\n")
+
+
 def repro(adapter, scene, times, settings, quantity):
     """The Pinocchio part of a reproduction of a run of ``scene`` sampled at ``times`` with ``settings``: Python
     source defining ``simulate()`` (``Adapter.repro``); ValueError "where: what — fix" where it does not apply."""
@@ -122,9 +135,9 @@ def repro(adapter, scene, times, settings, quantity):
     if pm.constrained:
         raise ValueError("scene: constraints (loop closures, or welds=constraint) run pin.constraintDynamics with the "
                          "adapter's proximal settings — no repro for them; reproduce a run of a tree")
-    if pm.has_forces:
-        raise ValueError("scene: loads and spring-dampers are external forces rebuilt at every evaluation — no repro "
-                         "for them yet; reproduce a run of a scene under gravity alone")
+    if pm.world_loads or pm.springs:
+        raise ValueError("scene: world-fixed loads and spring-dampers are external forces rebuilt from the pose at "
+                         "every evaluation — no repro for them yet; reproduce a run under gravity and follower loads")
     if quantity == "joint":
         names = [j.child for j in scene.joints if j.kind in ("revolute", "prismatic")]
         read = "{name: Q[:, model.joints[model.getJointId(name)].idx_q][:, None] for name in NAMES}"
@@ -152,8 +165,8 @@ def repro(adapter, scene, times, settings, quantity):
 # mass (kg), centre of mass in its joint's frame (m) and inertia about it (kg m^2)).
 {_model_calls(pm, scene)}
 data = model.createData()
-TAU = np.zeros(model.nv)  # no actuation: gravity alone
-# The initial state, Pinocchio's coordinates (a FreeFlyer: position, quaternion x, y, z, w; velocity in its
+TAU = np.zeros(model.nv)  # no actuation: gravity{" and the follower loads below" if pm.const_f else " alone"}
+{_loads(pm)}# The initial state, Pinocchio's coordinates (a FreeFlyer: position, quaternion x, y, z, w; velocity in its
 # joint's LOCAL frame).
 Q0 = np.array({p.q0.tolist()!r})
 V0 = np.array({p.v0.tolist()!r})
@@ -164,7 +177,7 @@ NAMES = {names!r}
 
 
 def acc(q, v):
-    return pin.aba(model, data, q, v, TAU)
+    return pin.aba(model, data, q, v, TAU{", FEXT" if pm.const_f else ""})
 
 
 {_DEXPINV[vector_space]}
