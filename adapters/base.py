@@ -283,7 +283,8 @@ class Adapter:
         ``TIMES`` with the arithmetic ``run`` used, it returns ``{name: ndarray (n, k)}`` of ``quantity`` at every
         sample — ``"joint"``: each revolute or prismatic joint's coordinate (n, 1), rad or m, by its child's name;
         ``"orientation"``: each body's ``q_WB`` (n, 4), scalar first, world, as the engine produced it (not
-        normalized) — and sets ``ENGINE_VERSION``.
+        normalized), or its ``R_WB`` (n, 3, 3) where the read-back turns a matrix into it (the script then does, by
+        ``spatial.matrix_to_quat``'s arithmetic) — and sets ``ENGINE_VERSION``.
 
         The default finds the module ``repro`` beside the adapter's (``adapters/<engine>/repro.py``: its
         ``repro(adapter, scene, times, settings, quantity)``); without one, and wherever that module does not cover

@@ -7,9 +7,10 @@ adapter's ``step_loop``: ``mj_step(nstep)`` per sample interval, which gives the
 scene's loads at full control. The quantities come straight from ``qpos`` as the read-back takes
 them: a hinge's or slide's coordinate, and a free joint's quaternion (w first, as integrated).
 
-Not covered, with the reason in the error: loads applied as ``xfrc_applied`` (the lagging path
-recomputes them from the pose before every step, in the adapter's Python), and orientations of bodies
-that are not free (their attitude is MuJoCo's frame turned into the scene's body frame, not ``qpos``).
+A body that is not free has its attitude from MuJoCo's ``xmat`` at the sampled state, turned into the
+scene's body frame (``R_WB = R_WE R_EB``) as the read-back turns it, with the same numpy operations on arrays
+of the same shapes. Not covered, with the reason in the error: loads applied as ``xfrc_applied`` (the
+lagging path recomputes them from the pose before every step, in the adapter's Python).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ def repro(adapter, scene, times, settings, quantity):
     """The MuJoCo part of a reproduction of a run of ``scene`` sampled at ``times`` with ``settings``: Python
     source defining ``simulate()`` (``Adapter.repro``); ValueError "where: what — fix" where it does not apply."""
     p = adapter.prepare(scene, times, settings)
+    attitudes = ""
     if p.load_path != "actuator":
         raise ValueError("options.loads: xfrc_applied recomputes the loads from the pose before every step in "
                          "the adapter's Python — no repro for it; reproduce a run with loads=actuator")
@@ -33,14 +35,36 @@ def repro(adapter, scene, times, settings, quantity):
         read = "{name: Q[:, model.jnt_qposadr[joint_id(name)]][:, None] for name in NAMES}"
         what = "each hinge's or slide's qpos (rad or m), by joint name"
     elif quantity == "orientation":
-        stuck = [j.child for j in scene.joints if not floating(j, p.welds)]
-        if stuck:
-            raise ValueError(f"quantity: the orientation of {', '.join(stuck)} (not free bodies) is MuJoCo's body frame "
-                             "turned into the scene's, not qpos — no repro for it; reproduce a run whose headline is "
-                             "a joint angle, or of free bodies only")
         names = [b.name for b in scene.bodies]
-        read = "{name: Q[:, model.jnt_qposadr[joint_id(name)] + 3:model.jnt_qposadr[joint_id(name)] + 7] for name in NAMES}"
-        what = "each free joint's quaternion q_WB from qpos (w, x, y, z; world; as integrated, not normalized)"
+        free = [b.name for b in scene.bodies if floating(scene.joint(b.name), p.welds)]
+        frames = np.array([p.frames[name][1] for name in names])
+        read = "attitudes(Q)"
+        what = ("each body's attitude: a free body's quaternion q_WB from qpos (w, x, y, z; world; as integrated, "
+                "not normalized), any other's R_WB = R_WE R_EB from MuJoCo's xmat at the sampled state")
+        attitudes = f"""
+
+# Each body's scene frame B in MuJoCo's body frame E, R_EB (``mjcf.engine_frames``: B itself for a free body),
+# in NAMES' order; the free bodies, whose attitude is their free joint's quaternion as integrated.
+R_EB = np.array({frames.tolist()!r})
+FREE = {free!r}
+
+
+def attitudes(Q):
+    \"\"\"Each body's attitude at the sampled states Q (n, nq): R_WB (n, 3, 3), or a free body's quaternion (n, 4).\"\"\"
+    model = mujoco.MjModel.from_xml_string(MJCF)
+    scratch = mujoco.MjData(model)
+    ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name) for name in NAMES]
+    xmat = np.full((len(Q), model.nbody, 9), np.nan)
+    for k in np.flatnonzero(np.all(np.isfinite(Q), axis=1)):
+        scratch.qpos[:] = Q[k]
+        mujoco.mj_kinematics(model, scratch)  # the poses of this state (after mj_step, xmat is the previous one's)
+        xmat[k] = scratch.xmat
+    R_WB = xmat[:, ids].reshape(len(Q), len(NAMES), 3, 3) @ R_EB  # W <- E <- B
+    out = {{name: R_WB[:, i] for i, name in enumerate(NAMES)}}
+    for name in FREE:
+        a = model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)]
+        out[name] = Q[:, a + 3:a + 7]
+    return out"""
     else:
         raise ValueError(f"quantity: no MuJoCo repro of {quantity!r} — it reproduces 'joint' and 'orientation'")
     steps = np.asarray(p.steps, dtype=int)
@@ -78,7 +102,7 @@ def simulate():
     def joint_id(name):
         return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
 
-    return {read}
+    return {read}{attitudes}
 
 
 ENGINE_VERSION = mujoco.__version__

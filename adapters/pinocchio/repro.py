@@ -108,6 +108,9 @@ def _model_calls(pm, scene):
         inertia = R @ body.inertia_matrix @ R.T  # kg m^2 about the COM, the joint frame's axes
         lines.append(f"model.appendBodyToJoint({joints.get(pm.carrier[body.name], 0)}, pin.Inertia({body.mass!r}, "
                      f"np.array({p.tolist()!r}), np.array({inertia.tolist()!r})), pin.SE3.Identity())  # {body.name}")
+        lines.append(f"model.addFrame(pin.Frame({body.name!r}, {joints.get(pm.carrier[body.name], 0)}, "
+                     f"pin.SE3(np.array({R.tolist()!r}), np.array({p.tolist()!r})), pin.FrameType.OP_FRAME))  "
+                     "# its frame at B")
     return "\n".join(lines)
 
 
@@ -132,6 +135,7 @@ def repro(adapter, scene, times, settings, quantity):
                          f"{', '.join(_STEPS)}")
     p = adapter.prepare(scene, times, settings)
     pm = p.pm
+    attitudes = ""
     if pm.constrained:
         raise ValueError("scene: constraints (loop closures, or welds=constraint) run pin.constraintDynamics with the "
                          "adapter's proximal settings — no repro for them; reproduce a run of a tree")
@@ -143,16 +147,29 @@ def repro(adapter, scene, times, settings, quantity):
         read = "{name: Q[:, model.joints[model.getJointId(name)].idx_q][:, None] for name in NAMES}"
         what = "each revolute or prismatic joint's coordinate (rad or m), by joint name"
     elif quantity == "orientation":
-        stuck = [j.child for j in scene.joints if j.kind != "free"]
-        if stuck:
-            raise ValueError(f"quantity: the orientation of {', '.join(stuck)} (not free bodies) is read back by "
-                             "forward kinematics — no repro for it; reproduce a run whose headline is a joint angle, or "
-                             "of free bodies only")
         names = [b.name for b in scene.bodies]
-        # a FreeFlyer's q: position, then the quaternion (x, y, z, w): scalar last, turned to scalar first
-        read = ("{name: Q[:, [model.joints[model.getJointId(name)].idx_q + i for i in (6, 3, 4, 5)]] "
-                "for name in NAMES}")
-        what = "each FreeFlyer's quaternion q_WB (w, x, y, z; world; as integrated, not normalized)"
+        free = [j.child for j in scene.joints if j.kind == "free"]
+        read = "attitudes(Q, V)"
+        what = ("each body's attitude: a FreeFlyer's quaternion q_WB (w, x, y, z; world; as integrated, not "
+                "normalized), any other's R_WB, the rotation of its frame at B after forward kinematics")
+        attitudes = f"""
+
+FREE = {free!r}  # the bodies on a FreeFlyer, whose attitude is its quaternion as integrated
+
+
+def attitudes(Q, V):
+    \"\"\"Each body's attitude at the sampled states: R_WB (n, 3, 3) of its frame at B, or a FreeFlyer's quaternion
+    (n, 4), (x, y, z, w) turned to (w, x, y, z).\"\"\"
+    out = {{name: np.full((len(Q), 3, 3), np.nan) for name in NAMES}}
+    for k in np.flatnonzero(np.all(np.isfinite(Q), axis=1) & np.all(np.isfinite(V), axis=1)):
+        pin.forwardKinematics(model, data, Q[k], V[k])
+        pin.updateFramePlacements(model, data)
+        for name in NAMES:
+            out[name][k] = data.oMf[model.getFrameId(name)].rotation
+    for name in FREE:
+        a = model.joints[model.getJointId(name)].idx_q
+        out[name] = np.concatenate([Q[:, a + 6:a + 7], Q[:, a + 3:a + 6]], axis=1)
+    return out"""
     else:
         raise ValueError(f"quantity: no Pinocchio repro of {quantity!r} — it reproduces 'joint' and 'orientation'")
     steps = np.asarray(p.steps, dtype=int)
@@ -162,7 +179,7 @@ def repro(adapter, scene, times, settings, quantity):
     return f'''import pinocchio as pin
 
 # The model, by the calls the adapter makes (joint placements in the parent joint's frame, m; each body's
-# mass (kg), centre of mass in its joint's frame (m) and inertia about it (kg m^2)).
+# mass (kg), centre of mass in its joint's frame (m) and inertia about it (kg m^2), and its scene frame B there).
 {_model_calls(pm, scene)}
 data = model.createData()
 TAU = np.zeros(model.nv)  # no actuation: gravity{" and the follower loads below" if pm.const_f else " alone"}
@@ -187,16 +204,17 @@ def acc(q, v):
 def simulate():
     """The run: ``step`` from sample to sample; ``{{name: ndarray (n, k)}}`` of the quantity at every sample."""
     Q = np.full((len(TIMES), model.nq), np.nan)
+    V = np.full((len(TIMES), model.nv), np.nan)
     q, v = Q0.copy(), V0.copy()
-    Q[0] = q
+    Q[0], V[0] = q, v
     for k, n in enumerate(STEPS):
         h = (TIMES[k + 1] - TIMES[k]) / n
         for _ in range(n):
             q, v = step(q, v, h)
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             break
-        Q[k + 1] = q
-    return {read}
+        Q[k + 1], V[k + 1] = q, v
+    return {read}{attitudes}
 
 
 ENGINE_VERSION = pin.__version__

@@ -42,7 +42,36 @@ _ERRORS = {
     """The largest |q - q_true| over the joints, per sample: as the harness measures joints."""
     return np.max([np.abs(values[name][:, 0] - np.asarray(truth[name])) for name in truth], axis=0)
 ''',
-    "orientation": '''def normalize(q):
+    "orientation": '''def matrix_to_quat(R):
+    """Unit quaternion (w, x, y, z), w >= 0, of rotation matrices R (m, 3, 3): Shepperd's method, the
+    largest-diagonal branch, as the harness turns an engine's attitude matrices into quaternions."""
+    tr = np.trace(R, axis1=1, axis2=2)
+    diag = np.diagonal(R, axis1=1, axis2=2)
+    k = np.argmax(np.concatenate([tr[:, None], diag], axis=1), axis=1)
+    q = np.empty((R.shape[0], 4))
+    for branch in range(4):
+        sel = k == branch
+        if not np.any(sel):
+            continue
+        r = R[sel]
+        if branch == 0:
+            s = 2.0 * np.sqrt(1.0 + tr[sel])
+            q[sel] = np.stack([0.25 * s, (r[:, 2, 1] - r[:, 1, 2]) / s, (r[:, 0, 2] - r[:, 2, 0]) / s,
+                               (r[:, 1, 0] - r[:, 0, 1]) / s], -1)
+        else:
+            i = branch - 1
+            j, m = (i + 1) % 3, (i + 2) % 3
+            s = 2.0 * np.sqrt(1.0 + r[:, i, i] - r[:, j, j] - r[:, m, m])
+            out = np.empty((r.shape[0], 4))
+            out[:, 0] = (r[:, m, j] - r[:, j, m]) / s
+            out[:, 1 + i] = 0.25 * s
+            out[:, 1 + j] = (r[:, j, i] + r[:, i, j]) / s
+            out[:, 1 + m] = (r[:, m, i] + r[:, i, m]) / s
+            q[sel] = out
+    return np.where(q[:, :1] < 0.0, -q, q)
+
+
+def normalize(q):
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     return np.where(q[..., :1] < 0.0, -q, q)
 
@@ -61,8 +90,10 @@ def angle(q1, q2):
 
 
 def error(values, truth):
-    """The largest geodesic angle over the bodies, per sample (rad): as the harness measures orientations."""
-    return np.max([angle(values[name], np.asarray(truth[name])) for name in truth], axis=0)
+    """The largest geodesic angle over the bodies, per sample (rad): as the harness measures orientations (an
+    attitude the engine gives as a matrix, (m, 3, 3), is turned into a quaternion first)."""
+    quats = {name: matrix_to_quat(q) if q.shape[1:] == (3, 3) else q for name, q in values.items()}
+    return np.max([angle(quats[name], np.asarray(truth[name])) for name in truth], axis=0)
 ''',
 }
 
