@@ -6,11 +6,12 @@ by the calls ``PinocchioModel`` makes, with the arguments it passed (joint place
 the built model, where ``addJoint`` stores them as given; each body's ``pin.Inertia`` from its mass,
 its frame in the joint's and its inertia, as the adapter computes them), so ``aba`` sees the same
 numbers. The integrators are ``integrators.fixed_step``'s, the readable specification of the compiled
-loop (``stepper.cpp``) that a run takes by default: the same operations in the same order, so where
-the configuration space is a vector space (revolute and prismatic joints only: no ``dexp^-1``
-solve) both loops and the script agree bit for bit. With free or ball joints the script solves
-``dIntegrate`` with numpy (LAPACK), as the Python loop does; the compiled loop's Eigen LU may differ
-from it in the last bits.
+loop (``stepper.cpp``) that a run takes by default: the same operations in the same order. The one place
+the two loops' arithmetic differs is ``dexp^-1`` with free or ball joints, a solve of ``dIntegrate``: numpy's
+(LAPACK) in the Python loop, Eigen's ``partialPivLu`` in the compiled one; the script writes the one of
+the loop the adapter runs here (``prepare``: the compiled loop where it is built and ``loop=native``),
+Eigen's written out in numpy operation for operation (measured: the free tops' rk4 runs on the compiled
+loop, 4e-9 relative off with numpy's solve, reproduce bit for bit).
 
 Follower loads are the constant per-joint forces ``aba`` takes (``PinocchioModel.const_f``). Not covered, with
 the reason in the error: world-fixed loads and spring-dampers (external forces rebuilt from the pose at every
@@ -70,17 +71,49 @@ _STEPS = {
 ''',
 }
 
+# dexp^-1 as each loop computes it (``PinocchioModel.dexpinv_function``, ``stepper.cpp`` ``Stepper::dexpinv``).
 _DEXPINV = {
-    True: '''def dexpinv(q, theta, vel):  # revolute and prismatic joints only: a vector space, dexp^-1 is the identity
-    return vel
-''',
-    False: '''def dexpinv(q, theta, vel):
-    """The tangent of q (+) theta moving with velocity vel: dIntegrate(q, theta, ARG1)^-1 vel."""
-    # (numpy's LAPACK solve, as the adapter's Python loop; its compiled loop takes Eigen's partialPivLu, which may
-    # differ in the last bits: measured 3e-10 relative on the free top's orientation error, rk4 at dt = 1e-2)
-    return np.linalg.solve(pin.dIntegrate(model, q, theta, pin.ArgumentPosition.ARG1), vel)
-''',
+    "identity": '''def dexpinv(q, theta, vel):  # revolute and prismatic joints only: a vector space, dexp^-1 is the identity
+    return vel''',
+    "numpy": '''def dexpinv(q, theta, vel):
+    """The tangent of q (+) theta moving with velocity vel: dIntegrate(q, theta, ARG1)^-1 vel, solved by numpy
+    (LAPACK), as the adapter's Python loop solves it."""
+    return np.linalg.solve(pin.dIntegrate(model, q, theta, pin.ArgumentPosition.ARG1), vel)''',
+    "numpy-blocks": '''def dexpinv(q, theta, vel):
+    """The tangent of q (+) theta moving with velocity vel: dIntegrate(q, theta, ARG1)^-1 vel. FreeFlyers only:
+    dIntegrate is block diagonal, solved 6 x 6 block by block by numpy (LAPACK), as the adapter's Python loop does."""
+    n = model.nv // 6
+    diag = np.arange(n)
+    J = pin.dIntegrate(model, q, theta, pin.ArgumentPosition.ARG1).reshape(n, 6, n, 6)[diag, :, diag, :]
+    return np.linalg.solve(J, vel.reshape(n, 6, 1)).ravel()''',
+    "eigen": '''def dexpinv(q, theta, vel):
+    """The tangent of q (+) theta moving with velocity vel: dIntegrate(q, theta, ARG1)^-1 vel, solved as the
+    adapter's compiled loop solves it, J.partialPivLu().solve(vel) in Eigen 3.4, operation for operation:
+    the unblocked LU of a matrix of at most 16 rows (the first largest |pivot| of each column, the column below
+    it divided by it, a rank-1 update of the rest), then the unit-lower and the upper triangular solves,
+    column by column (a zero entry skipped)."""
+    lu = np.array(pin.dIntegrate(model, q, theta, pin.ArgumentPosition.ARG1), dtype=float)
+    n = len(lu)
+    x = np.array(vel, dtype=float)
+    for k in range(n):
+        p = k + int(np.argmax(np.abs(lu[k:, k])))
+        if lu[p, k] != 0.0:
+            if p != k:
+                lu[[k, p]] = lu[[p, k]]
+                x[[k, p]] = x[[p, k]]  # the same transposition of the right-hand side: x = P vel
+            lu[k + 1:, k] /= lu[k, k]
+        lu[k + 1:, k + 1:] -= np.outer(lu[k + 1:, k], lu[k, k + 1:])
+    for i in range(n):  # L x = P vel, L unit lower
+        if x[i] != 0.0:
+            x[i + 1:] -= x[i] * lu[i + 1:, i]
+    for i in range(n - 1, -1, -1):  # U x = ...
+        if x[i] != 0.0:
+            x[i] /= lu[i, i]
+            x[:i] -= x[i] * lu[:i, i]
+    return x''',
 }
+# Eigen's PartialPivLU blocks its factorization above this size (Eigen/src/LU/PartialPivLU.h, UnBlockedBound).
+EIGEN_UNBLOCKED_ROWS = 16
 
 
 def _model_calls(pm, scene):
@@ -175,7 +208,19 @@ def attitudes(Q, V):
     steps = np.asarray(p.steps, dtype=int)
     steps_src = (f"np.full({len(steps)}, {int(steps[0])})" if np.all(steps == steps[0])
                  else f"np.array({steps.tolist()!r})")
-    vector_space = pm.dexpinv_kind() == 0
+    kind = pm.dexpinv_kind()
+    native = p.native is not None  # the compiled loop runs (``PinocchioAdapter._fixed_loop``)
+    if kind == 0:
+        dexpinv = "identity"
+    elif not native:
+        dexpinv = "numpy-blocks" if kind == 3 else "numpy"
+    elif pm.model.nv <= EIGEN_UNBLOCKED_ROWS:
+        dexpinv = "eigen"
+    else:
+        raise ValueError(f"scene: {pm.model.nv} velocities — the compiled loop's dexp^-1 is Eigen's blocked LU, which "
+                         f"the repro writes out for at most {EIGEN_UNBLOCKED_ROWS}; reproduce a run with "
+                         "--option loop=python")
+    loop = "the compiled loop (stepper.cpp)" if native else "the Python loop"
     return f'''import pinocchio as pin
 
 # The model, by the calls the adapter makes (joint placements in the parent joint's frame, m; each body's
@@ -187,7 +232,8 @@ TAU = np.zeros(model.nv)  # no actuation: gravity{" and the follower loads below
 # joint's LOCAL frame).
 Q0 = np.array({p.q0.tolist()!r})
 V0 = np.array({p.v0.tolist()!r})
-# {settings.integrator}: steps between consecutive samples, each of (TIMES[k + 1] - TIMES[k]) / STEPS[k] s.
+# {settings.integrator}, the arithmetic of the adapter's {loop}: steps between consecutive samples, each of
+# (TIMES[k + 1] - TIMES[k]) / STEPS[k] s.
 STEPS = {steps_src}
 # Read for each of these: {what}.
 NAMES = {names!r}
@@ -197,7 +243,7 @@ def acc(q, v):
     return pin.aba(model, data, q, v, TAU{", FEXT" if pm.const_f else ""})
 
 
-{_DEXPINV[vector_space]}
+{_DEXPINV[dexpinv]}
 
 {_STEPS[settings.integrator]}
 
