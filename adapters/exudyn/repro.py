@@ -23,7 +23,7 @@ import numpy as np
 
 from dalembert.adapters.exudyn import sampling
 from dalembert.adapters.exudyn.adapter import ADAPTIVE, EXPLICIT, IMPLICIT, newton_tolerances
-from dalembert.adapters.exudyn.model import MODEL_OPTIONS, build
+from dalembert.adapters.exudyn.model import MODEL_OPTIONS, NODES, build
 from dalembert.adapters.base import option_value
 
 __all__ = ["repro"]
@@ -34,88 +34,57 @@ def _matrices(ms):
     return "[" + ", ".join(f"{np.asarray(ms[i], dtype=float).tolist()!r}" for i in range(len(ms))) + "]"
 
 
-def _loads(mbs, tree):
-    """The loads on the tree's links, as the calls that make them (a marker on the link, then the load), or ""."""
+def _loads(mbs, owners):
+    """The loads, as the calls that make them (a marker at the load's point, then the load), or "".
+
+    ``owners``: object number -> the script's expression for it (``tree``, ``bodies['top']``)."""
     lines = []
+    made = set()  # the markers and loads ``CreateRigidBody`` makes itself (gravity: a BodyMass marker, its load)
     for i in range(mbs.systemData.NumberOfMarkers()):
         m = mbs.GetMarker(i)
-        if m["markerType"] != "KinematicTreeRigid" or int(m["objectNumber"]) != int(tree):
-            raise ValueError(f"scene: marker {i} is a {m['markerType']} — the repro writes a kinematic tree's "
-                             "loads only; no repro for this system")
+        if m["markerType"] == "BodyMass" and int(m["bodyNumber"]) in owners:
+            made.add(i)
+            continue
         HT = np.asarray(m["localHT"], dtype=float)
-        lines.append(f"markers.append(mbs.AddMarker(MarkerKinematicTreeRigid(objectNumber=tree, linkNumber="
-                     f"{int(m['linkNumber'])}, localHT=exu.HT(rotation={HT[:3, :3].tolist()!r}, "
-                     f"translation={HT[:3, 3].tolist()!r}))))  # at the load's point, link {int(m['linkNumber'])}'s "
-                     "frame (m)")
+        at = f"localHT=exu.HT(rotation={HT[:3, :3].tolist()!r}, translation={HT[:3, 3].tolist()!r})"
+        if m["markerType"] == "KinematicTreeRigid" and int(m["objectNumber"]) in owners:
+            lines.append(f"markers[{i}] = mbs.AddMarker(MarkerKinematicTreeRigid(objectNumber="
+                         f"{owners[int(m['objectNumber'])]}, linkNumber={int(m['linkNumber'])}, {at}))  "
+                         f"# the load's point in link {int(m['linkNumber'])}'s frame, m")
+        elif m["markerType"] == "BodyRigid" and int(m["bodyNumber"]) in owners:
+            lines.append(f"markers[{i}] = mbs.AddMarker(MarkerBodyRigid(bodyNumber={owners[int(m['bodyNumber'])]}, "
+                         f"{at}))  # the load's point in the body's frame, m")
+        else:
+            raise ValueError(f"scene: marker {i} is a {m['markerType']} marker on another object — the repro writes the "
+                             "loads of a kinematic tree or of free bodies only; no repro for this system")
     for i in range(mbs.systemData.NumberOfLoads()):
         ld = mbs.GetLoad(i)
+        if ld["loadType"] == "MassProportional" and int(ld["markerNumber"]) in made:
+            continue
         kind = {"ForceVector": "LoadForceVector", "TorqueVector": "LoadTorqueVector"}.get(ld["loadType"])
         if kind is None or ld["loadVectorUserFunction"]:
             raise ValueError(f"scene: load {i} is a {ld['loadType']} — the repro writes constant force and torque "
                              "vectors only; no repro for this system")
         unit = "N" if kind == "LoadForceVector" else "N m"
-        frame = "in the link's frame, turning with it" if ld["bodyFixed"] else "in world axes"
+        frame = "in the body's frame, turning with it" if ld["bodyFixed"] else "in world axes"
         lines.append(f"mbs.AddLoad({kind}(markerNumber=markers[{int(ld['markerNumber'])}], loadVector="
                      f"{np.asarray(ld['loadVector'], dtype=float).tolist()!r}, bodyFixed={bool(ld['bodyFixed'])}))"
                      f"  # {unit}, {frame}")
     if not lines:
         return ""
-    return "\n    ".join(["markers = []"] + lines)
+    return "\n    ".join(["markers = {}  # by Exudyn's marker number"] + lines) + "\n    "
 
 
-def repro(adapter, scene, times, settings, quantity):
-    """The Exudyn part of a reproduction of a run of ``scene`` sampled at ``times`` with ``settings``: Python
-    source defining ``simulate()`` (``Adapter.repro``); ValueError "where: what — fix" where it does not apply."""
-    if settings.integrator in ADAPTIVE:
-        raise ValueError(f"integrator: {settings.integrator} is driven sample by sample through SolveSteps — no repro "
-                         "for the adaptive solvers; reproduce a fixed-step run")
-    if quantity != "joint":
-        raise ValueError(f"quantity: no Exudyn repro of {quantity!r} — it reproduces the joint coordinates of a "
-                         "kinematic tree ('joint'); rigid bodies' attitudes are read through rotation sensors")
-    if option_value(MODEL_OPTIONS, settings, "joints") != "minimal":
-        raise ValueError("options.joints: redundant joints are rigid bodies held by generic joints — no repro for them; "
-                         "reproduce a run with joints=minimal")
-    built = build(scene, settings)
+def _tree(built):
+    """A kinematic tree's system, sensor and read-out, as source: (what is read, the calls, the read-out)."""
     mbs = built.mbs
-    if built.tree is None or mbs.systemData.NumberOfObjects() != 1:
+    if mbs.systemData.NumberOfObjects() != 1:
         raise ValueError("scene: the repro writes a kinematic tree with its loads; this system has other objects "
-                         "(free bodies, loops, springs, contact) — no repro for it")
-    loads_src = _loads(mbs, built.tree)
+                         "(loops, springs, contact) — no repro for it")
     node, tree = mbs.GetNode(built.tree_node), mbs.GetObject(built.tree)
-    times = np.asarray(times, dtype=float)
-    dt = float(settings.dt)
-    horizon, interval = float(times[-1] - times[0]), float(times[1] - times[0])
-    solver = {**IMPLICIT, **EXPLICIT}[settings.integrator]
-    lines = [f"s.timeIntegration.numberOfSteps = {int(round(horizon / dt))}  # dt = {dt!r} s"]
-    if settings.integrator == "generalized-alpha":
-        radius = option_value(adapter.options, settings, "spectral_radius")
-        if radius is not None:
-            lines.append(f"s.timeIntegration.generalizedAlpha.spectralRadius = {float(radius)!r}")
-        rtol, atol = newton_tolerances(scene, settings)
-        lines.append(f"s.timeIntegration.newton.relativeTolerance = {rtol!r}")
-        lines.append(f"s.timeIntegration.newton.absoluteTolerance = {atol!r}")
     joint_types = ", ".join(f"exu.JointType.{t.name}" for t in tree["jointTypes"])
-    names = list(built.links)
-    settings_src = "\n    ".join(lines)
-    return f'''import exudyn as exu
-from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerKinematicTreeRigid, NodeGenericODE2,
-                                  ObjectKinematicTree, SensorNode)
-
-# The joints' coordinates, one per link, in link order (rad for RevoluteZ, m for PrismaticZ).
-NAMES = {names!r}
-# Each sample is read at the step that lands on it to within this fraction of a step (Exudyn's accumulated time
-# drifts by ulps; the adapter's sampling.ON_TIME).
-ON_TIME = {sampling.ON_TIME!r}
-# The sensor's write schedule leads the samples by this many steps at the horizon (sampling.SCHEDULE_LEAD).
-SCHEDULE_LEAD = {sampling.SCHEDULE_LEAD!r}
-DT = {dt!r}  # s
-
-
-def system():
-    """The system: one kinematic tree (each link: its joint frame in the parent link's, the joint's offset there,
-    m; its mass, kg, centre of mass, m, and inertia about it, kg m^2, in its own link frame) on one ODE2 node."""
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
+    calls = f"""# One kinematic tree (each link: its joint frame in the parent link's and the joint's offset there, m; its
+    # mass, kg, centre of mass, m, and inertia about it, kg m^2, in its own link frame) on one ODE2 node.
     node = mbs.AddNode(NodeGenericODE2(referenceCoordinates={np.asarray(node["referenceCoordinates"]).tolist()!r},
                                        initialCoordinates={np.asarray(node["initialCoordinates"]).tolist()!r},
                                        initialCoordinates_t={np.asarray(node["initialCoordinates_t"]).tolist()!r},
@@ -129,17 +98,109 @@ def system():
         linkMasses={np.asarray(tree["linkMasses"], dtype=float).tolist()!r},
         baseOffset={np.asarray(tree["baseOffset"], dtype=float).tolist()!r},
         gravity={np.asarray(tree["gravity"], dtype=float).tolist()!r}))  # m/s^2, world
-    {loads_src}
-    sensor = mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True,
-                                      outputVariableType=exu.OutputVariableType.Coordinates))
+    {_loads(mbs, {int(built.tree): "tree"})}sensors = {{"q": mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True,
+                                            outputVariableType=exu.OutputVariableType.Coordinates))}}"""
+    read = "{name: values['q'][:, i:i + 1] for i, name in enumerate(NAMES)}"
+    return "the joints' coordinates, one per link, in link order (rad for RevoluteZ, m for PrismaticZ)", calls, read
+
+
+def _rigid(scene, built, settings):
+    """Free rigid bodies' system, sensors and read-out, as source: (what is read, the calls, the read-out)."""
+    from dalembert import spatial
+
+    mbs = built.mbs
+    if mbs.systemData.NumberOfObjects() != len(scene.bodies):
+        raise ValueError("scene: the repro writes free rigid bodies with their loads; this system has other objects "
+                         "(joints, loops, springs, contact) — no repro for it")
+    node = NODES[option_value(MODEL_OPTIONS, settings, "node")]
+    g = np.array(scene.gravity, dtype=float)
+    state0 = spatial.initial_body_states(scene)
+    lines = ["# Each body (``CreateRigidBody`` as the adapter calls it): mass, kg, and inertia about its centre of mass,",
+             "# kg m^2, in its own axes; its initial pose and velocity in world axes (m, m/s, rad/s).",
+             "bodies = {}"]
+    for name in built.owners.values():
+        body, s0 = scene.body(name), state0[name]
+        gravity = f", gravity={g.tolist()!r}" if np.any(g) else ""  # (Exudyn adds none by default)
+        lines.append(
+            f"bodies[{name!r}] = mbs.CreateRigidBody(inertia=RigidBodyInertia({body.mass!r}, "
+            f"np.array({np.asarray(body.inertia_matrix).tolist()!r}), [0.0, 0.0, 0.0], True), "
+            f"referencePosition={list(map(float, s0['p']))!r}, referenceRotationMatrix=np.array("
+            f"{np.asarray(s0['R']).tolist()!r}), initialVelocity={list(map(float, s0['v']))!r}, "
+            f"initialAngularVelocity={list(map(float, s0['w']))!r}, nodeType=exu.NodeType.{node}{gravity}, "
+            "returnDict=True)['bodyNumber']")
+    owners = {int(obj): f"bodies[{name!r}]" for obj, name in built.owners.items()}
+    calls = "\n    ".join(lines) + "\n    " + _loads(mbs, owners) + (
+        "sensors = {name: mbs.AddSensor(SensorBody(bodyNumber=body, storeInternal=True,\n"
+        "                                          outputVariableType=exu.OutputVariableType.RotationMatrix))\n"
+        "           for name, body in bodies.items()}")
+    # the read-back's R_WB = R_WE R_EB, with E = B for a rigid body (R_EB the identity), row-major sensor output
+    read = "{name: values[name].reshape(len(TIMES), 3, 3) @ np.eye(3) for name in NAMES}"
+    return "each body's R_WB from its RotationMatrix sensor (world axes, row-major)", calls, read
+
+
+def repro(adapter, scene, times, settings, quantity):
+    """The Exudyn part of a reproduction of a run of ``scene`` sampled at ``times`` with ``settings``: Python
+    source defining ``simulate()`` (``Adapter.repro``); ValueError "where: what — fix" where it does not apply."""
+    if settings.integrator in ADAPTIVE:
+        raise ValueError(f"integrator: {settings.integrator} is driven sample by sample through SolveSteps — no repro "
+                         "for the adaptive solvers; reproduce a fixed-step run")
+    free = all(j.kind == "free" for j in scene.joints)
+    if quantity == "orientation" and not free:
+        raise ValueError("quantity: the orientation of jointed rigid bodies (joints=redundant, or ball joints) — no "
+                         "Exudyn repro for it; it reproduces free bodies' orientations and a kinematic tree's joints")
+    if quantity == "joint" and option_value(MODEL_OPTIONS, settings, "joints") != "minimal":
+        raise ValueError("options.joints: redundant joints' coordinates are read back from rigid bodies held by "
+                         "generic joints — no repro for them; reproduce a run with joints=minimal")
+    if quantity not in ("joint", "orientation"):
+        raise ValueError(f"quantity: no Exudyn repro of {quantity!r} — it reproduces 'joint' and 'orientation'")
+    built = build(scene, settings)
+    if quantity == "joint":
+        what, calls, read = _tree(built)
+        names = list(built.links)
+    else:
+        what, calls, read = _rigid(scene, built, settings)
+        names = list(built.owners.values())
+    times = np.asarray(times, dtype=float)
+    dt = float(settings.dt)
+    horizon = float(times[-1] - times[0])
+    solver = {**IMPLICIT, **EXPLICIT}[settings.integrator]
+    lines = [f"s.timeIntegration.numberOfSteps = {int(round(horizon / dt))}  # dt = {dt!r} s"]
+    if settings.integrator == "generalized-alpha":
+        radius = option_value(adapter.options, settings, "spectral_radius")
+        if radius is not None:
+            lines.append(f"s.timeIntegration.generalizedAlpha.spectralRadius = {float(radius)!r}")
+        rtol, atol = newton_tolerances(scene, settings)
+        lines.append(f"s.timeIntegration.newton.relativeTolerance = {rtol!r}")
+        lines.append(f"s.timeIntegration.newton.absoluteTolerance = {atol!r}")
+    settings_src = "\n    ".join(lines)
+    return f'''import exudyn as exu
+from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid, MarkerKinematicTreeRigid,
+                                  NodeGenericODE2, ObjectKinematicTree, SensorBody, SensorNode)
+from exudyn.rigidBodyUtilities import RigidBodyInertia
+
+# Read for each of these: {what}.
+NAMES = {names!r}
+# Each sample is read at the step that lands on it to within this fraction of a step (Exudyn's accumulated time
+# drifts by ulps; the adapter's sampling.ON_TIME).
+ON_TIME = {sampling.ON_TIME!r}
+# The sensors' write schedule leads the samples by this many steps at the horizon (sampling.SCHEDULE_LEAD).
+SCHEDULE_LEAD = {sampling.SCHEDULE_LEAD!r}
+DT = {dt!r}  # s
+
+
+def system():
+    """The system, assembled, and its sensors (name -> sensor number), stored in memory."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    {calls}
     mbs.Assemble()
-    return SC, mbs, sensor
+    return SC, mbs, sensors
 
 
 def simulate():
-    """The run: Exudyn's {solver} over the horizon; ``{{name: ndarray (n, 1)}}`` of each joint's coordinate at every
-    sample (NaN from the first sample no step landed on)."""
-    SC, mbs, sensor = system()
+    """The run: Exudyn's {solver} over the horizon; ``{{name: ndarray (n, ...)}}`` read at every sample (NaN from
+    the first sample no step landed on)."""
+    SC, mbs, sensors = system()
     s = exu.SimulationSettings()
     s.solution.file.write = False
     s.timeIntegration.verboseMode = 0
@@ -151,12 +212,14 @@ def simulate():
     s.solution.sensors.writePeriod = interval * (1.0 - SCHEDULE_LEAD * DT / horizon)
     exu.config.printToConsole = False
     mbs.SolveDynamic(s, solverType=exu.DynamicSolverType.{solver})
-    rows = np.asarray(mbs.GetSensorStoredData(sensor), dtype=float)  # time, then the coordinates
-    tol = ON_TIME * DT
-    at = np.minimum(np.searchsorted(rows[:, 0], TIMES - tol), len(rows) - 1)
-    values = rows[at, 1:]
-    values[np.abs(rows[at, 0] - TIMES) > tol] = np.nan
-    return {{name: values[:, i:i + 1] for i, name in enumerate(NAMES)}}
+    values = {{}}
+    for name, sensor in sensors.items():
+        rows = np.asarray(mbs.GetSensorStoredData(sensor), dtype=float)  # time, then the sensor's values
+        tol = ON_TIME * DT
+        at = np.minimum(np.searchsorted(rows[:, 0], TIMES - tol), len(rows) - 1)
+        values[name] = rows[at, 1:]
+        values[name][np.abs(rows[at, 0] - TIMES) > tol] = np.nan
+    return {read}
 
 
 ENGINE_VERSION = exu.__version__
