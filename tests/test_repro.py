@@ -70,7 +70,7 @@ def test_the_script_reproduces_the_stored_error_without_dalembert(store, tmp_pat
     assert "reproduced" in out and "NOT" not in out
 
 
-@pytest.mark.parametrize("case, engine, integrator, quantity", RUNS[1:3] + RUNS[4:])
+@pytest.mark.parametrize("case, engine, integrator, quantity", [run for run in RUNS if run[0] == "pendulum"])
 def test_the_script_fails_on_a_tampered_figure_or_model(store, tmp_path, case, engine, integrator, quantity):
     """The stored figure off by 1e-8 relative (ten times the tolerance), or gravity 9.80 for 9.81 in the model:
     the script exits 1 and says so (it computes its figure, it does not echo the stored one)."""
