@@ -1,20 +1,27 @@
-"""Exudyn's part of a standalone reproduction (``dalembert repro``): the kinematic tree as Exudyn's API
-calls, the solver settings of the run, the solve, and the joint coordinates at the sample times.
+"""Exudyn's part of a standalone reproduction (``dalembert repro``): the system as Exudyn's API calls, the
+solver settings of the run, the solve, and the headline quantity read from sensors at the sample times.
 
-What it writes is ``Adapter.repro``'s contract (``dalembert.adapters.base``). The system is the one
-``model.build`` makes for a jointed tree in minimal coordinates (``joints=minimal``): one
-``NodeGenericODE2`` and one ``ObjectKinematicTree``, their parameters read back from the assembled
-system (``GetNode``, ``GetObject``: the numbers Exudyn holds) and written as the calls that make them.
-The settings are the adapter's (``ExudynAdapter._settings``: the fixed step as ``numberOfSteps`` over
-the horizon, the Newton tolerances and spectral radius of generalized-alpha); the samples are read as
-``sampling.solve`` reads them, from a sensor stored by Exudyn on a schedule that leads the sample
-times by ``sampling.SCHEDULE_LEAD`` steps, each at the step that lands on its sample.
+What it writes is ``Adapter.repro``'s contract (``dalembert.adapters.base``), for the systems ``model.build``
+makes of
 
-The tree's loads (a ``MarkerKinematicTreeRigid`` at the load's point and a ``LoadForceVector`` or
-``LoadTorqueVector``) are written from ``GetMarker`` and ``GetLoad`` alike. Not covered, with the reason in the
-error: rigid bodies (free bodies, ``joints=redundant``: their attitude is read through Exudyn's rotation
-sensors and turned into quaternions, not a coordinate), other objects (loops, springs, contact), and the
-adaptive solvers (driven sample by sample through ``MainSolverExplicit.SolveSteps``).
+* a jointed tree in minimal coordinates (``joints=minimal``; the quantity: its joint coordinates): one
+  ``NodeGenericODE2`` and one ``ObjectKinematicTree``, their parameters read back from the assembled system
+  (``GetNode``, ``GetObject``: the numbers Exudyn holds) and written as the calls that make them;
+* free rigid bodies (the quantity: their orientations): ``CreateRigidBody`` with the arguments the adapter
+  passes, each body's ``RotationMatrix`` sensor turned into quaternions as the read-back turns it;
+
+each with its loads (a marker at the load's point, a ``LoadForceVector`` or ``LoadTorqueVector``, from
+``GetMarker`` and ``GetLoad``). The settings are the adapter's (``ExudynAdapter._settings``: the fixed step as
+``numberOfSteps`` over the horizon, generalized-alpha's Newton tolerances and spectral radius; an adaptive
+solver's tolerances, initial and minimum steps); the samples are read as ``sampling.solve`` reads them, from
+sensors Exudyn stores: a fixed-step solve on a schedule that leads the sample times by
+``sampling.SCHEDULE_LEAD`` steps, each read at the step that lands on its sample; an adaptive one driven as
+``sampling.solve_per_sample`` drives it, one ``MainSolverExplicit.SolveSteps`` per sample interval, ending on
+the sample.
+
+Not covered, with the reason in the error: bodies held by joints as rigid bodies (``joints=redundant``, ball
+joints: their coordinates and attitudes are read back through generic joints' frames) and systems with
+other objects (loops, springs, contact).
 """
 
 from __future__ import annotations
@@ -141,9 +148,6 @@ def _rigid(scene, built, settings):
 def repro(adapter, scene, times, settings, quantity):
     """The Exudyn part of a reproduction of a run of ``scene`` sampled at ``times`` with ``settings``: Python
     source defining ``simulate()`` (``Adapter.repro``); ValueError "where: what — fix" where it does not apply."""
-    if settings.integrator in ADAPTIVE:
-        raise ValueError(f"integrator: {settings.integrator} is driven sample by sample through SolveSteps — no repro "
-                         "for the adaptive solvers; reproduce a fixed-step run")
     free = all(j.kind == "free" for j in scene.joints)
     if quantity == "orientation" and not free:
         raise ValueError("quantity: the orientation of jointed rigid bodies (joints=redundant, or ball joints) — no "
@@ -161,10 +165,41 @@ def repro(adapter, scene, times, settings, quantity):
         what, calls, read = _rigid(scene, built, settings)
         names = list(built.owners.values())
     times = np.asarray(times, dtype=float)
-    dt = float(settings.dt)
-    horizon = float(times[-1] - times[0])
+    horizon, interval = float(times[-1] - times[0]), float(times[1] - times[0])
     solver = {**IMPLICIT, **EXPLICIT}[settings.integrator]
-    lines = [f"s.timeIntegration.numberOfSteps = {int(round(horizon / dt))}  # dt = {dt!r} s"]
+    adaptive = settings.integrator in ADAPTIVE
+    if adaptive:  # ExudynAdapter._settings, sampling.solve: one SolveSteps per sample interval, ending on the sample
+        rtol, atol = float(settings.rtol), float(settings.atol if settings.atol is not None else settings.rtol)
+        lines = ["s.timeIntegration.automaticStepSize = True",
+                 f"s.timeIntegration.relativeTolerance = {rtol!r}",
+                 f"s.timeIntegration.absoluteTolerance = {atol!r}",
+                 "s.timeIntegration.numberOfSteps = 1  # Exudyn's largest step = horizon / numberOfSteps: the samples "
+                 "cap it",
+                 f"s.timeIntegration.initialStepSize = {interval!r}  # s, the sample interval",
+                 f"s.timeIntegration.minimumStepSize = MIN_STEP  # s",
+                 "s.solution.sensors.writePeriod = 2.0 * (TIMES[-1] - TIMES[0])  # beyond the horizon: written where "
+                 "each SolveSteps ends only"]
+        step = f"MIN_STEP = {sampling.MIN_STEP_FRACTION * interval!r}  # s, the smallest step (sampling.MIN_STEP_FRACTION of the interval)"
+        solve = """solver = exu.MainSolverExplicit()
+    solver.InitializeSolver(mbs, s)
+    try:
+        for k in range(1, len(TIMES)):  # no dense output: each sample is where a SolveSteps ends
+            solver.it.endTime = float(TIMES[k])
+            solver.SolveSteps(mbs, s)
+            if solver.it.currentTime < TIMES[k] - TOL:
+                break  # the solver gave up (its step below the minimum)
+    finally:
+        solver.FinalizeSolver(mbs, s)"""
+        tol = "TOL = ON_TIME * MIN_STEP  # s"
+    else:
+        dt = float(settings.dt)
+        lines = ["s.timeIntegration.automaticStepSize = False",
+                 f"s.timeIntegration.numberOfSteps = {int(round(horizon / dt))}  # dt = {dt!r} s",
+                 "s.solution.sensors.writePeriod = (TIMES[1] - TIMES[0]) * (1.0 - SCHEDULE_LEAD * DT / (TIMES[-1] - "
+                 "TIMES[0]))"]
+        step = f"DT = {dt!r}  # s"
+        solve = f"mbs.SolveDynamic(s, solverType=exu.DynamicSolverType.{solver})"
+        tol = "TOL = ON_TIME * DT  # s"
     if settings.integrator == "generalized-alpha":
         radius = option_value(adapter.options, settings, "spectral_radius")
         if radius is not None:
@@ -185,7 +220,8 @@ NAMES = {names!r}
 ON_TIME = {sampling.ON_TIME!r}
 # The sensors' write schedule leads the samples by this many steps at the horizon (sampling.SCHEDULE_LEAD).
 SCHEDULE_LEAD = {sampling.SCHEDULE_LEAD!r}
-DT = {dt!r}  # s
+{step}
+{tol}
 
 
 def system():
@@ -206,19 +242,16 @@ def simulate():
     s.timeIntegration.verboseMode = 0
     s.timeIntegration.startTime = {float(times[0])!r}
     s.timeIntegration.endTime = {float(times[-1])!r}
-    s.timeIntegration.automaticStepSize = False
+    s.timeIntegration.solverType = exu.DynamicSolverType.{solver}
     {settings_src}
-    horizon, interval = TIMES[-1] - TIMES[0], TIMES[1] - TIMES[0]
-    s.solution.sensors.writePeriod = interval * (1.0 - SCHEDULE_LEAD * DT / horizon)
     exu.config.printToConsole = False
-    mbs.SolveDynamic(s, solverType=exu.DynamicSolverType.{solver})
+    {solve}
     values = {{}}
     for name, sensor in sensors.items():
         rows = np.asarray(mbs.GetSensorStoredData(sensor), dtype=float)  # time, then the sensor's values
-        tol = ON_TIME * DT
-        at = np.minimum(np.searchsorted(rows[:, 0], TIMES - tol), len(rows) - 1)
+        at = np.minimum(np.searchsorted(rows[:, 0], TIMES - TOL), len(rows) - 1)
         values[name] = rows[at, 1:]
-        values[name][np.abs(rows[at, 0] - TIMES) > tol] = np.nan
+        values[name][np.abs(rows[at, 0] - TIMES) > TOL] = np.nan
     return {read}
 
 
