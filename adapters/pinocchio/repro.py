@@ -13,11 +13,12 @@ the loop the adapter runs here (``prepare``: the compiled loop where it is built
 Eigen's written out in numpy operation for operation (measured: the free tops' rk4 runs on the compiled
 loop, 4e-9 relative off with numpy's solve, reproduce bit for bit).
 
-Follower loads are the constant per-joint forces ``aba`` takes (``PinocchioModel.const_f``). Not covered, with
-the reason in the error: world-fixed loads and spring-dampers (external forces rebuilt from the pose at every
-evaluation), constraints (loop closures, welds as constraints: ``pin.constraintDynamics`` with the
-adapter's proximal settings and Baumgarte gains) and the adaptive integrators (scipy's, re-centred
-every step: ``integrators.adaptive``).
+The adaptive integrators are ``integrators.adaptive`` written out: scipy's ``RK45`` or ``DOP853`` over the horizon
+in local coordinates, its chart re-centred after every step (such a script needs scipy too). Follower loads
+are the constant per-joint forces ``aba`` takes (``PinocchioModel.const_f``). Not covered, with the reason in
+the error: world-fixed loads and spring-dampers (external forces rebuilt from the pose at every evaluation) and
+constraints (loop closures, welds as constraints: ``pin.constraintDynamics`` with the adapter's proximal
+settings and Baumgarte gains).
 """
 
 from __future__ import annotations
@@ -70,6 +71,55 @@ _STEPS = {
             v + h6 * (a1 + 2.0 * (a2 + a3) + a4))
 ''',
 }
+
+# The fixed-step loop (``dalembert.stepping.march``): ``step`` from sample to sample, stopping at a non-finite state.
+_FIXED = '''def simulate():
+    """The run: ``step`` from sample to sample; ``{name: ndarray (n, k)}`` of the quantity at every sample."""
+    Q = np.full((len(TIMES), model.nq), np.nan)
+    V = np.full((len(TIMES), model.nv), np.nan)
+    q, v = Q0.copy(), V0.copy()
+    Q[0], V[0] = q, v
+    for k, n in enumerate(STEPS):
+        h = (TIMES[k + 1] - TIMES[k]) / n
+        for _ in range(n):
+            q, v = step(q, v, h)
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+            break
+        Q[k + 1], V[k + 1] = q, v
+'''
+# The adaptive loop (``integrators.adaptive``): one scipy solver over the horizon, sampled by its dense output, its
+# chart re-centred on each step's end (same state, same derivative).
+_ADAPTIVE = '''def simulate():
+    """The run: one METHOD solver over the horizon; ``{name: ndarray (n, k)}`` of the quantity at every sample."""
+    nv = model.nv
+    Q = np.full((len(TIMES), model.nq), np.nan)
+    V = np.full((len(TIMES), nv), np.nan)
+    Q[0], V[0] = Q0, V0
+    centre = [np.array(Q0, dtype=float)]  # the chart's centre q_c: q = integrate(q_c, delta)
+
+    def rhs(t, y):
+        delta, vel = y[:nv], y[nv:]
+        return np.concatenate([dexpinv(centre[0], delta, vel), acc(pin.integrate(model, centre[0], delta), vel)])
+
+    solver = METHOD(rhs, float(TIMES[0]), np.concatenate([np.zeros(nv), V0]), float(TIMES[-1]), rtol=RTOL, atol=ATOL)
+    k = 1  # the next sample to read
+    while k < len(TIMES) and solver.status == "running":
+        if solver.step() is not None or not np.all(np.isfinite(solver.y)):
+            break
+        passed = k + int(np.searchsorted(TIMES[k:], solver.t, side="right"))  # samples up to the step's end
+        dense = solver.dense_output() if TIMES[k] < solver.t else None
+        for j in range(k, passed):
+            y = solver.y if TIMES[j] == solver.t else dense(TIMES[j])
+            Q[j], V[j] = pin.integrate(model, centre[0], y[:nv]), y[nv:]
+        k = passed
+        # re-centre the chart on the step's end: scipy's Runge-Kutta solvers step from their y and f
+        centre[0] = pin.integrate(model, centre[0], solver.y[:nv])
+        v = solver.y[nv:].copy()
+        solver.y = np.concatenate([np.zeros(nv), v])
+        solver.f = np.concatenate([v, solver.f[nv:]])
+'''
+# The adapter's adaptive integrators: scipy's classes.
+ADAPTIVE = {"rk45": "RK45", "dop853": "DOP853"}
 
 # dexp^-1 as each loop computes it (``PinocchioModel.dexpinv_function``, ``stepper.cpp`` ``Stepper::dexpinv``).
 _DEXPINV = {
@@ -162,10 +212,6 @@ def _loads(pm):
 def repro(adapter, scene, times, settings, quantity):
     """The Pinocchio part of a reproduction of a run of ``scene`` sampled at ``times`` with ``settings``: Python
     source defining ``simulate()`` (``Adapter.repro``); ValueError "where: what — fix" where it does not apply."""
-    if settings.integrator not in _STEPS:
-        raise ValueError(f"integrator: {settings.integrator} is scipy's, re-centred on the group after every step "
-                         f"(the adapter's integrators.adaptive) — no repro for it; reproduce a run of "
-                         f"{', '.join(_STEPS)}")
     p = adapter.prepare(scene, times, settings)
     pm = p.pm
     attitudes = ""
@@ -205,11 +251,20 @@ def attitudes(Q, V):
     return out"""
     else:
         raise ValueError(f"quantity: no Pinocchio repro of {quantity!r} — it reproduces 'joint' and 'orientation'")
-    steps = np.asarray(p.steps, dtype=int)
-    steps_src = (f"np.full({len(steps)}, {int(steps[0])})" if np.all(steps == steps[0])
-                 else f"np.array({steps.tolist()!r})")
+    if settings.integrator in ADAPTIVE:
+        rtol, atol = settings.rtol or 1e-8, settings.atol or 1e-8  # as ``integrators.adaptive`` passes them
+        stepping = (f"# {settings.integrator}: scipy's {ADAPTIVE[settings.integrator]} in local coordinates about a chart "
+                    f"centre moved after every step\n# (the adapter's integrators.adaptive).\nRTOL, ATOL = {rtol!r}, "
+                    f"{atol!r}")
+        loop = _ADAPTIVE.replace("METHOD", ADAPTIVE[settings.integrator])
+        imports = f"import pinocchio as pin\nfrom scipy.integrate import {ADAPTIVE[settings.integrator]}"
+    else:
+        steps = np.asarray(p.steps, dtype=int)
+        steps_src = (f"np.full({len(steps)}, {int(steps[0])})" if np.all(steps == steps[0])
+                     else f"np.array({steps.tolist()!r})")
+        loop, imports = None, "import pinocchio as pin"
     kind = pm.dexpinv_kind()
-    native = p.native is not None  # the compiled loop runs (``PinocchioAdapter._fixed_loop``)
+    native = p.native is not None and loop is None  # the compiled loop runs (``PinocchioAdapter._fixed_loop``)
     if kind == 0:
         dexpinv = "identity"
     elif not native:
@@ -220,8 +275,12 @@ def attitudes(Q, V):
         raise ValueError(f"scene: {pm.model.nv} velocities — the compiled loop's dexp^-1 is Eigen's blocked LU, which "
                          f"the repro writes out for at most {EIGEN_UNBLOCKED_ROWS}; reproduce a run with "
                          "--option loop=python")
-    loop = "the compiled loop (stepper.cpp)" if native else "the Python loop"
-    return f'''import pinocchio as pin
+    if loop is None:
+        which = "the compiled loop (stepper.cpp)" if native else "the Python loop"
+        stepping = (f"# {settings.integrator}, the arithmetic of the adapter's {which}: steps between consecutive "
+                    f"samples, each of\n# (TIMES[k + 1] - TIMES[k]) / STEPS[k] s.\nSTEPS = {steps_src}")
+        loop = _STEPS[settings.integrator] + "\n\n\n" + _FIXED
+    return f'''{imports}
 
 # The model, by the calls the adapter makes (joint placements in the parent joint's frame, m; each body's
 # mass (kg), centre of mass in its joint's frame (m) and inertia about it (kg m^2), and its scene frame B there).
@@ -232,9 +291,7 @@ TAU = np.zeros(model.nv)  # no actuation: gravity{" and the follower loads below
 # joint's LOCAL frame).
 Q0 = np.array({p.q0.tolist()!r})
 V0 = np.array({p.v0.tolist()!r})
-# {settings.integrator}, the arithmetic of the adapter's {loop}: steps between consecutive samples, each of
-# (TIMES[k + 1] - TIMES[k]) / STEPS[k] s.
-STEPS = {steps_src}
+{stepping}
 # Read for each of these: {what}.
 NAMES = {names!r}
 
@@ -245,22 +302,8 @@ def acc(q, v):
 
 {_DEXPINV[dexpinv]}
 
-{_STEPS[settings.integrator]}
 
-def simulate():
-    """The run: ``step`` from sample to sample; ``{{name: ndarray (n, k)}}`` of the quantity at every sample."""
-    Q = np.full((len(TIMES), model.nq), np.nan)
-    V = np.full((len(TIMES), model.nv), np.nan)
-    q, v = Q0.copy(), V0.copy()
-    Q[0], V[0] = q, v
-    for k, n in enumerate(STEPS):
-        h = (TIMES[k + 1] - TIMES[k]) / n
-        for _ in range(n):
-            q, v = step(q, v, h)
-        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-            break
-        Q[k + 1], V[k + 1] = q, v
-    return {read}{attitudes}
+{loop}    return {read}{attitudes}
 
 
 ENGINE_VERSION = pin.__version__

@@ -17,6 +17,7 @@ geodesic angle ``2 atan2(|vec(q1* q2)|, |scalar(q1* q2)|)`` of the normalized qu
 from __future__ import annotations
 
 import math
+import re
 import sys
 import textwrap
 
@@ -153,6 +154,9 @@ def write(store, key):
         embedded = {n: truth.joints[n].q[picks, 0] for n in names}
     else:
         unit, embedded = "rad", {n: truth.bodies[n].quaternion[picks] for n in truth.bodies}
+    # what the script imports: numpy, and the engine part's top-level imports
+    needs = sorted({"numpy"} | set(re.findall(r"^(?:from|import) (\w+)", engine, re.M)))
+    needs = [", ".join(needs[:-1]), needs[-1]] if len(needs) > 1 else needs
     peak = int(np.argmax(series))
     loop = (r.audit or {}).get("loop")  # Pinocchio's: which stepping loop the run took
     paragraphs = [
@@ -166,7 +170,7 @@ def write(store, key):
         f"the engine as the run did, computes the same error on those samples, prints it beside the stored one "
         f"sample by sample, and exits 1 when the maxima differ by more than REPRO_REL_TOL relative (0 when they "
         f"agree).",
-        f"Needs only {r.engine} and numpy: python this_file.py. Written by: dalembert repro {store.path} --key {key}",
+        f"Needs {' and '.join(needs)} only: python this_file.py. Written by: dalembert repro {store.path} --key {key}",
     ]
     doc = "\n\n".join(textwrap.fill(p, 110) for p in paragraphs)
     rows = "".join(f"    {n!r}: [\n" + "".join(f"        {v.tolist()!r},  # t = {float(truth.t[i])!r} s\n"
