@@ -162,8 +162,8 @@ def trajectories(store, keys=(), case=None, engine=None, integrator=None, dt=Non
 
 def repro(store, key):
     """The standalone reproduction of run ``key`` of ``store`` (a Store or a path) as the text of a Python script
-    that needs only the engine and numpy (``dalembert repro``; ``dalembert.harness.commands.repro``). ValueError
-    naming the field for an unknown key, or a run the engine's repro does not cover."""
+    that needs the engine and numpy, never dalembert (``dalembert repro``; ``dalembert.harness.commands.repro``).
+    ValueError naming the field for an unknown key, or a run the engine's repro does not cover."""
     from dalembert.harness.commands.repro import write
 
     return write(_store(store), key)

@@ -181,7 +181,8 @@ def _parser():
                                       "dalembert) that reproduces its headline error",
                         epilog="example:\n  dalembert repro results/latest --key pendulum__mujoco__rk4__0123456789ab "
                                "--out pendulum_mujoco.py\n\nThe script prints its error and the stored one and exits "
-                               "1 when they differ by more than 1e-9 relative; see dalembert.harness.commands.repro.",
+                               f"1 when they differ by more than {repro.REPRO_REL_TOL:g} relative; see "
+                               "dalembert.harness.commands.repro.",
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     rr.add_argument("run_dir")
     rr.add_argument("--key", required=True, help="the run's key (the report's run tables and runs.parquet list them)")
