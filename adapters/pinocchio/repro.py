@@ -1,5 +1,6 @@
 """Pinocchio's part of a standalone reproduction (``dalembert repro``): the model as ``pin`` API calls,
-the initial state, and the adapter's fixed-step integrator written out in numpy around ``pin.aba``.
+the initial state, and the adapter's integrator written out in numpy around ``pin.aba`` (its adaptive ones
+around scipy's solvers).
 
 What it writes is ``Adapter.repro``'s contract (``dalembert.adapters.base``). The model is rebuilt
 by the calls ``PinocchioModel`` makes, with the arguments it passed (joint placements read back from
