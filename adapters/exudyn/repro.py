@@ -7,8 +7,10 @@ makes of
 * a jointed tree in minimal coordinates (``joints=minimal``; the quantity: its joint coordinates): one
   ``NodeGenericODE2`` and one ``ObjectKinematicTree``, their parameters read back from the assembled system
   (``GetNode``, ``GetObject``: the numbers Exudyn holds) and written as the calls that make them;
-* free rigid bodies (the quantity: their orientations): ``CreateRigidBody`` with the arguments the adapter
-  passes, each body's ``RotationMatrix`` sensor turned into quaternions as the read-back turns it;
+* rigid bodies, free or held by generic joints (``joints=redundant``; the quantity: their orientations):
+  ``CreateRigidBody`` with the arguments the adapter passes, the ground, each joint's two markers and its
+  ``ObjectJointGeneric`` (from ``GetMarker``, ``GetObject``), each body's ``RotationMatrix`` sensor turned into
+  quaternions as the read-back turns it;
 
 each with its loads (a marker at the load's point, a ``LoadForceVector`` or ``LoadTorqueVector``, from
 ``GetMarker`` and ``GetLoad``). The settings are the adapter's (``ExudynAdapter._settings``: the fixed step as
@@ -19,9 +21,9 @@ sensors Exudyn stores: a fixed-step solve on a schedule that leads the sample ti
 ``sampling.solve_per_sample`` drives it, one ``MainSolverExplicit.SolveSteps`` per sample interval, ending on
 the sample.
 
-Not covered, with the reason in the error: bodies held by joints as rigid bodies (``joints=redundant``, ball
-joints: their coordinates and attitudes are read back through generic joints' frames) and systems with
-other objects (loops, springs, contact).
+Not covered, with the reason in the error: the joint coordinates of rigid bodies held by generic joints (read
+back from both bodies' states through the joint frames, ``spatial.joint_coordinates``), a tree's links'
+attitudes, and systems with other objects (a tree's loops, springs, distance loops, contact).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from dalembert.adapters.exudyn import sampling
 from dalembert.adapters.exudyn.adapter import ADAPTIVE, EXPLICIT, IMPLICIT, newton_tolerances
 from dalembert.adapters.exudyn.model import MODEL_OPTIONS, NODES, build
 from dalembert.adapters.base import option_value
+from dalembert.scene import WORLD
 
 __all__ = ["repro"]
 
@@ -41,10 +44,10 @@ def _matrices(ms):
     return "[" + ", ".join(f"{np.asarray(ms[i], dtype=float).tolist()!r}" for i in range(len(ms))) + "]"
 
 
-def _loads(mbs, owners):
-    """The loads, as the calls that make them (a marker at the load's point, then the load), or "".
+def _connections(mbs, owners):
+    """The markers, the generic joints between them and the loads, as the calls that make them, or "".
 
-    ``owners``: object number -> the script's expression for it (``tree``, ``bodies['top']``)."""
+    ``owners``: object number -> the script's expression for it (``tree``, ``bodies['top']``, ``ground``)."""
     lines = []
     made = set()  # the markers and loads ``CreateRigidBody`` makes itself (gravity: a BodyMass marker, its load)
     for i in range(mbs.systemData.NumberOfMarkers()):
@@ -60,10 +63,23 @@ def _loads(mbs, owners):
                          f"# the load's point in link {int(m['linkNumber'])}'s frame, m")
         elif m["markerType"] == "BodyRigid" and int(m["bodyNumber"]) in owners:
             lines.append(f"markers[{i}] = mbs.AddMarker(MarkerBodyRigid(bodyNumber={owners[int(m['bodyNumber'])]}, "
-                         f"{at}))  # the load's point in the body's frame, m")
+                         f"{at}))  # a frame in the body's (a joint's, a load's point), m")
         else:
-            raise ValueError(f"scene: marker {i} is a {m['markerType']} marker on another object — the repro writes the "
-                             "loads of a kinematic tree or of free bodies only; no repro for this system")
+            raise ValueError(f"scene: marker {i} is a {m['markerType']} marker on another object — the repro writes "
+                             "markers on a kinematic tree, rigid bodies and the ground only; no repro for this system")
+    for i in range(mbs.systemData.NumberOfObjects()):
+        o = mbs.GetObject(i)
+        if i in owners:  # a body, the tree or a ground, made before
+            continue
+        if (o["objectType"] != "JointGeneric" or o["offsetUserFunction"] or not o["activeConnector"]
+                or o["alternativeConstraints"]
+                or any(not np.array_equal(o[k], np.eye(3)) for k in ("rotationMarker0", "rotationMarker1"))):
+            raise ValueError(f"scene: object {i} is a {o['objectType']} — the repro writes rigid bodies held by "
+                             "generic joints only (no springs, distance loops or contact); no repro for this system")
+        a, b = (int(m) for m in o["markerNumbers"])
+        lines.append(f"mbs.AddObject(ObjectJointGeneric(markerNumbers=[markers[{a}], markers[{b}]], "
+                     f"constrainedAxes={list(map(int, o['constrainedAxes']))!r}))  # 1: a constrained axis "
+                     "(translations x, y, z, rotations x, y, z of marker 0's frame)")
     for i in range(mbs.systemData.NumberOfLoads()):
         ld = mbs.GetLoad(i)
         if ld["loadType"] == "MassProportional" and int(ld["markerNumber"]) in made:
@@ -105,27 +121,28 @@ def _tree(built):
         linkMasses={np.asarray(tree["linkMasses"], dtype=float).tolist()!r},
         baseOffset={np.asarray(tree["baseOffset"], dtype=float).tolist()!r},
         gravity={np.asarray(tree["gravity"], dtype=float).tolist()!r}))  # m/s^2, world
-    {_loads(mbs, {int(built.tree): "tree"})}sensors = {{"q": mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True,
+    {_connections(mbs, {int(built.tree): "tree"})}sensors = {{"q": mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True,
                                             outputVariableType=exu.OutputVariableType.Coordinates))}}"""
     read = "{name: values['q'][:, i:i + 1] for i, name in enumerate(NAMES)}"
     return "the joints' coordinates, one per link, in link order (rad for RevoluteZ, m for PrismaticZ)", calls, read
 
 
 def _rigid(scene, built, settings):
-    """Free rigid bodies' system, sensors and read-out, as source: (what is read, the calls, the read-out)."""
+    """Rigid bodies' system (free, or held by generic joints: ``joints=redundant``), sensors and read-out, as
+    source: (what is read, the calls, the read-out)."""
     from dalembert import spatial
 
     mbs = built.mbs
-    if mbs.systemData.NumberOfObjects() != len(scene.bodies):
-        raise ValueError("scene: the repro writes free rigid bodies with their loads; this system has other objects "
-                         "(joints, loops, springs, contact) — no repro for it")
     node = NODES[option_value(MODEL_OPTIONS, settings, "node")]
     g = np.array(scene.gravity, dtype=float)
     state0 = spatial.initial_body_states(scene)
     lines = ["# Each body (``CreateRigidBody`` as the adapter calls it): mass, kg, and inertia about its centre of mass,",
              "# kg m^2, in its own axes; its initial pose and velocity in world axes (m, m/s, rad/s).",
              "bodies = {}"]
-    for name in built.owners.values():
+    owners = {}
+    for obj, name in built.owners.items():
+        if name == WORLD:
+            continue
         body, s0 = scene.body(name), state0[name]
         gravity = f", gravity={g.tolist()!r}" if np.any(g) else ""  # (Exudyn adds none by default)
         lines.append(
@@ -135,8 +152,15 @@ def _rigid(scene, built, settings):
             f"{np.asarray(s0['R']).tolist()!r}), initialVelocity={list(map(float, s0['v']))!r}, "
             f"initialAngularVelocity={list(map(float, s0['w']))!r}, nodeType=exu.NodeType.{node}{gravity}, "
             "returnDict=True)['bodyNumber']")
-    owners = {int(obj): f"bodies[{name!r}]" for obj, name in built.owners.items()}
-    calls = "\n    ".join(lines) + "\n    " + _loads(mbs, owners) + (
+        owners[int(obj)] = f"bodies[{name!r}]"
+    grounds = [int(obj) for obj, name in built.owners.items() if name == WORLD]
+    for obj in grounds:
+        o = mbs.GetObject(obj)
+        if np.any(o["referencePosition"]) or not np.array_equal(o["referenceRotation"], np.eye(3)):
+            raise ValueError(f"scene: ground {obj} is placed off the world's origin — no repro for this system")
+        lines.append("ground = mbs.AddObject(ObjectGround())  # the world, for the joints' and loads' ends on it")
+        owners[obj] = "ground"
+    calls = "\n    ".join(lines) + "\n    " + _connections(mbs, owners) + (
         "sensors = {name: mbs.AddSensor(SensorBody(bodyNumber=body, storeInternal=True,\n"
         "                                          outputVariableType=exu.OutputVariableType.RotationMatrix))\n"
         "           for name, body in bodies.items()}")
@@ -148,10 +172,12 @@ def _rigid(scene, built, settings):
 def repro(adapter, scene, times, settings, quantity):
     """The Exudyn part of a reproduction of a run of ``scene`` sampled at ``times`` with ``settings``: Python
     source defining ``simulate()`` (``Adapter.repro``); ValueError "where: what — fix" where it does not apply."""
-    free = all(j.kind == "free" for j in scene.joints)
-    if quantity == "orientation" and not free:
-        raise ValueError("quantity: the orientation of jointed rigid bodies (joints=redundant, or ball joints) — no "
-                         "Exudyn repro for it; it reproduces free bodies' orientations and a kinematic tree's joints")
+    rigid = (all(j.kind == "free" for j in scene.joints)
+             or option_value(MODEL_OPTIONS, settings, "joints") == "redundant")  # every body a rigid body
+    if quantity == "orientation" and not rigid:
+        raise ValueError("quantity: the orientation of a kinematic tree's links — no Exudyn repro for it (their "
+                         "attitudes are read through the tree's sensors); it reproduces rigid bodies' orientations and "
+                         "a kinematic tree's joints")
     if quantity == "joint" and option_value(MODEL_OPTIONS, settings, "joints") != "minimal":
         raise ValueError("options.joints: redundant joints' coordinates are read back from rigid bodies held by "
                          "generic joints — no repro for them; reproduce a run with joints=minimal")
@@ -163,7 +189,7 @@ def repro(adapter, scene, times, settings, quantity):
         names = list(built.links)
     else:
         what, calls, read = _rigid(scene, built, settings)
-        names = list(built.owners.values())
+        names = [name for name in built.owners.values() if name != WORLD]
     times = np.asarray(times, dtype=float)
     horizon, interval = float(times[-1] - times[0]), float(times[1] - times[0])
     solver = {**IMPLICIT, **EXPLICIT}[settings.integrator]
@@ -210,7 +236,8 @@ def repro(adapter, scene, times, settings, quantity):
     settings_src = "\n    ".join(lines)
     return f'''import exudyn as exu
 from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerBodyRigid, MarkerKinematicTreeRigid,
-                                  NodeGenericODE2, ObjectKinematicTree, SensorBody, SensorNode)
+                                  NodeGenericODE2, ObjectGround, ObjectJointGeneric, ObjectKinematicTree, SensorBody,
+                                  SensorNode)
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 # Read for each of these: {what}.
