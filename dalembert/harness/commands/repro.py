@@ -17,7 +17,7 @@ What each engine's part covers, and why not the rest, is in its module (``adapte
 Measured on every finished run of ``dalembert run --tag canonical --engine mujoco --engine pinocchio --engine
 exudyn --dt 1e-2,1e-3 --param t_final=0.5`` and of ``--tag contact --tag variant --tag hard --dt 1e-3 --rtol 1e-6
 --param t_final=0.3``: every script written (MuJoCo 176 runs, Pinocchio 124, Exudyn 334) reproduced its stored
-error to REPRO_REL_TOL, run where dalembert cannot be imported.
+error bit for bit (the maximum printed equal to the stored one), run where dalembert cannot be imported.
 """
 
 from __future__ import annotations
