@@ -277,6 +277,35 @@ class Adapter:
         """
         raise NotImplementedError
 
+    def repro(self, scene, times, settings, quantity):
+        """The engine's part of a standalone reproduction of one run (``dalembert repro``): Python source that
+        imports the engine (numpy is imported and ``TIMES``, the sample times (n,) in s, defined before it; never
+        dalembert), builds the model as the engine's own input (MJCF, the engine's API calls), sets the run's
+        settings and defines ``simulate()``: stepping with the engine's own API from the initial state through
+        ``TIMES`` with the arithmetic ``run`` used, it returns ``{name: ndarray (n, k)}`` of ``quantity`` at every
+        sample — ``"joint"``: each revolute or prismatic joint's coordinate (n, 1), rad or m, by its child's name;
+        ``"orientation"``: each body's ``q_WB`` (n, 4), scalar first, world, as the engine produced it (not
+        normalized), or its ``R_WB`` (n, 3, 3) where the read-back turns a matrix into it (the script then does, by
+        ``spatial.matrix_to_quat``'s arithmetic) — and sets ``ENGINE_VERSION``.
+
+        The default finds the module ``repro`` beside the adapter's (``adapters/<engine>/repro.py``: its
+        ``repro(adapter, scene, times, settings, quantity)``); without one, and wherever that module does not cover
+        the run, ValueError "where: what — fix"."""
+        import importlib
+
+        package = type(self).__module__.rpartition(".")[0]
+        try:
+            module = importlib.import_module(f"{package}.repro") if package else None
+        except ModuleNotFoundError as e:
+            if e.name != f"{package}.repro":
+                raise
+            module = None
+        if module is None:
+            raise ValueError(f"engine: no repro for this engine ({self.name}) — dalembert repro writes runs of the "
+                             "engines that have one (adapters/<engine>/repro.py); dalembert export gives this run's "
+                             "trajectory")
+        return module.repro(self, scene, times, settings, quantity)
+
     def audit(self, prepared, outcome):
         """What the engine actually simulated, read back from the engine (not from the scene): a dict with at
         least ``gravity`` (m/s^2, world axes) and what else the engine reports (loads, joints, constraint rows,

@@ -13,6 +13,7 @@ Everything the command line does, for a notebook or a script::
     api.report(store)                          # report.html, report.md, summary.csv
     api.compare("results/before", "results/top").regressed
     api.trajectories(store, engine="mujoco")   # every sample of every run, long format
+    api.repro(store, key)                      # one run as a standalone script (the engine, no dalembert)
 
 It is the command line's code, not a copy: ``run`` and ``report`` are the ``run`` of
 ``dalembert.harness.commands.run`` and ``.report`` (a keyword for every flag, checked
@@ -39,7 +40,7 @@ from dalembert.harness.commands.report import run as _report
 from dalembert.record import READABLE_SCHEMAS, SCHEMA_VERSION
 from dalembert.store import Store
 
-__all__ = ["run", "load", "table", "findings", "report", "compare", "trajectories", "MatrixError"]
+__all__ = ["run", "load", "table", "findings", "report", "compare", "trajectories", "repro", "MatrixError"]
 
 
 class MatrixError(RuntimeError):
@@ -162,3 +163,12 @@ def trajectories(store, keys=(), case=None, engine=None, integrator=None, dt=Non
 
     s = _store(store)
     return frame(s, select(s.records(), set(keys), case, engine, integrator, dt, rtol, options))
+
+
+def repro(store, key):
+    """The standalone reproduction of run ``key`` of ``store`` (a Store or a path) as the text of a Python script
+    that needs the engine and numpy, never dalembert (``dalembert repro``; ``dalembert.harness.commands.repro``).
+    ValueError naming the field for an unknown key, or a run the engine's repro does not cover."""
+    from dalembert.harness.commands.repro import write
+
+    return write(_store(store), key)

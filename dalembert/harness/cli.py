@@ -13,7 +13,8 @@ import os
 import sys
 import warnings
 
-from dalembert.harness.commands import cases, check_engine, compare, engines, export, report, show_model, truth, validate
+from dalembert.harness.commands import (cases, check_engine, compare, engines, export, report, repro, show_model,
+                                         truth, validate)
 from dalembert.harness.commands import run as run_command
 from dalembert.harness.commands.console import fail as _fail
 from dalembert.terminal import printable
@@ -28,6 +29,7 @@ EPILOG = """examples:
   dalembert truth free_top_intermediate --param t_final=5 --csv top.csv
   dalembert validate --case pivoted_rod
   dalembert check-engine mujoco --integrator rk4
+  dalembert repro results/top --key free_top__mujoco__rk4__0123456789ab --out top_mujoco.py
 """
 
 
@@ -196,6 +198,16 @@ def _parser():
                     help="engine option for every run whose integrator takes it (repeatable)")
     ce.add_argument("--verbose", "-v", action="store_true", help="also print the notes (figures measured, probes "
                                                                  "that did not apply)")
+    rr = sub.add_parser("repro", help="write one stored run as a standalone script (the engine and numpy, no "
+                                      "dalembert) that reproduces its headline error",
+                        epilog="example:\n  dalembert repro results/latest --key pendulum__mujoco__rk4__0123456789ab "
+                               "--out pendulum_mujoco.py\n\nThe script prints its error and the stored one and exits "
+                               f"1 when they differ by more than {repro.REPRO_REL_TOL:g} relative; see "
+                               "dalembert.harness.commands.repro.",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    rr.add_argument("run_dir")
+    rr.add_argument("--key", required=True, help="the run's key (the report's run tables and runs.parquet list them)")
+    rr.add_argument("--out", default="-", metavar="FILE", help="the script (default - : standard output)")
 
     v = sub.add_parser("validate", help="run every case (not tagged hard) with the reference solver against its truth",
                        epilog="example:\n  dalembert validate --case pivoted_rod",
@@ -212,7 +224,7 @@ USER_ERRORS = (ValueError, KeyError, ImportError, OSError)
 # Each command's module (its ``main(args)``).
 COMMANDS = {"cases": cases.main, "engines": engines.main, "run": run_command.main, "report": report.main,
             "show-model": show_model.main, "validate": validate.main, "truth": truth.main, "export": export.main,
-            "compare": compare.main, "check-engine": check_engine.main}
+            "compare": compare.main, "check-engine": check_engine.main, "repro": repro.main}
 
 
 def _refuse_empty(parser, args):
