@@ -128,7 +128,7 @@ def test_statistics_are_simbody_s():
     """Steps and realizations from OpenSim's summary: a fixed step takes the horizon over dt steps; an adaptive
     Runge-Kutta-Merson several realizations (stages) per step."""
     case = make_case("pendulum", t_final=1.0)
-    _, fixed = run(case, Settings("rk2", dt=1e-3))
+    _, fixed = run(case, Settings("verlet", dt=1e-3))
     assert fixed.n_steps == 1000 and fixed.n_rhs >= 2 * fixed.n_steps
     _, adaptive = run(case, Settings("rk-merson", rtol=1e-9, atol=1e-9))
     assert 0 < adaptive.n_steps < adaptive.n_rhs
@@ -185,11 +185,11 @@ def test_what_simbody_does_not_run_is_refused_with_the_reason(case, words):
 def test_options_are_checked_before_anything_runs():
     case = make_case("pendulum")
     with pytest.raises(ValueError, match="options.defaults: unknown 'opensim'"):
-        ADAPTER.check(case.scene, case.times, Settings("rk2", dt=1e-3, options={"defaults": "opensim"}))
+        ADAPTER.check(case.scene, case.times, Settings("verlet", dt=1e-3, options={"defaults": "opensim"}))
     with pytest.raises(ValueError, match="dt"):
-        ADAPTER.check(case.scene, case.times, Settings("rk2", dt=3e-3))
+        ADAPTER.check(case.scene, case.times, Settings("verlet", dt=3e-3))
 
 
 def test_show_model_describes_the_model():
-    text = ADAPTER.describe(make_case("pendulum").scene, Settings("rk2", dt=1e-3))
+    text = ADAPTER.describe(make_case("pendulum").scene, Settings("verlet", dt=1e-3))
     assert "PinJoint" in text and "defaults=scene" in text and "OpenSim 4.6" in text

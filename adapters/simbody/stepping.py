@@ -1,6 +1,7 @@
 """Simbody's stepping through OpenSim's ``Manager``: one integrator, advanced from sample to sample.
 
-OpenSim 4.6's ``Manager`` wraps Simbody's eight integrators (``METHODS``) and a ``TimeStepper``. A run builds a
+OpenSim 4.6's ``Manager`` wraps Simbody's eight integrators (``METHODS``; the adapter declares five,
+``adapter.INTEGRATORS``) and a ``TimeStepper``. A run builds a
 ``Manager`` on the prepared model, sets the method and either a fixed step (``setIntegratorFixedStepSize``) or
 the accuracy (``setIntegratorAccuracy``: Simbody's relative error tolerance, ``rtol``), initializes it from a
 copy of the initial state and calls ``integrate(t_k)`` for each sample time ``t_k``: Simbody steps to each
