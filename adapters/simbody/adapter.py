@@ -20,7 +20,7 @@ from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared
 from dalembert.adapters.simbody.audit import audit
 from dalembert.adapters.simbody.model import MODEL_OPTIONS, opensim_version
 from dalembert.adapters.simbody.stepping import METHODS
-from dalembert.scene import EFFECTS, SPRING_EFFECT
+from dalembert.scene import EFFECTS, SPRING_EFFECTS
 
 __all__ = ["SimbodyAdapter", "SimbodyPrepared", "UNSUPPORTED", "INTEGRATORS", "LEFT_OUT"]
 
@@ -32,8 +32,6 @@ UNSUPPORTED = {
     "loop:": ("closed kinematic loops: OpenSim has the constraints (PointConstraint for a ball, "
               "ConstantDistanceConstraint for a distance, a point and two PointOnLine or a CoordinateCoupler for a "
               "revolute) with Simbody's constraint projection; not yet mapped"),
-    SPRING_EFFECT: ("linear spring-dampers between two points: OpenSim's PointToPointSpring has no damping term "
-                    "(a damper would be a second force element, or a custom Force); not yet mapped"),
     "contact": ("contact: OpenSim's contact is compliant (Hunt-Crossley, elastic foundation), with no hard "
                 "contact to take the scene's pairs, friction and restitution as given; not mapped"),
 }
@@ -77,8 +75,8 @@ class SimbodyAdapter(Adapter):
     OpenSim's ``Manager``. Option ``defaults`` = ``scene`` | ``engine`` (``model.MODEL_OPTIONS``)."""
 
     name = "simbody"
-    # free, revolute, prismatic, ball and weld joints; gravity; world and follower forces and torques
-    effects = EFFECTS
+    # free, revolute, prismatic, ball and weld joints; gravity; world and follower forces and torques; springs
+    effects = EFFECTS | SPRING_EFFECTS
     options = MODEL_OPTIONS
     integrators = {
         name: IntegratorSpec(fixed, tuple(MODEL_OPTIONS), f"Simbody {METHODS[name]}: {text}"

@@ -30,6 +30,9 @@ def audit(prepared, outcome):
                    for name, b in model.bodies.items()},
         "loads": [f"{f.getName()}: PrescribedForce on {f.getFrame().getName()}, "
                   f"{'ground' if f.getForceIsInGlobalFrame() else 'body'} axes" for f in model.forces],
+        "springs": {f.getName(): {"bodies": [f.getBody1Name(), f.getBody2Name()],
+                                  "points": [f.getPoint1().to_numpy().tolist(), f.getPoint2().to_numpy().tolist()],
+                                  "tension": f.get_expression()} for f in model.springs},
         "steps": int(outcome.n_steps),
         "realizations": int(outcome.n_rhs),
         "message": outcome.info.get("message", ""),
@@ -38,13 +41,13 @@ def audit(prepared, outcome):
 
 
 def defaults(model):
-    """What a scene never calls for, read back from the model: every force in its force set (the loads are the
-    only ones the adapter adds), contact geometry, constraints, controllers (actuators, muscles), probes, and each
+    """What a scene never calls for, read back from the model: every force in its force set (the loads and springs
+    are the only ones the adapter adds), contact geometry, constraints, controllers (actuators, muscles), probes, and each
     coordinate's locked, clamped and prescribed flags and its range."""
     m = model.model
     forces = m.getForceSet()
     coords = m.getCoordinateSet()
-    loads = {f.getName() for f in model.forces}
+    loads = {f.getName() for f in model.forces + model.springs}
     return {
         "other_forces": [forces.get(i).getConcreteClassName() + " " + forces.get(i).getName()
                          for i in range(forces.getSize()) if forces.get(i).getName() not in loads],

@@ -19,7 +19,8 @@
   its rotation axis a quarter turn away passes the singularity (measured: a spin of 150 rad/s about the middle
   axis made every fixed-step method fail at dt = 1e-3; the harness shows what remains).
 * Gravity set from the scene (OpenSim's default is -9.80665 in y). Loads as ``PrescribedForce``s with constant
-  functions (``loads``); no contact geometry, no other force, no constraint.
+  functions; spring-dampers as ``ExpressionBasedPointToPointForce``s (tension ``k (d - L) + c ddot``; OpenSim's
+  ``PointToPointSpring`` has no damping); no contact geometry, no other force, no constraint.
 * Nothing the scene does not call for (option ``defaults``). OpenSim adds no damping, actuators, muscles or
   contact to a model it is not given; what it does set by default is on each ``Coordinate``: a range of
   [-10, 10] (rad or m), ``clamped`` and ``locked`` false, ``prescribed`` false. With ``defaults=scene`` (the
@@ -116,6 +117,7 @@ class SimbodyModel:
     frames : dict joint (child) name -> (X_PF, X_CM) — the joint's parent and child frames in their bodies'
         frames (the ground's for the world), each ``(p (3,), R (3, 3))``, as built (charts and axes applied)
     forces : list of opensim.PrescribedForce — the scene's loads, in order
+    springs : list of opensim.ExpressionBasedPointToPointForce — the scene's springs, in order
     state0 : opensim.State — the initial state (time 0); runs start from copies
     defaults : str — option ``defaults``
     """
@@ -132,6 +134,7 @@ class SimbodyModel:
             self._add(scene.joint(body.name), body)
         for i, ld in enumerate(scene.loads):
             self.forces.append(self._load(i, ld))
+        self.springs = [self._spring(sp) for sp in scene.springs]
         if self.defaults == "scene":
             for joint in self.joints.values():
                 for k in range(joint.numCoordinates()):
@@ -187,6 +190,17 @@ class SimbodyModel:
         self.model.addForce(f)
         return f
 
+    def _spring(self, sp):
+        """Spring ``sp`` as an ``ExpressionBasedPointToPointForce``: OpenSim evaluates the tension (positive pulls
+        the points together, measured) from the points' distance ``d`` and its rate ``ddot``; the scene's numbers
+        are written at full precision (``repr``) into the expression."""
+        force = self.osim.ExpressionBasedPointToPointForce(
+            _frame_name(sp.body_a), vec3(self.osim, sp.point_a), _frame_name(sp.body_b), vec3(self.osim, sp.point_b),
+            spring_expression(sp))
+        force.setName(sp.name)
+        self.model.addForce(force)
+        return force
+
     def _initial(self, state):
         """The scene's q0, v0 on ``state``, through each joint's coordinates (charts: free and ball start at zero
         angles, F and M coinciding, so their speeds, Simbody's angular velocity of M in F, are the scene's rates
@@ -221,7 +235,20 @@ class SimbodyModel:
         for f in self.forces:
             lines.append(f"  {f.getName()}: PrescribedForce on {f.getFrame().getName()}, "
                          f"{'ground' if f.getForceIsInGlobalFrame() else 'body'} axes")
+        for f in self.springs:
+            lines.append(f"  {f.getName()}: ExpressionBasedPointToPointForce {f.getBody1Name()} - {f.getBody2Name()}, "
+                         f"tension {f.get_expression()}")
         return "\n".join(lines)
+
+
+def spring_expression(sp):
+    """The tension (N) of spring ``sp`` in OpenSim's expression language: ``k (d - L) + c ddot``."""
+    return f"{sp.stiffness!r}*(d-{sp.rest_length!r})+{sp.damping!r}*ddot"
+
+
+def _frame_name(body):
+    """OpenSim's name of a scene body's frame (the scene's world is OpenSim's ``ground``)."""
+    return "ground" if body == WORLD else body
 
 
 def _inertia(osim, I):
