@@ -25,6 +25,16 @@ LOOSE, TIGHT = 1e-6, 1e-9  # the matrix's default tolerances (``dalembert run --
 T_FINAL = 1.0  # s: over half the pendulum's swing (period 1.75 s at 1 rad), through its lowest point
 
 
+# Integrators whose steps the 0.01-s sample interval caps at both of the matrix's tolerances on this pendulum, so
+# that rtol 1e-6 and 1e-9 give one trajectory: a known limit of the engine, expected to fail here (strictly: if it
+# starts to pass, the entry goes). OpenSim's Manager has no dense output, so every sample ends a step; RKF45's
+# error over one 0.01-s step already meets rtol 1e-9 (measured over 1 s: 3.26e-9 rad at rtol 1e-6 and 1e-9, bit
+# for bit; 5.6e-11 rad at 1e-12, so the tolerance does reach it). The report's hazard "a tolerance changed
+# nothing" names such runs.
+CAPPED_BY_SAMPLES = {("simbody", "rk-feldberg"): "OpenSim's Manager ends a step at every sample: the 0.01-s interval "
+                                                 "meets both rtol 1e-6 and 1e-9 with RKF45"}
+
+
 def _adaptive_integrators():
     """Every engine's adaptive integrators; an engine not installed here (its ``version`` raises ImportError)
     is skipped, saying so."""
@@ -33,8 +43,10 @@ def _adaptive_integrators():
         adapter = get_adapter(engine)
         for name, spec in sorted(adapter.integrators.items()):
             if not spec.fixed_step:
-                missing = pytest.mark.skipif(not _installed(adapter), reason=f"{engine} not installed")
-                out.append(pytest.param(engine, name, id=f"{engine}-{name}", marks=[missing]))
+                marks = [pytest.mark.skipif(not _installed(adapter), reason=f"{engine} not installed")]
+                if (engine, name) in CAPPED_BY_SAMPLES:
+                    marks.append(pytest.mark.xfail(strict=True, reason=CAPPED_BY_SAMPLES[engine, name]))
+                out.append(pytest.param(engine, name, id=f"{engine}-{name}", marks=marks))
     return out
 
 
