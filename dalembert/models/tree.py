@@ -257,7 +257,7 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
         owner, X_OP = home[j.parent]
         X_OJ = _compose(X_OP, _pose(j.p_PJ, j.R_PJ))
         inner[link] = (owner, X_OJ)
-        if j.kind == "fixed" and not _is_body(*mine):
+        if j.kind == "fixed" and (not _is_body(*mine) or (owner != "world" and props[owner][0] <= 0.0)):
             X_CJ = _pose(j.p_CJ, j.R_CJ)
             X_OC = _compose(X_OJ, (-X_CJ[1].T @ X_CJ[0], X_CJ[1].T))
             home[link] = (owner, X_OC)
