@@ -256,4 +256,4 @@ def read_mjcf(path, gravity=(0.0, 0.0, -9.81), positions=None, velocities=None, 
     """
     model, links, joints, effects = mjcf_tree(path)
     return build_scene(os.path.basename(path), name or model, links, joints, effects, "fixed", gravity, positions,
-                       velocities)
+                       velocities, tag="body")

@@ -174,7 +174,7 @@ def _combine(a, b):
 
 
 def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 0.0, -9.81), positions=None,
-                velocities=None):
+                velocities=None, tag="link"):
     """The ``Scene`` of a model file's tree (see the module docstring).
 
     Parameters
@@ -188,6 +188,7 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
     positions, velocities : dict — the file's joint name -> its initial coordinate (rad or m) and rate
         (rad/s or m/s), 0 where not given; for a free base, ``"base"`` -> the free joint's 7 coordinates /
         6 speeds (``JOINT_KINDS``; the position defaults to the root COM with the root frame at the origin)
+    tag : str — the file's element for a link, in messages (``link``; MJCF's ``body``)
 
     Returns
     -------
@@ -248,10 +249,10 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
                 home[link], props[link] = (link, _pose(np.zeros(3), np.eye(3))), mine
             else:  # a fixed base without a body's inertia of its own: it is part of the world
                 home[link] = ("world", _pose(np.zeros(3), np.eye(3)))
-                effects.append(FileEffect(f"<link name='{link}'>", "merged", "into the world (the fixed root)"))
+                effects.append(FileEffect(f"<{tag} name='{link}'>", "merged", "into the world (the fixed root)"))
             continue
         if not has_mass(link):
-            effects.append(FileEffect(f"<link name='{link}'>", "dropped",
+            effects.append(FileEffect(f"<{tag} name='{link}'>", "dropped",
                                       f"massless subtree from <joint name='{j.name}'>"))
             continue
         owner, X_OP = home[j.parent]
@@ -264,12 +265,12 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
             if owner != "world" and lk.mass > 0.0:
                 props[owner] = _combine(props[owner], (lk.mass, X_OC[0] + X_OC[1] @ mine[1],
                                                        X_OC[1] @ I_L @ X_OC[1].T))
-            effects.append(FileEffect(f"<link name='{link}'>", "merged",
+            effects.append(FileEffect(f"<{tag} name='{link}'>", "merged",
                                       f"into '{owner}' (fixed joint; mass {lk.mass:g} kg, not a body's inertia "
                                       "alone)"))
             continue
         if lk.mass <= 0.0:
-            raise ModelError(f"{path}: <link name='{link}'> has no mass but moves on <joint name='{j.name}'> "
+            raise ModelError(f"{path}: <{tag} name='{link}'> has no mass but moves on <joint name='{j.name}'> "
                              f"({j.kind}) and carries links with mass — give it an <inertial> with a mass "
                              "and inertia, or make the joint fixed", "massless moving link")
         home[link], props[link] = (link, _pose(np.zeros(3), np.eye(3))), mine
@@ -281,11 +282,11 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
             continue
         mass, com, I_L = props[link]
         if link == root and mass <= 0.0:
-            raise ModelError(f"{path}: <link name='{link}'> (the root) has no mass, nor the links fixed to it — a "
+            raise ModelError(f"{path}: <{tag} name='{link}'> (the root) has no mass, nor the links fixed to it — a "
                              "floating base must be a body with mass: pass base='fixed', or give the root an "
                              "<inertial>", "massless floating root")
         if not _is_body(mass, com, I_L):
-            raise ModelError(f"{path}: <link name='{link}'> <inertial>: mass {mass:g} kg and principal moments "
+            raise ModelError(f"{path}: <{tag} name='{link}'> <inertial>: mass {mass:g} kg and principal moments "
                              f"{np.linalg.eigvalsh(I_L).tolist()} kg m^2 (links fixed to it merged in) are not a "
                              "rigid body's — a body needs a positive mass and moments that are positive and "
                              "meet the triangle inequality I1 + I2 >= I3: fix the <inertia>", "bad inertia")
