@@ -236,7 +236,7 @@ def mjcf_tree(path):
     return root.get("model") or os.path.splitext(shown)[0], links, joints, reader.effects
 
 
-def read_mjcf(path, gravity=(0.0, 0.0, -9.81), positions=None, velocities=None, name=None):
+def read_mjcf(path, gravity=(0.0, 0.0, -9.81), positions=None, velocities=None, name=None, locked=()):
     """The ``Scene`` of an MJCF file, with what the file calls for besides.
 
     The world is the file's root: bodies with a ``<freejoint>`` are free, bodies without a joint are welded
@@ -249,6 +249,7 @@ def read_mjcf(path, gravity=(0.0, 0.0, -9.81), positions=None, velocities=None, 
     positions, velocities : dict — joint name (the file's) -> initial coordinates and speeds
         (``dalembert.kinds.JOINT_KINDS``)
     name : str — the scene's name (default: the model's)
+    locked : iterable of str — joints (the file's names) held at their zero, as if fixed
 
     Returns
     -------
@@ -256,4 +257,4 @@ def read_mjcf(path, gravity=(0.0, 0.0, -9.81), positions=None, velocities=None, 
     """
     model, links, joints, effects = mjcf_tree(path)
     return build_scene(os.path.basename(path), name or model, links, joints, effects, "fixed", gravity, positions,
-                       velocities, tag="body")
+                       velocities, tag="body", locked=locked)

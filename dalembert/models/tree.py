@@ -23,7 +23,7 @@ actuators, transmissions, mimic joints) are collected in ``FileEffects`` and lef
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -174,7 +174,7 @@ def _combine(a, b):
 
 
 def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 0.0, -9.81), positions=None,
-                velocities=None, tag="link"):
+                velocities=None, tag="link", locked=()):
     """The ``Scene`` of a model file's tree (see the module docstring).
 
     Parameters
@@ -189,12 +189,20 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
         (rad/s or m/s), 0 where not given; for a free base, ``"base"`` -> the free joint's 7 coordinates /
         6 speeds (``JOINT_KINDS``; the position defaults to the root COM with the root frame at the origin)
     tag : str — the file's element for a link, in messages (``link``; MJCF's ``body``)
+    locked : iterable of str — the file's names of moving joints to hold at their zero, as if fixed (a
+        gripper's fingers, which slide without end when the file's limits are left out)
 
     Returns
     -------
     ImportedModel
     """
     positions, velocities, effects = dict(positions or {}), dict(velocities or {}), list(effects)
+    locked = set(locked)
+    missing = sorted(locked - {j.name for j in joints})
+    if missing:
+        raise ModelError(f"{path}: locked joints {missing} are not in the file — use its joint names", "bad argument")
+    joints = [replace(j, kind="fixed") if j.name in locked else j for j in joints]
+    effects += [FileEffect(f"<joint name='{n}'>", "locked", "held at 0 (asked for)") for n in sorted(locked)]
     if base not in ("fixed", "free"):
         raise ModelError(f"{path}: base={base!r} — use 'fixed' (welded to the world) or 'free' (a floating base)",
                          "bad argument")

@@ -129,7 +129,8 @@ def urdf_tree(path):
     return root.get("name") or os.path.splitext(shown)[0], links, joints, effects
 
 
-def read_urdf(path, base="fixed", gravity=(0.0, 0.0, -9.81), positions=None, velocities=None, name=None):
+def read_urdf(path, base="fixed", gravity=(0.0, 0.0, -9.81), positions=None, velocities=None, name=None,
+              locked=()):
     """The ``Scene`` of a URDF file, with what the file calls for besides.
 
     Parameters
@@ -140,6 +141,7 @@ def read_urdf(path, base="fixed", gravity=(0.0, 0.0, -9.81), positions=None, vel
     positions, velocities : dict — joint name (the file's) -> initial angle/slide and rate; ``"base"`` -> the
         free base's 7 coordinates / 6 speeds (``dalembert.kinds.JOINT_KINDS``)
     name : str — the scene's name (default: the robot's)
+    locked : iterable of str — joints (the file's names) held at their zero, as if fixed
 
     Returns
     -------
@@ -147,4 +149,4 @@ def read_urdf(path, base="fixed", gravity=(0.0, 0.0, -9.81), positions=None, vel
     """
     robot, links, joints, effects = urdf_tree(path)
     return build_scene(os.path.basename(path), name or robot, links, joints, effects, base, gravity, positions,
-                       velocities)
+                       velocities, locked=locked)

@@ -1,0 +1,135 @@
+"""Real robots from their model files (``dalembert.models``): a fixed-base arm released under gravity, a
+floating-base robot tumbling in free fall with its joints moving, and a large tree.
+
+Each scene is the file's bodies and joint tree only: what the file calls for besides (damping, friction,
+limits, actuators, mimic joints: ``FileEffects``) is left out, so every engine runs the same passive
+multibody system and the reference's truth is its exact motion. ``model`` is a robot of example-robot-data
+(``ur5``, ``panda``, ``solo12``, ``talos``, ...: ``dalembert.models.ROBOTS``; ``pip install dalembert[robots]``)
+or the path of a URDF or MJCF file of the user's own (``--param model=path/to/robot.urdf``).
+"""
+
+from __future__ import annotations
+
+from dalembert.case import Case, Tolerance, case
+from dalembert.cases._sampling import sample_times
+from dalembert.models import ModelError, read_mjcf, read_urdf, robot_path
+from dalembert.scene import SceneError
+
+UNITS = dict(gravity="m/s^2", spread="rad", rate="rad/s", spin="rad/s", t_final="s", sample_interval="s")
+
+# Default release poses (rad, in the file's joint order): every joint off its zero so that every link
+# swings and the arm folds over itself (a passive, chaotic motion); the shoulder of each held ~1 rad from
+# the vertical. Other files start from ``spread`` rad on every revolute joint.
+POSES = {
+    "ur5": (0.3, -0.9, 1.2, -0.6, 1.1, 0.4),
+    "panda": (0.4, 0.9, -0.5, -1.4, 0.6, 1.2, 0.3),
+}
+# Gripper fingers slide without end once the file's limits are left out: held at zero (``locked``).
+LOCKED = {"panda": ("panda_finger_joint1", "panda_finger_joint2")}
+
+
+def _model(case_name, model, pose, spread, base, gravity, velocities=None, rate=0.0):
+    """``(ImportedModel, file path)``: the model at its pose (``pose``: comma-separated angles in the file's
+    joint order; empty: ``POSES`` or ``spread`` on every joint) and joint ``rate`` (alternating signs)."""
+    if not isinstance(model, str) or not model:
+        raise SceneError(f"case {case_name!r}", [f"{case_name}.model: must be a robot's name or a file's path, got "
+                                                 f"{model!r} — e.g. 'ur5' or path/to/robot.urdf"])
+    try:
+        path = robot_path(model)
+        read = read_mjcf if path.endswith(".xml") else read_urdf
+        kw = {} if read is read_mjcf else dict(base=base)
+        bare = read(path, gravity=gravity, locked=LOCKED.get(model, ()), **kw)
+        names = [n for n in bare.joint_names if n != "base"]
+        if pose:
+            try:
+                angles = [float(v) for v in pose.split(",")]
+            except ValueError:
+                angles = []
+            if len(angles) != len(names):
+                raise SceneError(f"case {case_name!r}", [
+                    f"{case_name}.pose: {len(names)} comma-separated joint coordinates wanted (rad or m, in the "
+                    f"file's order: {', '.join(names)}), got {pose!r} — give one per joint"])
+        else:
+            angles = POSES.get(model, [spread] * len(names))
+        kinds = {n: bare.scene.joint(bare.joint_names[n]).kind for n in names}
+        positions = {n: a for n, a in zip(names, angles) if kinds[n] in ("revolute", "prismatic")}
+        speeds = {n: rate * (-1.0) ** i for i, n in enumerate(names) if kinds[n] in ("revolute", "prismatic")}
+        speeds.update(velocities or {})
+        return read(path, gravity=gravity, positions=positions, velocities=speeds, locked=LOCKED.get(model, ()),
+                    name=case_name, **kw), path
+    except ModelError as err:
+        raise SceneError(f"case {case_name!r}", [str(err)]) from None
+
+
+# No closed form: the truth is the reference at its truth settings (DOP853 at rtol = atol = 1e-12 on Kane's
+# formulation), cross-checked by its second solution (the contract's: LSODA at 1e-12). The swing is chaotic
+# (a folding arm): the horizon is kept short so that the two agree far below the tolerances.
+ANGLE_TOL = Tolerance(1e-6, "rad over 2 s; as the double pendulum's (chain): met by a 4th-order method at dt = 1e-3 "
+                            "on the reference (rk4: 2e-9 rad on UR5), missed at dt = 1e-2 (rk4: 4e-5 rad)")
+POSITION_TOL = Tolerance(1e-6, "m; the links' COMs lie within ~1 m of the base: ANGLE_TOL times that")
+VELOCITY_TOL = Tolerance(1e-5, "m/s; rates reach ~5 rad/s on ~1 m: ANGLE_TOL times that, doubled")
+RATE_TOL = Tolerance(1e-5, "rad/s; as VELOCITY_TOL")
+REACTION_TOL = Tolerance(1e-5, "relative to the largest joint reaction; m a - m g of the same motion, ten times "
+                               "ANGLE_TOL (accelerations reach ~50 rad/s^2 as the arm folds)")
+ENERGY_TOL = Tolerance(1e-8, "relative to max(|E(0)|, the largest kinetic energy); as chain's: a 4th-order method "
+                             "at dt = 1e-3 keeps energy to ~1e-10 on these arms")
+
+
+def _arm_case(name, model, pose, spread, gravity, t_final, sample_interval):
+    imported, _ = _model(name, model, pose, spread, "fixed", (0.0, 0.0, -float(gravity)))
+    return Case(name, imported.scene, t_final, sample_times(t_final, sample_interval, name), conserved=("energy",),
+                tolerances=dict(joint=ANGLE_TOL, orientation=ANGLE_TOL, position=POSITION_TOL, velocity=VELOCITY_TOL,
+                                angular_velocity=RATE_TOL, reaction_force=REACTION_TOL, energy=ENERGY_TOL))
+
+
+@case(tags=("robot", "jointed", "gravity"), units=UNITS, positive=("sample_interval",))
+def robot_arm(model="ur5", pose="", spread=0.5, gravity=9.81, t_final=2.0, sample_interval=0.01):
+    """A fixed-base arm released at rest under gravity from a pose: a passive, chaotic swing of a real robot
+    (UR5: 6 revolute joints, 7 bodies; Panda: 7 revolute joints and its hand, 11 bodies, the fingers held).
+
+    ``model``: a robot of example-robot-data (``ur5``, ``panda``, ...) or a URDF/MJCF file; ``pose``:
+    comma-separated joint angles in the file's order (default ``POSES``, or ``spread`` rad on every joint of
+    another file). The file's damping, friction, limits and actuators are left out (``FileEffects``).
+    """
+    return _arm_case("robot_arm", model, pose, spread, gravity, t_final, sample_interval)
+
+
+@case(tags=("robot", "hard", "jointed", "gravity"), units=UNITS, positive=("sample_interval",))
+def robot_tree(model="talos", pose="", spread=0.3, gravity=9.81, t_final=1.0, sample_interval=0.01):
+    """A large tree released under gravity, welded at its root: Talos (example-robot-data's
+    ``talos_reduced.urdf``: 32 revolute joints, 33 moving bodies plus welded sensors and tools) with every
+    joint ``spread`` rad off its zero. The cost of many joints against the chain's; out of the default matrix
+    (its reference truth takes ~10x the UR5's)."""
+    return _arm_case("robot_tree", model, pose, spread, gravity, t_final, sample_interval)
+
+
+# Free fall without gravity: momentum and energy are exact invariants, and every drift is the integrator's.
+FREE_ANGLE_TOL = Tolerance(1e-6, "rad over 1 s (joint angles and the base attitude); as robot_arm's ANGLE_TOL")
+FREE_POSITION_TOL = Tolerance(1e-6, "m; the base drifts ~0.2 m: ANGLE_TOL times the legs' reach (~0.3 m), rounded up")
+FREE_VELOCITY_TOL = Tolerance(1e-5, "m/s and rad/s; joint rates ~3 rad/s: ANGLE_TOL times those, tripled")
+FREE_ENERGY_TOL = Tolerance(1e-9, "relative; a 4th-order method at dt = 1e-3 keeps it to ~1e-11 over 1 s")
+FREE_MOMENTUM_TOL = Tolerance(1e-9, "relative (absolute when zero); no external force or torque acts: both momenta "
+                                    "are exact invariants, kept like the energy")
+
+
+@case(tags=("robot", "hard", "jointed", "free"), units=UNITS, positive=("sample_interval",))
+def robot_free_fall(model="solo12", pose="", spread=0.4, rate=3.0, spin=(0.5, 1.0, 2.0), t_final=1.0,
+                    sample_interval=0.01):
+    """A floating-base robot tumbling in free fall (no gravity) with its joints moving: Solo12 (a base and four
+    3-joint legs: 13 bodies, 18 degrees of freedom) thrown with the base spinning at ``spin`` (rad/s, base
+    axes) and every joint swinging at ``rate`` rad/s (alternating signs) from ``spread`` rad. Momentum and
+    energy are conserved exactly: their drift is each engine's own."""
+    if not (isinstance(spin, tuple) and len(spin) == 3):
+        raise SceneError("case 'robot_free_fall'", [f"robot_free_fall.spin: 3 numbers wanted (rad/s, base axes), "
+                                                    f"got {spin!r} — e.g. 0.5,1,2"])
+    imported, _ = _model("robot_free_fall", model, pose, spread, "free", (0.0, 0.0, 0.0),
+                         velocities={"base": (0.1, 0.0, 0.2, *spin)}, rate=rate)
+    return Case("robot_free_fall", imported.scene, t_final, sample_times(t_final, sample_interval, "robot_free_fall"),
+                conserved=("energy", "angular_momentum", "linear_momentum"),
+                tolerances=dict(joint=FREE_ANGLE_TOL, orientation=FREE_ANGLE_TOL, position=FREE_POSITION_TOL,
+                                velocity=FREE_VELOCITY_TOL, angular_velocity=FREE_VELOCITY_TOL,
+                                reaction_force=REACTION_TOL, energy=FREE_ENERGY_TOL,
+                                angular_momentum=FREE_MOMENTUM_TOL, linear_momentum=FREE_MOMENTUM_TOL))
+
+
+__all__ = ["robot_arm", "robot_tree", "robot_free_fall", "POSES", "LOCKED"]
