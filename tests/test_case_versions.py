@@ -52,7 +52,7 @@ VERSIONS = {
     "pivoted_rod_violent": "ede03c9c63ec",
     "robot_arm": "8a123fcded61",
     "robot_free_fall": "2583c21e5052",
-    "robot_tree": "5bcc2e708835",
+    "robot_tree": "c7cf5eedc77d",
     "sphere_collision": "a49d0f5e1e88",
 }
 
