@@ -19,6 +19,10 @@ SAME_FILE_TOL = 1e-12
 # moments and a quaternion: the two routes agree to ~5e-6 of each quantity (measured 3.5e-6 on Talos), not to
 # roundoff; 2e-5 is four printed digits' worth of margin above that and far below any real error.
 MUJOCO_PRINT_TOL = 2e-5
+# MuJoCo's compiled model (before printing) keeps doubles: it rewrites each inertia as principal moments and a
+# quaternion by an eigen-decomposition, exact to a few ulps (measured 1.1e-14 relative on Panda's links, the
+# worst of four robots); 1e-12 leaves room and catches any wrong frame or inertia rotation (O(1) errors).
+MUJOCO_COMPILED_TOL = 1e-12
 
 ARM_MJCF = """\
 <mujoco model="arm">
@@ -124,9 +128,9 @@ def test_errors_name_the_file_the_element_and_the_fix(tmp_path, body, words, rea
     assert err.value.reason == reason
 
 
-def _mujoco_conversion(urdf_path, out):
-    """MuJoCo's own reading of a URDF, written back as MJCF: geometry stripped first (meshes are not
-    needed and their package:// paths do not resolve), static bodies kept apart (``fusestatic="false"``)."""
+def _mujoco_model(urdf_path):
+    """MuJoCo's own reading of a URDF (an ``MjModel``): geometry stripped first (meshes are not needed and their
+    package:// paths do not resolve), static bodies kept apart (``fusestatic="false"``)."""
     mujoco = pytest.importorskip("mujoco")
     root = ET.parse(urdf_path).getroot()
     for link in root.findall("link"):
@@ -136,9 +140,32 @@ def _mujoco_conversion(urdf_path, out):
     for e in root.findall("transmission") + root.findall("gazebo"):
         root.remove(e)
     ET.SubElement(root, "mujoco").append(ET.Element("compiler", discardvisual="true", fusestatic="false"))
-    model = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
-    mujoco.mj_saveLastXML(str(out), model)
+    return mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
+
+
+def _mujoco_conversion(urdf_path, out):
+    """MuJoCo's own reading of a URDF written back as MJCF (``mj_saveLastXML``)."""
+    mujoco = pytest.importorskip("mujoco")
+    mujoco.mj_saveLastXML(str(out), _mujoco_model(urdf_path))
     return str(out)
+
+
+@robots
+@pytest.mark.parametrize("robot", ["double_pendulum", "ur5", "panda", "solo12"])
+def test_mujoco_s_compiled_reading_of_a_urdf_has_the_same_bodies(robot):
+    """Masses, inertias (link axes) and COMs of every body against MuJoCo's compiled model, in doubles."""
+    from dalembert.models import robot_path
+    mujoco = pytest.importorskip("mujoco")
+    path = robot_path(robot)
+    model, scene = _mujoco_model(path), read_urdf(path).scene
+    for b in scene.bodies:
+        i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b.name)
+        R = spatial.quat_to_matrix(model.body_iquat[i])
+        inertia = R @ np.diag(model.body_inertia[i]) @ R.T
+        assert abs(model.body_mass[i] - b.mass) <= MUJOCO_COMPILED_TOL * b.mass, b.name
+        assert np.abs(inertia - b.inertia_matrix).max() <= MUJOCO_COMPILED_TOL * np.abs(inertia).max(), b.name
+        j = scene.joint(b.name)  # a URDF joint frame is the child link's frame: child_point = -COM in the link
+        np.testing.assert_allclose(-np.asarray(j.child_point), model.body_ipos[i], rtol=0, atol=MUJOCO_COMPILED_TOL)
 
 
 @robots
