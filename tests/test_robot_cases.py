@@ -22,7 +22,7 @@ CONTRACT_HORIZON = 0.5
 def test_one_robot_case_is_in_the_default_matrix():
     assert in_default_matrix(CASES["robot_arm"])
     assert not in_default_matrix(CASES["robot_tree"]) and not in_default_matrix(CASES["robot_free_fall"])
-    assert {"robot"} <= set(CASES["robot_arm"].tags) & set(CASES["robot_free_fall"].tags)
+    assert {"robot"} <= set(CASES["robot_arm"].tags) & set(CASES["robot_free_fall"].tags) & set(CASES["robot_tree"].tags)
 
 
 @robots
