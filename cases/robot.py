@@ -87,7 +87,8 @@ def _arm_case(name, model, pose, spread, gravity, t_final, sample_interval):
 @case(tags=("robot", "jointed", "gravity"), units=UNITS, positive=("sample_interval",))
 def robot_arm(model="ur5", pose="", spread=0.5, gravity=9.81, t_final=2.0, sample_interval=0.01):
     """A fixed-base arm released at rest under gravity from a pose: a passive, chaotic swing of a real robot
-    (UR5: 6 revolute joints, 7 bodies; Panda: 7 revolute joints and its hand, 11 bodies, the fingers held).
+    (UR5: 6 bodies on 6 revolute joints; Panda: 10 bodies, 7 revolute joints, its hand and held fingers welded;
+    the fixed base is the world's).
 
     ``model``: a robot of example-robot-data (``ur5``, ``panda``, ...) or a URDF/MJCF file; ``pose``:
     comma-separated joint angles in the file's order (default ``POSES``, or ``spread`` rad on every joint of
@@ -99,7 +100,7 @@ def robot_arm(model="ur5", pose="", spread=0.5, gravity=9.81, t_final=2.0, sampl
 @case(tags=("robot", "variant", "jointed", "gravity"), units=UNITS, positive=("sample_interval",))
 def robot_tree(model="talos", pose="", spread=0.3, gravity=9.81, t_final=0.25, sample_interval=0.01):
     """A large tree released under gravity, welded at its root: Talos (example-robot-data's
-    ``talos_reduced.urdf``: 32 revolute joints, 33 moving bodies plus welded sensors and tools) with every
+    ``talos_reduced.urdf``: 50 bodies, 32 revolute joints, 18 welds to sensors and tools) with every
     joint ``spread`` rad off its zero. The cost of many joints against the chain's; a preset of ``robot_arm``
     (tag ``variant``: out of the default matrix, and checked at its own horizon, not ``hard``'s 2 s).
     Its reference truth took 7.2 s for the 0.25 s horizon and 144 s for 1 s (on a shared 2-core machine; UR5's
@@ -124,9 +125,9 @@ FREE_MOMENTUM_TOL = Tolerance(1e-9, "relative; no external force or torque acts,
 def robot_free_fall(model="solo12", pose="", spread=0.4, rate=3.0, spin=(0.5, 1.0, 2.0), t_final=1.0,
                     sample_interval=0.01):
     """A floating-base robot tumbling in free fall (no gravity) with its joints moving: Solo12 (a base and four
-    3-joint legs: 13 bodies, 18 degrees of freedom) thrown with the base spinning at ``spin`` (rad/s, base
-    axes) and every joint swinging at ``rate`` rad/s (alternating signs) from ``spread`` rad. Momentum and
-    energy are conserved exactly: their drift is each engine's own."""
+    3-joint legs: 17 bodies, 4 of them welded feet; 18 degrees of freedom) thrown with the base spinning at
+    ``spin`` (rad/s, base axes) and every joint swinging at ``rate`` rad/s (alternating signs) from
+    ``spread`` rad. Momentum and energy are conserved exactly: their drift is each engine's own."""
     if not (isinstance(spin, tuple) and len(spin) == 3):
         raise SceneError("case 'robot_free_fall'", [f"robot_free_fall.spin: 3 numbers wanted (rad/s, base axes), "
                                                     f"got {spin!r} — e.g. 0.5,1,2"])

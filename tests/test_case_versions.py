@@ -50,9 +50,9 @@ VERSIONS = {
     "pendulum_a01": "2c05611bb412",
     "pivoted_rod": "da2a01182e34",
     "pivoted_rod_violent": "ede03c9c63ec",
-    "robot_arm": "59ec68d06f56",
+    "robot_arm": "f5e15ac70a60",
     "robot_free_fall": "2583c21e5052",
-    "robot_tree": "6145fb189335",
+    "robot_tree": "41b237ef23a6",
     "sphere_collision": "a49d0f5e1e88",
 }
 

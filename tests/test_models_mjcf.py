@@ -89,7 +89,7 @@ def test_trivial_geom_inertia_and_a_free_joint(tmp_path):
         <body name="ball" pos="1 2 3" quat="0 0 0 1"><freejoint/>
           <geom type="sphere" size="0.1" pos="0.2 0 0"/>
         </body>
-        <body name="slab" pos="0 0 1"><geom type="box" size="0.1 0.2 0.3" mass="3"/></body>
+        <body name="slab" pos="0 0 1"><joint/><geom type="box" size="0.1 0.2 0.3" mass="3"/></body>
       </worldbody>
     </mujoco>"""
     scene = read_mjcf(_write(tmp_path, text, "g.xml")).scene

@@ -57,7 +57,8 @@ def _write(tmp_path, text, name="arm.urdf"):
 def test_bodies_sit_at_their_coms_with_the_inertia_rotated_into_the_link_frame(tmp_path):
     model = read_urdf(_write(tmp_path, ARM), positions={"shoulder": 0.3})
     scene = model.scene
-    assert [b.name for b in scene.bodies] == ["base", "upper"]  # tool merged, weight merged, marker dropped
+    # The fixed base is the world's; tool and weight merged into upper; the massless marker dropped.
+    assert [b.name for b in scene.bodies] == ["upper"]
     upper = scene.body("upper")
     # The inertial frame is turned 90 degrees about z: its x and y moments swap in the link frame; the
     # 0.5 kg point mass merged at (0.6, 0.2, 0) in the link frame moves the COM and adds m d^2 terms.
@@ -70,15 +71,14 @@ def test_bodies_sit_at_their_coms_with_the_inertia_rotated_into_the_link_frame(t
     assert upper.mass == pytest.approx(2.0, abs=EXACT_TOL)
     np.testing.assert_allclose(upper.inertia_matrix, I, atol=EXACT_TOL)
     j = scene.joint("upper")
-    assert j.kind == "revolute" and j.parent == "base" and j.q0 == (0.3,)
-    # The joint origin (0, 0, 0.3) in the base link frame, from the base COM at (0, 0, 0.1); the child's
-    # link origin (the joint frame) seen from its COM.
-    np.testing.assert_allclose(j.parent_point, [0.0, 0.0, 0.2], atol=EXACT_TOL)
+    assert j.kind == "revolute" and j.parent == "world" and j.q0 == (0.3,)
+    # The joint origin (0, 0, 0.3) in the base link frame, which is the world's; the child's link origin (the
+    # joint frame) seen from its COM.
+    np.testing.assert_allclose(j.parent_point, [0.0, 0.0, 0.3], atol=EXACT_TOL)
     np.testing.assert_allclose(j.child_point, -c, atol=EXACT_TOL)
     np.testing.assert_allclose(spatial.quat_to_matrix(j.parent_quat), rpy_to_matrix([np.pi / 2, 0, 0]), atol=EXACT_TOL)
-    root = scene.joint("base")
-    assert root.kind == "weld" and root.parent == "world"
-    np.testing.assert_allclose(root.child_point, [0.0, 0.0, -0.1], atol=EXACT_TOL)
+    merged = {e.element: e.value for e in model.effects.effects if e.kind == "merged"}
+    assert merged["<link name='base'>"] == "into the world (the fixed root)"
     assert model.joint_names == {"shoulder": "upper"}
 
 
@@ -86,7 +86,7 @@ def test_the_file_s_effects_are_collected_and_left_out(tmp_path):
     effects = read_urdf(_write(tmp_path, ARM)).effects
     assert effects.kinds() == ["damping", "dropped", "friction", "limit", "merged", "transmission"]
     assert "damping" in str(effects) and "left out" in str(effects)
-    assert read_urdf(_write(tmp_path, ARM)).scene.effects == {"gravity", "joint:revolute", "joint:weld"}
+    assert read_urdf(_write(tmp_path, ARM)).scene.effects == {"gravity", "joint:revolute"}
 
 
 def test_rpy_is_fixed_axis_roll_pitch_yaw():
@@ -159,23 +159,26 @@ def _have_robots():
 robots = pytest.mark.skipif(not _have_robots(), reason="example-robot-data not installed (pip install "
                                                        "dalembert[robots])")
 
-# example-robot-data 6.0.0: the 69 URDFs it installs, of which these 10 do not import (fixed base), by reason.
-# The other 59 do (test below). "bad inertia": a moving link whose <inertia> no rigid body has (zero
-# moments with a mass: icub's ankles; the triangle inequality broken: allegro, romeo, pr2's head plate;
-# a zero moment: finger_edu); human.urdf moves massless "virtual" links; ur3.urdf is an empty xacro stub.
+# example-robot-data 6.0.0: the 69 URDFs it installs, of which these 12 do not import with a fixed base, by
+# reason; the other 57 do (test below). "bad inertia": a moving link whose <inertia> no rigid body has (zero
+# moments with a mass: icub's ankles; the triangle inequality broken: allegro, romeo, pr2's head plate; a zero
+# moment: finger_edu); human.urdf moves massless "virtual" links; ur3.urdf is an empty xacro stub; the two
+# quadrotors are single rigid bodies (no moving joint), which import with a floating base instead.
 REFUSED = {
     "allegro_hand_description/urdf/allegro_left_hand.urdf": "bad inertia",
     "allegro_hand_description/urdf/allegro_right_hand.urdf": "bad inertia",
     "finger_edu_description/robots/finger_edu.urdf": "bad inertia",
+    "hector_description/robots/quadrotor_base.urdf": "no moving joints",
     "human_description/robots/human.urdf": "massless moving link",
     "icub_description/robots/icub.urdf": "bad inertia",
     "icub_description/robots/icub_reduced.urdf": "bad inertia",
+    "iris_description/robots/iris_simple.urdf": "no moving joints",
     "pr2_description/urdf/pr2.urdf": "bad inertia",
     "romeo_description/urdf/romeo_laas_small.urdf": "bad inertia",
     "romeo_description/urdf/romeo_small.urdf": "bad inertia",
     "ur_description/urdf/ur3.urdf": "no links",
 }
-IMPORTED_COUNT = 59
+IMPORTED_COUNT = 57
 
 
 @robots
@@ -189,6 +192,8 @@ def test_every_urdf_of_example_robot_data_imports_or_says_why():
         except ModelError as err:
             assert os.path.basename(path) in str(err)
             refused[rel] = err.reason
+            if err.reason == "no moving joints":
+                assert read_urdf(path, base="free").scene.joints[0].kind == "free"
         else:
             imported.append(rel)
     assert refused == REFUSED

@@ -14,8 +14,9 @@ turns it into a ``Scene`` whose body frames sit at each link's COM with the link
   physics of the welded pair, and what Pinocchio's URDF reader does with every fixed joint. A massless
   subtree (frames only, whatever its joints) is left out; a massless link that carries massive links
   through a moving joint is refused, naming the link (its joint would have no inertia of its own);
-* the root link is welded to the world (``base="fixed"``; one that is not a body on its own is part of the
-  world) or free (``base="free"``; a root without mass, even with its fixed links merged in, is refused).
+* the root link is part of the world (``base="fixed"``: it does not move, so its mass acts on nothing that
+  moves), with every link fixed to it, or free (``base="free"``; a root without mass, even with its fixed
+  links merged in, is refused). A fixed-base scene so starts at its first moving joints.
 
 Effects the file calls for beyond bodies and joints (damping, friction, armature, limits, springs,
 actuators, transmissions, mimic joints) are collected in ``FileEffects`` and left out of the scene.
@@ -253,9 +254,9 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
         mine = (lk.mass, np.asarray(lk.com, float), I_L)
         j = parent_of.get(link)
         if j is None:
-            if base == "free" or _is_body(*mine):
+            if base == "free":
                 home[link], props[link] = (link, _pose(np.zeros(3), np.eye(3))), mine
-            else:  # a fixed base without a body's inertia of its own: it is part of the world
+            else:  # a fixed base does not move: it is part of the world (its mass acts on nothing that moves)
                 home[link] = ("world", _pose(np.zeros(3), np.eye(3)))
                 effects.append(FileEffect(f"<{tag} name='{link}'>", "merged", "into the world (the fixed root)"))
             continue
@@ -266,11 +267,11 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
         owner, X_OP = home[j.parent]
         X_OJ = _compose(X_OP, _pose(j.p_PJ, j.R_PJ))
         inner[link] = (owner, X_OJ)
-        if j.kind == "fixed" and (not _is_body(*mine) or (owner != "world" and props[owner][0] <= 0.0)):
+        if j.kind == "fixed" and (owner == "world" or not _is_body(*mine) or props[owner][0] <= 0.0):
             X_CJ = _pose(j.p_CJ, j.R_CJ)
             X_OC = _compose(X_OJ, (-X_CJ[1].T @ X_CJ[0], X_CJ[1].T))
             home[link] = (owner, X_OC)
-            if owner != "world" and lk.mass > 0.0:
+            if owner != "world" and lk.mass > 0.0:  # (what is fixed to the world is the world's)
                 props[owner] = _combine(props[owner], (lk.mass, X_OC[0] + X_OC[1] @ mine[1],
                                                        X_OC[1] @ I_L @ X_OC[1].T))
             effects.append(FileEffect(f"<{tag} name='{link}'>", "merged",
@@ -305,8 +306,6 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
                 q0 = positions.get("base", (*com, 1.0, 0.0, 0.0, 0.0))
                 scene_joints.append(Joint("free", "world", link, q0=q0, v0=velocities.get("base", (0.0,) * 6)))
                 joint_names["base"] = link
-            else:
-                scene_joints.append(Joint("weld", "world", link, child_point=-com))
             continue
         owner, X_OJ = inner[link]
         kind = KINDS[j.kind]
@@ -337,6 +336,10 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
     if unknown:
         raise ModelError(f"{path}: initial coordinates for {unknown[:5]}, not moving joints of the model — use the "
                          f"file's joint names: {list(joint_names)[:8]}...", "bad argument")
+    if not bodies:
+        raise ModelError(f"{path}: nothing moves — with a fixed base the file has no moving joint (the whole robot "
+                         "is one rigid body fixed to the world): pass base='free' for a floating base",
+                         "no moving joints")
     try:
         scene = Scene(name, bodies, scene_joints, gravity)
     except SceneError as err:
