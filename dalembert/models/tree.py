@@ -184,7 +184,7 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
     name : str — the scene's name
     links : list of LinkSpec; joints : list of JointSpec (one per non-root link, a tree)
     effects : list of FileEffect — the file's extra effects; merges and drops are added here
-    base : "fixed" or "free" — the root link welded to the world, or free
+    base : "fixed" or "free" — the root link part of the world (with every link fixed to it), or free
     gravity : 3 floats, m/s^2, world
     positions, velocities : dict — the file's joint name -> its initial coordinate (rad or m) and rate
         (rad/s or m/s), 0 where not given; for a free base, ``"base"`` -> the free joint's 7 coordinates /
@@ -205,7 +205,7 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
     joints = [replace(j, kind="fixed") if j.name in locked else j for j in joints]
     effects += [FileEffect(f"<joint name='{n}'>", "locked", "held at 0 (asked for)") for n in sorted(locked)]
     if base not in ("fixed", "free"):
-        raise ModelError(f"{path}: base={base!r} — use 'fixed' (welded to the world) or 'free' (a floating base)",
+        raise ModelError(f"{path}: base={base!r} — use 'fixed' (the root is the world's) or 'free' (a floating base)",
                          "bad argument")
     if not links:
         raise ModelError(f"{path}: no links — the file defines no robot (a xacro macro file is expanded by xacro "
@@ -274,9 +274,9 @@ def build_scene(path, name, links, joints, effects, base="fixed", gravity=(0.0, 
             if owner != "world" and lk.mass > 0.0:  # (what is fixed to the world is the world's)
                 props[owner] = _combine(props[owner], (lk.mass, X_OC[0] + X_OC[1] @ mine[1],
                                                        X_OC[1] @ I_L @ X_OC[1].T))
-            effects.append(FileEffect(f"<{tag} name='{link}'>", "merged",
-                                      f"into '{owner}' (fixed joint; mass {lk.mass:g} kg, not a body's inertia "
-                                      "alone)"))
+            effects.append(FileEffect(f"<{tag} name='{link}'>", "merged", "into the world (fixed to the fixed base)"
+                                      if owner == "world" else f"into '{owner}' (fixed joint; mass {lk.mass:g} kg, "
+                                      "not a body's inertia alone, or its parent has none)"))
             continue
         if lk.mass <= 0.0:
             raise ModelError(f"{path}: <{tag} name='{link}'> has no mass but moves on <joint name='{j.name}'> "

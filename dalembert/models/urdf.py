@@ -136,7 +136,8 @@ def read_urdf(path, base="fixed", gravity=(0.0, 0.0, -9.81), positions=None, vel
     Parameters
     ----------
     path : str — the .urdf file
-    base : "fixed" (the root link welded to the world at the origin) or "free" (a floating base)
+    base : "fixed" (the root link, at the origin, and every link fixed to it are the world's) or "free" (a
+        floating base)
     gravity : 3 floats — m/s^2, world
     positions, velocities : dict — joint name (the file's) -> initial angle/slide and rate; ``"base"`` -> the
         free base's 7 coordinates / 6 speeds (``dalembert.kinds.JOINT_KINDS``)
