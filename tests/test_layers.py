@@ -8,6 +8,8 @@ core (it reads stores, never runs anything); ``dalembert.harness`` joins them al
 ``dalembert.testing`` (the case contract for case authors, ``check_case``) is a top-level
 module but not core: it runs the reference solver, so it is its own layer, allowed the core
 and the reference (like the cases it checks), and the harness may use it.
+``dalembert.models`` (URDF and MJCF files into scenes) is a layer beside the scene inside ``dalembert/``: it
+imports only the core, and the core may not import it; the cases use it (the robot cases).
 ``dalembert.engine_check`` (the probes of ``dalembert check-engine``) runs adapters: it is allowed the
 core, the reference and the adapters; ``dalembert.testing.check_engine`` and the harness use it.
 Every import counts, including those inside functions.
@@ -26,12 +28,13 @@ import pytest
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 with open(os.path.join(ROOT, "pyproject.toml"), "rb") as _fh:
     SETUPTOOLS = tomllib.load(_fh)["tool"]["setuptools"]
-LAYERS = ("reference", "cases", "adapters", "reports", "engine_check", "harness", "testing")
+LAYERS = ("models", "reference", "cases", "adapters", "reports", "engine_check", "harness", "testing")
 # layer -> the layers it may import ("core" is dalembert's own top-level modules)
 ALLOWED = {
     "core": {"core"},
+    "models": {"core", "models"},
     "reference": {"core", "reference"},
-    "cases": {"core", "reference", "cases"},
+    "cases": {"core", "reference", "cases", "models"},
     "adapters": {"core", "reference", "adapters"},
     "reports": {"core", "reports"},
     "engine_check": {"core", "reference", "adapters", "engine_check"},
@@ -59,7 +62,7 @@ def _modules():
                 if f.endswith(".py"):
                     name = prefix if f == "__init__.py" else f"{prefix}.{f[:-3]}"
                     out[name] = os.path.join(here, f)
-    for layer in ("harness", "engine_check"):  # the layers that live inside dalembert/
+    for layer in ("harness", "engine_check", "models"):  # the layers that live inside dalembert/
         top = os.path.join(ROOT, "dalembert", layer)
         for here, dirs, files in os.walk(top):
             dirs[:] = [d for d in dirs if os.path.exists(os.path.join(here, d, "__init__.py"))]
