@@ -117,6 +117,10 @@ def _in_environment(name, path):
     adapter = get_adapter(env.spec.engine, path)
     if not env.active:
         adapter.version = env.version  # this instance only: this process's own engine keeps its version
+
+        def elsewhere(*args, **kwargs):  # never a run of this process's engine recorded under another version
+            raise RuntimeError(f"{name} runs in its environment's workers only ({env.path}), not in {sys.prefix}")
+        adapter.prepare = adapter.run = elsewhere
     return adapter
 
 

@@ -35,7 +35,7 @@ from pathlib import Path
 from dalembert.cache import cache_dir
 
 __all__ = ["DISTRIBUTIONS", "EngineSpec", "Environment", "parse_engine", "is_versioned", "engine_of", "environment",
-           "require", "create", "environments", "remove", "installer", "WORKER_LIBRARIES"]
+           "require", "serving", "create", "environments", "remove", "installer", "WORKER_LIBRARIES"]
 
 # The distribution on the package index of each built-in adapter's engine (``importlib.metadata``'s
 # names of the installed wheels: ``pin`` is Pinocchio's, ``mujoco-mjx`` MJX's, ``dartpy`` DART's).
@@ -151,8 +151,18 @@ class Environment:
 
     @property
     def active(self):
-        """Whether this process runs in it (a worker of the environment)."""
-        return os.path.realpath(sys.prefix) == os.path.realpath(self.path)
+        """Whether this process runs in it: its interpreter's, or a pool's worker started for it (``serving``)."""
+        return os.path.realpath(self.path) in _SERVING | {os.path.realpath(sys.prefix)}
+
+
+# The environments this process is a pool's worker of (``serving``).
+_SERVING = set()
+
+
+def serving(path):
+    """Say that this process is a pool's worker started for the environment at ``path``: its versioned engine
+    runs here (``dalembert.harness.worker.serve``, started with the environment's interpreter)."""
+    _SERVING.add(os.path.realpath(path))
 
 
 def environment(name):

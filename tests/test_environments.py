@@ -213,3 +213,70 @@ def test_a_real_environment_runs_its_engine_version(tmp_path):
     assert main([*RUN, "--engine", "mujoco==3.6.0", "--out", str(out)]) in (0, 1)
     (record,) = Store(out).records()
     assert (record.engine, record.engine_version, record.status) == ("mujoco==3.6.0", "3.6.0", "ok")
+
+
+# ---------------------------------------------------------------- the report pairs the versions
+def _record(engine, version, integrator, energy, case="free_top_intermediate"):
+    from types import SimpleNamespace
+
+    from dalembert.settings import Settings
+
+    return SimpleNamespace(engine=engine, engine_version=version, case=case, case_version="v", params={},
+                           settings=Settings(integrator, dt=5e-3), errors={"orientation": (1e-3, 1e-3)},
+                           drifts={"energy": energy, "angular_momentum": 1e-3}, key=f"{engine}-{integrator}")
+
+
+def test_the_report_sets_an_engines_versions_side_by_side_and_names_what_changed():
+    """Each version a column, a group per case and settings; a drift that moved by more than CHANGE_FACTOR is
+    named with each version's value, one that did not is not; an engine at one version has no table."""
+    from types import SimpleNamespace
+
+    from dalembert.reports.sections.versions import CHANGE_FACTOR, version_groups, versions
+
+    records = [_record("mujoco==3.6.0", "3.6.0", "implicitfast", 4e-3),
+               _record("mujoco", "4.0.0", "implicitfast", 0.35),
+               _record("mujoco==3.6.0", "3.6.0", "rk4", 3e-10), _record("mujoco", "4.0.0", "rk4", 1.5 * 3e-10),
+               _record("mujoco==3.11.0", "3.11.0", "rk4", 3e-10), _record("pinocchio", "4.1.0", "rk4", 1e-9)]
+    groups = version_groups(records)
+    assert sorted(k[4] for k in groups) == ["implicitfast dt=0.005", "rk4 dt=0.005"]  # pinocchio: one version
+    rk4 = next(g for k, g in groups.items() if k[4].startswith("rk4"))
+    assert [r.engine_version for r in rk4] == ["3.6.0", "3.11.0", "4.0.0"]  # PEP 440 order, not the text's
+    md = versions(SimpleNamespace(records=records)).md
+    text = "\n".join(md)
+    assert "implicitfast dt=0.005 energy drift on free_top_intermediate: 3.6.0 0.004, 4.0.0 0.35" in text
+    assert "rk4 dt=0.005 energy drift" not in text.split("|")[0]  # 1.5x: under CHANGE_FACTOR, no finding
+    assert CHANGE_FACTOR > 1.5
+    assert "| mujoco==3.6.0 (3.6.0) | mujoco==3.11.0 (3.11.0) | mujoco (4.0.0) |" in text
+
+
+def test_a_versioned_engine_never_runs_outside_its_environment(tmp_path):
+    """In a process that is not its environment's worker, a versioned engine's adapter reports the environment's
+    version but refuses to build or run: a run of this process's engine is never recorded under another version."""
+    from dalembert.adapters import get_adapter
+
+    fake("mujoco==3.6.0", "3.6.0", tmp_path)
+    adapter = get_adapter("mujoco==3.6.0")
+    assert adapter.version() == "3.6.0" and get_adapter("mujoco").version() == mujoco.__version__
+    with pytest.raises(RuntimeError, match="runs in its environment's workers only"):
+        adapter.prepare(None, None, None)
+
+
+def test_a_dask_task_runs_a_versioned_engine_in_its_environment(tmp_path):
+    """``execute_isolated`` (a Dask task's run) starts the environment's interpreter for a versioned engine."""
+    from dataclasses import asdict
+
+    from dalembert.harness.dask import execute_isolated
+    from dalembert.harness.execute import QUICK
+    from dalembert.harness.matrix import expand
+    from dalembert.harness.truths import build
+    from dalembert.store import trajectory_to_npz
+
+    version = mujoco.__version__
+    name = f"mujoco=={version}"
+    pids = fake(name, version, tmp_path)
+    (spec,), _ = expand(["free_top_intermediate"], engines=[name], integrators=["rk4"], dts=[5e-3],
+                        params={"t_final": 0.5})
+    (_, made), = build([spec]).values()
+    record, _ = execute_isolated(spec.to_json(), asdict(QUICK), trajectory_to_npz(made), 120)
+    assert (record.engine, record.status) == (name, "ok"), record.message
+    assert record.provenance["pid"] in _pids(pids)

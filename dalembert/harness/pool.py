@@ -159,7 +159,8 @@ class _Interpreter:
     def __init__(self, python, fd, parent, n_threads, engines):
         boot = ("import sys; sys.path[:] = [p for p in sys.path if p not in ('', '.')]; "
                 "from dalembert.harness.worker import serve; serve()")
-        args = json.dumps({"fd": fd, "parent": parent, "threads": n_threads, "engines": [list(e) for e in engines]})
+        args = json.dumps({"fd": fd, "parent": parent, "threads": n_threads, "engines": [list(e) for e in engines],
+                           "environment": os.path.dirname(os.path.dirname(python))})  # (python: ENV/bin/python)
         self.popen = subprocess.Popen([python, "-c", boot, args], pass_fds=(fd,), stdin=subprocess.DEVNULL)
 
     @property
