@@ -1,8 +1,8 @@
 """Workers started as their own interpreter.
 
 ``python -m dalembert.harness.worker``: run one spec read (pickled: spec, timing, truth
-npz, and the engine environment it was started for, if any) from stdin, write the pickled ``(RunRecord, trajectory npz)`` to stdout. Used to
-isolate runs on Dask workers.
+npz, and the engine environment it was started for, if any) from stdin, write the pickled
+``(RunRecord, trajectory npz)`` to stdout. Used to isolate runs on Dask workers.
 
 ``serve()``: a pool's long-lived worker in an engine environment's interpreter
 (``dalembert.harness.pool._Interpreter`` starts it), reading its settings as JSON from
