@@ -280,3 +280,22 @@ def test_a_dask_task_runs_a_versioned_engine_in_its_environment(tmp_path):
     record, _ = execute_isolated(spec.to_json(), asdict(QUICK), trajectory_to_npz(made), 120)
     assert (record.engine, record.status) == (name, "ok"), record.message
     assert record.provenance["pid"] in _pids(pids)
+
+
+def test_mujoco_before_its_spring_and_damper_flags_disables_passive_forces_by_their_old_name(monkeypatch):
+    """MuJoCo 3.2 and older have one ``passive`` flag where later releases have ``spring`` and ``damper``: the
+    MJCF names the one the installed MuJoCo knows (3.2.7 refused ``spring`` as an unknown attribute)."""
+    from types import SimpleNamespace
+
+    from dalembert.adapters.mujoco.mjcf import mjcf
+    from dalembert.case import load_cases
+    from dalembert.settings import Settings
+
+    case = load_cases()["free_top_intermediate"]()
+    now = mjcf(case.scene, Settings("rk4", dt=5e-3))
+    assert 'spring="disable"' in now and "passive" not in now
+    old = SimpleNamespace(**{n: getattr(mujoco.mjtDisableBit, n) for n in dir(mujoco.mjtDisableBit)
+                             if n.startswith("mjDSBL") and n not in ("mjDSBL_SPRING", "mjDSBL_DAMPER")})
+    monkeypatch.setattr(mujoco, "mjtDisableBit", old)
+    before = mjcf(case.scene, Settings("rk4", dt=5e-3))
+    assert 'passive="disable"' in before and "spring=" not in before and "damper=" not in before
