@@ -4,8 +4,8 @@ An engine named with a requirement (``mujoco==3.6.0``, PEP 440: any specifier th
 understands) runs in an environment made for it by ``dalembert env create mujoco==3.6.0``: a
 virtual environment at ``cache_dir("environments", ...)`` holding dalembert's worker side (this
 checkout, installed editable with ``--no-deps``, so that the worker's code is always the parent's),
-numpy, scipy and threadpoolctl at this environment's versions (the records and trajectories cross
-between the two interpreters as pickles), and the engine's distribution at the asked version with
+``WORKER_LIBRARIES`` at this environment's versions (the records and trajectories cross between the
+two interpreters as pickles), and the engine's distribution at the asked version with
 its own dependencies. It is made with ``uv`` when ``uv`` is on PATH, else with ``venv`` and pip, from
 this interpreter (the same Python version: a pickle's classes and numpy's arrays must read the same).
 
