@@ -35,7 +35,7 @@ from pathlib import Path
 from dalembert.cache import cache_dir
 
 __all__ = ["DISTRIBUTIONS", "EngineSpec", "Environment", "parse_engine", "is_versioned", "engine_of", "environment",
-           "require", "serving", "create", "environments", "remove", "installer", "WORKER_LIBRARIES"]
+           "require", "serving", "create", "environments", "remove", "installer", "WORKER_LIBRARIES", "ENGINE_LIBRARIES"]
 
 # The distribution on the package index of each built-in adapter's engine (``importlib.metadata``'s
 # names of the installed wheels: ``pin`` is Pinocchio's, ``mujoco-mjx`` MJX's, ``dartpy`` DART's).
@@ -45,6 +45,10 @@ DISTRIBUTIONS = {"mujoco": "mujoco", "pinocchio": "pin", "exudyn": "exudyn", "dr
 # scipy (arrays and the truths' integrators; a pickled array must read the same), threadpoolctl (each
 # worker's thread pools, ``dalembert.harness.threads``), packaging (an engine's name read as a requirement).
 WORKER_LIBRARIES = ("numpy", "scipy", "threadpoolctl", "packaging")
+# What an engine's adapter needs beside the engine's own dependencies (pyproject's), at this environment's versions:
+# Pinocchio's compiled stepper builds against Eigen's headers from ``cmeel-eigen`` (without them its runs take the
+# Python loop, and say so in their audit).
+ENGINE_LIBRARIES = {"pinocchio": ("cmeel-eigen",)}
 # The file in an environment that says what it holds (written last: an environment without it is unfinished).
 INFO = "environment.json"
 # A requirement's first operator character: a name without one is a plain engine name.
@@ -203,12 +207,12 @@ def _checkout():
     return str(root)
 
 
-def _pinned():
-    """``WORKER_LIBRARIES`` at this environment's versions (``numpy==2.1.3``, ...); one not installed is left to pip."""
+def _pinned(libraries=WORKER_LIBRARIES):
+    """``libraries`` at this environment's versions (``numpy==2.1.3``, ...); one not installed is left to pip."""
     from importlib import metadata
 
     out = []
-    for lib in WORKER_LIBRARIES:
+    for lib in libraries:
         try:
             out.append(f"{lib}=={metadata.version(lib)}")
         except metadata.PackageNotFoundError:
@@ -250,7 +254,8 @@ def create(name, log=lambda line: None, tool=None, problem=None):
             _call([sys.executable, "-m", "venv", partial], "venv", log)
             pip = [python, "-m", "pip", "install", "--quiet", "--disable-pip-version-check"]
         _call(pip + ["--no-deps", "-e", checkout], "installing dalembert's worker side", log)
-        _call(pip + _pinned() + [env.spec.requirement], f"installing {env.spec.requirement}", log)
+        _call(pip + _pinned() + _pinned(ENGINE_LIBRARIES.get(env.spec.engine, ())) + [env.spec.requirement],
+              f"installing {env.spec.requirement}", log)
         version = _call([python, "-c", "import importlib.metadata as m, sys; "
                          f"print(m.version({env.spec.distribution!r}))"], "reading the engine's version", log).strip()
         why = problem(version) if problem else None
