@@ -254,8 +254,10 @@ def create(name, log=lambda line: None, tool=None, problem=None):
             _call([sys.executable, "-m", "venv", partial], "venv", log)
             pip = [python, "-m", "pip", "install", "--quiet", "--disable-pip-version-check"]
         _call(pip + ["--no-deps", "-e", checkout], "installing dalembert's worker side", log)
-        _call(pip + _pinned() + _pinned(ENGINE_LIBRARIES.get(env.spec.engine, ())) + [env.spec.requirement],
-              f"installing {env.spec.requirement}", log)
+        pinned = _pinned() + _pinned(ENGINE_LIBRARIES.get(env.spec.engine, ()))
+        _call(pip + pinned + [env.spec.requirement], f"installing {env.spec.requirement} beside {' '.join(pinned)} "
+              "(this environment's versions: the worker's arrays must read as the parent's; an engine release that "
+              "needs others cannot run beside this dalembert)", log)
         version = _call([python, "-c", "import importlib.metadata as m, sys; "
                          f"print(m.version({env.spec.distribution!r}))"], "reading the engine's version", log).strip()
         why = problem(version) if problem else None
