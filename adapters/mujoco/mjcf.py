@@ -97,9 +97,12 @@ DISABLED = ("contact", "constraint", "equality", "limit", "frictionloss", "sprin
 
 def _disabled_names():
     """``DISABLED`` as the installed MuJoCo names its flags: releases without the ``spring`` and ``damper`` flags
-    (3.2 and older: no ``mjDSBL_SPRING``) disable both with one, ``passive``."""
-    import mujoco
-
+    (3.2 and older: no ``mjDSBL_SPRING``) disable both with one, ``passive``. Without MuJoCo (the model written
+    as text alone), the current names."""
+    try:
+        import mujoco
+    except ImportError:
+        return DISABLED
     if hasattr(mujoco.mjtDisableBit, "mjDSBL_SPRING"):
         return DISABLED
     return tuple(dict.fromkeys("passive" if f in ("spring", "damper") else f for f in DISABLED))
