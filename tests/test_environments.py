@@ -235,6 +235,7 @@ def test_the_report_sets_an_engines_versions_side_by_side_and_names_what_changed
 
     records = [_record("mujoco==3.6.0", "3.6.0", "implicitfast", 4e-3),
                _record("mujoco", "4.0.0", "implicitfast", 0.35),
+               _record("mujoco==3.11.0", "3.11.0", "implicitfast", 0.35),
                _record("mujoco==3.6.0", "3.6.0", "rk4", 3e-10), _record("mujoco", "4.0.0", "rk4", 1.5 * 3e-10),
                _record("mujoco==3.11.0", "3.11.0", "rk4", 3e-10), _record("pinocchio", "4.1.0", "rk4", 1e-9)]
     groups = version_groups(records)
@@ -243,7 +244,7 @@ def test_the_report_sets_an_engines_versions_side_by_side_and_names_what_changed
     assert [r.engine_version for r in rk4] == ["3.6.0", "3.11.0", "4.0.0"]  # PEP 440 order, not the text's
     md = versions(SimpleNamespace(records=records)).md
     text = "\n".join(md)
-    assert "implicitfast dt=0.005 energy drift on free_top_intermediate: 3.6.0 0.004, 4.0.0 0.35" in text
+    assert "implicitfast dt=0.005 energy drift on free_top_intermediate: 3.6.0 0.004, 3.11.0-4.0.0 0.35" in text
     assert "rk4 dt=0.005 energy drift" not in text.split("|")[0]  # 1.5x: under CHANGE_FACTOR, no finding
     assert CHANGE_FACTOR > 1.5
     assert "| mujoco==3.6.0 (3.6.0) | mujoco==3.11.0 (3.11.0) | mujoco (4.0.0) |" in text

@@ -64,13 +64,21 @@ def version_groups(records):
 
 
 def _changes(group, label):
-    """The line saying how ``group``'s quantity ``label`` changed across versions, or None under ``CHANGE_FACTOR``."""
+    """The line saying how ``group``'s quantity ``label`` changed across versions (``3.2.7-3.6.0 0.085, 3.7.0
+    1.3e-10``), or None under ``CHANGE_FACTOR``."""
     where, key = next((w, k) for lab, w, k in QUANTITIES if lab == label)
     values = [(r, _value(r, where, key)) for r in group]
     finite = [v for _, v in values if math.isfinite(v) and v > 0]
     if len(finite) < 2 or max(finite) / min(finite) < CHANGE_FACTOR:
         return None
-    return ", ".join(f"{r.engine_version} {v:.2g}" for r, v in values)
+    spans = []  # consecutive versions with one value (as written) are one span: the change shows where it happened
+    for r, v in values:
+        text = f"{v:.2g}"
+        if spans and spans[-1][2] == text:
+            spans[-1][1] = r.engine_version
+        else:
+            spans.append([r.engine_version, r.engine_version, text])
+    return ", ".join(f"{a}{'' if a == b else '-' + b} {text}" for a, b, text in spans)
 
 
 def versions(rep):
