@@ -190,9 +190,23 @@ class Adapter:
     integrators = {}
     # name -> Option: every option an integrator's ``IntegratorSpec.options`` names, and the values it takes
     options = {}
+    # The engine versions this adapter runs, a PEP 440 specifier (``">=3.2"``; empty: any), and why not the
+    # others (an API or MJCF the adapter needs that older releases lack): an engine environment at a version
+    # outside it is refused with the reason (``version_problem``).
+    supported_versions = ""
+    unsupported_versions_why = ""
 
     def version(self):
         raise NotImplementedError
+
+    def version_problem(self, version):
+        """Why engine version ``version`` (str) cannot be run by this adapter (``supported_versions``), or None."""
+        from packaging.specifiers import SpecifierSet
+
+        if not self.supported_versions or SpecifierSet(self.supported_versions).contains(version, prereleases=True):
+            return None
+        why = f" ({self.unsupported_versions_why})" if self.unsupported_versions_why else ""
+        return f"{self.name} {version} is outside the versions its adapter supports, {self.supported_versions}{why}"
 
     def load(self):
         """Import the engine (once per process; ImportError when it is missing): a worker loads its engines

@@ -91,7 +91,12 @@ def register_adapter(name, cls):
 
 
 def adapter_path(name):
-    """``"module:Class"`` of the adapter registered as ``name`` (how another process imports it)."""
+    """``"module:Class"`` of the adapter registered as ``name`` (how another process imports it); a versioned
+    name's (``mujoco==3.6.0``) is its engine's."""
+    if name not in _REGISTRY and name not in BUILTIN and _versioned(name):
+        from dalembert.environments import parse_engine
+
+        name = parse_engine(name).engine
     if name in _REGISTRY:
         cls = _REGISTRY[name]
         return f"{cls.__module__}:{cls.__qualname__}"
@@ -101,6 +106,29 @@ def adapter_path(name):
     if name in eps:
         return eps[name].value
     raise UnknownNameError(f"unknown engine {name!r}{suggest(name, adapter_names())}")
+
+
+def _in_environment(name, path):
+    """The adapter of versioned engine ``name`` (``mujoco==3.6.0``): its engine's, whose ``version()`` outside the
+    engine's environment is the environment's (``Environment.version``: ImportError naming ``dalembert env
+    create`` when it was not made) and inside it, in the environment's worker, the engine's own."""
+    from dalembert.environments import environment
+
+    env = environment(name)
+    adapter = get_adapter(env.spec.engine, path)
+    if not env.active:
+        adapter.version = env.version  # this instance only: this process's own engine keeps its version
+
+        def elsewhere(*args, **kwargs):  # never a run of this process's engine recorded under another version
+            raise RuntimeError(f"{name} runs in its environment's workers only ({env.path}), not in {sys.prefix}")
+        adapter.prepare = adapter.run = elsewhere
+    return adapter
+
+
+def _versioned(name):
+    from dalembert.environments import is_versioned
+
+    return is_versioned(name)
 
 
 def adapter_names():
@@ -150,8 +178,11 @@ def get_adapter(name, path=None):
 
     ``path`` (``"module:Class"``) lets a worker process import an adapter that
     was registered programmatically in its parent. A plugin that cannot be imported raises ``ImportError``
-    naming it and its distribution.
+    naming it and its distribution. A versioned name (``mujoco==3.6.0``) is its engine's adapter, in an engine
+    environment (``dalembert.environments.adapter_for``).
     """
+    if name not in _REGISTRY and name not in BUILTIN and _versioned(name):
+        return _in_environment(name, path)
     if name not in _REGISTRY and path and name not in BUILTIN:
         module, cls = path.split(":")
         obj = getattr(importlib.import_module(module), cls)

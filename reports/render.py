@@ -39,6 +39,7 @@ from dalembert.reports.sections.parity import parity
 from dalembert.reports.sections.runs import every_run
 from dalembert.reports.sections.scaling import scaling
 from dalembert.reports.sections.stability import stability
+from dalembert.reports.sections.versions import versions
 from dalembert.reports.sections.work_precision import work_precision
 from dalembert.store import atomic_write
 
@@ -97,7 +98,7 @@ def build_report(store, out_dir=None):
     summary, summary_rows = findings(rep)
     mapped_part, mapped = maps(rep)
     parts = [header(rep), summary, hazards(rep), mapped_part, loops(rep), scaling(rep), observed_order(rep),
-             parity(rep)]
+             parity(rep), versions(rep)]
     for f in found:
         parts += _case_sections(rep, f, names, mapped)
     html_path, md_path = write_page([p for p in parts if p], out_dir)

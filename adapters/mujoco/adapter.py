@@ -88,6 +88,10 @@ class MujocoAdapter(Adapter):
         "implicitfast": IntegratorSpec(True, OPTIONS, "implicit in velocity, no Coriolis derivatives", order=1),
         "discrete": IntegratorSpec(True, OPTIONS, "MuJoCo 4's discrete integrator", order=1),
     }
+    # Run here on the canonical cases from 3.2.7 to 4.0.0 (every minor release, in engine environments); 3.2 and
+    # older name the passive-force flags otherwise (``mjcf._disabled_names``: a shim).
+    supported_versions = ">=3.2"
+    unsupported_versions_why = "releases before 3.2 were never run with this adapter's MJCF and API"
 
     def version(self):
         import mujoco

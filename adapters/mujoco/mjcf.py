@@ -95,6 +95,19 @@ DISABLED = ("contact", "constraint", "equality", "limit", "frictionloss", "sprin
             "autoreset")
 
 
+def _disabled_names():
+    """``DISABLED`` as the installed MuJoCo names its flags: releases without the ``spring`` and ``damper`` flags
+    (3.2 and older: no ``mjDSBL_SPRING``) disable both with one, ``passive``. Without MuJoCo (the model written
+    as text alone), the current names."""
+    try:
+        import mujoco
+    except ImportError:
+        return DISABLED
+    if hasattr(mujoco.mjtDisableBit, "mjDSBL_SPRING"):
+        return DISABLED
+    return tuple(dict.fromkeys("passive" if f in ("spring", "damper") else f for f in DISABLED))
+
+
 def _f(x):
     return " ".join(repr(float(v)) for v in np.ravel(x))
 
@@ -216,8 +229,8 @@ def mjcf(scene, settings):
         children.setdefault(WORLD if j in weld_constraints else j.parent, []).append(j)
     gravity = np.array(scene.gravity)
     constrained = bool(weld_constraints or scene.loops)
-    disabled = [f for f in DISABLED if not (constrained and f in ("constraint", "equality"))
-                and not (scene.springs and f in ("spring", "damper"))
+    disabled = [f for f in _disabled_names() if not (constrained and f in ("constraint", "equality"))
+                and not (scene.springs and f in ("spring", "damper", "passive"))
                 and not (scene.contacts and f in ("constraint", "contact"))]
     if scene.loops and _loop_steps(settings) < 2.0:
         disabled.append("refsafe")  # MuJoCo would clamp the time constant to 2 steps

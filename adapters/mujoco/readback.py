@@ -151,7 +151,8 @@ def _state_dynamics(model):
 
     import mujoco
 
-    if model.opt.integrator != mujoco.mjtIntegrator.mjINT_DISCRETE:
+    discrete = getattr(mujoco.mjtIntegrator, "mjINT_DISCRETE", None)  # MuJoCo 4's; earlier releases have none
+    if discrete is None or model.opt.integrator != discrete:
         return model
     out = copy.copy(model)
     out.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER

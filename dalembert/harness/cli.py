@@ -13,8 +13,8 @@ import os
 import sys
 import warnings
 
-from dalembert.harness.commands import (cases, check_engine, compare, engines, export, report, repro, show_model,
-                                         truth, validate)
+from dalembert.harness.commands import (cases, check_engine, compare, engines, env, export, report, repro,
+                                         show_model, truth, validate)
 from dalembert.harness.commands import run as run_command
 from dalembert.harness.commands.console import fail as _fail
 from dalembert.terminal import printable
@@ -30,6 +30,8 @@ EPILOG = """examples:
   dalembert validate --case pivoted_rod
   dalembert check-engine mujoco --integrator rk4
   dalembert repro results/top --key free_top__mujoco__rk4__0123456789ab --out top_mujoco.py
+  dalembert env create mujoco==3.6.0
+  dalembert run --engine mujoco==3.6.0 --engine mujoco --case free_top_intermediate --integrator rk4 --dt 5e-3
 """
 
 
@@ -209,6 +211,16 @@ def _parser():
     rr.add_argument("--key", required=True, help="the run's key (the report's run tables and runs.parquet list them)")
     rr.add_argument("--out", default="-", metavar="FILE", help="the script (default - : standard output)")
 
+    en = sub.add_parser("env", help="engine environments: an engine at a version of its own (create, list, remove)",
+                        epilog="examples:\n  dalembert env create mujoco==3.6.0\n  dalembert env list\n"
+                               "  dalembert env remove mujoco==3.6.0\n\ncreate reaches the package index (uv if on "
+                               "PATH, else venv and pip); run --engine mujoco==3.6.0 then runs its runs there.",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    en.add_argument("env_action", choices=("create", "list", "remove"), metavar="{create,list,remove}")
+    en.add_argument("engine", nargs="?", default=None, help="ENGINE==VERSION (a PEP 440 requirement), e.g. "
+                                                            "mujoco==3.6.0; none for list")
+    en.add_argument("--verbose", "-v", action="store_true", help="print each install command, and each path")
+
     v = sub.add_parser("validate", help="run every case (not tagged hard) with the reference solver against its truth",
                        epilog="example:\n  dalembert validate --case pivoted_rod",
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -224,7 +236,7 @@ USER_ERRORS = (ValueError, KeyError, ImportError, OSError)
 # Each command's module (its ``main(args)``).
 COMMANDS = {"cases": cases.main, "engines": engines.main, "run": run_command.main, "report": report.main,
             "show-model": show_model.main, "validate": validate.main, "truth": truth.main, "export": export.main,
-            "compare": compare.main, "check-engine": check_engine.main, "repro": repro.main}
+            "compare": compare.main, "check-engine": check_engine.main, "repro": repro.main, "env": env.main}
 
 
 def _refuse_empty(parser, args):

@@ -22,14 +22,24 @@ otherwise the first run of a group no other worker holds. An engine that compile
 and integrator (MJX: seconds per compilation, kept in the process) then compiles it once per worker
 and group instead of once per run, where plain order would hand a sweep's runs to the workers in turn.
 The matrix's runs and records are the same; only who runs which, and when, changes.
+
+Engine environments: the runs of a versioned engine (``mujoco==3.6.0``, ``dalembert.environments``) go to
+workers started from that environment's interpreter, a subprocess (``_Interpreter``: ``python -m``-like, the
+pipe's socket passed as a file descriptor) that serves the same protocol and sets up the same lifetime
+(``die_with_parent``). A worker takes only runs of its interpreter; a free worker with none left in the
+queue ends and a worker for the next run's interpreter starts in its place, so ``jobs`` workers run at
+most. Timing, timeouts, deaths and stops from outside are told and stored as for any worker.
 """
 
 from __future__ import annotations
 
 import contextlib
+import json
 import multiprocessing as mp
 import os
 import signal
+import subprocess
+import sys
 import threading
 import time
 from multiprocessing.connection import wait
@@ -113,22 +123,75 @@ def affinity(spec):
     return (spec.case, spec.case_version, spec.engine, spec.settings.integrator, spec.settings.options)
 
 
-def _take(queue, worker, held):
+def _take(queue, worker, held, pythons=None):
     """Pop from ``queue`` (``(group, spec)``, next run last) the run ``worker`` should do: one of its last
     run's group, else the first of a group not in ``held`` (the groups the busy workers are on), else the
-    next."""
-    for wanted in (lambda g: g == worker.group, lambda g: g not in held):
-        for i in range(len(queue) - 1, -1, -1):
+    next; only runs of the worker's interpreter (``pythons``: engine -> interpreter, None for this one's),
+    None when the queue holds none."""
+    pythons = pythons or {}
+    python = getattr(worker, "python", None)
+    mine = [i for i in range(len(queue) - 1, -1, -1) if pythons.get(queue[i][0][2]) == python]
+    for wanted in (lambda g: g == worker.group, lambda g: g not in held, lambda g: True):
+        for i in mine:
             if wanted(queue[i][0]):
                 return queue.pop(i)[1]
-    return queue.pop()[1]
+    return None
+
+
+def _pythons(specs):
+    """The interpreter of each engine of ``specs`` that runs in an engine environment (``mujoco==3.6.0``): its
+    environment's; ValueError naming the command that makes a missing one (before any worker starts)."""
+    from dalembert.adapters import get_adapter
+    from dalembert.environments import is_versioned, require
+
+    return {e: require(e, problem=get_adapter(e).version_problem).python for e in sorted({s.engine for s in specs})
+            if is_versioned(e)}
+
+
+class _Interpreter:
+    """A worker process started from another interpreter (an engine environment's), with the interface of
+    ``multiprocessing.Process`` the pool uses (``kill``, ``join``, ``is_alive``, ``exitcode``).
+
+    ``fd``: the worker's end of the pipe (a socket), passed to it; the worker serves ``_serve``'s protocol on
+    it (``dalembert.harness.worker.serve``). The checkout on the path is left out (``''``): the worker imports
+    the dalembert installed in its environment, the same checkout installed editable."""
+
+    def __init__(self, python, fd, parent, n_threads, engines):
+        boot = ("import sys; sys.path[:] = [p for p in sys.path if p not in ('', '.')]; "
+                "from dalembert.harness.worker import serve; serve()")
+        args = json.dumps({"fd": fd, "parent": parent, "threads": n_threads, "engines": [list(e) for e in engines],
+                           "environment": os.path.dirname(os.path.dirname(python))})  # (python: ENV/bin/python)
+        self.popen = subprocess.Popen([python, "-c", boot, args], pass_fds=(fd,), stdin=subprocess.DEVNULL)
+
+    @property
+    def exitcode(self):
+        return self.popen.poll()  # -signal when a signal ended it, as multiprocessing's
+
+    def is_alive(self):
+        return self.popen.poll() is None
+
+    def kill(self):
+        with contextlib.suppress(ProcessLookupError):
+            self.popen.kill()
+
+    def join(self, timeout=None):
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            self.popen.wait(timeout)
 
 
 class _Worker:
     """The parent's handle on one worker: its pipe, its process, the run it is doing."""
 
-    def __init__(self, ctx, n_threads, engines):
+    def __init__(self, ctx, n_threads, engines, python=None):
+        """``python``: the interpreter of an engine environment the worker runs in (None: this one's)."""
         self.conn, child = ctx.Pipe()
+        self.python = python
+        if python is not None:  # its parent is this process; SIGTERM held until it has its own, as a fork's
+            with sigterm_held():
+                self.proc = _Interpreter(python, child.fileno(), os.getpid(), n_threads, engines)
+            child.close()
+            self.spec, self.started, self.truths, self.group = None, 0.0, set(), None
+            return
         # a forked worker's parent is this process; a forkserver's child's is the forkserver
         forked = ctx.get_start_method() == "fork"
         parent = os.getpid() if forked else None
@@ -202,22 +265,31 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
 
     Returns the runs lost to the infrastructure, not stored: ``[(key, reason)]``.
     """
+    pythons = _pythons(specs)  # (a missing environment refused before anything runs)
     truths = prepare_cases(specs, store)
     todo = [s for s in specs if s.key not in store.done_keys()]
     n_threads = threads.per_worker(jobs or os.cpu_count())  # as asked (the manifest's), not as capped below
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(todo) or 1))
     ctx = _context()
     engines = tuple(sorted({(s.engine, s.adapter) for s in todo}))
+
+    def start(python):  # a worker for ``python``'s runs, loading only their engines
+        return _Worker(ctx, n_threads, tuple(e for e in engines if pythons.get(e[0]) == python), python)
+
     counts = {"done": 0, "bad": 0, "total": len(todo)}
     queue = [(affinity(s), s) for s in reversed(todo)]
     idle, busy, lost = [], {}, []  # busy: connection -> worker
     try:
-        for _ in range(jobs if todo else 0):  # one by one: a Ctrl-C meanwhile still finds the ones started
-            idle.append(_Worker(ctx, n_threads, engines))
+        for i in range(jobs if todo else 0):  # one by one: a Ctrl-C meanwhile still finds the ones started
+            idle.append(start(pythons.get(queue[-1 - i % len(queue)][1].engine)))
         while queue or busy:
             while queue and idle:
                 worker = idle.pop()
-                spec = _take(queue, worker, {w.group for w in busy.values()})
+                spec = _take(queue, worker, {w.group for w in busy.values()}, pythons)
+                if spec is None:  # none of its interpreter's runs left: one for the next run's takes its place
+                    worker.stop()
+                    worker = start(pythons.get(queue[-1][1].engine))
+                    spec = _take(queue, worker, {w.group for w in busy.values()}, pythons)
                 worker.submit(spec, timing, truths[(spec.case, spec.case_version)], len(busy) + 1)
                 busy[worker.conn] = worker
             # each worker stays in ``busy`` or ``idle`` until it is gone: a Ctrl-C at any point finds it
@@ -229,7 +301,7 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
                     worker.kill()
                     del busy[conn]
                     dead, code = worker.spec, worker.proc.exitcode
-                    idle.append(_Worker(ctx, n_threads, engines))
+                    idle.append(start(worker.python))
                     stopped = stopped_from_outside(dead, code)
                     if stopped:  # not the run's doing: not stored, --resume runs it
                         lost.append((dead.key, stopped))
@@ -245,7 +317,7 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
                     del busy[conn]
                     finish(store, unfinished(worker.spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"),
                            None, progress, counts)
-                    idle.append(_Worker(ctx, n_threads, engines))
+                    idle.append(start(worker.python))
     except BaseException:  # an error or Ctrl-C: no worker is left behind, the error under way is the one told
         _close(idle, busy)
         write_table(store, failing=True)

@@ -29,8 +29,8 @@ import numpy as np
 
 from dalembert.registry import suggest
 
-__all__ = ["Selection", "select", "numbers", "names", "given", "pairs", "values", "sweep", "option_sweep", "MAX_RUNS",
-           "MAX_MODEL_PARTS"]
+__all__ = ["Selection", "select", "numbers", "names", "versioned", "given", "pairs", "values", "sweep", "option_sweep",
+           "MAX_RUNS", "MAX_MODEL_PARTS"]
 
 # A guard against a slip of the keyboard (lin:1,2,100000000 for lin:1,2,10): the default matrix is
 # a few hundred runs and the largest shipped sweeps (the stability maps) a few hundred more; a
@@ -74,6 +74,28 @@ def numbers(flag, groups, notes, lower=0.0):
         notes.append(f"{flag}: {', '.join(f'{x:g}' for x in unique if values.count(x) > 1)} given more than once; "
                      "each runs once")
     return unique
+
+
+def versioned(engines, notes):
+    """``engines`` (names, or None) with each versioned one (``mujoco == 3.6.0``) written as its records carry it
+    (``mujoco==3.6.0``), its environment made and its version one the adapter supports: ValueError naming
+    ``--engine`` and the command that makes the environment otherwise (``run`` never installs anything)."""
+    from dalembert.adapters import get_adapter
+    from dalembert.environments import is_versioned, parse_engine, require
+
+    if engines is None:
+        return None
+    out = []
+    for name in engines:
+        if is_versioned(name):
+            spec = parse_engine(name)
+            require(spec.name, problem=get_adapter(spec.engine).version_problem)
+            name = spec.name
+        if name in out:
+            notes.append(f"--engine: {name} given more than once; each counts once")
+            continue
+        out.append(name)
+    return out
 
 
 def given(flag, value):
@@ -209,7 +231,8 @@ def select(args, cores):
         raise ValueError(f"--timeout: must be a positive number of seconds, got {timeout}")
     dts, rtols = numbers("--dt", args.dt, notes), numbers("--rtol", args.rtol, notes)
     cases, tag_list = names("--case", args.case, notes), names("--tag", args.tag, notes)
-    engines, integrators = names("--engine", args.engine, notes), names("--integrator", args.integrator, notes)
+    engines, integrators = versioned(names("--engine", args.engine, notes), notes), names("--integrator",
+                                                                                        args.integrator, notes)
     registry = load_cases()
     for n in cases or []:
         registry[n]  # did-you-mean for unknown names

@@ -198,7 +198,10 @@ def _resumable(path):
     except (KeyError, TypeError) as e:
         raise ValueError(f"--resume {path}: manifest.json does not list the matrix's runs ({type(e).__name__}: {e}) "
                          "— it is not a manifest dalembert wrote; start a new matrix with --out") from None
-    unknown = sorted({s.engine for s in specs} - set(adapter_names()))
+    from dalembert.environments import engine_of
+
+    registered = set(adapter_names())
+    unknown = sorted({s.engine for s in specs if engine_of(s.engine) not in registered})
     if unknown:
         raise ValueError(f"--resume {path}: engine(s) {unknown} are not registered here — install them, or start a "
                          "new matrix without them")

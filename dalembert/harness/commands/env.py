@@ -1,0 +1,53 @@
+"""``dalembert env create|list|remove``: engine environments, an engine at a version of its own
+(``dalembert.environments``). ``create`` is the one command that reaches the package index; ``run``
+refuses a versioned engine whose environment is missing, naming this command."""
+
+from __future__ import annotations
+
+import sys
+
+__all__ = ["run", "main"]
+
+
+def run(action, engine=None, verbose=False):
+    """Do ``action`` (``create``, ``list``, ``remove``) for ``engine`` (``mujoco==3.6.0``; none for ``list``);
+    returns the exit status. ValueError naming the engine for a bad name, a missing or an existing environment."""
+    from dalembert import environments
+    from dalembert.adapters import get_adapter
+    from dalembert.harness.commands.console import fail
+
+    if action == "list":
+        made = environments.environments()
+        if not made:
+            print("no engine environments (make one with: dalembert env create ENGINE==VERSION)")
+        for name, info, path in made:
+            print(f"{name:<24} {info['engine_version']:<10} python {info['python']}, {info['installer']}, "
+                  f"{info['created']}" + (f"\n    {path}" if verbose else ""))
+        return 0
+    if action == "remove":
+        env = environments.remove(engine)
+        print(f"removed {env.spec.name} ({env.path})")
+        return 0
+    env = environments.environment(engine)
+    if env.exists:
+        raise ValueError(f"env create {engine}: already made, at {env.path} (engine {env.engine_version}) — use it, "
+                         f"or remove it first: dalembert env remove {env.spec.name}")
+    tool = environments.installer()
+    print(f"dalembert: making the environment of {engine} with {'uv' if tool == 'uv' else 'venv and pip'} "
+          "(this reaches the package index)", file=sys.stderr)
+    try:
+        env = environments.create(engine, log=(lambda line: print(f"  {line}", file=sys.stderr)) if verbose
+                                  else (lambda line: None), tool=tool,
+                                  problem=get_adapter(env.spec.engine).version_problem)
+    except RuntimeError as e:  # the installer's own failure (no such version, no network): its output said
+        return fail(str(e))
+    print(f"made {env.spec.name}: {env.spec.distribution} {env.engine_version} at {env.path}")
+    print(f"run it with: dalembert run --engine {env.spec.name} ...")
+    return 0
+
+
+def main(args):
+    if args.env_action != "list" and args.engine is None:
+        raise ValueError(f"env {args.env_action}: no engine — write e.g. dalembert env {args.env_action} "
+                         "mujoco==3.6.0")
+    return run(args.env_action, getattr(args, "engine", None), getattr(args, "verbose", False))

@@ -1,0 +1,302 @@
+"""Engine environments (``dalembert.environments``): the engine spec with a version, the refusals before
+anything runs, and the pool's workers started from an environment's interpreter.
+
+No test here reaches the network: an environment is faked by a directory whose ``bin/python`` runs this
+interpreter (noting its pid, so that a run's record shows which interpreter ran it) and whose
+``environment.json`` names the engine version installed here. A real environment (``dalembert env create``)
+is made only by ``test_a_real_environment_runs_its_engine_version``, where the package index is reachable.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from importlib import metadata
+
+import pytest
+
+from dalembert.environments import DISTRIBUTIONS, INFO, environment, environments, is_versioned, parse_engine
+from dalembert.harness.cli import main
+from dalembert.store import Store
+
+mujoco = pytest.importorskip("mujoco")
+
+
+@pytest.fixture(autouse=True)
+def cache(tmp_path, monkeypatch):
+    """A cache of this test's own: no environment made elsewhere is seen, none made here stays."""
+    monkeypatch.setenv("DALEMBERT_CACHE", str(tmp_path / "cache"))
+    return tmp_path / "cache"
+
+
+def fake(name, version, tmp_path):
+    """Make the environment of ``name`` as this interpreter (``version``: what its ``environment.json`` says is
+    installed); returns the file its interpreter appends each worker's pid to."""
+    env = environment(name)
+    pids = tmp_path / f"pids-{env.spec.directory}"
+    os.makedirs(os.path.join(env.path, "bin"))
+    with open(env.python, "w") as f:
+        f.write(f"#!/bin/sh\necho $$ >> {pids}\nexec {sys.executable} \"$@\"\n")
+    os.chmod(env.python, 0o755)
+    with open(os.path.join(env.path, INFO), "w") as f:
+        json.dump({"engine": env.spec.name, "requirement": env.spec.requirement, "engine_version": version,
+                   "python": sys.version.split()[0], "installer": "fake", "checkout": "", "created": "now"}, f)
+    return pids
+
+
+# ---------------------------------------------------------------- the spec, read
+def test_an_engine_spec_is_a_requirement_written_one_way():
+    assert parse_engine("mujoco==3.6.0").name == "mujoco==3.6.0"
+    assert parse_engine("mujoco == 3.6.0").name == "mujoco==3.6.0"  # one store key whatever the spacing
+    spec = parse_engine("pinocchio>=2.6, <3")
+    assert (spec.name, spec.distribution, spec.requirement) == ("pinocchio<3,>=2.6", "pin", "pin<3,>=2.6")
+    assert environment("mujoco==3.6.0").path != environment("mujoco==3.6.1").path
+    assert is_versioned("mujoco==3.6.0") and not is_versioned("mujoco") and not is_versioned("mujoco-mjx")
+
+
+@pytest.mark.parametrize("text,said", [
+    ("mujoco=3.6", "not a requirement"),
+    ("mujco==3.6.0", "did you mean 'mujoco'"),
+    ("reference==0.1", "distribution of its own"),
+    ("mujoco[render]==3.6.0", "extras, URLs and markers"),
+    ("mujoco==3.6.0; python_version>'3'", "extras, URLs and markers"),
+])
+def test_a_spec_that_is_not_an_engine_at_a_version_is_refused_naming_the_fix(text, said):
+    with pytest.raises(ValueError, match="--engine") as err:
+        parse_engine(text)
+    assert said in str(err.value)
+
+
+def test_each_engine_names_its_installed_distribution():
+    """The distribution ``env create`` installs is the one whose metadata this environment's engine has."""
+    import importlib
+
+    modules = {"mujoco": "mujoco", "pinocchio": "pinocchio", "exudyn": "exudyn", "drake": "pydrake",
+               "mjx": "mujoco.mjx", "pybullet": "pybullet", "dart": "dartpy"}
+    checked = 0
+    for engine, dist in DISTRIBUTIONS.items():
+        try:
+            importlib.import_module(modules[engine])
+        except Exception:  # not installed here
+            continue
+        assert metadata.version(dist), engine
+        checked += 1
+    assert checked >= 1
+
+
+# ---------------------------------------------------------------- refused before anything runs
+RUN = ["run", "--case", "free_top_intermediate", "--integrator", "rk4", "--dt", "5e-3", "--param", "t_final=0.5",
+       "--quick", "--jobs", "1"]
+
+
+def test_run_refuses_a_missing_environment_naming_the_command_that_makes_it(tmp_path, capsys):
+    assert main([*RUN, "--engine", "mujoco==3.6.0", "--out", str(tmp_path / "r")]) == 2
+    assert "dalembert env create mujoco==3.6.0" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()
+
+
+def test_a_version_outside_the_adapters_is_refused_with_its_reason(tmp_path, capsys, monkeypatch):
+    from dalembert.adapters.mujoco import MujocoAdapter
+
+    monkeypatch.setattr(MujocoAdapter, "supported_versions", ">=3.2")
+    monkeypatch.setattr(MujocoAdapter, "unsupported_versions_why", "an older API")
+    fake("mujoco==2.3.7", "2.3.7", tmp_path)
+    assert main([*RUN, "--engine", "mujoco==2.3.7", "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert "mujoco 2.3.7 is outside the versions its adapter supports, >=3.2 (an older API)" in err, err
+    assert not (tmp_path / "r").exists()
+
+
+def test_env_list_and_remove(tmp_path, capsys):
+    assert main(["env", "list"]) == 0
+    assert "no engine environments" in capsys.readouterr().out
+    fake("mujoco==3.6.0", "3.6.0", tmp_path)
+    assert main(["env", "list"]) == 0
+    assert "mujoco==3.6.0" in capsys.readouterr().out
+    assert main(["env", "create", "mujoco == 3.6.0"]) == 2  # made already: never reinstalled behind the user
+    assert "already made" in capsys.readouterr().err
+    assert main(["env", "remove", "mujoco==3.5.0"]) == 2
+    assert "made: mujoco==3.6.0" in capsys.readouterr().err
+    assert main(["env", "remove", "mujoco==3.6.0"]) == 0
+    assert environments() == []
+
+
+# ---------------------------------------------------------------- workers in their environment
+def _pids(path):
+    return {int(p) for p in open(path).read().split()} if os.path.exists(path) else set()
+
+
+def test_a_versioned_engines_runs_go_to_its_environments_interpreter_and_resume(tmp_path):
+    """The runs of ``mujoco==V`` run in workers of the environment's interpreter, those of ``mujoco`` in this
+    one's, in one store under two engine names; a run left out is run by ``--resume`` in the environment."""
+    version = mujoco.__version__
+    name = f"mujoco=={version}"
+    pids = fake(name, version, tmp_path)
+    out = tmp_path / "r"
+    argv = [*RUN, "--integrator", "implicitfast", "--engine", name, "--engine", "mujoco", "--out", str(out)]
+    assert main(argv) == 0
+    store = Store(out)
+    records = store.records()
+    assert sorted(r.engine for r in records) == sorted([name] * 2 + ["mujoco"] * 2)
+    assert {r.engine_version for r in records} == {version}
+    inside = {r.provenance["pid"] for r in records if r.engine == name}
+    outside = {r.provenance["pid"] for r in records if r.engine == "mujoco"}
+    assert inside and inside <= _pids(pids) and not outside & _pids(pids)
+    # the two versions' errors are the same engine's here: the environment changes where, not what, runs
+    by = {(r.engine, r.settings.integrator): r.errors for r in records}
+    assert by[(name, "rk4")] == by[("mujoco", "rk4")]
+
+    dropped = next(r for r in records if r.engine == name)
+    os.remove(os.path.join(out, "rows", dropped.key + ".json"))
+    before = _pids(pids)
+    assert main(["run", "--resume", str(out)]) == 0
+    again = next(r for r in Store(out).records() if r.key == dropped.key)
+    assert again.provenance["pid"] in _pids(pids) - before
+
+
+def test_a_run_past_its_timeout_in_an_environment_is_stored_as_timeout(tmp_path):
+    """The per-run limit holds for a worker of another interpreter: killed, replaced, the run stored as timeout.
+    A limit shorter than any worker's start (the interpreter's imports alone take longer) times out each run."""
+    version = mujoco.__version__
+    fake(f"mujoco=={version}", version, tmp_path)
+    out = tmp_path / "r"
+    assert main([*RUN, "--dt", "5e-3,1e-2", "--engine", f"mujoco=={version}", "--timeout", "0.01",
+                 "--out", str(out)]) in (0, 1)
+    assert [r.status for r in Store(out).records()] == ["timeout", "timeout"]
+
+
+ORPHAN = """
+import multiprocessing as mp, sys, time
+from dalembert.harness.pool import _Worker
+w = _Worker(mp.get_context("fork"), 1, (), python=sys.executable)
+print(w.proc.popen.pid, flush=True)
+time.sleep(600)
+"""
+
+
+def test_a_worker_of_another_interpreter_dies_with_its_parent():
+    """SIGKILL to the matrix process (which no handler sees): its environment's workers end too."""
+    psutil = pytest.importorskip("psutil")
+    parent = subprocess.Popen([sys.executable, "-c", ORPHAN], stdout=subprocess.PIPE, text=True)
+    try:
+        # (whenever the parent dies, the worker ends: before its prctl is armed, die_with_parent finds its parent gone)
+        worker = psutil.Process(int(parent.stdout.readline()))
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+        gone, alive = psutil.wait_procs([worker], timeout=60)
+        assert not alive
+    finally:
+        parent.kill()
+        parent.wait()
+
+
+def _index_reachable():
+    try:
+        import urllib.request
+
+        urllib.request.urlopen("https://pypi.org/simple/mujoco/", timeout=5)
+        return True
+    except Exception:
+        return False
+
+
+@pytest.mark.long
+def test_a_real_environment_runs_its_engine_version(tmp_path):
+    """``dalembert env create mujoco==3.6.0`` (~40 s with pip), then a run records MuJoCo 3.6.0 under that name."""
+    if not _index_reachable():
+        pytest.skip("the package index is not reachable: env create cannot install MuJoCo 3.6.0")
+    assert main(["env", "create", "mujoco==3.6.0"]) == 0
+    out = tmp_path / "r"
+    assert main([*RUN, "--engine", "mujoco==3.6.0", "--out", str(out)]) in (0, 1)
+    (record,) = Store(out).records()
+    assert (record.engine, record.engine_version, record.status) == ("mujoco==3.6.0", "3.6.0", "ok")
+
+
+# ---------------------------------------------------------------- the report pairs the versions
+def _record(engine, version, integrator, energy, case="free_top_intermediate"):
+    from types import SimpleNamespace
+
+    from dalembert.settings import Settings
+
+    return SimpleNamespace(engine=engine, engine_version=version, case=case, case_version="v", params={},
+                           settings=Settings(integrator, dt=5e-3), errors={"orientation": (1e-3, 1e-3)},
+                           drifts={"energy": energy, "angular_momentum": 1e-3}, key=f"{engine}-{integrator}")
+
+
+def test_the_report_sets_an_engines_versions_side_by_side_and_names_what_changed():
+    """Each version a column, a group per case and settings; a drift that moved by more than CHANGE_FACTOR is
+    named with each version's value, one that did not is not; an engine at one version has no table."""
+    from types import SimpleNamespace
+
+    from dalembert.reports.sections.versions import CHANGE_FACTOR, version_groups, versions
+
+    records = [_record("mujoco==3.6.0", "3.6.0", "implicitfast", 4e-3),
+               _record("mujoco", "4.0.0", "implicitfast", 0.35),
+               _record("mujoco==3.11.0", "3.11.0", "implicitfast", 0.35),
+               _record("mujoco==3.6.0", "3.6.0", "rk4", 3e-10), _record("mujoco", "4.0.0", "rk4", 1.5 * 3e-10),
+               _record("mujoco==3.11.0", "3.11.0", "rk4", 3e-10), _record("pinocchio", "4.1.0", "rk4", 1e-9)]
+    groups = version_groups(records)
+    assert sorted(k[4] for k in groups) == ["implicitfast dt=0.005", "rk4 dt=0.005"]  # pinocchio: one version
+    rk4 = next(g for k, g in groups.items() if k[4].startswith("rk4"))
+    assert [r.engine_version for r in rk4] == ["3.6.0", "3.11.0", "4.0.0"]  # PEP 440 order, not the text's
+    md = versions(SimpleNamespace(records=records)).md
+    text = "\n".join(md)
+    assert "implicitfast dt=0.005 energy drift on free_top_intermediate: 3.6.0 0.004, 3.11.0-4.0.0 0.35" in text
+    assert "rk4 dt=0.005 energy drift" not in text.split("|")[0]  # 1.5x: under CHANGE_FACTOR, no finding
+    assert CHANGE_FACTOR > 1.5
+    assert "| mujoco==3.6.0 (3.6.0) | mujoco==3.11.0 (3.11.0) | mujoco (4.0.0) |" in text
+
+
+def test_a_versioned_engine_never_runs_outside_its_environment(tmp_path):
+    """In a process that is not its environment's worker, a versioned engine's adapter reports the environment's
+    version but refuses to build or run: a run of this process's engine is never recorded under another version."""
+    from dalembert.adapters import get_adapter
+
+    fake("mujoco==3.6.0", "3.6.0", tmp_path)
+    adapter = get_adapter("mujoco==3.6.0")
+    assert adapter.version() == "3.6.0" and get_adapter("mujoco").version() == mujoco.__version__
+    with pytest.raises(RuntimeError, match="runs in its environment's workers only"):
+        adapter.prepare(None, None, None)
+
+
+def test_a_dask_task_runs_a_versioned_engine_in_its_environment(tmp_path):
+    """``execute_isolated`` (a Dask task's run) starts the environment's interpreter for a versioned engine."""
+    from dataclasses import asdict
+
+    from dalembert.harness.dask import execute_isolated
+    from dalembert.harness.execute import QUICK
+    from dalembert.harness.matrix import expand
+    from dalembert.harness.truths import build
+    from dalembert.store import trajectory_to_npz
+
+    version = mujoco.__version__
+    name = f"mujoco=={version}"
+    pids = fake(name, version, tmp_path)
+    (spec,), _ = expand(["free_top_intermediate"], engines=[name], integrators=["rk4"], dts=[5e-3],
+                        params={"t_final": 0.5})
+    (_, made), = build([spec]).values()
+    record, _ = execute_isolated(spec.to_json(), asdict(QUICK), trajectory_to_npz(made), 120)
+    assert (record.engine, record.status) == (name, "ok"), record.message
+    assert record.provenance["pid"] in _pids(pids)
+
+
+def test_mujoco_before_its_spring_and_damper_flags_disables_passive_forces_by_their_old_name(monkeypatch):
+    """MuJoCo 3.2 and older have one ``passive`` flag where later releases have ``spring`` and ``damper``: the
+    MJCF names the one the installed MuJoCo knows (3.2.7 refused ``spring`` as an unknown attribute)."""
+    from types import SimpleNamespace
+
+    from dalembert.adapters.mujoco.mjcf import mjcf
+    from dalembert.case import load_cases
+    from dalembert.settings import Settings
+
+    case = load_cases()["free_top_intermediate"]()
+    now = mjcf(case.scene, Settings("rk4", dt=5e-3))
+    assert 'spring="disable"' in now and "passive" not in now
+    old = SimpleNamespace(**{n: getattr(mujoco.mjtDisableBit, n) for n in dir(mujoco.mjtDisableBit)
+                             if n.startswith("mjDSBL") and n not in ("mjDSBL_SPRING", "mjDSBL_DAMPER")})
+    monkeypatch.setattr(mujoco, "mjtDisableBit", old)
+    before = mjcf(case.scene, Settings("rk4", dt=5e-3))
+    assert 'passive="disable"' in before and "spring=" not in before and "damper=" not in before
