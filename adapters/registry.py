@@ -32,6 +32,7 @@ BUILTIN = {
     "mjx": "dalembert.adapters.mjx:MjxAdapter",
     "pybullet": "dalembert.adapters.pybullet:PybulletAdapter",
     "dart": "dalembert.adapters.dart:DartAdapter",
+    "mujoco_warp": "dalembert.adapters.mujoco_warp:MujocoWarpAdapter",
 }
 # The entry-point group third-party adapters register in (a package's ``[project.entry-points."dalembert.adapters"]``).
 GROUP = "dalembert.adapters"
