@@ -71,7 +71,7 @@ class TestRun:
         # the compiled model the read-back uses keeps MuJoCo C's flags: auto-reset stays disabled there
         assert "autoreset" in audit["disabled"] and p.model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_AUTORESET
         assert out.n_steps == int(p.steps.sum()) == 100 and out.n_rhs == 400  # RK4: 4 evaluations a step
-        assert np.all(np.isfinite(out.trajectory.bodies["pendulum"].position))
+        assert np.all(np.isfinite(out.trajectory.bodies["rod"].position))
 
     def test_non_finite_state_ends_the_run(self, pendulum):
         from dalembert.adapters.mujoco_warp.stepping import put_state, step_samples
