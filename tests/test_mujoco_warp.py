@@ -102,3 +102,29 @@ class TestRefusals:
         assert pgs != xml
         reason = _refusal(pgs)
         assert reason and "mjw.put_model" in reason and "PGS" in reason
+
+
+def test_the_report_sets_it_against_mujoco_c(tmp_path):
+    """The report's parity section holds MuJoCo Warp's run against MuJoCo C's at the same settings, its figures
+    those of the two engines run afresh (``parity.horizon``), the float32 floor beside them."""
+    import subprocess
+    import sys
+
+    from dalembert.adapters.mujoco_warp.parity import horizon
+    from dalembert.harness.cli import main
+    from dalembert.reports.parity import parities
+    from dalembert.store import Store
+
+    out = tmp_path / "r"
+    subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--case", "free_top", "--param", "t_final=1",
+                    "--engine", "mujoco", "--engine", "mujoco_warp", "--integrator", "euler", "--dt", "1e-2",
+                    "--quick", "--jobs", "1", "--out", str(out)], check=True, capture_output=True)
+    assert main(["report", str(out)]) == 0
+    store = Store(out)
+    [p] = parities(store.records(), store.trajectory, lambda n, v: store.case(n, v).floor)
+    assert (p.port, p.original, p.number_type) == ("mujoco_warp", "mujoco", "float32")
+    fresh = horizon(make_case("free_top", t_final=1.0), Settings("euler", dt=1e-2))
+    assert p.orientation == pytest.approx(fresh["orientation"], rel=1e-12, abs=1e-15)
+    assert p.number_floor == pytest.approx(fresh["float32_floor"]) and p.number_floor > 0.0
+    assert p.orientation <= FLOOR_FACTOR * p.number_floor
+    assert "## MuJoCo Warp against MuJoCo C" in (out / "report.md").read_text()
