@@ -26,7 +26,7 @@ PORTS = {"mjx": "mujoco", "mujoco_warp": "mujoco"}
 # port -> its name in prose
 PORT_NAMES = {"mjx": "MJX", "mujoco_warp": "MuJoCo Warp"}
 # options of a port that its original does not have
-PORT_ONLY_OPTIONS = {"mjx": ("precision",)}
+PORT_ONLY_OPTIONS = {"mjx": ("precision",), "mujoco_warp": ("worlds",)}  # (a batch's world 0 is the run)
 
 
 @dataclass(frozen=True)

@@ -128,3 +128,27 @@ def test_the_report_sets_it_against_mujoco_c(tmp_path):
     assert p.number_floor == pytest.approx(fresh["float32_floor"]) and p.number_floor > 0.0
     assert p.orientation <= FLOOR_FACTOR * p.number_floor
     assert "## MuJoCo Warp against MuJoCo C" in (out / "report.md").read_text()
+
+
+# Batched worlds: the pendulum's 4 worlds over 0.1 s, world k's velocity raised by k WORLD_DV (1e-3 rad/s): world 3
+# ends ~(worlds - 1) * WORLD_DV * t = 3e-4 rad from world 0 (sin(w t) / w = 0.98 t at a sixteenth of the period,
+# float32's resolution of the angle 1e-7): a factor 3 either side. Without the perturbation the spread is 0.
+SPREAD_RANGE = (1e-4, 1e-3)
+
+
+def test_batched_worlds_run_world_0_and_time_the_batch(pendulum):
+    from dalembert.adapters.mujoco_warp.adapter import WORLD_DV
+
+    times = np.asarray(pendulum.times)[:11]
+    one = ADAPTER.prepare(pendulum.scene, times, Settings("rk4", dt=1e-3))
+    four = ADAPTER.prepare(pendulum.scene, times, Settings("rk4", dt=1e-3, options={"worlds": 4}))
+    a, b = ADAPTER.run(one), ADAPTER.run(four)
+    # world 0 is the case's initial state: the same float32 arithmetic as a run of one world
+    assert np.array_equal(a.trajectory.bodies["rod"].quaternion, b.trajectory.bodies["rod"].quaternion)
+    audit = ADAPTER.audit(four, b)
+    assert audit["worlds"] == 4 and audit["world_dv"] == WORLD_DV
+    assert audit["world_steps_per_s"] == pytest.approx(4 * b.n_steps / b.wall_s)
+    assert SPREAD_RANGE[0] < audit["world_spread_qpos_end"] < SPREAD_RANGE[1]
+    assert "worlds" not in ADAPTER.audit(one, a)
+    with pytest.raises(ValueError, match="worlds"):
+        ADAPTER.check(pendulum.scene, times, Settings("rk4", dt=1e-3, options={"worlds": 0}))

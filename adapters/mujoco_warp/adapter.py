@@ -17,7 +17,10 @@ float32 attitude floor of a torque-free top (``mjx.parity.float32_floor``) is in
 every run's audit, so a reader sees whether an error is the method's or the
 number type's. Options: ``welds`` as for MuJoCo, contact as MuJoCo's (``cone``,
 ``impratio``, ``noslip_iterations``, ``contact_timeconst``: MuJoCo Warp reads
-all four). Loads go through MuJoCo's site actuators only (applied inside every
+all four); ``worlds`` = N steps N copies of the case at once (MuJoCo Warp's ``nworld``), world k's initial
+velocities raised by k ``WORLD_DV``: the trajectory is world 0's (the case's own, the same float32 arithmetic as
+one world), the run's wall time the batch's, and the audit holds the batch size, its throughput (world-steps per
+second) and the worlds' spread at the end. Loads go through MuJoCo's site actuators only (applied inside every
 integrator stage); MuJoCo's ``loads=xfrc_applied`` path, a Python call per
 step, is not offered. What MuJoCo Warp refuses (``mjw.put_model``: a geometry
 type, a solver, a flag, an integrator it lacks) is refused with its reason
@@ -31,7 +34,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from dalembert.adapters.base import IntegratorSpec, Outcome
+from dalembert.adapters.base import IntegratorSpec, Option, Outcome
 from dalembert.adapters.mujoco import MujocoAdapter
 from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.adapter import MujocoPrepared
@@ -40,7 +43,15 @@ from dalembert.adapters.mujoco_warp.stepping import DEVICE, compile_step, device
 
 __all__ = ["MujocoWarpAdapter", "MujocoWarpPrepared"]
 
-OPTIONS = ("welds", *contact.OPTIONS)
+OPTIONS = ("welds", "worlds", *contact.OPTIONS)
+# Batched worlds (option ``worlds``): world k starts with every velocity coordinate raised by k WORLD_DV (m/s,
+# rad/s), ~1e-4 of the cases' velocities (~1-10), so the worlds' spread at the end measures how the case amplifies
+# a small difference. A smaller one is lost in float32: its change of qpos per step, dv dt, falls below float32's
+# resolution of qpos (measured: 1e-6 rad/s at dt 1e-3 leaves the pendulum's worlds' angles bit-identical).
+WORLD_DV = 1e-3
+# The most worlds a run may step (each holds MuJoCo Warp's contact and constraint arrays: ~MBs per thousand worlds
+# for the cases here); a larger batch is a typo more often than a plan.
+MAX_WORLDS = 4096
 STAGES = {"euler": 1, "rk4": 4, "implicitfast": 1}  # evaluations of the dynamics per step
 # The step the refusal check compiles every model with: ``mjw.put_model`` refuses features (integrator, cone,
 # solver, flags, geometry, actuator and sensor types), never a step, which enters the MJCF only as numbers
@@ -57,12 +68,14 @@ class MujocoWarpPrepared(MujocoPrepared):
     ----------
     mx : mujoco_warp.Model — the model on the device (float32)
     ctrl : float or None — the site actuators' constant control (1: the loads at full value), None without
+    worlds : int — option ``worlds``: the worlds each run steps at once (world 0 the case's)
     compile_s : float — the first step's wall time in ``prepare``: Warp's kernel compilation, or its load from the
         kernel cache, s (build, not stepping)
     """
 
     mx: object
     ctrl: object
+    worlds: int
     compile_s: float
 
 
@@ -71,7 +84,14 @@ class MujocoWarpAdapter(MujocoAdapter):
     ``equality``; contact as MuJoCo's (``cone``, ``impratio``, ``noslip_iterations``, ``contact_timeconst``)."""
 
     name = "mujoco_warp"
-    options = {"welds": MujocoAdapter.options["welds"], **contact.CONTACT_OPTIONS}
+    options = {
+        "welds": MujocoAdapter.options["welds"],
+        "worlds": Option(default=1, minimum=1.0, maximum=float(MAX_WORLDS), integer=True,
+                         description="worlds stepped at once (mjw nworld); world k's initial velocities raised by "
+                                     f"k * {WORLD_DV:g}; the trajectory is world 0's, the audit has the batch's "
+                                     "throughput and spread"),
+        **contact.CONTACT_OPTIONS,
+    }
     effects = MujocoAdapter.effects  # MuJoCo's mapping; what MuJoCo Warp lacks is refused (``_refusal``)
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "MuJoCo Warp semi-implicit Euler", order=1),
@@ -104,22 +124,32 @@ class MujocoWarpAdapter(MujocoAdapter):
     def prepare(self, scene, times, settings):
         p = super().prepare(scene, times, settings)  # compiled MJCF, checked; the initial state
         ctrl = 1.0 if p.load_path == "actuator" and p.model.nu else None
+        worlds = int(self.option(settings, "worlds"))
         mx = device_model(p.model)
-        compile_s = compile_step(mx, p.model, p.qpos0, p.qvel0, ctrl)
+        compile_s = compile_step(mx, p.model, p.qpos0, p.qvel0, ctrl, worlds)
         return MujocoWarpPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, mx=mx, ctrl=ctrl,
-                                  compile_s=compile_s)
+                                  worlds=worlds, compile_s=compile_s)
 
     # ------------------------------------------------------------- run
     def run(self, prepared):
         p = prepared
-        d = put_state(p.model, p.qpos0, p.qvel0, p.ctrl)  # a fresh state each run, not timed
+        d = put_state(p.model, p.qpos0, p.qvel0, p.ctrl, p.worlds, WORLD_DV)  # a fresh state each run, not timed
         Q, V, wall, bad = step_samples(p.mx, d, p.steps, p.qpos0, p.qvel0)
         n_steps = int(p.steps[:bad - 1].sum()) if bad else int(p.steps.sum())
         message = f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else ""
         info = {"message": message}
+        if p.worlds > 1:
+            # the batch: every world stepped n_steps in ``wall``; world 0 is the run's, the others its perturbed
+            # copies (their spread from world 0 at the end: NaN if a world diverged)
+            q = d.qpos.numpy().astype(float)
+            with np.errstate(invalid="ignore"):
+                spread = float(np.max(np.abs(q[1:] - q[0]))) if bad is None else float("nan")
+            info["worlds"] = {"worlds": p.worlds, "world_dv": WORLD_DV, "world_steps_per_s": p.worlds * n_steps / wall,
+                              "batch_s_per_step": wall / max(n_steps, 1), "world_spread_qpos_end": spread}
 
         def read():
             traj, info["audit"] = read_back(p, Q, V)
+            info["audit"].update(info.get("worlds", {}))
             return traj
 
         return Outcome(read, wall, n_steps, n_steps * STAGES[p.settings.integrator], info)

@@ -17,6 +17,9 @@ Python for a pendulum, whatever the model's size. MuJoCo Warp has no warning
 counters and no auto-reset: a blow-up runs on as inf and NaN, so the loop
 checks each sample and stops at the first non-finite one.
 
+A ``mjw.Data`` holds ``nworld`` worlds; each kernel launch covers them all, so a batch costs about the launches
+of one world plus the arithmetic of each (``benchmarks.mujoco_warp worlds``).
+
 The number type is float32: MuJoCo Warp's kernels are written in it (``wp.float32``
 fields throughout ``mujoco_warp._src.types``); there is no float64 build.
 """
@@ -76,9 +79,10 @@ def device_model(model):
         return mjw.put_model(m)
 
 
-def put_state(model, qpos, qvel, ctrl, nworld=1):
+def put_state(model, qpos, qvel, ctrl, nworld=1, dv=0.0):
     """A device ``mjw.Data`` of ``nworld`` worlds at ``qpos (nq,)``, ``qvel (nv,)`` with ``ctrl`` (None, or
-    the actuators' constant control), its contact and constraint arrays at MuJoCo Warp's default sizes."""
+    the actuators' constant control), its contact and constraint arrays at MuJoCo Warp's default sizes. World k's
+    velocity is ``qvel + k dv`` in every coordinate (m/s, rad/s): world 0 is the given state."""
     import mujoco
 
     wp, mjw, _ = warp()
@@ -87,14 +91,17 @@ def put_state(model, qpos, qvel, ctrl, nworld=1):
     if ctrl is not None:
         data.ctrl[:] = ctrl
     with wp.ScopedDevice(DEVICE):
-        return mjw.put_data(model, data, nworld=nworld)
+        d = mjw.put_data(model, data, nworld=nworld)
+        if nworld > 1 and dv:
+            d.qvel.assign((np.asarray(qvel) + dv * np.arange(nworld)[:, None]).astype(np.float32))
+        return d
 
 
-def compile_step(mx, model, qpos, qvel, ctrl):
-    """One step on a scratch state, so that every kernel a step launches is compiled (or loaded from the
-    cache) before a timed run: the wall time, s."""
+def compile_step(mx, model, qpos, qvel, ctrl, nworld=1):
+    """One step on a scratch state of ``nworld`` worlds, so that every kernel a step launches is compiled (or
+    loaded from the cache) before a timed run: the wall time, s."""
     wp, mjw, _ = warp()
-    d = put_state(model, qpos, qvel, ctrl)
+    d = put_state(model, qpos, qvel, ctrl, nworld)
     start = time.perf_counter()
     with wp.ScopedDevice(DEVICE):
         mjw.step(mx, d)
@@ -103,10 +110,11 @@ def compile_step(mx, model, qpos, qvel, ctrl):
 
 
 def step_samples(mx, d, steps, q0, v0):
-    """Step ``d`` through the sample intervals (``steps[k]`` steps in interval k) and read each sample back:
-    ``(Q (n, nq), V (n, nv), wall s, first bad sample or None)``, float64 widened exactly from float32, the
-    initial state first, NaN from the first non-finite sample on (the loop stops there). The wall time is the
-    stepping and the per-sample copies to the host (the CPU backend's arrays are host memory)."""
+    """Step ``d`` through the sample intervals (``steps[k]`` steps in interval k) and read world 0's samples
+    back: ``(Q (n, nq), V (n, nv), wall s, first bad sample or None)``, float64 widened exactly from float32, the
+    initial state first, NaN from the first non-finite sample of world 0 on (the loop stops there). The wall time
+    is the stepping of every world and the per-sample copies to the host (the CPU backend's arrays are host
+    memory). The other worlds' last state stays in ``d``."""
     wp, mjw, _ = warp()
     n = len(steps) + 1
     Q, V = np.full((n, len(q0)), np.nan), np.full((n, len(v0)), np.nan)
