@@ -5,15 +5,16 @@ compiled code on disk (Warp's kernel cache, keyed by the kernel's source, its
 options and Warp's version, so a stale entry is never loaded). The cache is put
 under ``dalembert.cache.cache_dir("warp")`` unless Warp is given its own
 (``WARP_CACHE_PATH``), so the workers of a matrix, later matrices and a fresh
-clone's second run load instead of compiling. Measured on 2 shared cores
-(``python -m benchmarks.mujoco_warp``): the first step of the pendulum in RK4
-18.6 s compiling, 0.12 s from the cache. ``compile_step`` takes that first step
+clone's second run load instead of compiling. Measured on 2 shared cores (load
+~3), one ``mjw.step`` of the pendulum in RK4 in a fresh process: 18.6 s with an
+empty cache, 0.12 s from the cache (41 s for the adapter's first ``prepare`` at a
+load of ~9). ``compile_step`` takes that first step
 on a scratch copy of the state, so a run's timed loop never compiles.
 
 There are no CUDA graphs on the CPU: every ``mjw.step`` launches its kernels
-one by one from Python (~70 launches a semi-implicit Euler step, each ~15 us
-of argument packing), so a step costs ~1.4 ms (Euler) to ~4.5 ms (RK4) of
-Python for a pendulum, whatever the model's size. MuJoCo Warp has no warning
+one by one from Python (~70 launches a semi-implicit Euler step, most of its
+time Warp's argument packing: cProfile), so a step of the pendulum costs ~1.4 ms
+(Euler) to ~4.5 ms (RK4) on 2 cores at a load of ~3, little of it arithmetic. MuJoCo Warp has no warning
 counters and no auto-reset: a blow-up runs on as inf and NaN, so the loop
 checks each sample and stops at the first non-finite one.
 
