@@ -135,7 +135,7 @@ class MujocoWarpAdapter(MujocoAdapter):
         p = prepared
         d = put_state(p.model, p.qpos0, p.qvel0, p.ctrl, p.worlds, WORLD_DV)  # a fresh state each run, not timed
         Q, V, wall, bad = step_samples(p.mx, d, p.steps, p.qpos0, p.qvel0)
-        n_steps = int(p.steps[:bad - 1].sum()) if bad else int(p.steps.sum())
+        n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())  # interval `bad` was stepped whole
         message = f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else ""
         info = {"message": message}
         if p.worlds > 1:
