@@ -152,3 +152,18 @@ def test_batched_worlds_run_world_0_and_time_the_batch(pendulum):
     assert "worlds" not in ADAPTER.audit(one, a)
     with pytest.raises(ValueError, match="worlds"):
         ADAPTER.check(pendulum.scene, times, Settings("rk4", dt=1e-3, options={"worlds": 0}))
+
+
+def test_constraint_rows_fit_the_models_equalities():
+    """The welded box held by equality welds has 156 constraint rows; MuJoCo Warp's default room (64) would drop
+    rows past it with a printed warning only. ``put_state`` sizes each world for them."""
+    from dalembert.adapters.mujoco_warp.stepping import put_state
+
+    case = make_case("particle_box_welded")
+    settings = Settings("rk4", dt=1e-2, options={"welds": "equality"})
+    p = get_adapter("mujoco").prepare(case.scene, np.asarray(case.times)[:2], settings)
+    data = mujoco.MjData(p.model)
+    data.qpos[:], data.qvel[:] = p.qpos0, p.qvel0
+    mujoco.mj_forward(p.model, data)
+    assert data.nefc == 156
+    assert put_state(p.model, p.qpos0, p.qvel0, None).njmax >= data.nefc

@@ -35,9 +35,12 @@ import time
 
 import numpy as np
 
-__all__ = ["warp", "device_model", "put_state", "compile_step", "step_samples", "DEVICE"]
+__all__ = ["warp", "device_model", "sizes", "put_state", "compile_step", "step_samples", "DEVICE", "NCONMAX"]
 
 DEVICE = "cpu"  # Warp's CPU backend: the adapter runs where no accelerator is
+# Contacts allocated per world: MuJoCo Warp's own default for a model without height fields, flexes or SDFs (45,
+# rounded up to its size 48); the contact cases here touch at most 4 points at once (a box on a plane).
+NCONMAX = 48
 
 
 @functools.cache
@@ -80,10 +83,25 @@ def device_model(model):
         return mjw.put_model(m)
 
 
+def sizes(model, data):
+    """``(nconmax, njmax)``: the contacts and constraint rows a world holds. MuJoCo Warp's default njmax (53, for
+    contacts) is short of a model's equality constraints (the welded particle box: 26 welds, 156 rows), and a
+    world past it drops rows with a printed warning only, so njmax is the rows MuJoCo C finds at the initial state
+    (``data`` after ``mj_forward``: equalities, and any contact there) plus every allocated contact at the
+    model's largest condim (pyramidal: 2 (condim - 1) rows, elliptic: condim)."""
+    import mujoco
+
+    if model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_CONTACT):
+        return NCONMAX, max(int(data.nefc), 1)
+    condim = max([1, *model.geom_condim.tolist(), *model.pair_dim.tolist()])
+    rows = condim if model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC else max(1, 2 * (condim - 1))
+    return NCONMAX, int(data.nefc) + NCONMAX * rows
+
+
 def put_state(model, qpos, qvel, ctrl, nworld=1, dv=0.0):
     """A device ``mjw.Data`` of ``nworld`` worlds at ``qpos (nq,)``, ``qvel (nv,)`` with ``ctrl`` (None, or
-    the actuators' constant control), its contact and constraint arrays at MuJoCo Warp's default sizes. World k's
-    velocity is ``qvel + k dv`` in every coordinate (m/s, rad/s): world 0 is the given state."""
+    the actuators' constant control), its contact and constraint arrays sized by ``sizes``. World k's velocity is
+    ``qvel + k dv`` in every coordinate (m/s, rad/s): world 0 is the given state."""
     import mujoco
 
     wp, mjw, _ = warp()
@@ -91,8 +109,10 @@ def put_state(model, qpos, qvel, ctrl, nworld=1, dv=0.0):
     data.qpos[:], data.qvel[:] = qpos, qvel
     if ctrl is not None:
         data.ctrl[:] = ctrl
+    mujoco.mj_forward(model, data)  # the initial state's constraint rows, for ``sizes``
+    nconmax, njmax = sizes(model, data)
     with wp.ScopedDevice(DEVICE):
-        d = mjw.put_data(model, data, nworld=nworld)
+        d = mjw.put_data(model, data, nworld=nworld, nconmax=nconmax, njmax=njmax)
         if nworld > 1 and dv:
             d.qvel.assign((np.asarray(qvel) + dv * np.arange(nworld)[:, None]).astype(np.float32))
         return d
