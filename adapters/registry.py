@@ -33,6 +33,7 @@ BUILTIN = {
     "pybullet": "dalembert.adapters.pybullet:PybulletAdapter",
     "dart": "dalembert.adapters.dart:DartAdapter",
     "simbody": "dalembert.adapters.simbody:SimbodyAdapter",
+    "mujoco_warp": "dalembert.adapters.mujoco_warp:MujocoWarpAdapter",
 }
 # The entry-point group third-party adapters register in (a package's ``[project.entry-points."dalembert.adapters"]``).
 GROUP = "dalembert.adapters"

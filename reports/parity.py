@@ -1,8 +1,8 @@
 """Parity: an engine's port against its original at the same settings, from stored trajectories.
 
-MJX is MuJoCo's JAX port: the same compiled model, the same integrators. Where a store
-holds an MJX run and a MuJoCo C run of the same case version, integrator, step and
-options (MJX's ``precision`` aside), their largest difference over the horizon
+MJX is MuJoCo's JAX port and MuJoCo Warp its Warp port (float32): the same compiled
+model, the same integrators. Where a store holds a port's run and a MuJoCo C run of the
+same case version, integrator, step and options (MJX's ``precision`` aside), their largest difference over the horizon
 (orientation as the geodesic angle, rad; COM position, m) is set against the floors it
 cannot beat: the case's double-precision floor (``CaseRecord.floor``) and, for a float32
 run of a torque-free top, the float32 floor its audit carries (RK4 in float32 against
@@ -19,12 +19,14 @@ import numpy as np
 
 from dalembert import spatial
 
-__all__ = ["PORTS", "Parity", "parities"]
+__all__ = ["PORTS", "PORT_NAMES", "Parity", "parities"]
 
 # port -> the engine it ports
-PORTS = {"mjx": "mujoco"}
+PORTS = {"mjx": "mujoco", "mujoco_warp": "mujoco"}
+# port -> its name in prose
+PORT_NAMES = {"mjx": "MJX", "mujoco_warp": "MuJoCo Warp"}
 # options of a port that its original does not have
-PORT_ONLY_OPTIONS = {"mjx": ("precision",)}
+PORT_ONLY_OPTIONS = {"mjx": ("precision",), "mujoco_warp": ("worlds",)}  # (a batch's world 0 is the run)
 
 
 @dataclass(frozen=True)

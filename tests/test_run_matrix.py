@@ -29,7 +29,9 @@ CONTRACT_HORIZON = 0.2  # s: 20 samples of every case (sampling, repeatability a
 # tendons on the device, together). The model build and read-back are MuJoCo's, whose contract runs every case.
 # 5 compilations, three of them programs other tests run too (``test_mjx``'s float32 rod, the divergence and parity
 # tests' top, the reliability test's rod), where the contract took 7 programs on the largest cases before.
-JIT_COMPILED = {"mjx": "euler"}
+# MuJoCo Warp likewise (Warp compiles kernels per model structure, and each step is ms of Python launches: its
+# contract over every case took 627 s on 2 busy cores).
+JIT_COMPILED = {"mjx": "euler", "mujoco_warp": "euler"}
 JIT_TREE_CASE = "pivoted_rod"
 
 

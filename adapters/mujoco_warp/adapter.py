@@ -1,0 +1,209 @@
+"""``MujocoWarpAdapter``: the contract (``dalembert.adapters``) for MuJoCo Warp (``mujoco_warp``) on Warp's CPU backend.
+
+The model is the MuJoCo adapter's: the same generated MJCF (``mujoco.mjcf``),
+compiled by MuJoCo C and checked against the scene (``MujocoAdapter.prepare``),
+then put on the device with ``mjw.put_model`` (the auto-reset flag cleared on a
+copy: ``stepping.device_model``); the initial state likewise with
+``mjw.put_data``. ``prepare`` also takes one step on a scratch state, so Warp's
+kernels are compiled (or loaded from its cache) before any timed run. The
+read-back is the MuJoCo adapter's (``mujoco.readback``), as for MJX: MuJoCo
+Warp's sampled ``qpos``/``qvel``, widened to double exactly, are set into a
+MuJoCo C ``MjData``, so poses and velocities are MuJoCo Warp's states and the
+joint reactions are MuJoCo C's ``mj_rnePostConstraint`` evaluated on them (the
+audit says so).
+
+Number type: float32 only (MuJoCo Warp's kernels are written in it); the
+float32 attitude floor of a torque-free top (``mjx.parity.float32_floor``) is in
+every run's audit, so a reader sees whether an error is the method's or the
+number type's. Options: ``welds`` as for MuJoCo, contact as MuJoCo's (``cone``,
+``impratio``, ``noslip_iterations``, ``contact_timeconst``: MuJoCo Warp reads
+all four); ``worlds`` = N steps N copies of the case at once (MuJoCo Warp's ``nworld``), world k's initial
+velocities raised by k ``WORLD_DV``: the trajectory is world 0's (the case's own, the same float32 arithmetic as
+one world), the run's wall time the batch's, and the audit holds the batch size, its throughput (world-steps per
+second) and the worlds' spread at the end. Loads go through MuJoCo's site actuators only (applied inside every
+integrator stage); MuJoCo's ``loads=xfrc_applied`` path, a Python call per
+step, is not offered. What MuJoCo Warp refuses (``mjw.put_model``: a geometry
+type, a solver, a flag, an integrator it lacks) is refused with its reason
+before anything runs.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, fields, replace
+
+import numpy as np
+
+from dalembert.adapters.base import IntegratorSpec, Option, Outcome
+from dalembert.adapters.mujoco import MujocoAdapter
+from dalembert.adapters.mujoco import contact
+from dalembert.adapters.mujoco.adapter import MujocoPrepared
+from dalembert.adapters.mujoco.readback import read_back
+from dalembert.adapters.mujoco_warp.stepping import DEVICE, compile_step, device_model, put_state, step_samples, warp
+
+__all__ = ["MujocoWarpAdapter", "MujocoWarpPrepared"]
+
+OPTIONS = ("welds", "worlds", *contact.OPTIONS)
+# Batched worlds (option ``worlds``): world k starts with every velocity coordinate raised by k WORLD_DV (m/s,
+# rad/s), ~1e-4 of the cases' velocities (~1-10), so the worlds' spread at the end measures how the case amplifies
+# a small difference. A smaller one is lost in float32: its change of qpos per step, dv dt, falls below float32's
+# resolution of qpos (measured: 1e-6 rad/s at dt 1e-3 leaves the pendulum's worlds' angles bit-identical).
+WORLD_DV = 1e-3
+# The most worlds a run may step (each holds MuJoCo Warp's contact and constraint arrays: ~MBs per thousand worlds
+# for the cases here); a larger batch is a typo more often than a plan.
+MAX_WORLDS = 4096
+STAGES = {"euler": 1, "rk4": 4, "implicitfast": 1}  # evaluations of the dynamics per step
+# The step the refusal check compiles every model with: ``mjw.put_model`` refuses features (integrator, cone,
+# solver, flags, geometry, actuator and sensor types), never a step, which enters the MJCF only as numbers
+# (timestep, solref), so one check serves every step of a sweep.
+REFUSAL_DT = 1e-3
+
+
+@dataclass(frozen=True, eq=False)
+class MujocoWarpPrepared(MujocoPrepared):
+    """MuJoCo Warp's prepared run: MuJoCo's (``MujocoPrepared``: the model compiled by MuJoCo C, its initial
+    state, the read-back's scratch data), put on the device, its step's kernels compiled.
+
+    Attributes
+    ----------
+    mx : mujoco_warp.Model — the model on the device (float32)
+    ctrl : float or None — the site actuators' constant control (1: the loads at full value), None without
+    worlds : int — option ``worlds``: the worlds each run steps at once (world 0 the case's)
+    compile_s : float — the first step's wall time in ``prepare``: Warp's kernel compilation, or its load from the
+        kernel cache, s (build, not stepping)
+    """
+
+    mx: object
+    ctrl: object
+    worlds: int
+    compile_s: float
+
+
+class MujocoWarpAdapter(MujocoAdapter):
+    """MuJoCo Warp (``mujoco-warp``) on Warp's CPU backend, float32. Options: ``welds`` = ``tree`` |
+    ``equality``; contact as MuJoCo's (``cone``, ``impratio``, ``noslip_iterations``, ``contact_timeconst``)."""
+
+    name = "mujoco_warp"
+    options = {
+        "welds": MujocoAdapter.options["welds"],
+        "worlds": Option(default=1, minimum=1.0, maximum=float(MAX_WORLDS), integer=True,
+                         description="worlds stepped at once (mjw nworld); world k's initial velocities raised by "
+                                     f"k * {WORLD_DV:g}; the trajectory is world 0's, the audit has the batch's "
+                                     "throughput and spread"),
+        **contact.CONTACT_OPTIONS,
+    }
+    effects = MujocoAdapter.effects  # MuJoCo's mapping; what MuJoCo Warp lacks is refused (``_refusal``)
+    integrators = {
+        "euler": IntegratorSpec(True, OPTIONS, "MuJoCo Warp semi-implicit Euler", order=1),
+        "rk4": IntegratorSpec(True, OPTIONS, "MuJoCo Warp classical RK4", order=4),
+        "implicitfast": IntegratorSpec(True, OPTIONS, "MuJoCo Warp implicit in velocity, no Coriolis derivatives",
+                                       order=1),
+    }
+
+    def version(self):
+        """MuJoCo Warp's version; ImportError when it or Warp is missing. Neither is imported here: the harness
+        asks before forking its workers, and each worker initializes Warp itself (``load``)."""
+        return _version()
+
+    def load(self):
+        """Warp initialized on the CPU and MuJoCo Warp imported (``version`` imports neither)."""
+        self.version()
+        warp()
+
+    def unsupported(self, scene, settings):
+        """The base check, then where ``mjw.put_model`` refuses the compiled model (NotImplementedError or
+        ValueError: a feature MuJoCo Warp lacks), the reason is MuJoCo Warp's."""
+        reason = super().unsupported(scene, settings)
+        if reason:
+            return reason
+        from dalembert.adapters.mujoco.mjcf import mjcf
+
+        return _refusal(mjcf(scene, replace(settings, dt=REFUSAL_DT)))
+
+    # ------------------------------------------------------------- build
+    def prepare(self, scene, times, settings):
+        p = super().prepare(scene, times, settings)  # compiled MJCF, checked; the initial state
+        ctrl = 1.0 if p.load_path == "actuator" and p.model.nu else None
+        worlds = int(self.option(settings, "worlds"))
+        mx = device_model(p.model)
+        compile_s = compile_step(mx, p.model, p.qpos0, p.qvel0, ctrl, worlds)
+        return MujocoWarpPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, mx=mx, ctrl=ctrl,
+                                  worlds=worlds, compile_s=compile_s)
+
+    # ------------------------------------------------------------- run
+    def run(self, prepared):
+        p = prepared
+        d = put_state(p.model, p.qpos0, p.qvel0, p.ctrl, p.worlds, WORLD_DV)  # a fresh state each run, not timed
+        Q, V, wall, bad = step_samples(p.mx, d, p.steps, p.qpos0, p.qvel0)
+        n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())  # interval `bad` was stepped whole
+        message = f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else ""
+        info = {"message": message}
+        if p.worlds > 1:
+            # the batch: every world stepped n_steps in ``wall``; world 0 is the run's, the others its perturbed
+            # copies (their spread from world 0 at the end: NaN if a world diverged)
+            q = d.qpos.numpy().astype(float)
+            with np.errstate(invalid="ignore"):
+                spread = float(np.max(np.abs(q[1:] - q[0]))) if bad is None else float("nan")
+            info["worlds"] = {"worlds": p.worlds, "world_dv": WORLD_DV, "world_steps_per_s": p.worlds * n_steps / wall,
+                              "batch_s_per_step": wall / max(n_steps, 1), "world_spread_qpos_end": spread}
+
+        def read():
+            traj, info["audit"] = read_back(p, Q, V)
+            info["audit"].update(info.get("worlds", {}))
+            return traj
+
+        return Outcome(read, wall, n_steps, n_steps * STAGES[p.settings.integrator], info)
+
+    # ------------------------------------------------------------- audit
+    def audit(self, prepared, outcome):
+        wp, mjw, init_message = warp()
+        p, mx = prepared, prepared.mx
+        out = super().audit(prepared, outcome)  # MuJoCo C's compiled model: flags, gravity, actuators
+        out.update({
+            # the gravity put on the device, in float32 (-9.81 becomes -9.8100004)
+            "gravity_device": tuple(float(g) for g in np.asarray(mx.opt.gravity.numpy()).reshape(-1)[:3]),
+            "integrator": f"MuJoCo Warp {mjw.IntegratorType(int(mx.opt.integrator)).name}",
+            "timestep": float(np.asarray(mx.opt.timestep.numpy()).reshape(-1)[0]),
+            "precision": str(mx.opt.timestep.numpy().dtype),
+            "device": DEVICE, "warp_version": wp.__version__, "mujoco_warp_version": self.version(),
+            "warp_init": init_message,
+            "kernel_compile_s": p.compile_s,
+            "autoreset": "none: MuJoCo Warp has no auto-reset (the flag is cleared on the device model's copy); "
+                         "a non-finite state ends the run",
+            "reactions": "MuJoCo C mj_rnePostConstraint on MuJoCo Warp's sampled states (double)",
+        })
+        if p.settings.dt is not None:
+            # the attitude floor of the number type (rad; torque-free tops only, else NaN), for the report's parity
+            from dalembert.adapters.mjx.parity import float32_floor
+
+            out["float32_floor"] = float32_floor(p.scene, p.times, p.settings.dt)
+        return out
+
+
+@functools.lru_cache(maxsize=64)
+def _refusal(xml):
+    """Why ``mjw.put_model`` refuses the model compiled from the MJCF ``xml``, or None; once per model in a
+    worker (every integrator and step of a case asks)."""
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_string(xml)
+    try:
+        device_model(model)
+    except (NotImplementedError, ValueError) as e:
+        return f"MuJoCo Warp cannot put this model on the device (mjw.put_model: {type(e).__name__}: {e})"
+    return None
+
+
+@functools.cache  # (installed packages do not change under a process)
+def _version():
+    from importlib.metadata import PackageNotFoundError, version
+    from importlib.util import find_spec
+
+    for module in ("warp", "mujoco_warp"):
+        if find_spec(module) is None:
+            raise ImportError(f"No module named {module!r} (install dalembert[mujoco-warp])")
+    try:
+        return version("mujoco-warp")
+    except PackageNotFoundError as e:
+        raise ImportError("mujoco_warp is importable but its distribution is not installed "
+                          "(install dalembert[mujoco-warp])") from e

@@ -1,0 +1,156 @@
+"""MuJoCo Warp's stepping on Warp's CPU backend: the model and state put on the device, ``mjw.step`` per step.
+
+Warp compiles each kernel module on its first launch in a process and keeps the
+compiled code on disk (Warp's kernel cache, keyed by the kernel's source, its
+options and Warp's version, so a stale entry is never loaded). The cache is put
+under ``dalembert.cache.cache_dir("warp")`` unless Warp is given its own
+(``WARP_CACHE_PATH``), so the workers of a matrix, later matrices and a fresh
+clone's second run load instead of compiling. Measured on 2 shared cores (load
+~3), one ``mjw.step`` of the pendulum in RK4 in a fresh process: 18.6 s with an
+empty cache, 0.12 s from the cache (41 s for the adapter's first ``prepare`` at a
+load of ~9). ``compile_step`` takes that first step
+on a scratch copy of the state, so a run's timed loop never compiles.
+
+There are no CUDA graphs on the CPU: every ``mjw.step`` launches its kernels
+one by one from Python (~70 launches a semi-implicit Euler step, most of its
+time Warp's argument packing: cProfile), so a step of the pendulum costs ~1.4 ms
+(Euler) to ~4.5 ms (RK4) on 2 cores at a load of ~3, little of it arithmetic. MuJoCo Warp has no warning
+counters and no auto-reset: a blow-up runs on as inf and NaN, so the loop
+checks each sample and stops at the first non-finite one.
+
+A ``mjw.Data`` holds ``nworld`` worlds; each kernel launch covers them all, so a batch costs about the launches
+of one world plus the arithmetic of each (``benchmarks.mujoco_warp worlds``).
+
+The number type is float32: MuJoCo Warp's kernels are written in it (``wp.float32``
+fields throughout ``mujoco_warp._src.types``); there is no float64 build.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import os
+import tempfile
+import time
+
+import numpy as np
+
+__all__ = ["warp", "device_model", "sizes", "put_state", "compile_step", "step_samples", "DEVICE", "NCONMAX"]
+
+DEVICE = "cpu"  # Warp's CPU backend: the adapter runs where no accelerator is
+# Contacts allocated per world: MuJoCo Warp's own default for a model without height fields, flexes or SDFs (45,
+# rounded up to its size 48); the contact cases here touch at most 4 points at once (a box on a plane).
+NCONMAX = 48
+
+
+@functools.cache
+def warp():
+    """``(warp, mujoco_warp, init message)``: Warp initialized once per process on its kernel cache, its log
+    quiet; the message is what Warp's native code printed on stderr at init (on a machine without a GPU: that
+    no CUDA driver was found), kept for the audit instead of printed."""
+    import warp as wp
+
+    from dalembert.cache import cache_dir
+
+    wp.config.log_level = wp.LOG_ERROR  # no "Module ... load ... (compiled)" line per kernel
+    if not os.environ.get("WARP_CACHE_PATH"):
+        wp.config.kernel_cache_dir = cache_dir("warp")
+    with tempfile.TemporaryFile(mode="w+") as err:  # native code writes to fd 2, past sys.stderr
+        saved = os.dup(2)
+        os.dup2(err.fileno(), 2)
+        try:
+            wp.init()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        err.seek(0)
+        message = err.read().strip()
+    import mujoco_warp as mjw
+
+    return wp, mjw, message
+
+
+def device_model(model):
+    """``mjw.put_model`` of a copy of MuJoCo C's ``model`` with the auto-reset flag cleared: the MJCF disables
+    MuJoCo C's auto-reset (a bad state must show, not restart), MuJoCo Warp has none to disable and refuses the
+    flag; the copy keeps the compiled model the read-back and audit read unchanged."""
+    import mujoco
+
+    wp, mjw, _ = warp()
+    m = copy.copy(model)
+    m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+    with wp.ScopedDevice(DEVICE):
+        return mjw.put_model(m)
+
+
+def sizes(model, data):
+    """``(nconmax, njmax)``: the contacts and constraint rows a world holds. MuJoCo Warp's default njmax (53, for
+    contacts) is short of a model's equality constraints (the welded particle box: 26 welds, 156 rows), and a
+    world past it drops rows with a printed warning only, so njmax is the rows MuJoCo C finds at the initial state
+    (``data`` after ``mj_forward``: equalities, and any contact there) plus every allocated contact at the
+    model's largest condim (pyramidal: 2 (condim - 1) rows, elliptic: condim)."""
+    import mujoco
+
+    if model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_CONTACT):
+        return NCONMAX, max(int(data.nefc), 1)
+    condim = max([1, *model.geom_condim.tolist(), *model.pair_dim.tolist()])
+    rows = condim if model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC else max(1, 2 * (condim - 1))
+    return NCONMAX, int(data.nefc) + NCONMAX * rows
+
+
+def put_state(model, qpos, qvel, ctrl, nworld=1, dv=0.0):
+    """A device ``mjw.Data`` of ``nworld`` worlds at ``qpos (nq,)``, ``qvel (nv,)`` with ``ctrl`` (None, or
+    the actuators' constant control), its contact and constraint arrays sized by ``sizes``. World k's velocity is
+    ``qvel + k dv`` in every coordinate (m/s, rad/s): world 0 is the given state."""
+    import mujoco
+
+    wp, mjw, _ = warp()
+    data = mujoco.MjData(model)
+    data.qpos[:], data.qvel[:] = qpos, qvel
+    if ctrl is not None:
+        data.ctrl[:] = ctrl
+    mujoco.mj_forward(model, data)  # the initial state's constraint rows, for ``sizes``
+    nconmax, njmax = sizes(model, data)
+    with wp.ScopedDevice(DEVICE):
+        d = mjw.put_data(model, data, nworld=nworld, nconmax=nconmax, njmax=njmax)
+        if nworld > 1 and dv:
+            d.qvel.assign((np.asarray(qvel) + dv * np.arange(nworld)[:, None]).astype(np.float32))
+        return d
+
+
+def compile_step(mx, model, qpos, qvel, ctrl, nworld=1):
+    """One step on a scratch state of ``nworld`` worlds, so that every kernel a step launches is compiled (or
+    loaded from the cache) before a timed run: the wall time, s."""
+    wp, mjw, _ = warp()
+    d = put_state(model, qpos, qvel, ctrl, nworld)
+    start = time.perf_counter()
+    with wp.ScopedDevice(DEVICE):
+        mjw.step(mx, d)
+        wp.synchronize_device(DEVICE)
+    return time.perf_counter() - start
+
+
+def step_samples(mx, d, steps, q0, v0):
+    """Step ``d`` through the sample intervals (``steps[k]`` steps in interval k) and read world 0's samples
+    back: ``(Q (n, nq), V (n, nv), wall s, first bad sample or None)``, float64 widened exactly from float32, the
+    initial state first, NaN from the first non-finite sample of world 0 on (the loop stops there). The wall time
+    is the stepping of every world and the per-sample copies to the host (the CPU backend's arrays are host
+    memory). The other worlds' last state stays in ``d``."""
+    wp, mjw, _ = warp()
+    n = len(steps) + 1
+    Q, V = np.full((n, len(q0)), np.nan), np.full((n, len(v0)), np.nan)
+    Q[0], V[0] = q0, v0
+    step = mjw.step
+    bad = None
+    with wp.ScopedDevice(DEVICE):
+        start = time.perf_counter()
+        for k, nstep in enumerate(steps, 1):
+            for _ in range(int(nstep)):
+                step(mx, d)
+            q, v = d.qpos.numpy()[0], d.qvel.numpy()[0]
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                bad = k
+                break
+            Q[k], V[k] = q, v
+        wall = time.perf_counter() - start
+    return Q, V, wall, bad
