@@ -1,10 +1,11 @@
 """Engine environments (``dalembert.environments``): the engine spec with a version, the refusals before
 anything runs, and the pool's workers started from an environment's interpreter.
 
-No test here reaches the network: an environment is faked by a directory whose ``bin/python`` runs this
+No test here reaches the network unasked: an environment is faked by a directory whose ``bin/python`` runs this
 interpreter (noting its pid, so that a run's record shows which interpreter ran it) and whose
 ``environment.json`` names the engine version installed here. A real environment (``dalembert env create``)
-is made only by ``test_a_real_environment_runs_its_engine_version``, where the package index is reachable.
+is made only by ``test_a_real_environment_runs_its_engine_version``, with ``DALEMBERT_NETWORK_TESTS=1`` and the
+package index reachable.
 """
 
 from __future__ import annotations
