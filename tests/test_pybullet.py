@@ -307,3 +307,20 @@ def test_describe_reads_the_built_multibodies():
     text = ADAPTER.describe(case.scene, Settings("euler", dt=1e-3))
     assert text.count("\n") == 1 + 3 + 1  # the header, the fixed base, the three links
     assert "gravity [0.0, 0.0, -9.81]" in text and "mass 2.0" in text
+
+
+def test_a_branching_tree_keeps_each_links_mass_and_a_tree_beyond_pybullets_links_is_refused():
+    """PyBullet numbers a multibody's links depth-first whatever order they are passed in: Solo12's four legs
+    (three links each, passed breadth-first before) came back with masses swapped between legs, which
+    ``prepare``'s mass check refuses; passed depth-first, every link is the scene's. A tree of more links than
+    one multibody holds (``MAX_LINKS``) is refused before anything is built."""
+    from dalembert.adapters.pybullet.adapter import MAX_LINKS
+
+    adapter = get_adapter("pybullet")
+    case = make_case("robot_free_fall")
+    settings = Settings("euler", dt=1e-3)
+    assert adapter.unsupported(case.scene, settings) is None
+    adapter.prepare(case.scene, case.times[:3], settings)  # raises when a link's mass is another's
+    assert adapter.unsupported(make_case("chain", n=MAX_LINKS).scene, settings) is None
+    why = adapter.unsupported(make_case("chain", n=MAX_LINKS + 1).scene, settings)
+    assert f"a tree of {MAX_LINKS + 1} links" in why and f"at most {MAX_LINKS}" in why

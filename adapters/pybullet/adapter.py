@@ -75,7 +75,7 @@ class PybulletAdapter(Adapter):
     def unsupported(self, scene, settings):
         missing = scene.effects - self.effects
         if not missing:
-            return contact.why_not(scene)
+            return _too_many_links(scene) or contact.why_not(scene)
         notes = [why for key, why in NOT_MAPPED.items()
                  if any(m == key or m.startswith(key + ":") for m in missing)]
         return f"{self.name} adapter cannot represent {', '.join(sorted(missing))} ({'; '.join(notes)})"
@@ -123,6 +123,31 @@ def _version():
     from importlib.metadata import version
 
     return version("pybullet")
+
+
+# The most links one PyBullet multibody holds (measured on 3.2.7: a 300-link chain is built with 127 joints, and
+# asking for link 127 fails "Joint index out-of-range").
+MAX_LINKS = 127
+
+
+def _too_many_links(scene):
+    """Why PyBullet cannot hold ``scene`` (a tree of more than ``MAX_LINKS`` links below its root), or None."""
+    from dalembert.scene import WORLD
+
+    roots = {}  # each tree's root: the bodies below it
+    for j in scene.joints:
+        root = j.child
+        while (parent := scene.joint(root).parent) != WORLD:
+            root = parent
+        roots[root] = roots.get(root, 0) + (j.parent != WORLD)
+    # a free root is a multibody's base; every other tree hangs, root and all, off the world's one fixed multibody
+    free = [n for r, n in roots.items() if scene.joint(r).kind == "free"]
+    fixed = sum(n + 1 for r, n in roots.items() if scene.joint(r).kind != "free")
+    worst = max([*free, fixed])
+    if worst > MAX_LINKS:
+        return (f"a tree of {worst} links: one PyBullet multibody holds at most {MAX_LINKS} (PyBullet 3.2.7 builds "
+                f"the first {MAX_LINKS} and drops the rest)")
+    return None
 
 
 def _check_mass_properties(model, scene):

@@ -68,6 +68,24 @@ MODEL_OPTIONS = {
 NO_VELOCITY_CLAMP = float("inf")
 
 
+def _depth_first(scene, members):
+    """``members`` (one multibody's links, parents before children) in depth-first order, each parent's children in
+    the order given: ``createMultiBody`` numbers the links depth-first from the base whatever order they are passed
+    in (measured: Solo12's twelve leg links passed breadth-first came back with masses swapped between legs), so
+    only in this order is link i the i-th passed."""
+    names = {b.name for b in members}
+    children = {}
+    for b in members:
+        parent = scene.joint(b.name).parent
+        children.setdefault(parent if parent in names else None, []).append(b)
+    out, stack = [], list(reversed(children.get(None, [])))
+    while stack:  # iterative: a chain may be a thousand links deep
+        b = stack.pop()
+        out.append(b)
+        stack.extend(reversed(children.get(b.name, [])))
+    return out
+
+
 def engine():
     """The ``pybullet`` module, imported with the process's stderr (fd 2) sent to /dev/null for the
     import: the module's C initializer prints ``pybullet build time: ...`` there, which a Python-level
@@ -225,6 +243,7 @@ def _construct(pb, c, scene, settings):
     for base in [*roots, None]:
         members = fixed if base is None else [b for b in scene.topological_order()
                                               if b.name != base.name and _root(scene, b.name) == base.name]
+        members = _depth_first(scene, members)
         if base is None and not members:
             continue
         order = {b.name: i for i, b in enumerate(members)}
@@ -316,8 +335,9 @@ def _disconnect(client):
 
 def _root(scene, name):
     """The body at the root of ``name``'s tree (the one jointed to the world)."""
-    j = scene.joint(name)
-    return name if j.parent == WORLD else _root(scene, j.parent)
+    while (parent := scene.joint(name).parent) != WORLD:  # iterative: a chain may be a thousand links deep
+        name = parent
+    return name
 
 
 def _defaults_off(pb, c, mb, members, scene):
