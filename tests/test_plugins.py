@@ -65,33 +65,34 @@ def _distribution(site, name, version, entry_points, module=None, source=""):
 
 @pytest.fixture
 def site(tmp_path, monkeypatch):
-    """Three plugins: ``fake`` that works, ``broken`` that cannot be imported, and one named ``mujoco``."""
+    """Three plugins: ``fake`` that works, ``unimportable`` that cannot be imported (a name no other test
+    registers: tests/broken_adapters.py registers a ``broken`` of its own), and one named ``mujoco``."""
     site = tmp_path / "site"
     site.mkdir()
     _distribution(site, "dalembert_fake", "1.2.3", {"fake": "fake_engine:FakeAdapter",
                                                      "noreact": "fake_engine:NoReactionsAdapter"}, "fake_engine", GOOD)
-    _distribution(site, "dalembert_broken", "0.3", {"broken": "broken_engine:Adapter"}, "broken_engine", BROKEN)
+    _distribution(site, "dalembert_broken", "0.3", {"unimportable": "broken_engine:Adapter"}, "broken_engine", BROKEN)
     _distribution(site, "dalembert_shadow", "2.0", {"mujoco": "fake_engine:FakeAdapter"})
     monkeypatch.syspath_prepend(str(site))
     yield site
-    for name in ("fake", "noreact", "broken"):
+    for name in ("fake", "noreact", "unimportable"):
         registry._REGISTRY._items.pop(name, None)  # (loaded in this process by the test)
 
 
 def test_a_broken_plugin_is_named_and_left_out_and_the_others_list(site, capsys):
     with pytest.warns(PluginWarning) as caught:
         names = adapter_names()
-    assert "fake" in names and "broken" not in names and {"reference", "mujoco"} <= set(names)
+    assert "fake" in names and "unimportable" not in names and {"reference", "mujoco"} <= set(names)
     messages = [str(w.message) for w in caught]
-    assert any("'broken'" in m and "dalembert_broken 0.3" in m and "No module named 'pybullet_engine'" in m
+    assert any("'unimportable'" in m and "dalembert_broken 0.3" in m and "No module named 'pybullet_engine'" in m
                and "fix or uninstall" in m for m in messages), messages
     assert main(["engines"]) == 0
     captured = capsys.readouterr()
-    assert "fake" in captured.out and "reference" in captured.out and "broken" not in captured.out
-    assert "dalembert: warning: plugin engine 'broken'" in captured.err  # one line, the command line's
+    assert "fake" in captured.out and "reference" in captured.out and "unimportable" not in captured.out
+    assert "dalembert: warning: plugin engine 'unimportable'" in captured.err  # one line, the command line's
     assert "(adapter from dalembert_fake 1.2.3)" in next(x for x in captured.out.splitlines() if x.startswith("fake"))
-    with pytest.raises(ImportError, match="plugin engine 'broken' .*dalembert_broken 0.3.*pybullet_engine"):
-        get_adapter("broken")
+    with pytest.raises(ImportError, match="plugin engine 'unimportable' .*dalembert_broken 0.3.*pybullet_engine"):
+        get_adapter("unimportable")
 
 
 def test_a_plugin_with_a_built_in_name_is_refused_naming_its_distribution(site):
@@ -110,8 +111,8 @@ def test_a_plain_matrix_keeps_the_plugins_that_load(site):
         warnings.simplefilter("always")
         specs, skipped = expand(cases=["free_top"], integrators=["rk4"], dts=[1e-2], params={"t_final": 0.5})
     engines = {s.engine for s in specs}
-    assert "fake" in engines and "broken" not in engines
-    assert any(issubclass(w.category, PluginWarning) and "'broken'" in str(w.message) for w in caught)
+    assert "fake" in engines and "unimportable" not in engines
+    assert any(issubclass(w.category, PluginWarning) and "'unimportable'" in str(w.message) for w in caught)
 
 
 def test_a_plugin_run_records_its_distribution(site, tmp_path):
