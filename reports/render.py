@@ -31,11 +31,12 @@ from dalembert.reports.sections.contact import contact
 from dalembert.reports.sections.engines import engines_simulated
 from dalembert.reports.sections.findings import findings
 from dalembert.reports.sections.hazards import hazards
-from dalembert.reports.sections.header import header
+from dalembert.reports.sections.header import header, page_title
 from dalembert.reports.sections.loops import loops
 from dalembert.reports.sections.maps import maps
 from dalembert.reports.sections.order import observed_order
 from dalembert.reports.sections.parity import parity
+from dalembert.reports.sections.recommend import what_to_use
 from dalembert.reports.sections.runs import every_run
 from dalembert.reports.sections.scaling import scaling
 from dalembert.reports.sections.stability import stability
@@ -96,8 +97,11 @@ def build_report(store, out_dir=None):
                  colours=figures.engine_colours({r.engine for r in records}))
     summary, summary_rows = findings(rep)
     mapped_part, mapped = maps(rep)
-    parts = [header(rep), summary, hazards(rep), mapped_part, loops(rep), scaling(rep), observed_order(rep),
-             parity(rep)]
+    # the answers first (what to use, the observed order), then what was run and the evidence
+    answers = [(what_to_use(rep), "what-to-use", "what to use"), (observed_order(rep), "observed-order", "observed order")]
+    parts = [page_title(rep)] + [p for p, _, _ in answers]
+    parts += [header(rep, [(a, t) for p, a, t in answers if p]), summary, hazards(rep), mapped_part, loops(rep),
+              scaling(rep), parity(rep)]
     for f in found:
         parts += _case_sections(rep, f, names, mapped)
     html_path, md_path = write_page([p for p in parts if p], out_dir)
