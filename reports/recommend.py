@@ -193,15 +193,16 @@ def _grid_decides(best, candidates, target):
     if at == len(mine) - 1 and at > 0 and mine[at - 1].error > target:
         reasons.append(f"{best.engine} {best.setting} reaches it only at the finest step the grid ran "
                        f"({mine[at - 1].setting} missed, {mine[at - 1].error:.2g})")
+    bracketed = []  # (coarse, fine) of the other lines: missed at a step cheaper than the pick, reached at the next
     for key, line in sorted(lines.items()):
         if key == _line(best.runs[0]):
             continue
-        for coarse, fine in zip(line, line[1:]):
-            if coarse.error > target >= fine.error and coarse.cost < best.cost:
-                reasons.append(f"{coarse.engine} {coarse.setting} missed it ({coarse.error:.2g}) at "
-                               f"{coarse.cost:.2g} s/s, less than the pick, and {fine.setting} reached it: "
-                               "a step between might win")
-                break
+        bracketed += [(c, f) for c, f in zip(line, line[1:]) if c.error > target >= f.error and c.cost < best.cost][:1]
+    if bracketed:
+        coarse, fine = min(bracketed, key=lambda cf: cf[0].cost)
+        others = "" if len(bracketed) == 1 else f" and {len(bracketed) - 1} more line(s)"
+        reasons.append(f"{coarse.engine} {coarse.setting} missed it ({coarse.error:.2g}) at {coarse.cost:.2g} s/s, "
+                       f"less than the pick, and {fine.setting} reached it{others}: a step between might win")
     return "; ".join(reasons)
 
 

@@ -59,10 +59,11 @@ def hazards(rep):
     rest_html, rest_md, counts = [], [], {}
     for f in rep.found:
         shown = [h for h in f.hazards if listed(h)]
-        if shown:
-            part.heading(rep.titles[f], 3)
+        if shown:  # one line per case, its list folded under it
+            said = ", ".join(f"{HAZARD_TITLES[k].lower()} ({len(hs)})" for k, hs in _grouped(shown))
             html, md = _block(_grouped(shown))
-            part.raw("".join(html), md)
+            part.raw(f'<details class="fold"><summary><b>{escape_html(rep.titles[f])}</b>: {escape_html(said)}'
+                     f"</summary>{''.join(html)}</details>", [f"### {escape_md(rep.titles[f])}", ""] + md)
         folded = [h for h in f.hazards if not listed(h)]
         if folded:
             html, md = _block(_grouped(folded))

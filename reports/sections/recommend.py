@@ -44,10 +44,12 @@ def _caveats(rep, recs):
     """The caveats that apply to every answer, as sentences."""
     manifest, records = rep.manifest, rep.records
     machine = manifest.get("machine") or {}
+    single = any(r.ok and len(r.cost.wall_s_repeats) < 2 for r in records)
     out = [f"Costs are stepping seconds per simulated second on this machine ({machine.get('cpu')}, "
            f"{machine.get('cores')} cores), CPU only (MJX ran on JAX's CPU backend): on a GPU its costs differ. "
-           "A pick is \"apart\" only where its min–max spread over the timed repeats ends below the runner-up's; "
-           f"a run timed once is given {100 * SINGLE_SAMPLE_SPREAD:g} % either side."]
+           "A pick is \"apart\" only where its min–max spread over the timed repeats ends below the runner-up's"
+           + (f"; a run with a single timed repeat is given {100 * SINGLE_SAMPLE_SPREAD:g} % either side."
+              if single else ".")]
     cores = machine.get("cores")
     loaded = loaded_runs(records, cores) if cores else []
     if loaded:
