@@ -104,7 +104,8 @@ def build_report(store, out_dir=None):
     summary, summary_rows = findings(rep)
     mapped_part, mapped = maps(rep)
     # the answers first (what to use, the observed order), then what was run and the evidence
-    answers = [(what_to_use(rep), "what-to-use", "what to use"), (observed_order(rep), "observed-order", "observed order")]
+    answers = [(what_to_use(rep), "what-to-use", "what to use"),
+               (observed_order(rep), "observed-order", "observed order")]
     parts = [page_title(rep)] + [p for p, _, _ in answers]
     parts += [header(rep, [(a, t) for p, a, t in answers if p]),
               summary.folded("The Pareto fronts, the summary table and each case's findings", keep=1),

@@ -116,3 +116,18 @@ def test_the_answers_open_the_page(seed, tmp_path):
     assert "| free bodies (free_top) | 0.001 rad | alpha rk4 dt=0.005" in md
     assert "beta rk4 dt=0.005" in md and "The step grid: dt 0.005 s." in md
     assert "100x cheaper" in md
+
+
+def test_first_order_and_float32_runs_are_said_to_miss_the_finest_target(seed, tmp_path):
+    shutil.copytree(seed.path, tmp_path / "s")
+    store = Store.open(tmp_path / "s")
+    first = base(store)  # (the seed's run: rk4, order 4, in double)
+    add_run(store, "euler", engine="alpha", integrator="euler", dt=1e-3, integrator_order=1,
+            errors={**first.errors, "orientation": (2e-5, 2e-5)})
+    add_run(store, "f32", engine="beta", integrator="rk4", dt=5e-3, integrator_order=4, audit={"precision": "float32"},
+            errors={**first.errors, "orientation": (3e-6, 3e-6)})
+    build_report(store)
+    md = open(os.path.join(store.path, "report.md")).read()
+    assert ("Integrators declaring order 1 (1 engine line) never reach 1e-06 on any case here: their best is 2e-05."
+            in md)
+    assert "Runs in float32 (1 engine line) never reach 1e-06 on any case here: their best is 3e-06." in md

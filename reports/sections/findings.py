@@ -65,8 +65,8 @@ def findings(rep):
     if panels:
         part.figure(figures.pareto_summary(panels, rep.colours),
                     "Each engine's best error at each cost (Pareto front: a point is a run no cheaper run of the "
-                    "engine beats); lower left is better. Dashed: the case's tolerance; dotted: the double-precision "
-                    "roundoff floor.", "summary")
+                    "engine beats); lower left is better. Dashed: the case's tolerance; dotted: "
+                    f"{figures.ROUNDOFF_NOTE}.", "summary")
     table, csv_rows = _summary_table(found, titles)
     part.para("Per case and engine: the most accurate run, the cheapest run that reaches each accuracy in the "
               "case's headline error (stepping seconds per simulated second; \"never\": no run did), and how many "

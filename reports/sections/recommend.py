@@ -3,8 +3,11 @@ to pick with its cost and the runner-up (``reports.recommend``), and the caveats
 
 from __future__ import annotations
 
+from dalembert.reports.causes import single_precision
+from dalembert.reports.formatting import counted
 from dalembert.reports.page import Part
-from dalembert.reports.recommend import PROBLEM_CLASSES, SINGLE_SAMPLE_SPREAD, recommend
+from dalembert.reports.recommend import PROBLEM_CLASSES, SINGLE_SAMPLE_SPREAD, TARGETS, recommend
+from dalembert.reports.work_precision import figure_of
 from dalembert.reports.sections.common import run_link
 from dalembert.reports.tables import Cell, Table, escape_html
 from dalembert.reports.timing import loaded_runs
@@ -60,6 +63,34 @@ def _caveats(rep, recs):
     return out
 
 
+def _best_of(rep, keep):
+    """The smallest headline figure over every case of the finished runs ``keep(run)`` accepts, and how many
+    engine lines (engine, integrator, options) those runs are; (None, 0) when none."""
+    best, lines = None, set()
+    for f in rep.found:
+        for r in f.runs:
+            if f.ranked and r.ok and r.judgement.verdict != "diverged" and keep(r):
+                lines.add((r.engine, r.settings.integrator, r.options_label))
+                e = figure_of(r, f.ranked, f.case)
+                best = e if best is None or e < best else best
+    return best, len(lines)
+
+
+def _takeaways(rep):
+    """What holds across the matrix, in sentences: whether first-order schemes or float32 runs reach the finest
+    target on any case."""
+    finest, out = min(TARGETS), []
+    for what, keep in (("Integrators declaring order 1", lambda r: r.integrator_order == 1),
+                       ("Runs in float32", single_precision)):
+        best, n = _best_of(rep, keep)
+        if best is None:
+            continue
+        verdict = "never reach" if best > finest else "reach"
+        out.append(f"{what} ({counted(n, 'engine line')}) {verdict} {finest:g} on any case here: their best is "
+                   f"{best:.2g}.")
+    return out
+
+
 def what_to_use(rep):
     """The section (a ``Part``; empty when no class of problem holds a case with a headline figure)."""
     part = Part()
@@ -88,7 +119,7 @@ def what_to_use(rep):
                      Cell(caveat, wrap=True)])
     part.table(Table(head, rows, cls="recommend", row_classes=["warning" if r.grid or not r.apart else ""
                                                                for r in recs]), note_constant=False)
-    part.items(_caveats(rep, recs))
+    part.items(_takeaways(rep) + _caveats(rep, recs))
     uncovered = [rep.titles[f] for f in rep.found if not any(c.claims(f.case) for c in PROBLEM_CLASSES)]
     if uncovered:
         part.para("Cases no class holds: " + ", ".join(uncovered) + ".")
