@@ -18,7 +18,7 @@ COUNTED = ("diverged", "failed", "energy", "tolerance")  # the hazards the summa
 
 def _summary_table(found, titles):
     """The summary as a ``Table`` and as rows of ``summary.csv`` (full precision)."""
-    head = ["case", "engine", "best error", "best at"] + [f"cheapest to {t:g} (s/s)" for t in ACCURACY_TARGETS]
+    head = ["case", "engine", "best error", "best at"] + [f"cheapest run to error ≤ {t:g} · its cost (s/s)" for t in ACCURACY_TARGETS]
     head += ["diverged", "stopped", f"energy > {100 * ENERGY_HAZARD:g} %", "beyond tol.", "runs"]
     rows, csv_rows = [], []
     for f in found:
