@@ -8,8 +8,8 @@ same integrator and step whose headline errors differ beyond the case's toleranc
   for which pairs count): e.g. an RK4 whose rotation update is first order on free or ball joints;
 * *soft against hard loop constraints* — on a case with loop closures, a run whose audit describes its closure
   as soft (``SOFT_LOOP_KEYS``) beside one that does not: its loop residual is part of its motion;
-* *a step cap* — an adaptive run whose steps were no more than the case's sample intervals: the sample grid, not
-  its tolerance, set its steps.
+* *a step cap* — an adaptive run that took exactly one step per sample interval of the case: the sample grid,
+  not its tolerance, set its steps (fewer steps than samples is dense output, no cap).
 
 Stored numbers only: each cause quotes the audit key or the orders it comes from.
 """
@@ -70,7 +70,9 @@ def disagreement_causes(group, case, runs, quantity, orders=None):
                        f"constraints (audit {', '.join(keys)}), the others hard: the residual is part of the motion")
     intervals = max(len(case.sample_times) - 1, 1)
     for r in group:
-        if r.settings.dt is None and 0 < r.cost.n_steps <= intervals:
-            out.append(f"{r.engine}'s {r.settings.integrator} took {r.cost.n_steps} steps for {intervals} sample "
-                       "intervals: the samples, not its tolerance, capped its steps")
+        # (one step per sample interval exactly: a controller free to choose would not land on it; fewer steps
+        # than samples is dense output, not a cap)
+        if r.settings.dt is None and r.cost.n_steps == intervals:
+            out.append(f"{r.engine}'s {r.settings.integrator} took one step per sample interval ({intervals}): the "
+                       "samples, not its tolerance, set its steps")
     return out

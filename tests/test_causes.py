@@ -74,8 +74,10 @@ def test_an_adaptive_run_capped_by_the_samples_is_named(seed):
                      cost=replace(first.cost, n_steps=intervals))
     free = replace(capped, key="d", engine="beta", cost=replace(first.cost, n_steps=10 * intervals))
     causes = disagreement_causes([capped, free], _case(seed), [capped, free], "orientation")
-    assert causes == [f"alpha's dop853 took {intervals} steps for {intervals} sample intervals: the samples, not its "
-                      "tolerance, capped its steps"]
+    assert causes == [f"alpha's dop853 took one step per sample interval ({intervals}): the samples, not its "
+                      "tolerance, set its steps"]
+    dense = replace(capped, cost=replace(first.cost, n_steps=intervals // 10))  # dense output: fewer steps, no cap
+    assert disagreement_causes([dense, free], _case(seed), [dense, free], "orientation") == []
 
 
 def test_a_disagreement_with_a_cause_is_listed_and_one_without_is_folded(store):
