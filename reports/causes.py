@@ -16,6 +16,8 @@ Stored numbers only: each cause quotes the audit key or the orders it comes from
 
 from __future__ import annotations
 
+import math
+
 from dalembert.reports.order import ORDER_MARGIN, observed_orders, step_pairs
 
 __all__ = ["SOFT_LOOP_KEYS", "single_precision", "case_orders", "disagreement_causes"]
@@ -49,8 +51,9 @@ def disagreement_causes(group, case, runs, quantity, orders=None):
     """
     orders = case_orders(case, runs, quantity) if orders is None else orders
     out = []
+    least = min((r.max_error(quantity) for r in group), default=math.nan)
     for r in group:
-        if single_precision(r):
+        if single_precision(r) and r.max_error(quantity) > least:  # (the least accurate side of it, not the best)
             out.append(f"{r.engine} ran in float32 (audit precision): its roundoff floor, ~1e-6, is not the method's")
     flagged = []
     for r in group:

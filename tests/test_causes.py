@@ -41,6 +41,8 @@ def test_float32_is_named(seed):
     group = [_run(first, "a", "alpha", 1e-3, audit={"precision": "float32"}), _run(first, "b", "beta", 1e-8)]
     causes = disagreement_causes(group, _case(seed), group, "orientation")
     assert any("alpha ran in float32" in c for c in causes) and not any("beta" in c for c in causes)
+    best = [_run(first, "a", "alpha", 1e-9, audit={"precision": "float32"}), _run(first, "b", "beta", 1e-3)]
+    assert disagreement_causes(best, _case(seed), best, "orientation") == []  # float32 the more accurate: no cause
     plain = [replace(group[0], audit={"precision": "float64"}), group[1]]
     assert disagreement_causes(plain, _case(seed), plain, "orientation") == []
 
@@ -59,8 +61,9 @@ def test_an_order_below_the_declared_one_is_named_beside_an_engine_that_keeps_it
 def test_soft_loops_beside_hard_ones_are_named():
     case = SimpleNamespace(scene=SimpleNamespace(loops=("C",)), sample_times=(0.0, 0.5, 1.0))
     settings = SimpleNamespace(integrator="rk4", dt=1e-2)
-    soft = SimpleNamespace(engine="mujoco", audit={"loop_softness": "soft"}, settings=settings, options_label="")
-    hard = SimpleNamespace(engine="pinocchio", audit={}, settings=settings, options_label="")
+    soft = SimpleNamespace(engine="mujoco", audit={"loop_softness": "soft"}, settings=settings, options_label="",
+                           max_error=lambda q: 1e-4)
+    hard = SimpleNamespace(engine="pinocchio", audit={}, settings=settings, options_label="", max_error=lambda q: 1e-8)
     assert disagreement_causes([soft, hard], case, [], "joint", orders={}) == [
         "mujoco closes the loop with soft constraints (audit loop_softness), the others hard: the residual is part "
         "of the motion"]
