@@ -37,6 +37,13 @@ INTEGRATOR_PALETTE = tuple(plt.get_cmap("tab10").colors) + ("#000000", "#8c6d31"
 OPTION_STYLES = ("-", "--", ":", "-.")
 LEGEND_W = 2.2  # inches beside a panel for its own legend (stability maps)
 FLOOR_STYLE = dict(color="k", ls=":", lw=1.2)
+# What the dotted line is (``reference.roundoff``: RK4 in double against its extended-precision twin), said wherever
+# it is drawn: an estimate, so a run below it is no contradiction.
+ROUNDOFF_NOTE = ("the roundoff floor, an estimate of the roundoff a double-precision integrator accumulates over the "
+                 "horizon, not a bound (a run may sit below it)")
+# Markers beside the colours of a panel's integrators: a colour comes back after INTEGRATOR_PALETTE's twelve, with
+# another marker (Drake's fifteen integrators stay distinct).
+INTEGRATOR_MARKERS = ("o", "s", "^", "D", "v")
 TOLERANCE_STYLE = dict(color="#c0392b", ls="--", lw=1.0)
 DIVERGED_MARGIN = 2.0  # factor of room below the lowest and above the largest error on the diverged runs' axis
 # Per diverged run, the share of its samples (%) that may lie below the axis: its start at roundoff (1e-16 at
@@ -87,7 +94,7 @@ def grid(n, ncols=4, sharex=True, sharey=True, height=PANEL_H):
 def _levels(ax, floor, tolerance):
     """The case's roundoff floor and tolerance as horizontal lines (labelled in the legend)."""
     if floor:
-        ax.axhline(floor, **FLOOR_STYLE, label="roundoff floor")
+        ax.axhline(floor, **FLOOR_STYLE, label="roundoff floor (estimate)")
     if tolerance:
         ax.axhline(tolerance, **TOLERANCE_STYLE, label="tolerance")
 
@@ -119,7 +126,7 @@ def pareto_summary(panels, colours, xlabel="stepping time per simulated second (
     handles = [Line2D([], [], color=colours[e], lw=2, marker="o", ms=4) for e in sorted(colours)]
     labels = sorted(colours)
     handles += [Line2D([], [], **TOLERANCE_STYLE), Line2D([], [], **FLOOR_STYLE)]
-    labels += ["case tolerance", "roundoff floor"]
+    labels += ["case tolerance", "roundoff floor (estimate)"]
     fig.legend(handles, labels, loc="upper center", ncol=len(labels), bbox_to_anchor=(0.5, 1.0), frameon=False,
                fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.93 if len(axes) <= 4 else 0.96))
@@ -147,15 +154,17 @@ def work_precision(panels, ylabel, floor=None, tolerance=None, xlabel="stepping 
     colour = {}
     for p in panels:
         names = sorted({ln["integrator"] for q in panels if q["engine"] == p["engine"] for ln in q["lines"]})
-        colour.update({(p["engine"], i): INTEGRATOR_PALETTE[k % len(INTEGRATOR_PALETTE)] for k, i in enumerate(names)})
+        colour.update({(p["engine"], i): (INTEGRATOR_PALETTE[k % len(INTEGRATOR_PALETTE)],
+                                          INTEGRATOR_MARKERS[(k // len(INTEGRATOR_PALETTE)) % len(INTEGRATOR_MARKERS)])
+                       for k, i in enumerate(names)})
     for ax, p in zip(flat, panels):
         placed = []
         for ln in sorted(p["lines"], key=lambda ln: ln["integrator"]):
             c, e, names = zip(*ln["points"])
-            col = colour[(p["engine"], ln["integrator"])]
-            ax.plot(c, e, "-", color=col, lw=1.3, label=ln["integrator"])
-            ax.plot(c[:1], e[:1], "o", mfc="white", mec=col, ms=4.5)  # open: the coarse end
-            ax.plot(c[-1:], e[-1:], "o", color=col, ms=4.5)  # filled: the fine end
+            col, mark = colour[(p["engine"], ln["integrator"])]
+            ax.plot(c, e, "-", color=col, lw=1.3)
+            ax.plot(c[:1], e[:1], mark, mfc="white", mec=col, ms=4.5)  # open: the coarse end
+            ax.plot(c[-1:], e[-1:], mark, color=col, ms=4.5)  # filled: the fine end
             for k in sorted({0, len(c) - 1}):
                 _end_label(ax, placed, c[k], e[k], names[k], col)
         _levels(ax, floor, tolerance)
@@ -163,8 +172,9 @@ def work_precision(panels, ylabel, floor=None, tolerance=None, xlabel="stepping 
         ax.set_yscale("log")
         ax.set_title(p["title"])
         ax.set_xlabel(xlabel)
-        handles = [h for h in ax.get_lines() if not h.get_label().startswith("_") and h.get_label() in
-                   {ln["integrator"] for ln in p["lines"]}]
+        # the legend's keys carry each integrator's colour and marker (a colour alone repeats past twelve)
+        handles = [Line2D([], [], color=colour[(p["engine"], i)][0], marker=colour[(p["engine"], i)][1], lw=1.3, ms=4,
+                          label=i) for i in sorted({ln["integrator"] for ln in p["lines"]})]
         ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, fontsize=7,
                   frameon=False, handlelength=1.4, columnspacing=0.9)
     for row in axes:

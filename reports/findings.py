@@ -14,9 +14,11 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from dalembert.errors import QUANTITIES
+from dalembert.reports.causes import case_orders, disagreement_causes
 from dalembert.reports.formatting import value_text
 from dalembert.reports.hazards import (CLOSURE_GROWTH, CREEP_METRIC, DISAGREEMENT_FACTOR, ENERGY_HAZARD, ENERGY_LIKE,
-                                       HAZARDS, NAMED, Hazard, case_hazards, list_text)
+                                       HAZARDS, NAMED, Hazard, case_hazards, list_text,
+                                       listed)
 from dalembert.reports.names import run_name, settings_text, speed_text
 from dalembert.reports.work_precision import cheapest_reaching, headline_metric, headline_quantity, pareto_front, points
 
@@ -112,6 +114,10 @@ def _case_findings(case, runs, store=None):
         engines.append(EngineSummary(engine, mine, tuple(Reach(t, cheapest_reaching(pts, t)) for t in ACCURACY_TARGETS),
                                      best, tuple(pareto_front(pts))))
     hazards = case_hazards(engines, runs, case, quantity, store)
+    if any(h.kind == "disagreement" for h in hazards):
+        orders = case_orders(case, runs, quantity)
+        hazards = [replace(h, causes=tuple(disagreement_causes(h.runs, case, runs, quantity, orders)))
+                   if h.kind == "disagreement" else h for h in hazards]
     found = CaseFindings(case, tuple(runs), quantity, tuple(engines), tuple(hazards), (), headline)
     return replace(found, sentences=tuple(_sentences(found)))  # the prose reads the rest
 
@@ -149,19 +155,19 @@ def _sentences(f):
         out.append(text)
     counts = {}
     for h in f.hazards:
-        if h.kind != "unsupported":
+        if listed(h):
             counts[h.kind] = counts.get(h.kind, 0) + (len(h.runs) if h.kind != "disagreement" else 1)
     words = {"diverged": "runs diverged", "failed": "runs stopped early",
              "energy": f"runs change the energy by more than {100 * ENERGY_HAZARD:g} %",
              "creep": "runs creep where the closed form sticks",
              "closure": "runs still opening their loops", "reactions": "runs with the motion right and the reactions wrong",
              "tolerance": "finished runs leave the tolerance", "inert": "runs whose tolerance changed nothing",
-             "disagreement": "settings where engines disagree"}
+             "disagreement": "settings where engines disagree for a named cause"}
     if counts.get("disagreement") == 1:
-        words["disagreement"] = "setting where engines disagree"
+        words["disagreement"] = "setting where engines disagree for a named cause"
     if counts:
         out.append("Hazards: " + list_text(f"{n} {words[k]}" for k, n in counts.items()) + " (listed below).")
     else:
-        out.append("No run diverged, stopped early, drifted in energy beyond "
-                   f"{100 * ENERGY_HAZARD:g} % or left the tolerance.")
+        out.append("No run diverged, stopped early or drifted in energy beyond "
+                   f"{100 * ENERGY_HAZARD:g} %, and no disagreement has a named cause.")
     return out

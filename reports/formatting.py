@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numbers
 
-__all__ = ["SIGNIFICANT", "value_text", "params_text"]
+__all__ = ["SIGNIFICANT", "value_text", "params_text", "counted"]
 
 # Digits a time or a parameter prints with: float noise sits at the 16th-17th digit, and a
 # sweep's values differ in the first few (0.1 s steps, spins 1..10 rad/s).
@@ -39,3 +39,9 @@ def value_text(x, unit=""):
 def params_text(params):
     """A case's parameters as ``name=value, ...`` (sorted by name, values by ``value_text``); "" for none."""
     return ", ".join(f"{k}={value_text(v)}" for k, v in sorted(params.items()))
+
+
+def counted(n, word, many=None):
+    """``n`` and ``word`` in the number it takes: ``counted(1, "run")`` is "1 run", ``counted(2, "run")`` "2 runs"
+    (``many``: the plural where it is not ``word + "s"``)."""
+    return f"{n} {word if n == 1 else (many or word + 's')}"

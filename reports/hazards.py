@@ -50,7 +50,7 @@ from dalembert.reports.formatting import value_text
 from dalembert.reports.names import settings_text, speed_text
 from dalembert.reports.work_precision import sweep_key
 
-__all__ = ["ENERGY_HAZARD", "DISAGREEMENT_FACTOR", "CLOSURE_GROWTH", "HAZARDS", "ENERGY_LIKE", "CREEP_METRIC", "NAMED",
+__all__ = ["ENERGY_HAZARD", "DISAGREEMENT_FACTOR", "CLOSURE_GROWTH", "HAZARDS", "LISTED", "listed", "ENERGY_LIKE", "CREEP_METRIC", "NAMED",
            "Hazard", "case_hazards", "list_text"]
 
 # Energy lost or gained over the horizon beyond which a simulation is visibly not the physics
@@ -69,6 +69,9 @@ CLOSURE_GROWTH = 3.0
 # Hazard kinds, in the order the report lists them.
 HAZARDS = ("diverged", "failed", "energy", "creep", "closure", "reactions", "tolerance", "inert", "disagreement",
            "unsupported")
+# The kinds that mean something on their own, listed where the report lists hazards (a disagreement only with a
+# cause the store names, ``Hazard.causes``); the rest (beyond the tolerance: the tables' business) are folded.
+LISTED = ("diverged", "failed", "energy", "creep", "closure", "reactions", "disagreement")
 ENERGY_LIKE = ("energy", "energy_balance")
 # The metric a contact case names its creep by (``cases/block_on_incline``): the slip speed, m/s, over a phase
 # in which its closed form sticks.
@@ -87,6 +90,7 @@ class Hazard:
     runs: tuple  # the runs it is about
     text: str
     details: tuple = ()
+    causes: tuple = ()  # a disagreement's causes the store attributes (``reports.causes``), sentences
 
 
 def case_hazards(engines, runs, case, quantity, store=None):
@@ -102,6 +106,11 @@ def case_hazards(engines, runs, case, quantity, store=None):
         hazards += _unsupported(e)
     hazards.sort(key=lambda h: HAZARDS.index(h.kind))
     return hazards
+
+
+def listed(h):
+    """Whether hazard ``h`` means something on its own (``LISTED``; a disagreement with a cause named)."""
+    return h.kind in LISTED and (h.kind != "disagreement" or bool(h.causes))
 
 
 def list_text(items):

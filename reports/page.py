@@ -82,6 +82,16 @@ class Part:
         self.md += [f"<details><summary>{escape_html(summary)}</summary>", "", "```",
                     text.rstrip().replace("```", "'''"), "```", "", "</details>", ""]
 
+    def folded(self, summary, keep=0):
+        """This part with everything after its first ``keep`` HTML elements (a heading) inside a closed
+        ``<details>`` under ``summary``; the Markdown is left as it is (a file has no folding to do)."""
+        out = Part()
+        if self:
+            out.html = (self.html[:keep] + [f'<details class="fold"><summary>{escape_html(summary)}</summary>']
+                        + self.html[keep:] + ["</details>"])
+            out.md = list(self.md)
+        return out
+
     def raw(self, html, md=()):
         """Markup built by the caller from escaped parts, and its Markdown lines."""
         self.html.append(html)

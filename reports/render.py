@@ -28,14 +28,15 @@ from dalembert.reports.sections.against_time import against_time
 from dalembert.reports.sections.case import case_header
 from dalembert.reports.sections.common import Report, section_id, title
 from dalembert.reports.sections.contact import contact
-from dalembert.reports.sections.engines import engines_simulated
+from dalembert.reports.sections.engines import beyond_the_scene, engines_simulated
 from dalembert.reports.sections.findings import findings
 from dalembert.reports.sections.hazards import hazards
-from dalembert.reports.sections.header import header
+from dalembert.reports.sections.header import header, page_title
 from dalembert.reports.sections.loops import loops
 from dalembert.reports.sections.maps import maps
 from dalembert.reports.sections.order import observed_order
 from dalembert.reports.sections.parity import parity
+from dalembert.reports.sections.recommend import what_to_use
 from dalembert.reports.sections.runs import every_run
 from dalembert.reports.sections.scaling import scaling
 from dalembert.reports.sections.stability import stability
@@ -82,8 +83,14 @@ def _case_sections(rep, f, names, mapped):
                   + " above stand(s) for them; every run is in the store (dalembert export --all).")
         return [part]
     name = f"{f.case.name}-{f.case.version}" if count > 1 else f.case.name
-    return [case_header(rep, f), work_precision(rep, f, name), stability(rep, f, name), against_time(rep, f, name),
-            contact(rep, f, name), every_run(rep, f), engines_simulated(rep, f)]
+    # the case says what it is; its evidence is folded, one line each (the page stays a few screens long)
+    return [case_header(rep, f)] + [part.folded(summary) for part, summary in (
+        (work_precision(rep, f, name), "What accuracy costs: the work-precision figure and each line's best"),
+        (stability(rep, f, name), "Stability: the drift figure and the stored verdicts"),
+        (against_time(rep, f, name), "Against time: the runs that matter"),
+        (contact(rep, f, name), "Against the closed form: the contact figures and events"),
+        (every_run(rep, f), f"Every run ({len(f.runs)}): the table"),
+        (engines_simulated(rep, f), "What each engine simulated: raw audits and models"))]
 
 
 def build_report(store, out_dir=None):
@@ -97,8 +104,14 @@ def build_report(store, out_dir=None):
                  colours=figures.engine_colours({r.engine for r in records}))
     summary, summary_rows = findings(rep)
     mapped_part, mapped = maps(rep)
-    parts = [header(rep), summary, hazards(rep), mapped_part, loops(rep), scaling(rep), observed_order(rep),
-             parity(rep), versions(rep)]
+    # the answers first (what to use, the observed order), then what was run and the evidence
+    answers = [(what_to_use(rep), "what-to-use", "what to use"),
+               (observed_order(rep), "observed-order", "observed order")]
+    parts = [page_title(rep)] + [p for p, _, _ in answers]
+    parts += [header(rep, [(a, t) for p, a, t in answers if p]),
+              summary.folded("The Pareto fronts, the summary table and each case's findings", keep=1),
+              hazards(rep), beyond_the_scene(rep), mapped_part, loops(rep).folded("Per case and engine line", keep=2),
+              scaling(rep), parity(rep)]
     for f in found:
         parts += _case_sections(rep, f, names, mapped)
     html_path, md_path = write_page([p for p in parts if p], out_dir)

@@ -23,12 +23,26 @@ document.querySelectorAll('table.sortable th').forEach(function (th) {
 
 // Self-check for readers and for the browser test: counts figures drawn with a non-zero size and,
 // with every <details> open, whether anything is wider than the window (then closes them again).
+// A link into folded content (a run's row, an engine's audit) opens the folds around its target; the address
+// ending in #unfold opens every fold (what the browser test photographs the figures with).
+function reveal() {
+  var id = decodeURIComponent(location.hash.slice(1));
+  if (id === 'unfold') { document.querySelectorAll('details').forEach(function (d) { d.open = true; }); return; }
+  var t = id && document.getElementById(id);
+  for (var d = t; d; d = d.parentElement) { if (d.tagName === 'DETAILS') d.open = true; }
+  if (t) t.scrollIntoView();
+}
+window.addEventListener('hashchange', reveal);
+
+// Self-check for readers and for the browser test, with every <details> open: counts the figures drawn with a
+// non-zero size and whether anything is wider than the window; then closes them again and records the page's
+// height (data-height) and where each figure and section starts (data-at), folded unless the address opens folds.
 window.addEventListener('load', function () {
+  var closed = Array.prototype.filter.call(document.querySelectorAll('details'), function (d) { return !d.open; });
+  closed.forEach(function (d) { d.open = true; });
   var figs = document.querySelectorAll('figure.plot svg'), drawn = 0;
   figs.forEach(function (s) { var r = s.getBoundingClientRect(); if (r.width > 0 && r.height > 0) drawn++; });
   document.body.setAttribute('data-figures', drawn + '/' + figs.length);
-  var closed = Array.prototype.filter.call(document.querySelectorAll('details'), function (d) { return !d.open; });
-  closed.forEach(function (d) { d.open = true; });
   var wide = [];
   document.querySelectorAll('body *').forEach(function (el) {
     if (el.closest('pre')) return;
@@ -38,6 +52,7 @@ window.addEventListener('load', function () {
   var page = document.documentElement.scrollWidth <= window.innerWidth;
   document.body.setAttribute('data-overflow', page && !wide.length ? 'none' : wide.slice(0, 5).join(' ') || 'page');
   closed.forEach(function (d) { d.open = false; });
+  reveal();  // (an address with a target or #unfold: the heights and places below are of that view)
   var at = {};  // where each figure and section starts, for screenshots of one of them
   document.querySelectorAll('figure[id], h2[id]').forEach(function (el) {
     at[el.id] = Math.round(el.getBoundingClientRect().top + window.scrollY);

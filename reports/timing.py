@@ -53,7 +53,7 @@ def timing_note(manifest, records):
             timed = sum(1 for r in records if _loads(r))
             names = ", ".join(f"{r.case} {run_name(r)}" for r in loaded[:3])
             parts.append(f"{len(loaded)} of {timed} timed runs started or ended with the load above the cores "
-                         f"by more than the matrix's own {OWN_LOAD:g} (e.g. {names})")
+                         f"by more than the matrix's own load of {OWN_LOAD:g} (e.g. {names})")
     if jobs > cores:
         parts.append(f"the matrix ran {jobs} runs at once on {cores} cores")
     if not parts:

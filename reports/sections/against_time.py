@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert.reports import figures, time_series
+from dalembert.reports.formatting import counted
 from dalembert.reports.findings import settings_text
 from dalembert.reports.loops import RESIDUALS
 from dalembert.reports.page import Part
@@ -89,6 +90,6 @@ def _diverged(part, store, f, name, truth, divs):
     if panels:
         n = sum(len(v) for v in panels.values())
         part.figure(figures.diverged_runs(panels, f"{f.quantity} error ({f.unit})"),
-                    f"{name}: the {n} runs that diverged, their {f.quantity} error until it stopped being finite "
+                    f"{name}: the {counted(n, 'run')} that diverged, their {f.quantity} error until it stopped being finite "
                     "(log scale over every run's whole range: none is cut off); x and dotted line: the time the run "
                     "diverged.", f"{name}-diverged")

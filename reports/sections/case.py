@@ -3,21 +3,58 @@ reasons, the conserved quantities it declares and the metrics it measures, with 
 
 from __future__ import annotations
 
-from dalembert.reports.formatting import params_text, value_text
+from dalembert.kinds import JOINT_KINDS
+from dalembert.reports.formatting import counted, params_text, value_text
 from dalembert.reports.page import Part
+from dalembert.reports.recommend import problem_class
 from dalembert.reports.sections.common import section_id
+from dalembert.reports.sections.recommend import grid_text
 from dalembert.reports.tables import Cell, Table, num
 
-__all__ = ["case_header"]
+__all__ = ["case_header", "what_it_is", "degrees_of_freedom"]
+
+FREE_BODY_DOF = JOINT_KINDS["free"][1]  # a body no joint holds moves freely: 6 speeds
+# Tags that say where a case sits in the matrix, not what it tests.
+MATRIX_TAGS = ("canonical", "hard", "variant")
+
+
+def degrees_of_freedom(scene):
+    """The scene's degrees of freedom at its initial state: its tree's speeds (``JOINT_KINDS``; a body no joint
+    holds, 6) less the rank of its loop closures (``Scene.loop_summary``)."""
+    if scene.loops:
+        return scene.loop_summary().dof
+    held = {j.child for j in scene.joints}
+    return (sum(JOINT_KINDS[j.kind][1] for j in scene.joints)
+            + FREE_BODY_DOF * sum(1 for b in scene.bodies if b.name not in held))
+
+
+def what_it_is(f):
+    """One sentence saying what case version ``f`` is: its class of problem, bodies, degrees of freedom, joints and
+    loops, what it tests (its tags) and its sweep (the integrators, steps and tolerances its runs used)."""
+    case, scene = f.case, f.case.scene
+    kinds = {}
+    for j in scene.joints:
+        kinds[j.kind] = kinds.get(j.kind, 0) + 1
+    joints = ", ".join(f"{n} {k}" for k, n in sorted(kinds.items())) or "none"
+    loops = f", {counted(len(scene.loops), 'loop closure')}" if scene.loops else ""
+    problem = problem_class(case)
+    tests = ", ".join(t for t in case.tags if t not in MATRIX_TAGS)
+    integrators = sorted({r.settings.integrator for r in f.runs if r.status != "unsupported"})
+    return (f"What it is: {problem.name + ' — ' + problem.what if problem else 'a case no class holds'}. "
+            f"{counted(len(scene.bodies), 'body', 'bodies')}, "
+            f"{counted(degrees_of_freedom(scene), 'degree of freedom', 'degrees of freedom')}; joints: {joints}{loops}. "
+            f"Tests: {tests or 'its tags say nothing more'}. Sweep: {counted(len(integrators), 'integrator')} at "
+            f"{grid_text(f.runs)}, over a {value_text(case.t_final, 's')} horizon.")
 
 
 def case_header(rep, f):
     """The head of case version ``f``'s section (a ``Part``)."""
     part, case = Part(), f.case
     part.heading(rep.titles[f], 2, anchor=section_id(f))
+    part.para(what_it_is(f))
     part.para(f"Version {case.version}; parameters {params_text(f.runs[0].params) or 'defaults'}; horizon "
               f"{value_text(case.t_final, 's')}; effects {', '.join(sorted(case.scene.effects))}; truth: {case.truth}; "
-              f"{len(f.runs)} runs.")
+              f"{counted(len(f.runs), 'run')}.")
     conserved = [inv for inv in case.invariants if inv.kind != "metric"]
     metrics = [inv for inv in case.invariants if inv.kind == "metric"]
     if conserved:  # a declared quantity is shown with what it is wherever its drift is shown

@@ -18,7 +18,7 @@ COUNTED = ("diverged", "failed", "energy", "tolerance")  # the hazards the summa
 
 def _summary_table(found, titles):
     """The summary as a ``Table`` and as rows of ``summary.csv`` (full precision)."""
-    head = ["case", "engine", "best error", "best at"] + [f"cheapest to {t:g} (s/s)" for t in ACCURACY_TARGETS]
+    head = ["case", "engine", "best error", "best at"] + [f"cheapest run to error ≤ {t:g} · its cost (s/s)" for t in ACCURACY_TARGETS]
     head += ["diverged", "stopped", f"energy > {100 * ENERGY_HAZARD:g} %", "beyond tol.", "runs"]
     rows, csv_rows = [], []
     for f in found:
@@ -65,8 +65,8 @@ def findings(rep):
     if panels:
         part.figure(figures.pareto_summary(panels, rep.colours),
                     "Each engine's best error at each cost (Pareto front: a point is a run no cheaper run of the "
-                    "engine beats); lower left is better. Dashed: the case's tolerance; dotted: the double-precision "
-                    "roundoff floor.", "summary")
+                    "engine beats); lower left is better. Dashed: the case's tolerance; dotted: "
+                    f"{figures.ROUNDOFF_NOTE}.", "summary")
     table, csv_rows = _summary_table(found, titles)
     part.para("Per case and engine: the most accurate run, the cheapest run that reaches each accuracy in the "
               "case's headline error (stepping seconds per simulated second; \"never\": no run did), and how many "

@@ -47,8 +47,12 @@ def observed_order(rep):
                      Cell(f"{o.median:.2f} ({o.low:.2f} to {o.high:.2f})", o.median, title=each),
                      Cell(str(len(o.pairs)), len(o.pairs)), Cell(", ".join(o.cases), wrap=True),
                      Cell(flag, wrap=True)])
-    part.table(Table(head, rows, row_classes=["diverged" if o.flagged or o.below else "" for o in found]),
-               note_constant=False)
+    marked = [o.flagged or bool(o.below) for o in found]
+    if any(marked):  # the flagged lines in view, every line one click away
+        part.table(Table(head, [r for r, m in zip(rows, marked) if m], row_classes=["diverged"] * sum(marked)),
+                   note_constant=False)
+    part.table(Table(head, rows, row_classes=["diverged" if m else "" for m in marked]), note_constant=False,
+               collapsed=f"every line's observed order ({len(found)} lines)")
     return part
 
 

@@ -50,6 +50,6 @@ def every_run(rep, f):
                        Cell(r.judgement.verdict, title=r.judgement.reason)])
     part.heading("Every run", 3)
     part.table(Table(head, rows, row_ids=[f"run-{r.key}" for r in runs],
-                     row_classes=[r.judgement.verdict for r in runs]),
+                     row_classes=[r.judgement.verdict for r in runs], cls="runs"),
                collapsed=f"all {len(runs)} runs of {f.case.name}: click to open; click a header to sort")
     return part

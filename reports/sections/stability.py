@@ -7,7 +7,7 @@ import math
 
 from dalembert.reports import figures
 from dalembert.reports.findings import ENERGY_LIKE, run_name
-from dalembert.reports.formatting import value_text
+from dalembert.reports.formatting import counted, value_text
 from dalembert.reports.page import Part
 from dalembert.reports.sections.common import grid_row
 from dalembert.reports.tables import Cell, Table, num
@@ -52,7 +52,7 @@ def stability(rep, f, name):
                 f"{name}-stability")
     n_unsupported = len(f.runs) - len(shown)
     if n_unsupported:
-        part.para(f"{n_unsupported} unsupported runs are not drawn; the hazards above list them with the reason.")
+        part.para(f"{counted(n_unsupported, 'unsupported run')} not drawn; the hazards above list them with the reason.")
     reasons = [f"{run_name(r)}: {r.judgement.verdict} — {r.judgement.reason}" for r in shown if r.judgement.reason
                and r.judgement.verdict != "stable"]
     if reasons:

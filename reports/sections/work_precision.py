@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 from dalembert.reports import figures
+from dalembert.reports.figures import ROUNDOFF_NOTE
 from dalembert.reports.findings import ACCURACY_TARGETS
 from dalembert.reports.page import Part
 from dalembert.reports.tables import Cell, Table, num
@@ -34,9 +35,9 @@ def work_precision(rep, f, name):
     panels = [panels[k] for k in sorted(panels)]
     part.figure(figures.work_precision(panels, what, floor=f.case.floor.get(f.ranked), tolerance=f.ranked_tolerance),
                 f"{name}: {what.rsplit(' (', 1)[0]} against stepping time per simulated second, a panel per engine and "
-                "option variant on shared axes (lower left is better); colour: integrator; open marker: the "
-                "coarsest step or tolerance, filled: the finest. Dashed: the case's tolerance; dotted: the roundoff "
-                "floor.", f"{name}-wp")
+                "option variant on shared axes (lower left is better); colour and marker: integrator; open marker: "
+                "the coarsest step or tolerance, filled: the finest. Dashed: the case's tolerance; dotted: "
+                f"{ROUNDOFF_NOTE}.", f"{name}-wp")
     rows = []
     for label, pts in sorted(lines.items()):
         r = pts[0].run
