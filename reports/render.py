@@ -111,7 +111,7 @@ def build_report(store, out_dir=None):
     parts += [header(rep, [(a, t) for p, a, t in answers if p]),
               summary.folded("The Pareto fronts, the summary table and each case's findings", keep=1),
               hazards(rep), beyond_the_scene(rep), mapped_part, loops(rep).folded("Per case and engine line", keep=2),
-              scaling(rep), parity(rep)]
+              scaling(rep), parity(rep), versions(rep)]
     for f in found:
         parts += _case_sections(rep, f, names, mapped)
     html_path, md_path = write_page([p for p in parts if p], out_dir)
