@@ -4,7 +4,7 @@ from dalembert import Settings, invariants
 from dalembert.adapters import get_adapter
 from dalembert.case import make_case
 
-__all__ = ["run_with_audit", "run_case"]
+__all__ = ["run_with_audit", "run_case", "installed"]
 
 
 def run_with_audit(scene, times, integrator, dt, engine="mujoco", **options):
@@ -28,3 +28,13 @@ def run_case(engine, name, settings, **params):
     outcome = adapter.run(prepared)
     drifts = invariants.summary(case.scene, outcome.trajectory, case.conserved, case.invariants).drifts
     return case, prepared, outcome, drifts
+
+
+def installed(engine):
+    """Whether ``engine``'s package is installed here (its adapter's ``version`` does not raise ImportError): an
+    optional engine outside ``all`` (MuJoCo Warp) is absent from a fresh ``make test``."""
+    try:
+        get_adapter(engine).version()
+    except ImportError:
+        return False
+    return True

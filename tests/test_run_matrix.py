@@ -12,6 +12,7 @@ import pytest
 
 from dalembert.adapters import adapter_names, check_adapter, register_adapter
 from broken_adapters import Broken, Loaded, NoFollower, SlowReadBack, Threads, Unloadable
+from engine_runs import installed
 from dalembert.harness.execute import QUICK, Timing, execute
 from dalembert.harness.matrix import RunSpec, expand
 from dalembert.harness.pool import run_matrix
@@ -43,7 +44,8 @@ for _name, _cls in (("broken", Broken), ("no-follower", NoFollower), ("threads",
 
 
 @pytest.mark.long
-@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("engine", [pytest.param(e, marks=pytest.mark.skipif(
+    not installed(e), reason=f"{e} is not installed (an optional engine outside dalembert[all])")) for e in ENGINES])
 def test_every_adapter_meets_the_contract(engine):
     from dalembert.case import load_cases
 
