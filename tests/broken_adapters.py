@@ -59,7 +59,10 @@ class Threads(ReferenceAdapter):
     def audit(self, prepared, outcome):
         from threadpoolctl import threadpool_info
 
-        blas = [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+        # (a BLAS built without threads has one whatever it is asked: OpenSim's OpenBLAS 0.3.15, threading layer
+        # "disabled", loaded in a worker once Simbody is installed)
+        blas = [p["num_threads"] for p in threadpool_info()
+                if p["user_api"] == "blas" and p.get("threading_layer") != "disabled"]
         return {**super().audit(prepared, outcome), "blas_threads": blas}
 
 
