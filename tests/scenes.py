@@ -57,3 +57,16 @@ def free_body_world_loads_case(t_final=1.0):
     )
     times = np.linspace(0.0, t_final, int(round(t_final / 0.01)) + 1)
     return Case("free_world_loads", scene, t_final, times, tolerances={"orientation": Tolerance(1e-6, "test")})
+
+
+def cart_pendulum():
+    """A cart on an inclined prismatic joint to the world (turned parent frame, offset points) and a pendulum
+    hinged under it: the slide and the swing exchange momentum."""
+    cart, rod = Body.box("cart", 2.0, (0.3, 0.2, 0.1)), Body.cylinder("rod", 0.5, 0.8, 0.02, axis=2)
+    return Scene("cart_pendulum", (cart, rod),
+                 (Joint("prismatic", "world", "cart", (0.1,), (0.4,), axis=(1.0, 0.0, 0.2),
+                        parent_point=(0.0, 0.1, 1.0), parent_quat=spatial.quat_exp([0.0, 0.0, 0.3]),
+                        child_point=(0.02, 0.0, -0.01)),
+                  Joint("revolute", "cart", "rod", (0.6,), (-1.0,), axis=(0.0, 1.0, 0.0),
+                        parent_point=(0.0, 0.0, -0.05), child_point=(0.0, 0.0, 0.4))),
+                 (0.0, 0.0, -9.81))

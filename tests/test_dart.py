@@ -19,7 +19,7 @@ from dalembert.errors import trajectory_errors
 from dalembert.reference import simulate
 from dalembert.scene import Body, Joint, Scene
 from bounds import ORDER_SLACK
-from scenes import chain_case, free_body_world_loads_case
+from scenes import cart_pendulum, chain_case, free_body_world_loads_case
 
 pytest.importorskip("dartpy")  # the optional extra dalembert[dart]
 
@@ -111,21 +111,6 @@ def test_the_top_converges_at_first_order():
     top = make_case("free_top", t_final=2.0)
     coarse, fine = (errors(top, Settings("euler", dt=dt))["orientation"][0] for dt in (2e-3, 1e-3))
     assert np.log2(coarse / fine) == pytest.approx(1.0, abs=ORDER_SLACK)
-
-
-def cart_pendulum():
-    """A cart on an inclined prismatic joint to the world (turned parent frame, offset points) and a pendulum
-    hinged under it: the slide and the swing exchange momentum."""
-    from dalembert import spatial
-
-    cart, rod = Body.box("cart", 2.0, (0.3, 0.2, 0.1)), Body.cylinder("rod", 0.5, 0.8, 0.02, axis=2)
-    return Scene("cart_pendulum", (cart, rod),
-                 (Joint("prismatic", "world", "cart", (0.1,), (0.4,), axis=(1.0, 0.0, 0.2),
-                        parent_point=(0.0, 0.1, 1.0), parent_quat=spatial.quat_exp([0.0, 0.0, 0.3]),
-                        child_point=(0.02, 0.0, -0.01)),
-                  Joint("revolute", "cart", "rod", (0.6,), (-1.0,), axis=(0.0, 1.0, 0.0),
-                        parent_point=(0.0, 0.0, -0.05), child_point=(0.0, 0.0, 0.4))),
-                 (0.0, 0.0, -9.81))
 
 
 def test_prismatic_joint_is_mujoco_s_slide_to_roundoff_and_first_order_to_the_reference():

@@ -15,9 +15,8 @@ from dalembert import Settings, make_case
 from dalembert.adapters import get_adapter
 from dalembert.errors import trajectory_errors
 from dalembert.reference import simulate
-from dalembert.scene import Body, Joint, Scene
 from bounds import ORDER_SLACK
-from scenes import chain_case, free_body_world_loads_case
+from scenes import cart_pendulum, chain_case, free_body_world_loads_case
 
 pytest.importorskip("opensim")  # the optional extra dalembert[simbody]
 
@@ -81,21 +80,6 @@ def test_verlet_converges_at_second_order(make):
         if q in coarse:
             assert coarse[q][0] < SECOND_ORDER_TOL, (q, coarse[q][0])
             assert np.log2(coarse[q][0] / fine[q][0]) == pytest.approx(2.0, abs=ORDER_SLACK), q
-
-
-def cart_pendulum():
-    """A cart on an inclined prismatic joint to the world (turned parent frame, offset points) and a pendulum
-    hinged under it: the slide and the swing exchange momentum."""
-    from dalembert import spatial
-
-    cart, rod = Body.box("cart", 2.0, (0.3, 0.2, 0.1)), Body.cylinder("rod", 0.5, 0.8, 0.02, axis=2)
-    return Scene("cart_pendulum", (cart, rod),
-                 (Joint("prismatic", "world", "cart", (0.1,), (0.4,), axis=(1.0, 0.0, 0.2),
-                        parent_point=(0.0, 0.1, 1.0), parent_quat=spatial.quat_exp([0.0, 0.0, 0.3]),
-                        child_point=(0.02, 0.0, -0.01)),
-                  Joint("revolute", "cart", "rod", (0.6,), (-1.0,), axis=(0.0, 1.0, 0.0),
-                        parent_point=(0.0, 0.0, -0.05), child_point=(0.0, 0.0, 0.4))),
-                 (0.0, 0.0, -9.81))
 
 
 def test_prismatic_joint_matches_the_reference():
