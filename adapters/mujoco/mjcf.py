@@ -318,13 +318,16 @@ def mjcf(scene, settings):
             # relpose: the child's MuJoCo frame in the parent's, as the scene's weld holds them
             X_WE = {}
             for name in (j.parent, j.child):
+                if name == WORLD:  # the world's frame is MuJoCo's world frame
+                    X_WE[name] = (np.zeros(3), np.eye(3))
+                    continue
                 s0, (p_EB, R_EB) = state0[name], X_EB.get(name, (np.zeros(3), np.eye(3)))
                 R_WE = s0["R"] @ R_EB.T
                 X_WE[name] = (s0["p"] - R_WE @ p_EB, R_WE)
             (p1, R1), (p2, R2) = X_WE[j.parent], X_WE[j.child]
             relpose = np.concatenate([R1.T @ (p2 - p1), spatial.matrix_to_quat(R1.T @ R2)])
-            body1 = "" if j.parent == WORLD else f' body1="{j.parent}"'
-            lines.append(f'    <weld name="{j.child}"{body1} body2="{j.child}" relpose="{_f(relpose)}" '
+            body1 = "world" if j.parent == WORLD else j.parent  # MuJoCo's world body is named "world"
+            lines.append(f'    <weld name="{j.child}" body1="{body1}" body2="{j.child}" relpose="{_f(relpose)}" '
                          f'solref="{solref}" solimp="{_f(WELD_SOLIMP)}"/>')
     if weld_constraints or scene.loops:
         lines.append("  </equality>")
