@@ -60,13 +60,18 @@ MACHINE_FIELDS = ("cpu", "cores", "os", "python", "host")
 CHANGES = ("worse", "better", "status", "same")
 
 
-def _key(r, drop=()):
+# The engine name two runs paired by ``pair_engines`` share in their keys.
+PAIRED_ENGINE = "(paired engines)"
+
+
+def _key(r, drop=(), engines=False):
     """What identifies a run across stores: its ``dalembert.identity.RunIdentity`` (the options named in
-    ``drop`` left out: the ones ``pair_options`` sets apart)."""
+    ``drop`` left out: the ones ``pair_options`` sets apart; the engine left out with ``engines``: the ones
+    ``pair_engines`` sets apart, e.g. two versions of one engine)."""
     settings = r.settings
     if drop:
         settings = replace(settings, options={k: v for k, v in settings.options.items() if k not in drop})
-    return run_identity(r.case, r.params, r.engine, settings)
+    return run_identity(r.case, r.params, PAIRED_ENGINE if engines else r.engine, settings)
 
 
 def _same_value(stored, given):
@@ -263,19 +268,31 @@ def _timed_once(manifests):
             "more on a loaded one — costs are shown, not judged (no cost is called slower or faster)")
 
 
-def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_versions=False, pair_options=None):
+def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_versions=False, pair_options=None,
+                   pair_engines=None):
     """Compare ``store_a`` (before) with ``store_b`` (after); a ``Comparison``.
 
     ``pair_options``: ``(options_a, options_b)``, each a dict key -> value (as text; ``UNSET``, "default": the
     option not given): compare A's runs with ``options_a`` against B's with ``options_b``, every other option and
     setting equal (two configurations of one engine; ``store_a`` and ``store_b`` may be one store). Runs without
     them are left out of the comparison.
+
+    ``pair_engines``: ``(engine_a, engine_b)``: compare A's runs of ``engine_a`` against B's of ``engine_b``, every
+    setting equal (two versions of one engine, ``mujoco==3.6.0`` against ``mujoco``: the gate an engine's CI runs
+    across releases; ``store_a`` and ``store_b`` may be one store). Runs of other engines are left out.
     """
     ra, rb = store_a.records(), store_b.records()
     manifests = store_a.manifest(), store_b.manifest()
     once = _timed_once(manifests)
     warnings = []
     pairing = ()
+    if pair_engines:
+        engine_a, engine_b = pair_engines
+        kept = [r for r in ra if r.engine == engine_a], [r for r in rb if r.engine == engine_b]
+        warnings.append(f"pairing A's runs of {engine_a} against B's of {engine_b}, all else equal: "
+                        f"{len(ra) - len(kept[0])} of A's {len(ra)} runs and {len(rb) - len(kept[1])} of B's "
+                        f"{len(rb)} of other engines are left out")
+        ra, rb = kept
     if pair_options:
         opts_a, opts_b = (dict(o) for o in pair_options)
         pairing = (opts_a, opts_b)
@@ -284,10 +301,11 @@ def compare_stores(store_a, store_b, threshold=2.0, cost_threshold=None, across_
         warnings.append(f"pairing A's runs with {_words(opts_a)} against B's with {_words(opts_b)}, all else equal: "
                         f"{len(ra) - len(kept_a)} of A's {len(ra)} runs and {len(rb) - len(kept_b)} of B's {len(rb)} "
                         "without those options are left out")
-        a, b = {_key(r, drop): r for r in kept_a}, {_key(r, drop): r for r in kept_b}
+        a, b = ({_key(r, drop, bool(pair_engines)): r for r in kept_a},
+                {_key(r, drop, bool(pair_engines)): r for r in kept_b})
     else:
         kept_a, kept_b = ra, rb
-        a, b = {_key(r): r for r in ra}, {_key(r): r for r in rb}
+        a, b = {_key(r, (), bool(pair_engines)): r for r in ra}, {_key(r, (), bool(pair_engines)): r for r in rb}
     changes, not_compared = [], []
     for key in sorted(set(a) & set(b), key=str):
         x, y = a[key], b[key]

@@ -132,6 +132,32 @@ def test_nothing_pairs_is_a_failure_that_says_why(store, tmp_path, capsys):
     assert main(["compare", store.path, store.path]) == 0  # what pairs still passes
 
 
+def _engine(store, path, engine):
+    out = _copy(store, path)
+    for i in range(len(out.done_keys())):
+        tamper(out, lambda r: replace(r, engine=engine), i)
+    return out
+
+
+def test_pair_engines_sets_two_versions_of_one_engine_against_each_other(store, tmp_path, capsys):
+    """Runs of ``mujoco==3.6.0`` and of ``mujoco`` never pair by name; ``--pair-engines`` pairs them, all else
+    equal, and a version whose error grew is a regression."""
+    old, new = _engine(store, tmp_path / "old", "mujoco==3.6.0"), _engine(store, tmp_path / "new", "mujoco")
+    assert main(["compare", old.path, new.path]) == 2
+    assert "engines" in capsys.readouterr().err
+    cmp = compare_stores(old, new, pair_engines=("mujoco==3.6.0", "mujoco"))
+    assert len(cmp.changes) == 4 and not cmp.only_in_a and not cmp.only_in_b and not cmp.regressed
+    assert {(c.a.engine, c.b.engine) for c in cmp.changes} == {("mujoco==3.6.0", "mujoco")}
+    assert main(["compare", old.path, new.path, "--pair-engines", "mujoco==3.6.0", "mujoco"]) == 0
+    assert "4 runs in both" in capsys.readouterr().out
+    worse = _copy(new, tmp_path / "worse")
+    tamper(worse, lambda r: replace(r, errors={q: (10 * e[0], 10 * e[1]) for q, e in r.errors.items()}))
+    assert main(["compare", old.path, worse.path, "--pair-engines", "mujoco==3.6.0", "mujoco"]) == 1
+    capsys.readouterr()
+    assert main(["compare", old.path, new.path, "--pair-engines", "mujoco", "mujoco"]) == 2
+    assert "both sides are" in capsys.readouterr().err
+
+
 def test_pair_options_sets_two_configurations_of_one_engine_against_each_other(store, tmp_path, capsys):
     pyramidal = _copy(store, tmp_path / "p", {"cone": "pyramidal", "noslip": 10})
     elliptic = _copy(store, tmp_path / "e", {"cone": "elliptic", "noslip": 10})

@@ -145,15 +145,17 @@ def report(store, out_dir=None):
     return _report(store, out_dir)
 
 
-def compare(before, after, threshold=2.0, cost_threshold=None, across_versions=False, pair_options=None):
+def compare(before, after, threshold=2.0, cost_threshold=None, across_versions=False, pair_options=None,
+            pair_engines=None):
     """Compare two stores (Stores or paths) as ``dalembert compare`` does; a
     ``dalembert.reports.compare.Comparison`` (``.regressed``, ``.unpaired``: why nothing pairs, ``.changes``,
     ``.only_in_a``, ...; ``dalembert.reports.compare.to_json`` turns it into plain data). ``pair_options``:
-    ``({"cone": "pyramidal"}, {"cone": "elliptic"})``, as ``--pair-options``."""
+    ``({"cone": "pyramidal"}, {"cone": "elliptic"})``, as ``--pair-options``; ``pair_engines``:
+    ``("mujoco==3.6.0", "mujoco")``, as ``--pair-engines``."""
     from dalembert.reports.compare import compare_stores
 
     a, b = (s if isinstance(s, Store) else load(s, any_schema=True) for s in (before, after))
-    return compare_stores(a, b, threshold, cost_threshold, across_versions, pair_options)
+    return compare_stores(a, b, threshold, cost_threshold, across_versions, pair_options, pair_engines)
 
 
 def trajectories(store, keys=(), case=None, engine=None, integrator=None, dt=None, rtol=None, options=None):

@@ -171,6 +171,9 @@ def _parser():
                     help="pair two configurations of one engine: A's runs with A_OPTIONS (KEY=VALUE[,KEY=VALUE]; "
                          "KEY=default: the option not given) against B's with B_OPTIONS, all else equal (A and B "
                          "may be one directory)")
+    cp.add_argument("--pair-engines", nargs=2, metavar=("A_ENGINE", "B_ENGINE"),
+                    help="pair A's runs of A_ENGINE against B's of B_ENGINE, all else equal: two versions of one "
+                         "engine (--pair-engines mujoco==3.6.0 mujoco; A and B may be one directory)")
     cp.add_argument("--only-changed", action="store_true", help="print only the runs that changed")
     cp.add_argument("--json", metavar="FILE", help="also write the comparison as JSON (- for stdout, instead of the text)")
     cp.add_argument("--csv", metavar="FILE",

@@ -17,15 +17,16 @@ __all__ = ["run", "main"]
 
 
 def run(run_a, run_b, threshold=2.0, cost_threshold=None, across_versions=False, only_changed=False, json=None,
-        csv=None, pair_options=None):
+        csv=None, pair_options=None, pair_engines=None):
     """Compare the stores ``run_a`` and ``run_b`` and print (or write: ``json``, ``csv``, ``-`` for
     standard output) the comparison; returns the exit status (1 on a regression, 2 when nothing pairs).
-    ``pair_options``: ``(A_OPTIONS, B_OPTIONS)``, each ``"key=value[,key=value]"``, as ``--pair-options``."""
+    ``pair_options``: ``(A_OPTIONS, B_OPTIONS)``, each ``"key=value[,key=value]"``, as ``--pair-options``;
+    ``pair_engines``: ``(A_ENGINE, B_ENGINE)``, as ``--pair-engines``."""
     from types import SimpleNamespace
 
     return main(SimpleNamespace(run_a=run_a, run_b=run_b, threshold=threshold, cost_threshold=cost_threshold,
                                 across_versions=across_versions, only_changed=only_changed, json=json, csv=csv,
-                                pair_options=pair_options))
+                                pair_options=pair_options, pair_engines=pair_engines))
 
 
 def pair_options(texts):
@@ -45,6 +46,18 @@ def pair_options(texts):
     return out
 
 
+def pair_engines(names):
+    """``--pair-engines``' two engine names (``mujoco==3.6.0 mujoco``), checked; ValueError naming the flag."""
+    if names is None:
+        return None
+    if any(not n for n in names):
+        raise ValueError("--pair-engines: an engine name is empty — give two, e.g. --pair-engines mujoco==3.6.0 mujoco")
+    if names[0] == names[1]:
+        raise ValueError(f"--pair-engines: both sides are {names[0]!r} — that pairs runs as they are; give the two "
+                         "engines (or versions of one) to set against each other")
+    return tuple(names)
+
+
 def main(args):
     """The command line's ``dalembert compare`` (an argparse namespace in, the exit status out)."""
     import csv
@@ -56,6 +69,7 @@ def main(args):
 
     try:
         paired = pair_options(getattr(args, "pair_options", None))
+        engines = pair_engines(getattr(args, "pair_engines", None))
         stores = [_open(d, READABLE_SCHEMAS) for d in (args.run_a, args.run_b)]
         for flag, path in (("--json", args.json), ("--csv", args.csv)):
             if path is not None:
@@ -70,7 +84,7 @@ def main(args):
         print(f"dalembert: note: the stores have schemas {schemas[0]} and {schemas[1]}; runs are matched by case, "
               "engine and settings", file=sys.stderr)
     cmp = compare_stores(*stores, threshold=args.threshold, cost_threshold=args.cost_threshold,
-                         across_versions=args.across_versions, pair_options=paired)
+                         across_versions=args.across_versions, pair_options=paired, pair_engines=engines)
     outputs = []  # (flag, path, text)
     if args.json is not None:
         outputs.append(("--json", args.json, json.dumps(to_json(cmp), indent=1, allow_nan=False) + "\n"))
