@@ -195,6 +195,13 @@ class Adapter:
     # outside it is refused with the reason (``version_problem``).
     supported_versions = ""
     unsupported_versions_why = ""
+    # Why an effect the engine lacks is lacking, by effect or effect family ("loop" names every "loop:..."): the
+    # note ``unsupported`` gives after the effects it names. An engine names its own (the reason, what it would take).
+    refusal_notes = {
+        "loop": "closed kinematic loops: not yet built for this engine; its tree runs, the closure does not",
+        SPRING_EFFECT: ("linear spring-dampers between two points: not yet built for this engine; its bodies and "
+                        "joints run, the spring's force does not"),
+    }
 
     def version(self):
         raise NotImplementedError
@@ -235,18 +242,17 @@ class Adapter:
         return option_value(self.options, settings, key)
 
     def unsupported(self, scene, settings):
-        """The reason this engine cannot represent ``scene``, or None."""
+        """The reason this engine cannot represent ``scene`` (the effects it lacks, each with its
+        ``refusal_notes`` note), or None."""
         missing = sorted(scene.effects - self.effects)
-        if missing:
-            reason = f"{self.name} adapter cannot represent {', '.join(missing)}"
-            notes = []
-            if any(m.startswith("loop:") for m in missing):
-                notes.append("closed kinematic loops: not yet built for this engine; its tree runs, the closure does not")
-            if SPRING_EFFECT in missing:
-                notes.append("linear spring-dampers between two points: not yet built for this engine; its bodies and "
-                             "joints run, the spring's force does not")
-            return reason + (f" ({'; '.join(notes)})" if notes else "")
-        return None
+        if not missing:
+            return None
+        notes = []
+        for key, note in self.refusal_notes.items():
+            if any(m == key or m.startswith(key + ":") for m in missing) and note not in notes:
+                notes.append(note)
+        reason = f"{self.name} adapter cannot represent {', '.join(missing)}"
+        return reason + (f" ({'; '.join(notes)})" if notes else "")
 
     def variants(self, scene):
         """Engine option sets the default matrix runs on ``scene`` (``[{}]``: the defaults only)."""

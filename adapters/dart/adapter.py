@@ -63,6 +63,7 @@ class DartAdapter(Adapter):
     # contact: one pair, DART's hard contact (``contact``)
     effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS) | CONTACT_EFFECTS
     options = MODEL_OPTIONS
+    refusal_notes = UNSUPPORTED
     integrators = {
         "euler": IntegratorSpec(True, tuple(MODEL_OPTIONS),
                                 "DART's semi-implicit Euler (World.step): velocities first, positions from them",
@@ -78,14 +79,7 @@ class DartAdapter(Adapter):
         self.version()
 
     def unsupported(self, scene, settings):
-        missing = sorted(scene.effects - self.effects)
-        if not missing:
-            return contact.why_not(scene)
-        notes = []
-        for prefix, reason in UNSUPPORTED.items():
-            if any(m.startswith(prefix) for m in missing) and reason not in notes:
-                notes.append(reason)
-        return f"{self.name} adapter cannot represent {', '.join(missing)}" + (f" ({'; '.join(notes)})" if notes else "")
+        return super().unsupported(scene, settings) or contact.why_not(scene)
 
     def describe(self, scene, settings):
         """The world's summary, for reports and ``dalembert show-model``."""

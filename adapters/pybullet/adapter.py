@@ -62,6 +62,7 @@ class PybulletAdapter(Adapter):
     # free bodies' geoms and planes, hard (``contact``). Loops and springs: NOT_MAPPED.
     effects = EFFECTS | CONTACT_EFFECTS
     options = MODEL_OPTIONS
+    refusal_notes = NOT_MAPPED
     integrators = {
         "euler": IntegratorSpec(True, tuple(MODEL_OPTIONS),
                                 "semi-implicit Euler, first order (PyBullet's one integrator: stepSimulation at a "
@@ -73,12 +74,7 @@ class PybulletAdapter(Adapter):
         return _version()
 
     def unsupported(self, scene, settings):
-        missing = scene.effects - self.effects
-        if not missing:
-            return _too_many_links(scene) or contact.why_not(scene)
-        notes = [why for key, why in NOT_MAPPED.items()
-                 if any(m == key or m.startswith(key + ":") for m in missing)]
-        return f"{self.name} adapter cannot represent {', '.join(sorted(missing))} ({'; '.join(notes)})"
+        return super().unsupported(scene, settings) or _too_many_links(scene) or contact.why_not(scene)
 
     def describe(self, scene, settings):
         """The multibodies PyBullet builds, read back from the engine, for reports and ``dalembert show-model``."""

@@ -29,7 +29,7 @@ __all__ = ["SimbodyAdapter", "SimbodyPrepared", "UNSUPPORTED", "INTEGRATORS", "L
 MASS_PROPERTY_REL_TOL = 1e-12
 # Why Simbody's adapter does not run these effects (what it would take), by effect tag prefix.
 UNSUPPORTED = {
-    "loop:": ("closed kinematic loops: OpenSim has the constraints (PointConstraint for a ball, "
+    "loop": ("closed kinematic loops: OpenSim has the constraints (PointConstraint for a ball, "
               "ConstantDistanceConstraint for a distance, a point and two PointOnLine or a CoordinateCoupler for a "
               "revolute) with Simbody's constraint projection; not yet mapped"),
     "contact": ("contact: OpenSim's contact is compliant (Hunt-Crossley, elastic foundation), with no hard "
@@ -78,6 +78,7 @@ class SimbodyAdapter(Adapter):
     # free, revolute, prismatic, ball and weld joints; gravity; world and follower forces and torques; springs
     effects = EFFECTS | SPRING_EFFECTS
     options = MODEL_OPTIONS
+    refusal_notes = UNSUPPORTED
     integrators = {
         name: IntegratorSpec(fixed, tuple(MODEL_OPTIONS), f"Simbody {METHODS[name]}: {text}"
                              + ("" if fixed else ", error-controlled (accuracy = rtol)"), order=order)
@@ -92,16 +93,6 @@ class SimbodyAdapter(Adapter):
 
         engine()
         self.version()
-
-    def unsupported(self, scene, settings):
-        missing = sorted(scene.effects - self.effects)
-        if not missing:
-            return None
-        notes = []
-        for prefix, reason in UNSUPPORTED.items():
-            if any(m.startswith(prefix) for m in missing) and reason not in notes:
-                notes.append(reason)
-        return f"{self.name} adapter cannot represent {', '.join(missing)}" + (f" ({'; '.join(notes)})" if notes else "")
 
     def describe(self, scene, settings):
         """The model's summary, for reports and ``dalembert show-model``."""
