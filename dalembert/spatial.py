@@ -32,7 +32,8 @@ __all__ = [
     "IDENTITY_QUAT", "skew", "cross", "quat_multiply", "quat_conjugate", "quat_normalize", "quat_to_matrix",
     "matrix_to_quat", "quat_rotate", "quat_exp", "quat_from_axis_angle", "frame_with_z", "quat_derivative",
     "so3_exp", "so3_dexpinv", "rotation_angle", "matrix_from_euler_zxz", "world_to_body", "body_to_world",
-    "wxyz_to_xyzw", "xyzw_to_wxyz", "load_to_world", "joint_coordinates", "initial_body_states",
+    "wxyz_to_xyzw", "xyzw_to_wxyz", "load_to_world", "free_joint_coordinates", "joint_coordinates",
+    "initial_body_states",
 ]
 
 
@@ -60,6 +61,26 @@ def load_to_world(load, R_WB):
     if load.frame == "body":
         return R_WB @ vector
     return np.broadcast_to(vector, R_WB.shape[:-1]).copy()
+
+
+def free_joint_coordinates(p_WB, q_WB, v_WB_W, w_WB_W, R_WB):
+    """A free joint's coordinates (``Joint`` conventions) from its body's motion.
+
+    Parameters
+    ----------
+    p_WB : ndarray (n, 3) — COM position, world, m
+    q_WB : ndarray (n, 4) — attitude, scalar-first unit quaternion (as the engine gave it)
+    v_WB_W : ndarray (n, 3) — COM velocity, world axes, m/s
+    w_WB_W : ndarray (n, 3) — angular velocity, world axes, rad/s
+    R_WB : ndarray (n, 3, 3) — attitude as a matrix (turns ``w_WB_W`` into body axes)
+
+    Returns
+    -------
+    q : ndarray (n, 7) — ``(p_WB, q_WB)``
+    v : ndarray (n, 6) — ``(v_WB_W, w_WB_B)``: the angular velocity in body axes
+    """
+    return (np.concatenate([p_WB, q_WB], axis=1),
+            np.concatenate([v_WB_W, np.einsum("nji,nj->ni", R_WB, w_WB_W)], axis=1))
 
 
 def joint_coordinates(joint, R_WP, R_WC, w_WP_W, w_WC_W, p_WP=None, p_WC=None, v_WP_W=None, v_WC_W=None):

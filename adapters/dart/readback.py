@@ -86,10 +86,9 @@ def read_back(p, Q, V):
     for j in scene.joints:
         s = model.dofs[j.child]
         b = order[j.child]
-        if j.kind == "free":  # the scene's: (p_WB, q_WB), (v_WB_W, w_WB_B)
-            w_B = np.einsum("nji,nj->ni", R[:, b], omega[:, b])
-            joints[j.child] = JointStates(np.concatenate([pos[:, b], quat[:, b]], axis=1),
-                                          np.concatenate([vel[:, b], w_B], axis=1))
+        if j.kind == "free":
+            joints[j.child] = JointStates(*spatial.free_joint_coordinates(pos[:, b], quat[:, b], vel[:, b],
+                                                                          omega[:, b], R[:, b]))
         elif j.kind in ("revolute", "prismatic"):
             joints[j.child] = JointStates(Q[:, s], V[:, s])
         elif j.kind == "ball":  # rotation vector of R_JpJc -> quaternion; v is the scene's already

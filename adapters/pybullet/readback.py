@@ -100,10 +100,8 @@ def read_back(p, X):
         bodies[b.name] = BodyStates(com[b.name], quat, vel[b.name], omega[b.name])
         j = scene.joint(b.name)
         if j.kind == "free":
-            R_WB = R_WE @ part.R_EB
-            joints[b.name] = JointStates(np.concatenate([com[b.name], quat], axis=1),
-                                         np.concatenate([vel[b.name], np.einsum("nji,nj->ni", R_WB, omega[b.name])],
-                                                        axis=1))
+            joints[b.name] = JointStates(*spatial.free_joint_coordinates(com[b.name], quat, vel[b.name], omega[b.name],
+                                                                         R_WE @ part.R_EB))
             continue
         a = offset[(part.mb, part.link)]
         if j.kind in ("revolute", "prismatic"):  # PyBullet's coordinates are the scene's (model)
