@@ -15,9 +15,9 @@ import numpy as np
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared
 from dalembert.adapters.pybullet import contact
 from dalembert.adapters.pybullet.audit import audit
-from dalembert.adapters.pybullet.model import MODEL_OPTIONS, build, engine
+from dalembert.adapters.pybullet.model import MODEL_OPTIONS, build, engine, root_of
 from dalembert.adapters.pybullet.stepping import load_plan, simulate
-from dalembert.scene import CONTACT_EFFECTS, EFFECTS, SPRING_EFFECT
+from dalembert.scene import CONTACT_EFFECTS, EFFECTS, SPRING_EFFECT, WORLD
 from dalembert.settings import steps_per_interval
 
 __all__ = ["PybulletAdapter", "PybulletPrepared"]
@@ -128,13 +128,9 @@ MAX_LINKS = 127
 
 def _too_many_links(scene):
     """Why PyBullet cannot hold ``scene`` (a tree of more than ``MAX_LINKS`` links below its root), or None."""
-    from dalembert.scene import WORLD
-
     roots = {}  # each tree's root: the bodies below it
     for j in scene.joints:
-        root = j.child
-        while (parent := scene.joint(root).parent) != WORLD:
-            root = parent
+        root = root_of(scene, j.child)
         roots[root] = roots.get(root, 0) + (j.parent != WORLD)
     # a free root is a multibody's base; every other tree hangs, root and all, off the world's one fixed multibody
     free = [n for r, n in roots.items() if scene.joint(r).kind == "free"]

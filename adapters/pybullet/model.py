@@ -44,7 +44,7 @@ from dalembert.adapters.base import Option
 from dalembert.scene import WORLD
 
 __all__ = ["engine", "PybulletModel", "Part", "build", "MODEL_OPTIONS", "SOLVERS", "NO_VELOCITY_CLAMP",
-           "ball_to_bullet", "ball_from_bullet", "summary", "rebuild"]
+           "ball_to_bullet", "ball_from_bullet", "summary", "rebuild", "root_of"]
 
 # dalembert name -> PyBullet's constraint solver (setPhysicsEngineParameter constraintSolverType):
 # sequential impulse (PyBullet's default), projected Gauss-Seidel, Dantzig's LCP.
@@ -239,10 +239,10 @@ def _construct(pb, c, scene, settings):
     # where each body's link frame L sits in its body frame B: X_BL (a base's L is E)
     X_BL = {}
     roots = [b for b in scene.topological_order() if scene.joint(b.name).kind == "free"]
-    fixed = [b for b in scene.topological_order() if _root(scene, b.name) not in {r.name for r in roots}]
+    fixed = [b for b in scene.topological_order() if root_of(scene, b.name) not in {r.name for r in roots}]
     for base in [*roots, None]:
         members = fixed if base is None else [b for b in scene.topological_order()
-                                              if b.name != base.name and _root(scene, b.name) == base.name]
+                                              if b.name != base.name and root_of(scene, b.name) == base.name]
         members = _depth_first(scene, members)
         if base is None and not members:
             continue
@@ -333,7 +333,7 @@ def _disconnect(client):
         pb.disconnect(physicsClientId=client)
 
 
-def _root(scene, name):
+def root_of(scene, name):
     """The body at the root of ``name``'s tree (the one jointed to the world)."""
     while (parent := scene.joint(name).parent) != WORLD:  # iterative: a chain may be a thousand links deep
         name = parent
