@@ -142,8 +142,10 @@ def test_the_user_who_named_a_refused_engine_is_told_before_anything_runs(tmp_pa
     run(cases=["free_top", "pivoted_rod"], engines=["no-follower"], integrators=["rk4"], dts=[1e-2],
         params=_params(), quick=True, out=str(tmp_path / "s"), jobs=1)
     err = capsys.readouterr().err
-    said = err.index(f"note: not run: no-follower cannot run pivoted_rod (t_final=0.1) with rk4: {REASON}")
-    assert said < err.index("1 runs, 1 to do")
+    refusal = f"no-follower cannot run pivoted_rod (t_final=0.1) with rk4: {REASON}"
+    assert err.index(f"note: not run: {refusal}") < err.index("1 runs, 1 to do")
+    # the rod has no run, so no section of its own: the report lists its refusal with the hazards
+    assert f"- {refusal}" in _markdown(Store.open(str(tmp_path / "s")), hazards)
 
 
 def test_the_report_lists_a_manifest_refusal_as_it_listed_the_rows(refusing, tmp_path):

@@ -126,7 +126,8 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
 
     Returns
     -------
-    specs : list of RunSpec
+    specs : list of RunSpec — every combination the engines' ``check`` accepts, those an engine refuses included
+        (``split`` leaves them out: ``dalembert run`` runs none of them)
     skipped : list of str — engines not installed (only when ``engines`` was not given)
     """
     from dalembert.adapters import adapter_names, get_adapter
