@@ -11,8 +11,9 @@ The contract — every adapter class:
    engine a run uses (default: what ``version()`` imports), which a pool's
    worker calls before its first run, so that no run's time holds an import;
 3. declares ``effects``: the ``Scene.effects`` tags it can represent. A scene
-   that needs another effect is not run: the harness stores it as
-   ``unsupported`` with the reason — never a silent approximation;
+   that needs another effect is not run: the harness lists it refused with the
+   reason (in the matrix's manifest; a run stored ``unsupported`` where only the
+   built model shows it) — never a silent approximation;
 4. declares ``integrators``: name -> ``IntegratorSpec`` (fixed-step or
    adaptive, and the names of the engine options it accepts), and ``options``:
    name -> ``Option`` (the values each option takes and its default), the one
@@ -24,7 +25,10 @@ The contract — every adapter class:
    settings it cannot run (unknown option or value — the base class checks
    every one against ``options`` —, dt that does not divide the sample
    interval, ...) — cheap, called before anything runs; ``unsupported(scene,
-   settings)`` returns the reason a valid request cannot be represented, or None;
+   settings)`` returns the reason a valid request cannot be represented, or None,
+   and ``unsupported_before_build(scene, settings)`` the part of it known without
+   building the model (default: all of it; the matrix lists those refusals once
+   in its manifest instead of expanding them into runs);
    ``describe(scene, settings)`` returns the model it would build, as text
    (``""``: none);
 6. ``prepare(scene, times, settings)`` builds the engine model (not timed) and

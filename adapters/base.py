@@ -254,6 +254,14 @@ class Adapter:
         reason = f"{self.name} adapter cannot represent {', '.join(missing)}"
         return reason + (f" ({'; '.join(notes)})" if notes else "")
 
+    def unsupported_before_build(self, scene, settings):
+        """The part of ``unsupported`` known from ``scene`` and ``settings`` alone, before the engine builds a
+        model: what ``dalembert run`` asks before it expands the matrix, so that a refused run is listed once in
+        the manifest, never made a run. Default: ``unsupported`` itself (an engine whose every refusal is
+        declared: effects, options, the scene's parts). An engine whose ``unsupported`` also builds the model (MJX:
+        ``mjx.put_model``) returns here all but that part, with the same text; the rest stays a run's refusal."""
+        return self.unsupported(scene, settings)
+
     def variants(self, scene):
         """Engine option sets the default matrix runs on ``scene`` (``[{}]``: the defaults only)."""
         return [{}]

@@ -54,7 +54,7 @@ import time
 import numpy as np
 
 from dalembert.harness.execute import QUICK, Timing
-from dalembert.harness.matrix import expand
+from dalembert.harness.matrix import expand, split
 from dalembert.harness.pool import run_matrix
 from dalembert.harness.truths import prepare_cases
 from dalembert.store import Store
@@ -131,8 +131,10 @@ def main(argv=None):
     args = p.parse_args(argv)
     params = {"t_final": args.t_final} if args.t_final else {}
     specs, skipped = expand(engines=args.engine, dts=[1e-2, 1e-3], rtols=[1e-6, 1e-9], params=params)
+    specs, refused = split(specs)  # as ``dalembert run``: a run an engine refuses is listed, not run
     engines = sorted({s.engine for s in specs})
-    print(f"matrix: {len(specs)} runs, engines {', '.join(engines)}, {os.cpu_count()} cores"
+    print(f"matrix: {len(specs)} runs ({len(refused)} refused, not run), engines {', '.join(engines)}, "
+          f"{os.cpu_count()} cores"
           + (f" (not installed: {'; '.join(skipped)})" if skipped else ""))
     records, walls, busy = {}, {}, {}
     with tempfile.TemporaryDirectory() as tmp:

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from dalembert.errors import QUANTITIES
+from dalembert.refusal import manifest_refusals
 from dalembert.reports.causes import case_orders, disagreement_causes
 from dalembert.reports.formatting import value_text
 from dalembert.reports.hazards import (CLOSURE_GROWTH, CREEP_METRIC, DISAGREEMENT_FACTOR, ENERGY_HAZARD, ENERGY_LIKE,
@@ -96,13 +97,16 @@ class CaseFindings:
 def find(store, records=None):
     """The ``CaseFindings`` of every case version in ``store`` (``records``: its records, if read
     already), by case name."""
-    groups = {}
+    groups, refused = {}, {}
     for r in records if records is not None else store.records():
         groups.setdefault((r.case, r.case_version), []).append(r)
-    return [_case_findings(store.case(name, version), runs, store) for (name, version), runs in sorted(groups.items())]
+    for f in manifest_refusals(store.manifest()):  # each engine's refusal of a case, listed once (no run made)
+        refused.setdefault((f.case, f.case_version), []).append(f)
+    return [_case_findings(store.case(name, version), runs, store, refused.get((name, version), ()))
+            for (name, version), runs in sorted(groups.items())]
 
 
-def _case_findings(case, runs, store=None):
+def _case_findings(case, runs, store=None, refused=()):
     quantity = headline_quantity(runs)
     headline = headline_metric(case, runs)
     ranked = headline.name if headline is not None else quantity
@@ -113,7 +117,7 @@ def _case_findings(case, runs, store=None):
         best = min(pts, key=lambda p: p.error) if pts else None
         engines.append(EngineSummary(engine, mine, tuple(Reach(t, cheapest_reaching(pts, t)) for t in ACCURACY_TARGETS),
                                      best, tuple(pareto_front(pts))))
-    hazards = case_hazards(engines, runs, case, quantity, store)
+    hazards = case_hazards(engines, runs, case, quantity, store, refused)
     if any(h.kind == "disagreement" for h in hazards):
         orders = case_orders(case, runs, quantity)
         hazards = [replace(h, causes=tuple(disagreement_causes(h.runs, case, runs, quantity, orders)))

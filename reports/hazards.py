@@ -29,7 +29,9 @@ records (``dalembert.reports.findings`` gathers them with the cheapest runs):
   Only comparable runs are compared: a run whose tolerance changed nothing (``inert``)
   is left out (its error says nothing of its tolerance), and so is any run
   whose settings do not mean what the others' do (``_comparable``);
-* ``unsupported`` — integrators an engine cannot run on the case, with its reason.
+* ``unsupported`` — integrators an engine cannot run on the case, with its reason: from the matrix's
+  manifest (``dalembert.refusal``: each refusal listed once, no run made) and from the runs stored
+  ``unsupported`` (a refusal only the built model shows, and every refusal of a store written before).
 
 Every sentence names the runs it is about (engine and settings) and quotes
 stored numbers only; verdicts are the stored ones, never judged again here.
@@ -46,6 +48,7 @@ from dalembert.case import LOOP_RESIDUALS
 from dalembert.errors import QUANTITIES
 from dalembert.invariants import loop_residual
 from dalembert.record import BAD_STATUSES
+from dalembert.refusal import settings_text as refused_text
 from dalembert.reports.formatting import value_text
 from dalembert.reports.names import settings_text, speed_text
 from dalembert.reports.work_precision import sweep_key
@@ -93,17 +96,20 @@ class Hazard:
     causes: tuple = ()  # a disagreement's causes the store attributes (``reports.causes``), sentences
 
 
-def case_hazards(engines, runs, case, quantity, store=None):
+def case_hazards(engines, runs, case, quantity, store=None, refused=()):
     """Every hazard of one case version: per engine (``engines``: summaries with ``engine`` and ``runs``), then
-    between engines over the comparable ``runs``, in ``HAZARDS`` order."""
+    between engines over the comparable ``runs``, in ``HAZARDS`` order; ``refused``: the manifest's
+    ``dalembert.refusal.Refusal``s of this case version (listed with the runs stored ``unsupported``, by engine)."""
     hazards = []
     for e in engines:
         hazards += (_diverged(e, case) + _failed(e) + _energy(e, case) + _creep(e, case) + _closure(e, case, store)
                     + _reactions(e, case, quantity) + _beyond(e, case) + _inert(e, quantity))
     inert = {r.key for h in hazards if h.kind == "inert" for r in h.runs}
     hazards += _disagreements([r for r in runs if r.key not in inert], quantity, case)
-    for e in engines:
-        hazards += _unsupported(e)
+    unsupported = [h for e in engines for h in _unsupported(e)] + [
+        Hazard("unsupported", r.engine, (), f"{r.engine} cannot run {r.what}: {r.reason}")
+        for r in sorted(refused, key=lambda r: r.reason)]
+    hazards += sorted(unsupported, key=lambda h: h.engine)
     hazards.sort(key=lambda h: HAZARDS.index(h.kind))
     return hazards
 
@@ -433,13 +439,7 @@ def _unsupported(e):
             by_reason.setdefault(r.message, []).append(r)
     out = []
     for reason, rs in sorted(by_reason.items()):
-        options = {r.options_text for r in rs}
-        integrators = sorted({r.settings.integrator for r in rs})
-        what = list_text(integrators)
-        if len(options) == 1 and next(iter(options)):
-            what += f" with {next(iter(options))}"
-        elif len(options) > 1:
-            what = list_text(sorted({" ".join(x for x in (r.settings.integrator, r.options_text) if x) for r in rs}))
+        what = refused_text([(r.settings.integrator, r.options_text) for r in rs])
         out.append(Hazard("unsupported", e.engine, tuple(_by_sweep(rs)), f"{e.engine} cannot run {what}: {reason}"))
     return out
 

@@ -135,7 +135,9 @@ def test_an_effect_mjx_cannot_put_on_the_device_is_unsupported(monkeypatch):
     monkeypatch.setattr(mjx_adapter, "mjx", lambda: Refusing)
     mjx_adapter._refusal.cache_clear()  # the answer is kept per model; this MJX changed its mind
     reason = ADAPTER.unsupported(case.scene, Settings("rk4", dt=1e-3))
+    before = ADAPTER.unsupported_before_build(case.scene, Settings("rk4", dt=1e-3))
     mjx_adapter._refusal.cache_clear()
+    assert before is None  # known once the model is built: the matrix keeps the run, its worker stores the refusal
     assert reason.startswith("MJX cannot put this model on the device") and "mjJNT_BALL" in reason
 
 

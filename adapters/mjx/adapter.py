@@ -113,12 +113,16 @@ class MjxAdapter(MujocoAdapter):
         """The base check, then MJX's own: the contact options MJX lacks (``why_not``), and where
         ``mjx.put_model`` or ``mjx.make_data`` refuses the compiled model (NotImplementedError, e.g. a
         feature MJX lacks), the reason is MJX's."""
-        reason = super().unsupported(scene, settings) or why_not(scene, settings)
+        reason = self.unsupported_before_build(scene, settings)
         if reason:
             return reason
         from dalembert.adapters.mujoco.mjcf import mjcf
 
         return _refusal(mjcf(scene, replace(settings, dt=REFUSAL_DT)))
+
+    def unsupported_before_build(self, scene, settings):
+        """``unsupported`` but for the device's refusal of the compiled model (known only once it is built)."""
+        return super().unsupported(scene, settings) or why_not(scene, settings)
 
     def variants(self, scene):
         """Default matrix: both precisions (and, where the scene has welds, MuJoCo's weld variants)."""

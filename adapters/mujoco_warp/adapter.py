@@ -113,12 +113,16 @@ class MujocoWarpAdapter(MujocoAdapter):
     def unsupported(self, scene, settings):
         """The base check, then where ``mjw.put_model`` refuses the compiled model (NotImplementedError or
         ValueError: a feature MuJoCo Warp lacks), the reason is MuJoCo Warp's."""
-        reason = super().unsupported(scene, settings)
+        reason = self.unsupported_before_build(scene, settings)
         if reason:
             return reason
         from dalembert.adapters.mujoco.mjcf import mjcf
 
         return _refusal(mjcf(scene, replace(settings, dt=REFUSAL_DT)))
+
+    def unsupported_before_build(self, scene, settings):
+        """``unsupported`` but for the device's refusal of the compiled model (known only once it is built)."""
+        return super().unsupported(scene, settings)
 
     # ------------------------------------------------------------- build
     def prepare(self, scene, times, settings):

@@ -1,7 +1,9 @@
 """The run matrix: cases x engines x integrators x step sizes (or tolerances), as ``RunSpec``s.
 
 ``expand(...)`` turns a selection into specs, checking every name and setting
-before anything runs; ``spec(...)`` makes one spec from explicit settings.
+before anything runs; ``spec(...)`` makes one spec from explicit settings; ``split(specs)``
+leaves out the runs an engine refuses by its declarations (``dalembert.refusal``), before
+anything runs.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from dalembert.identity import run_identity, run_key
 from dalembert.registry import suggest
 from dalembert.settings import Settings, steps_per_interval
 
-__all__ = ["RunSpec", "expand", "spec", "DEFAULT_DTS", "DEFAULT_RTOLS", "ATOL_PER_RTOL"]
+__all__ = ["RunSpec", "expand", "spec", "split", "DEFAULT_DTS", "DEFAULT_RTOLS", "ATOL_PER_RTOL"]
 
 # Default sweeps: two decades of step size and of tolerance, enough for a
 # work-precision slope, affordable for the pure-Python reference on 2 cores.
@@ -124,7 +126,8 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
 
     Returns
     -------
-    specs : list of RunSpec
+    specs : list of RunSpec — every combination the engines' ``check`` accepts, those an engine refuses included
+        (``split`` leaves them out: ``dalembert run`` runs none of them)
     skipped : list of str — engines not installed (only when ``engines`` was not given)
     """
     from dalembert.adapters import adapter_names, get_adapter
@@ -193,3 +196,29 @@ def expand(cases=None, tags=None, engines=None, integrators=None, dts=None, rtol
             offered = {o for a in adapters.values() for ispec in a.integrators.values() for o in ispec.options}
             raise ValueError(f"--option {key}: no selected engine's integrator takes it{suggest(key, offered)}")
     return specs, skipped
+
+
+def split(specs):
+    """The runs of ``specs`` their engines can run, and those an engine refuses before building a model
+    (``Adapter.unsupported_before_build``: effects, options, the scene's parts; the same reason a worker's
+    ``unsupported`` would store).
+
+    Returns
+    -------
+    runnable : list of RunSpec — in the order given; a refusal only the built model shows is among them (a worker
+        stores it ``unsupported``)
+    refused : list of (RunSpec, str) — each refused spec with its engine's reason (``refusal.group`` lists them once
+        per engine, case variant and reason)
+    """
+    from dalembert.adapters import get_adapter
+    from dalembert.harness.truths import built_case
+
+    runnable, refused = [], []
+    for s in specs:
+        case, _ = built_case(s.case, s.params)  # (built once per process: the expansion built it)
+        reason = get_adapter(s.engine, s.adapter or None).unsupported_before_build(case.scene, s.settings)
+        if reason:
+            refused.append((s, reason))
+        else:
+            runnable.append(s)
+    return runnable, refused

@@ -8,6 +8,10 @@ the size is meant, a sweep or matrix of more than ``MAX_RUNS`` runs, a model of 
 ``MAX_MODEL_PARTS`` parts, a run of more than ``matrix.MAX_STEPS_PER_RUN`` steps.
 Capped and said: ``--jobs`` beyond the cores (the timings would share them).
 
+Left out before anything runs: the runs an engine refuses by its declarations (``matrix.split``), each
+engine's refusals of a case listed once (``Selection.refused``: a note per refusal when engines or cases were
+named, else one per engine); a selection whose every run is refused is refused itself, with the reasons.
+
 Duplicates, one rule for every command: a single-valued thing given twice (``--param K``,
 ``--option K``, ``--out``) is refused, since which one was meant is a guess; a name or value
 repeated in a list (``--case a --case a``, ``--dt 1e-3,1e-3``) is kept once, in the order
@@ -27,6 +31,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from dalembert.refusal import group
 from dalembert.registry import suggest
 
 __all__ = ["Selection", "select", "numbers", "names", "versioned", "given", "pairs", "values", "sweep", "option_sweep",
@@ -55,6 +60,7 @@ class Selection:
     jobs: int
     timeout: float
     searches: tuple = ()  # (first probes, resolution) of each boundary search: --search dt, or a map
+    refused: tuple = ()  # dalembert.refusal.Refusal: what the engines refuse, once each; not among ``specs``
 
 
 def numbers(flag, groups, notes, lower=0.0):
@@ -213,7 +219,7 @@ def select(args, cores):
     each naming the flag, before anything runs.
     """
     from dalembert.case import load_cases
-    from dalembert.harness.matrix import expand
+    from dalembert.harness.matrix import expand, split
     from dalembert.harness.pool import DEFAULT_TIMEOUT_S
 
     notes = []
@@ -268,10 +274,13 @@ def select(args, cores):
     if dts and not any(s.settings.dt is not None for s in specs):
         raise ValueError("--dt: no selected integrator takes a fixed step — drop --dt, or select one (e.g. "
                          "--integrator rk4)")
+    named = bool(engines or cases)  # (before ``engines`` is rebound below: the maps take the engines an option names)
     for key in options:
         engines = sorted({s.engine for s in specs if key in dict(s.settings.options)})
         if engines != sorted({s.engine for s in specs}):
             notes.append(f"--option {key}: applies to {', '.join(engines)} only; the other engines run their defaults")
+    specs, refused = split(specs)  # (after the checks above: a flag's meaning does not hang on what is refused)
+    refused = dict(refused)
     searches = []
     if args.search:
         from dalembert.harness.search import RESOLUTION
@@ -285,24 +294,43 @@ def select(args, cores):
         if adaptive:
             notes.append(f"--search dt: adaptive integrators have no step to search, left out: {', '.join(adaptive)}")
         specs = [s for s in specs if s.settings.dt is not None]
-        if not specs:
+        if not specs and not refused:  # (every one refused: said below, with the reasons)
             raise ValueError("--search dt: no selected integrator takes a fixed step")
         searches.append((tuple(specs), resolution))
     elif args.resolution is not None:
         raise ValueError("--resolution: only with --search")
     if tags and not args.no_maps and not args.search:
-        for plan, first in _maps(engines, integrators, args.force, tags, registry, options):
+        for plan, first in _maps(engines, integrators, args.force, tags, registry, options, refused):
             notes.append(f"stability map {plan.name}: {plan.case} over {plan.parameter} = {plan.values}, each "
                          f"fixed-step integrator's boundary searched in [{plan.bracket[0]:g}, {plan.bracket[1]:g}] s "
                          "(--no-maps leaves it out)")
             specs = specs + [s for s in first if s not in specs]
             searches.append((tuple(first), plan.resolution))
-    return Selection(specs, skipped, notes, jobs, timeout, tuple(searches))
+    refusals = group(refused.items())
+    if refusals and not specs:
+        raise ValueError("the selection holds no run its engines can run: " + "; ".join(r.text() for r in refusals)
+                         + " — select another engine or case (dalembert engines lists what each represents)")
+    notes += _refusal_notes(refusals, named)
+    return Selection(specs, skipped, notes, jobs, timeout, tuple(searches), refusals)
 
 
-def _maps(engines, integrators, force, tags, registry, options):
-    """The default stability maps the selected tags carry: ``[(MapPlan, first probes)]``."""
-    from dalembert.harness.matrix import expand
+def _refusal_notes(refusals, named):
+    """What the user is told of ``refusals``: each in full where engines or cases were ``named`` (what was asked
+    for is refused), else a count per engine (the default matrix's are many; the manifest and report list them)."""
+    if named:
+        return [f"not run: {r.text()}" for r in refusals]
+    runs = {}
+    for r in refusals:
+        runs[r.engine] = runs.get(r.engine, 0) + r.runs
+    return [f"{sum(runs.values())} run(s) the engines refuse are left out of the matrix, each engine's refusal of a "
+            "case listed once in the manifest and the report: " + ", ".join(f"{e} {n}" for e, n in sorted(runs.items()))
+            ] if runs else []
+
+
+def _maps(engines, integrators, force, tags, registry, options, refused):
+    """The default stability maps the selected tags carry: ``[(MapPlan, first probes)]``; the probes an engine
+    refuses are left out, added to ``refused`` (spec -> reason)."""
+    from dalembert.harness.matrix import expand, split
     from dalembert.maps import MAPS
 
     out = []
@@ -313,7 +341,8 @@ def _maps(engines, integrators, force, tags, registry, options):
         first, _ = _each_option_set(options, lambda chosen: expand(
             [plan.case], None, engines, integrators, list(plan.bracket), None,
             {**plan.params, plan.parameter: swept}, chosen, force=force))
-        first = [s for s in first if s.settings.dt is not None]
+        first, more = split([s for s in first if s.settings.dt is not None])
+        refused.update(more)
         if first:
             out.append((plan, first))
     return out

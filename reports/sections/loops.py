@@ -3,6 +3,7 @@ reaction error and the cost of ``LOOP_TARGET``."""
 
 from __future__ import annotations
 
+from dalembert.refusal import manifest_refusals
 from dalembert.reports.loops import LOOP_TARGET, loop_lines
 from dalembert.reports.page import Part
 from dalembert.reports.tables import Cell, Table, num
@@ -35,6 +36,8 @@ def loops(rep):
         if not lines:
             continue
         unsupported = sorted({r.engine for r in runs if r.status == "unsupported"} - {ln.engine for ln in lines})
+        refused = sorted({f.engine for f in manifest_refusals(rep.manifest)
+                          if (f.case, f.case_version) == (name, version)} - {ln.engine for ln in lines})
         rows = [[Cell(ln.engine), Cell(ln.line.removeprefix(ln.engine + " "), wrap=True), num(ln.runs, "{:d}"),
                  num(ln.best_error), num(ln.worst_position_residual), num(ln.worst_velocity_residual),
                  num(ln.worst_reaction_error), num(ln.target_cost, "{:.3g}"),
@@ -45,4 +48,6 @@ def loops(rep):
         if unsupported:
             part.para("Not run (unsupported; the reason is in each run's row): " + ", ".join(unsupported) + ".",
                       cls="note")
+        if refused:  # (refused before the matrix ran: no row, the manifest lists each once)
+            part.para("Not run (refused; the hazards give each reason): " + ", ".join(refused) + ".", cls="note")
     return part

@@ -4,7 +4,8 @@ The one place a matrix is run: the command line (``main``) and the Python API
 (``dalembert.harness.api.run``) both call ``run``, with keywords named after the flags. Every
 input is checked (``dalembert.harness.selection``) and every case and its truth built
 (``dalembert.harness.truths.build``) before the store is made, so a refusal leaves nothing behind
-and the same command, corrected, can use the same ``--out``.
+and the same command, corrected, can use the same ``--out``. The runs an engine refuses by its
+declarations are no runs: the manifest lists them once each (``"refused"``, ``dalembert.refusal``).
 """
 
 from __future__ import annotations
@@ -364,6 +365,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
         built = build(specs)  # a case or truth that cannot be computed refuses here, before the store
         client = _connect(scheduler, debug) if scheduler else None
         manifest = session.manifest(specs, command, timeout, timing, jobs, scheduler)
+        manifest["refused"] = [r.to_json() for r in chosen.refused]  # once each, not runs: a report reads them here
         if chosen.searches:
             manifest["searches"] = [{"parameter": "dt", "resolution": res, "first": [s.to_json() for s in first]}
                                     for first, res in chosen.searches]
