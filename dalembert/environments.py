@@ -2,11 +2,13 @@
 
 An engine named with a requirement (``mujoco==3.6.0``, PEP 440: any specifier the package index
 understands) runs in an environment made for it by ``dalembert env create mujoco==3.6.0``: a
-virtual environment at ``cache_dir("environments", ...)`` holding dalembert's worker side (this
-checkout, installed editable with ``--no-deps``, so that the worker's code is always the parent's),
+virtual environment at ``cache_dir("environments", ...)`` holding the libraries of dalembert's worker side,
 ``WORKER_LIBRARIES`` at this environment's versions (the records and trajectories cross between the
 two interpreters as pickles), and the engine's distribution at the asked version with
-its own dependencies. It is made with ``uv`` when ``uv`` is on PATH, else with ``venv`` and pip, from
+its own dependencies. It holds no dalembert: its workers import the code of the process that starts them,
+from where that process imports it (``dalembert.harness.boot``), so that both sides always run one
+checkout's code and an environment outlives the checkout (or installed wheel) that made it. It is made
+with ``uv`` when ``uv`` is on PATH, else with ``venv`` and pip, from
 this interpreter (the same Python version: a pickle's classes and numpy's arrays must read the same).
 
 Only ``create`` reaches the network. A run of a versioned engine (``dalembert run --engine
@@ -30,7 +32,6 @@ import subprocess
 import sys
 from dataclasses import dataclass
 from datetime import datetime, timezone
-from pathlib import Path
 
 from dalembert.cache import cache_dir
 
@@ -135,8 +136,9 @@ class Environment:
         return os.path.isfile(os.path.join(self.path, INFO))
 
     def info(self):
-        """What the environment holds: ``requirement``, ``engine_version``, ``python``, ``installer``, ``created``,
-        ``checkout`` (dict); FileNotFoundError when it was not made."""
+        """What the environment holds: ``requirement``, ``engine_version``, ``python``, ``installer``, ``created``
+        (dict; one made before its workers imported the starting process's code also names the ``checkout`` it
+        installed, which they no longer import); FileNotFoundError when it was not made."""
         with open(os.path.join(self.path, INFO)) as f:
             return json.load(f)
 
@@ -195,18 +197,6 @@ def installer():
     return "uv" if shutil.which("uv") else "pip"
 
 
-def _checkout():
-    """This dalembert's source checkout (the directory of its ``pyproject.toml``); ValueError when it runs from
-    an installed wheel (an environment installs the checkout, so that its worker's code is this one's)."""
-    import dalembert
-
-    root = Path(dalembert.__file__).resolve().parent.parent
-    if not (root / "pyproject.toml").is_file():
-        raise ValueError(f"env create: dalembert runs from {root}, not from a source checkout — install it from one "
-                         "(pip install -e CHECKOUT) to make engine environments")
-    return str(root)
-
-
 def _pinned(libraries=WORKER_LIBRARIES):
     """``libraries`` at this environment's versions (``numpy==2.1.3``, ...); one not installed is left to pip."""
     from importlib import metadata
@@ -242,7 +232,7 @@ def create(name, log=lambda line: None, tool=None, problem=None):
     if env.exists:
         raise ValueError(f"env create {name}: already made, at {env.path} (engine {env.engine_version}) — use it, or "
                          f"remove it first: dalembert env remove {env.spec.name}")
-    checkout, tool = _checkout(), tool or installer()
+    tool = tool or installer()
     partial = env.path + ".partial"
     shutil.rmtree(partial, ignore_errors=True)
     python = os.path.join(partial, "bin", "python")
@@ -253,7 +243,6 @@ def create(name, log=lambda line: None, tool=None, problem=None):
         else:
             _call([sys.executable, "-m", "venv", partial], "venv", log)
             pip = [python, "-m", "pip", "install", "--quiet", "--disable-pip-version-check"]
-        _call(pip + ["--no-deps", "-e", checkout], "installing dalembert's worker side", log)
         pinned = _pinned() + _pinned(ENGINE_LIBRARIES.get(env.spec.engine, ()))
         _call(pip + pinned + [env.spec.requirement], f"installing {env.spec.requirement} beside {' '.join(pinned)} "
               "(this environment's versions: the worker's arrays must read as the parent's; an engine release that "
@@ -264,7 +253,7 @@ def create(name, log=lambda line: None, tool=None, problem=None):
         if why:
             raise ValueError(f"env create {name}: {why} — ask for a supported version")
         info = {"engine": env.spec.name, "requirement": env.spec.requirement, "engine_version": version,
-                "python": sys.version.split()[0], "installer": tool, "checkout": checkout,
+                "python": sys.version.split()[0], "installer": tool,
                 "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
         with open(os.path.join(partial, INFO), "w") as f:
             json.dump(info, f, indent=1)

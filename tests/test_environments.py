@@ -35,12 +35,18 @@ def cache(tmp_path, monkeypatch):
 
 def fake(name, version, tmp_path):
     """Make the environment of ``name`` as this interpreter (``version``: what its ``environment.json`` says is
-    installed); returns the file its interpreter appends each worker's pid to."""
+    installed); returns the file its interpreter appends each worker's pid to.
+
+    Its own dalembert is a stale one (as an environment's editable install of a checkout since deleted), ahead
+    of this one on its path, which raises on import: its workers must import the starting process's code."""
     env = environment(name)
     pids = tmp_path / f"pids-{env.spec.directory}"
+    stale = tmp_path / "stale"
+    os.makedirs(stale / "dalembert", exist_ok=True)
+    (stale / "dalembert" / "__init__.py").write_text("raise ImportError('a stale dalembert was imported')\n")
     os.makedirs(os.path.join(env.path, "bin"))
     with open(env.python, "w") as f:
-        f.write(f"#!/bin/sh\necho $$ >> {pids}\nexec {sys.executable} \"$@\"\n")
+        f.write(f"#!/bin/sh\necho $$ >> {pids}\nPYTHONPATH={stale} exec {sys.executable} \"$@\"\n")
     os.chmod(env.python, 0o755)
     with open(os.path.join(env.path, INFO), "w") as f:
         json.dump({"engine": env.spec.name, "requirement": env.spec.requirement, "engine_version": version,
@@ -309,3 +315,18 @@ def test_mujoco_before_its_spring_and_damper_flags_disables_passive_forces_by_th
     monkeypatch.setattr(mujoco, "mjtDisableBit", old)
     before = mjcf(case.scene, Settings("rk4", dt=5e-3))
     assert 'passive="disable"' in before and "spring=" not in before and "damper=" not in before
+
+
+def test_a_workers_packages_are_every_package_with_a_directory_of_its_own():
+    """``boot.PACKAGES`` names each package pyproject installs from a directory of its own (``package-dir``):
+    one left out would be imported, in an environment's worker, from the environment (or not at all)."""
+    import tomllib
+
+    from dalembert.harness.boot import PACKAGES, sources
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    with open(os.path.join(root, "pyproject.toml"), "rb") as f:
+        assert set(PACKAGES) == set(tomllib.load(f)["tool"]["setuptools"]["package-dir"])
+    import dalembert.reference
+
+    assert sources()["dalembert.reference"] == os.path.dirname(os.path.abspath(dalembert.reference.__file__))
