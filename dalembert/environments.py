@@ -264,8 +264,20 @@ def create(name, log=lambda line: None, tool=None, problem=None):
     return env
 
 
+def _version_order(info):
+    """Sorts environments by engine, then engine version (PEP 440: 3.10.0 after 3.9.0; one ``packaging`` cannot
+    read after the others, by text)."""
+    from packaging.version import InvalidVersion, Version
+
+    engine = engine_of(info["engine"])
+    try:
+        return (engine, 0, Version(info["engine_version"]), info["engine"])
+    except InvalidVersion:
+        return (engine, 1, info["engine_version"], info["engine"])
+
+
 def environments():
-    """Every made environment, ``[(engine name, info dict, path)]`` sorted by name."""
+    """Every made environment, ``[(engine name, info dict, path)]`` sorted by engine, then engine version."""
     root = cache_dir("environments")
     out = []
     for entry in sorted(os.listdir(root)):
@@ -275,7 +287,7 @@ def environments():
         except (OSError, ValueError):
             continue  # an unfinished one (``.partial``) or another file
         out.append((info["engine"], info, os.path.join(root, entry)))
-    return sorted(out, key=lambda e: e[0])
+    return sorted(out, key=lambda e: _version_order(e[1]))
 
 
 def remove(name):

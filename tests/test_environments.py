@@ -131,6 +131,17 @@ def test_env_list_and_remove(tmp_path, capsys):
     assert environments() == []
 
 
+def test_env_list_is_sorted_by_engine_then_version(tmp_path, capsys):
+    for version in ("3.10.0", "3.9.0", "3.2.7"):
+        fake(f"mujoco=={version}", version, tmp_path)
+    fake("exudyn==1.13.6", "1.13.6", tmp_path)
+    assert [name for name, _, _ in environments()] == ["exudyn==1.13.6", "mujoco==3.2.7", "mujoco==3.9.0",
+                                                      "mujoco==3.10.0"]
+    assert main(["env", "list"]) == 0
+    out = capsys.readouterr().out
+    assert out.index("mujoco==3.9.0") < out.index("mujoco==3.10.0")
+
+
 # ---------------------------------------------------------------- workers in their environment
 def _pids(path):
     return {int(p) for p in open(path).read().split()} if os.path.exists(path) else set()
@@ -149,6 +160,11 @@ def test_a_versioned_engines_runs_go_to_its_environments_interpreter_and_resume(
     records = store.records()
     assert sorted(r.engine for r in records) == sorted([name] * 2 + ["mujoco"] * 2)
     assert {r.engine_version for r in records} == {version}
+    # each run names the libraries loaded where it ran: the engine's, numpy's; not dalembert's nor the stdlib's
+    for r in records:
+        libraries = r.provenance["libraries"]
+        assert libraries["mujoco"] == version and libraries["numpy"] == metadata.version("numpy")
+        assert "dalembert" not in libraries and "json" not in libraries
     inside = {r.provenance["pid"] for r in records if r.engine == name}
     outside = {r.provenance["pid"] for r in records if r.engine == "mujoco"}
     assert inside and inside <= _pids(pids) and not outside & _pids(pids)
@@ -330,3 +346,20 @@ def test_a_workers_packages_are_every_package_with_a_directory_of_its_own():
     import dalembert.reference
 
     assert sources()["dalembert.reference"] == os.path.dirname(os.path.abspath(dalembert.reference.__file__))
+
+
+def test_an_integrator_an_older_version_lacks_is_refused_with_the_reason(monkeypatch):
+    """MuJoCo's ``discrete`` integrator arrived in 3.13.0 (3.12.0's MJCF parser rejects it): a run of it at 3.12.0
+    is refused with the reason, at 3.13.0 it runs, and the other integrators run at either."""
+    from dalembert.adapters import get_adapter
+    from dalembert.case import load_cases
+    from dalembert.settings import Settings
+
+    adapter = get_adapter("mujoco")
+    scene = load_cases()["free_top"]().scene
+    monkeypatch.setattr(type(adapter), "version", lambda self: "3.12.0")
+    why = adapter.unsupported(scene, Settings("discrete", dt=5e-3))
+    assert "mujoco 3.12.0 has no 'discrete' integrator" in why and "mujoco>=3.13" in why
+    assert adapter.unsupported(scene, Settings("implicitfast", dt=5e-3)) is None
+    monkeypatch.setattr(type(adapter), "version", lambda self: "3.13.0")
+    assert adapter.unsupported(scene, Settings("discrete", dt=5e-3)) is None
