@@ -247,14 +247,16 @@ def test_a_real_environment_runs_its_engine_version(tmp_path, monkeypatch):
 
 
 # ---------------------------------------------------------------- the report pairs the versions
-def _record(engine, version, integrator, energy, case="free_top_intermediate"):
+def _record(engine, version, integrator, energy, case="free_top_intermediate", absl="2.1.0"):
     from types import SimpleNamespace
 
     from dalembert.settings import Settings
 
+    libraries = {"mujoco": version, "numpy": "2.4.6", "absl-py": absl}
     return SimpleNamespace(engine=engine, engine_version=version, case=case, case_version="v", params={},
                            settings=Settings(integrator, dt=5e-3), errors={"orientation": (1e-3, 1e-3)},
-                           drifts={"energy": energy, "angular_momentum": 1e-3}, key=f"{engine}-{integrator}")
+                           drifts={"energy": energy, "angular_momentum": 1e-3}, key=f"{engine}-{integrator}",
+                           provenance={"pid": 1, "libraries": libraries})
 
 
 def test_the_report_sets_an_engines_versions_side_by_side_and_names_what_changed():
@@ -274,11 +276,30 @@ def test_the_report_sets_an_engines_versions_side_by_side_and_names_what_changed
     rk4 = next(g for k, g in groups.items() if k[4].startswith("rk4"))
     assert [r.engine_version for r in rk4] == ["3.6.0", "3.11.0", "4.0.0"]  # PEP 440 order, not the text's
     md = versions(SimpleNamespace(records=records)).md
-    text = "\n".join(md)
+    (figure,) = [m for m in md if not isinstance(m, str)]  # the changed quantity's panel, not the unchanged rk4's
+    assert "free_top_intermediate, implicitfast" in figure.svg and "rk4" not in figure.svg
+    assert "3.11.0" in figure.svg and figure.name == "versions-mujoco"
+    text = "\n".join(m for m in md if isinstance(m, str))
     assert "implicitfast dt=0.005 energy drift on free_top_intermediate: 3.6.0 0.004, 3.11.0-4.0.0 0.35" in text
     assert "rk4 dt=0.005 energy drift" not in text.split("|")[0]  # 1.5x: under CHANGE_FACTOR, no finding
     assert CHANGE_FACTOR > 1.5
     assert "| mujoco==3.6.0 (3.6.0) | mujoco==3.11.0 (3.11.0) | mujoco (4.0.0) |" in text
+
+
+def test_the_versions_section_names_the_libraries_that_differ_between_an_engines_versions():
+    """A library whose versions differ between the engine's versions is a row (its version per engine name);
+    one at the same version everywhere (numpy) is not, nor one only one name's worker loaded."""
+    from types import SimpleNamespace
+
+    from dalembert.reports.sections.versions import library_rows, versions
+
+    records = [_record("mujoco==3.6.0", "3.6.0", "rk4", 1e-9, absl="2.1.0"),
+               _record("mujoco", "4.0.0", "rk4", 1e-9, absl="2.3.1")]
+    records[1].provenance["libraries"]["mujoco-core"] = "4.0.0"
+    rows = library_rows(records, ["mujoco==3.6.0", "mujoco"])
+    assert rows == [("absl-py", ["2.1.0", "2.3.1"]), ("mujoco", ["3.6.0", "4.0.0"])]
+    text = "\n".join(m for m in versions(SimpleNamespace(records=records)).md if isinstance(m, str))
+    assert "| absl-py | 2.1.0 | 2.3.1 |" in text and "numpy |" not in text
 
 
 def test_a_versioned_engine_never_runs_outside_its_environment(tmp_path):
