@@ -80,8 +80,7 @@ def _libraries():
         dists = _DISTRIBUTIONS.get(top, ())
         if len(dists) > 1:  # one folder, several distributions (mujoco's and mujoco-mjx's): those of a loaded file
             files = {os.path.realpath(f) for name, f in modules.items() if f and name.partition(".")[0] == top}
-            dists = [d for d in dists if files & {os.path.realpath(metadata.distribution(d).locate_file(p))
-                                                  for p in metadata.distribution(d).files or ()}]
+            dists = [d for d in dists if files & _files(d)]
         for dist in dists:
             try:
                 out[dist] = metadata.version(dist)
@@ -90,8 +89,18 @@ def _libraries():
     return dict(sorted(out.items()))
 
 
-# ``importlib.metadata.packages_distributions()``, read once per process (``_libraries``).
-_DISTRIBUTIONS = None
+def _files(distribution):
+    """The real paths of the files ``distribution`` installed (a frozenset; read once per process)."""
+    from importlib import metadata
+
+    if distribution not in _FILES:
+        dist = metadata.distribution(distribution)
+        _FILES[distribution] = frozenset(os.path.realpath(dist.locate_file(p)) for p in dist.files or ())
+    return _FILES[distribution]
+
+
+# ``importlib.metadata.packages_distributions()``, read once per process (``_libraries``), and ``_files``' answers.
+_DISTRIBUTIONS, _FILES = None, {}
 
 
 def _pool_width():
