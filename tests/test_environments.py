@@ -384,3 +384,16 @@ def test_an_integrator_an_older_version_lacks_is_refused_with_the_reason(monkeyp
     assert adapter.unsupported(scene, Settings("implicitfast", dt=5e-3)) is None
     monkeypatch.setattr(type(adapter), "version", lambda self: "3.13.0")
     assert adapter.unsupported(scene, Settings("discrete", dt=5e-3)) is None
+
+
+def test_a_runs_libraries_name_each_loaded_distribution_once_found():
+    """The libraries loaded here, by distribution: Pinocchio's ``pin`` though its package lives inside cmeel's
+    prefix folder (not a top-level name of its own), and of the distributions sharing MuJoCo's folder only those
+    whose files are loaded (``mujoco-mjx`` only once ``mujoco.mjx`` is imported)."""
+    pytest.importorskip("pinocchio")
+    from dalembert.harness.execute import _libraries
+
+    libraries = _libraries()
+    assert libraries["pin"] == metadata.version("pin") and libraries["mujoco"] == mujoco.__version__
+    assert ("mujoco-mjx" in libraries) == ("mujoco.mjx" in sys.modules)
+    assert "dalembert" not in libraries and "json" not in libraries

@@ -77,9 +77,10 @@ def _libraries():
             - {name for name in modules if name.startswith("_")})
     out = {}
     for top in tops:
-        dists = _DISTRIBUTIONS.get(top, ())
+        files = {os.path.realpath(f) for name, f in modules.items() if f and name.partition(".")[0] == top}
+        dists = _DISTRIBUTIONS.get(top) or sorted({d for f in files for folder in _folders(f)
+                                                   for d in _DISTRIBUTIONS.get(folder, ())})
         if len(dists) > 1:  # one folder, several distributions (mujoco's and mujoco-mjx's): those of a loaded file
-            files = {os.path.realpath(f) for name, f in modules.items() if f and name.partition(".")[0] == top}
             dists = [d for d in dists if files & _files(d)]
         for dist in dists:
             try:
@@ -87,6 +88,18 @@ def _libraries():
             except metadata.PackageNotFoundError:  # (a name packages_distributions read but no metadata answers to)
                 continue
     return dict(sorted(out.items()))
+
+
+def _folders(path):
+    """The top folder of file ``path`` under each ``sys.path`` entry that holds it: a package installed inside
+    another folder (cmeel's ``cmeel.prefix/lib/.../site-packages/pinocchio``, Pinocchio's) is known to
+    ``packages_distributions`` by that folder, not by its own name."""
+    out = set()
+    for entry in sys.path:
+        entry = os.path.realpath(entry or ".")
+        if path.startswith(entry + os.sep):
+            out.add(os.path.relpath(path, entry).split(os.sep)[0])
+    return out
 
 
 def _files(distribution):
