@@ -36,7 +36,8 @@ from datetime import datetime, timezone
 from dalembert.cache import cache_dir
 
 __all__ = ["DISTRIBUTIONS", "EngineSpec", "Environment", "parse_engine", "is_versioned", "engine_of", "environment",
-           "require", "serving", "create", "environments", "remove", "installer", "WORKER_LIBRARIES", "ENGINE_LIBRARIES"]
+           "require", "serving", "create", "environments", "remove", "installer", "WORKER_LIBRARIES", "ENGINE_LIBRARIES",
+           "PICKLED_LIBRARIES"]
 
 # The distribution on the package index of each built-in adapter's engine (``importlib.metadata``'s
 # names of the installed wheels: ``pin`` is Pinocchio's, ``mujoco-mjx`` MJX's, ``dartpy`` DART's).
@@ -46,6 +47,9 @@ DISTRIBUTIONS = {"mujoco": "mujoco", "pinocchio": "pin", "exudyn": "exudyn", "dr
 # scipy (arrays and the truths' integrators; a pickled array must read the same), threadpoolctl (each
 # worker's thread pools, ``dalembert.harness.threads``), packaging (an engine's name read as a requirement).
 WORKER_LIBRARIES = ("numpy", "scipy", "threadpoolctl", "packaging")
+# What crosses the pipe between a worker and its parent as pickles besides dalembert's own classes (the
+# trajectories' arrays): an environment whose version of one differs from this process's is stale (``stale``).
+PICKLED_LIBRARIES = ("numpy",)
 # What an engine's adapter needs beside the engine's own dependencies (pyproject's), at this environment's versions:
 # Pinocchio's compiled stepper builds against Eigen's headers from ``cmeel-eigen`` (without them its runs take the
 # Python loop, and say so in their audit).
@@ -155,6 +159,28 @@ class Environment:
                               f"{self.spec.name}")
         return self.engine_version
 
+    def stale(self):
+        """Why this made environment's workers cannot serve this process: its Python or a ``PICKLED_LIBRARIES``
+        version differs from this process's (``["numpy 2.3.0 there, 2.4.6 here"]``; empty when it can)."""
+        import glob
+        from importlib import metadata
+
+        out = []
+        there, here = self.info().get("python", ""), sys.version.split()[0]
+        if there.rpartition(".")[0] != here.rpartition(".")[0]:  # (a patch release reads the same pickles)
+            out.append(f"Python {there} there, {here} here")
+        sites = glob.glob(os.path.join(self.path, "lib", "python*", "site-packages"))
+        for lib in PICKLED_LIBRARIES:
+            found = next(iter(metadata.distributions(name=lib, path=sites)), None)
+            there = found.version if found is not None else "none"
+            try:
+                here = metadata.version(lib)
+            except metadata.PackageNotFoundError:
+                here = "none"
+            if there != here:
+                out.append(f"{lib} {there} there, {here} here")
+        return out
+
     @property
     def active(self):
         """Whether this process runs in it: its interpreter's, or a pool's worker started for it (``serving``)."""
@@ -189,6 +215,10 @@ def require(name, flag="--engine", problem=None):
     if why:
         raise ValueError(f"{flag} {name}: {why} — remove it (dalembert env remove {env.spec.name}) and make "
                          "one at a supported version")
+    stale = env.stale()
+    if stale:
+        raise ValueError(f"{flag} {name}: its environment is stale ({'; '.join(stale)}: its workers' arrays must "
+                         f"read as this process's) — remake it: dalembert env create --force {env.spec.name}")
     return env
 
 
@@ -220,18 +250,19 @@ def _call(command, what, log):
     return done.stdout
 
 
-def create(name, log=lambda line: None, tool=None, problem=None):
+def create(name, log=lambda line: None, tool=None, problem=None, force=False):
     """Make the environment of engine ``name`` (``mujoco==3.6.0``; reaches the package index) and return it.
 
     ``log``: told each command; ``tool``: ``"uv"`` or ``"pip"`` (default: ``installer()``); ``problem``: why
-    an installed engine version cannot run (the adapter's ``version_problem``), or None. ValueError when it
-    exists already, or ``problem`` names one (nothing is then left behind); RuntimeError with the installer's
-    output when an install fails (nor then).
+    an installed engine version cannot run (the adapter's ``version_problem``), or None; ``force``: make it
+    again when it exists (a stale one), replacing it once the new one is made. ValueError when it exists
+    already (without ``force``), or ``problem`` names one (nothing is then left behind); RuntimeError with the
+    installer's output when an install fails (nor then, and a forced environment's old one stays).
     """
     env = environment(name)
-    if env.exists:
+    if env.exists and not force:
         raise ValueError(f"env create {name}: already made, at {env.path} (engine {env.engine_version}) — use it, or "
-                         f"remove it first: dalembert env remove {env.spec.name}")
+                         f"make it again: dalembert env create --force {env.spec.name}")
     tool = tool or installer()
     partial = env.path + ".partial"
     shutil.rmtree(partial, ignore_errors=True)
@@ -257,6 +288,8 @@ def create(name, log=lambda line: None, tool=None, problem=None):
                 "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
         with open(os.path.join(partial, INFO), "w") as f:
             json.dump(info, f, indent=1)
+        if force:
+            shutil.rmtree(env.path, ignore_errors=True)
         os.replace(partial, env.path)  # whole or not at all: a run never finds half an environment
     except BaseException:
         shutil.rmtree(partial, ignore_errors=True)

@@ -33,9 +33,10 @@ def cache(tmp_path, monkeypatch):
     return tmp_path / "cache"
 
 
-def fake(name, version, tmp_path):
+def fake(name, version, tmp_path, numpy=None):
     """Make the environment of ``name`` as this interpreter (``version``: what its ``environment.json`` says is
-    installed); returns the file its interpreter appends each worker's pid to.
+    installed; ``numpy``: the numpy version its site-packages say they hold, default this process's); returns the
+    file its interpreter appends each worker's pid to.
 
     Its own dalembert is a stale one (as an environment's editable install of a checkout since deleted), ahead
     of this one on its path, which raises on import: its workers must import the starting process's code."""
@@ -45,6 +46,11 @@ def fake(name, version, tmp_path):
     os.makedirs(stale / "dalembert", exist_ok=True)
     (stale / "dalembert" / "__init__.py").write_text("raise ImportError('a stale dalembert was imported')\n")
     os.makedirs(os.path.join(env.path, "bin"))
+    info = os.path.join(env.path, "lib", f"python{sys.version_info[0]}.{sys.version_info[1]}", "site-packages",
+                        f"numpy-{numpy or metadata.version('numpy')}.dist-info")
+    os.makedirs(info)
+    with open(os.path.join(info, "METADATA"), "w") as f:
+        f.write(f"Metadata-Version: 2.1\nName: numpy\nVersion: {numpy or metadata.version('numpy')}\n")
     with open(env.python, "w") as f:
         f.write(f"#!/bin/sh\necho $$ >> {pids}\nPYTHONPATH={stale} exec {sys.executable} \"$@\"\n")
     os.chmod(env.python, 0o755)
@@ -129,6 +135,53 @@ def test_env_list_and_remove(tmp_path, capsys):
     assert "made: mujoco==3.6.0" in capsys.readouterr().err
     assert main(["env", "remove", "mujoco==3.6.0"]) == 0
     assert environments() == []
+
+
+def test_a_stale_environment_is_refused_and_listed_naming_the_command_that_remakes_it(tmp_path, capsys):
+    """An environment whose numpy differs from this process's (made before this one's numpy was upgraded) cannot
+    serve its workers' arrays: ``run`` refuses it before anything runs, ``env list`` marks it, both naming
+    ``env create --force``; one at this numpy is not stale."""
+    fake("mujoco==3.6.0", "3.6.0", tmp_path, numpy="1.26.4")
+    fake("mujoco==3.7.0", "3.7.0", tmp_path)
+    assert environment("mujoco==3.6.0").stale() == [f"numpy 1.26.4 there, {metadata.version('numpy')} here"]
+    assert environment("mujoco==3.7.0").stale() == []
+    assert main([*RUN, "--engine", "mujoco==3.6.0", "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert "its environment is stale (numpy 1.26.4 there" in err and "env create --force mujoco==3.6.0" in err, err
+    assert not (tmp_path / "r").exists()
+    assert main(["env", "list"]) == 0
+    out = capsys.readouterr().out
+    assert "stale: numpy 1.26.4 there" in out and "env create --force mujoco==3.6.0" in out
+    assert "--force mujoco==3.7.0" not in out
+
+
+def test_create_force_replaces_an_environment_only_once_the_new_one_is_made(tmp_path, monkeypatch):
+    """``env create --force`` makes a made environment again (the installer faked: no network), the old one kept
+    until the new one is whole, and kept when the install fails."""
+    from dalembert import environments
+
+    fake("mujoco==3.6.0", "3.6.0", tmp_path, numpy="1.26.4")
+    old = environment("mujoco==3.6.0")
+    fail = {"install": False}
+
+    def call(command, what, log):  # venv: a directory; pip: nothing, or a failure; the version: 3.6.0
+        if "venv" in command:
+            os.makedirs(os.path.join(command[-1], "bin"))
+        elif "install" in command and fail["install"]:
+            assert os.path.isfile(os.path.join(old.path, INFO))  # the old one is there while the new one is made
+            raise RuntimeError("env create: installing failed")
+        return "3.6.0\n"
+
+    monkeypatch.setattr(environments, "_call", call)
+    with pytest.raises(ValueError, match="already made"):
+        environments.create("mujoco==3.6.0", tool="pip")
+    fail["install"] = True
+    with pytest.raises(RuntimeError):
+        environments.create("mujoco==3.6.0", tool="pip", force=True)
+    assert old.info()["installer"] == "fake" and old.stale()  # the old one, untouched
+    fail["install"] = False
+    environments.create("mujoco==3.6.0", tool="pip", force=True)
+    assert old.info()["installer"] == "pip" and not os.path.exists(old.path + ".partial")
 
 
 def test_env_list_is_sorted_by_engine_then_version(tmp_path, capsys):
