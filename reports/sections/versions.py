@@ -143,9 +143,11 @@ def versions(rep):
             if said:
                 lines.append(f"{engine} {label} {quantity} on {case}: {said}")
     part.para("The same case, integrator and step run by each version of an engine (each in its environment: "
-              "dalembert env create). " + (f"Changed by more than {CHANGE_FACTOR:g}x between versions: "
-                                           + "; ".join(lines) + "." if lines else
+              "dalembert env create). " + (f"Changed by more than {CHANGE_FACTOR:g}x between versions (each span of "
+                                           "versions with its value):" if lines else
                                            f"No quantity changed by more than {CHANGE_FACTOR:g}x between versions."))
+    if lines:
+        part.items(lines)
     for engine in sorted({k[0] for k in groups}):
         mine = {k: g for k, g in groups.items() if k[0] == engine}
         names = sorted({r.engine for g in mine.values() for r in g},
