@@ -195,6 +195,9 @@ class Adapter:
     # outside it is refused with the reason (``version_problem``).
     supported_versions = ""
     unsupported_versions_why = ""
+    # Integrators that only some of the supported versions have: name -> (PEP 440 specifier, why); a run of one at
+    # an engine version outside its specifier is refused with the reason (``unsupported``: ``integrator_problem``).
+    integrator_versions = {}
     # Why an effect the engine lacks is lacking, by effect or effect family ("loop" names every "loop:..."): the
     # note ``unsupported`` gives after the effects it names. An engine names its own (the reason, what it would take).
     refusal_notes = {
@@ -214,6 +217,15 @@ class Adapter:
             return None
         why = f" ({self.unsupported_versions_why})" if self.unsupported_versions_why else ""
         return f"{self.name} {version} is outside the versions its adapter supports, {self.supported_versions}{why}"
+
+    def integrator_problem(self, integrator, version):
+        """Why ``integrator`` cannot run at engine version ``version`` (str; ``integrator_versions``), or None."""
+        from packaging.specifiers import SpecifierSet
+
+        specifier, why = self.integrator_versions.get(integrator, ("", ""))
+        if not specifier or SpecifierSet(specifier).contains(version, prereleases=True):
+            return None
+        return f"{self.name} {version} has no {integrator!r} integrator ({why}): it runs at {self.name}{specifier}"
 
     def load(self):
         """Import the engine (once per process; ImportError when it is missing): a worker loads its engines
@@ -243,7 +255,11 @@ class Adapter:
 
     def unsupported(self, scene, settings):
         """The reason this engine cannot represent ``scene`` (the effects it lacks, each with its
-        ``refusal_notes`` note), or None."""
+        ``refusal_notes`` note) or run ``settings``' integrator at its version (``integrator_versions``), or None."""
+        if settings.integrator in self.integrator_versions:
+            problem = self.integrator_problem(settings.integrator, self.version())
+            if problem:
+                return problem
         missing = sorted(scene.effects - self.effects)
         if not missing:
             return None

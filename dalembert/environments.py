@@ -2,11 +2,13 @@
 
 An engine named with a requirement (``mujoco==3.6.0``, PEP 440: any specifier the package index
 understands) runs in an environment made for it by ``dalembert env create mujoco==3.6.0``: a
-virtual environment at ``cache_dir("environments", ...)`` holding dalembert's worker side (this
-checkout, installed editable with ``--no-deps``, so that the worker's code is always the parent's),
+virtual environment at ``cache_dir("environments", ...)`` holding the libraries of dalembert's worker side,
 ``WORKER_LIBRARIES`` at this environment's versions (the records and trajectories cross between the
 two interpreters as pickles), and the engine's distribution at the asked version with
-its own dependencies. It is made with ``uv`` when ``uv`` is on PATH, else with ``venv`` and pip, from
+its own dependencies. It holds no dalembert: its workers import the code of the process that starts them,
+from where that process imports it (``dalembert.harness.boot``), so that both sides always run one
+checkout's code and an environment outlives the checkout (or installed wheel) that made it. It is made
+with ``uv`` when ``uv`` is on PATH, else with ``venv`` and pip, from
 this interpreter (the same Python version: a pickle's classes and numpy's arrays must read the same).
 
 Only ``create`` reaches the network. A run of a versioned engine (``dalembert run --engine
@@ -30,12 +32,12 @@ import subprocess
 import sys
 from dataclasses import dataclass
 from datetime import datetime, timezone
-from pathlib import Path
 
 from dalembert.cache import cache_dir
 
 __all__ = ["DISTRIBUTIONS", "EngineSpec", "Environment", "parse_engine", "is_versioned", "engine_of", "environment",
-           "require", "serving", "create", "environments", "remove", "installer", "WORKER_LIBRARIES", "ENGINE_LIBRARIES"]
+           "require", "serving", "create", "environments", "remove", "installer", "WORKER_LIBRARIES", "ENGINE_LIBRARIES",
+           "PICKLED_LIBRARIES"]
 
 # The distribution on the package index of each built-in adapter's engine (``importlib.metadata``'s
 # names of the installed wheels: ``pin`` is Pinocchio's, ``mujoco-mjx`` MJX's, ``dartpy`` DART's).
@@ -45,6 +47,9 @@ DISTRIBUTIONS = {"mujoco": "mujoco", "pinocchio": "pin", "exudyn": "exudyn", "dr
 # scipy (arrays and the truths' integrators; a pickled array must read the same), threadpoolctl (each
 # worker's thread pools, ``dalembert.harness.threads``), packaging (an engine's name read as a requirement).
 WORKER_LIBRARIES = ("numpy", "scipy", "threadpoolctl", "packaging")
+# What crosses the pipe between a worker and its parent as pickles besides dalembert's own classes (the
+# trajectories' arrays): an environment whose version of one differs from this process's is stale (``stale``).
+PICKLED_LIBRARIES = ("numpy",)
 # What an engine's adapter needs beside the engine's own dependencies (pyproject's), at this environment's versions:
 # Pinocchio's compiled stepper builds against Eigen's headers from ``cmeel-eigen`` (without them its runs take the
 # Python loop, and say so in their audit).
@@ -135,8 +140,9 @@ class Environment:
         return os.path.isfile(os.path.join(self.path, INFO))
 
     def info(self):
-        """What the environment holds: ``requirement``, ``engine_version``, ``python``, ``installer``, ``created``,
-        ``checkout`` (dict); FileNotFoundError when it was not made."""
+        """What the environment holds: ``requirement``, ``engine_version``, ``python``, ``installer``, ``created``
+        (dict; one made before its workers imported the starting process's code also names the ``checkout`` it
+        installed, which they no longer import); FileNotFoundError when it was not made."""
         with open(os.path.join(self.path, INFO)) as f:
             return json.load(f)
 
@@ -152,6 +158,28 @@ class Environment:
             raise ImportError(f"no environment for {self.spec.name} — make it with: dalembert env create "
                               f"{self.spec.name}")
         return self.engine_version
+
+    def stale(self):
+        """Why this made environment's workers cannot serve this process: its Python or a ``PICKLED_LIBRARIES``
+        version differs from this process's (``["numpy 2.3.0 there, 2.4.6 here"]``; empty when it can)."""
+        import glob
+        from importlib import metadata
+
+        out = []
+        there, here = self.info().get("python", ""), sys.version.split()[0]
+        if there.rpartition(".")[0] != here.rpartition(".")[0]:  # (a patch release reads the same pickles)
+            out.append(f"Python {there} there, {here} here")
+        sites = glob.glob(os.path.join(self.path, "lib", "python*", "site-packages"))
+        for lib in PICKLED_LIBRARIES:
+            found = next(iter(metadata.distributions(name=lib, path=sites)), None)
+            there = found.version if found is not None else "none"
+            try:
+                here = metadata.version(lib)
+            except metadata.PackageNotFoundError:
+                here = "none"
+            if there != here:
+                out.append(f"{lib} {there} there, {here} here")
+        return out
 
     @property
     def active(self):
@@ -187,24 +215,16 @@ def require(name, flag="--engine", problem=None):
     if why:
         raise ValueError(f"{flag} {name}: {why} — remove it (dalembert env remove {env.spec.name}) and make "
                          "one at a supported version")
+    stale = env.stale()
+    if stale:
+        raise ValueError(f"{flag} {name}: its environment is stale ({'; '.join(stale)}: its workers' arrays must "
+                         f"read as this process's) — remake it: dalembert env create --force {env.spec.name}")
     return env
 
 
 def installer():
     """``"uv"`` when ``uv`` is on PATH, else ``"pip"`` (``venv`` and pip)."""
     return "uv" if shutil.which("uv") else "pip"
-
-
-def _checkout():
-    """This dalembert's source checkout (the directory of its ``pyproject.toml``); ValueError when it runs from
-    an installed wheel (an environment installs the checkout, so that its worker's code is this one's)."""
-    import dalembert
-
-    root = Path(dalembert.__file__).resolve().parent.parent
-    if not (root / "pyproject.toml").is_file():
-        raise ValueError(f"env create: dalembert runs from {root}, not from a source checkout — install it from one "
-                         "(pip install -e CHECKOUT) to make engine environments")
-    return str(root)
 
 
 def _pinned(libraries=WORKER_LIBRARIES):
@@ -230,19 +250,20 @@ def _call(command, what, log):
     return done.stdout
 
 
-def create(name, log=lambda line: None, tool=None, problem=None):
+def create(name, log=lambda line: None, tool=None, problem=None, force=False):
     """Make the environment of engine ``name`` (``mujoco==3.6.0``; reaches the package index) and return it.
 
     ``log``: told each command; ``tool``: ``"uv"`` or ``"pip"`` (default: ``installer()``); ``problem``: why
-    an installed engine version cannot run (the adapter's ``version_problem``), or None. ValueError when it
-    exists already, or ``problem`` names one (nothing is then left behind); RuntimeError with the installer's
-    output when an install fails (nor then).
+    an installed engine version cannot run (the adapter's ``version_problem``), or None; ``force``: make it
+    again when it exists (a stale one), replacing it once the new one is made. ValueError when it exists
+    already (without ``force``), or ``problem`` names one (nothing is then left behind); RuntimeError with the
+    installer's output when an install fails (nor then, and a forced environment's old one stays).
     """
     env = environment(name)
-    if env.exists:
+    if env.exists and not force:
         raise ValueError(f"env create {name}: already made, at {env.path} (engine {env.engine_version}) — use it, or "
-                         f"remove it first: dalembert env remove {env.spec.name}")
-    checkout, tool = _checkout(), tool or installer()
+                         f"make it again: dalembert env create --force {env.spec.name}")
+    tool = tool or installer()
     partial = env.path + ".partial"
     shutil.rmtree(partial, ignore_errors=True)
     python = os.path.join(partial, "bin", "python")
@@ -253,7 +274,6 @@ def create(name, log=lambda line: None, tool=None, problem=None):
         else:
             _call([sys.executable, "-m", "venv", partial], "venv", log)
             pip = [python, "-m", "pip", "install", "--quiet", "--disable-pip-version-check"]
-        _call(pip + ["--no-deps", "-e", checkout], "installing dalembert's worker side", log)
         pinned = _pinned() + _pinned(ENGINE_LIBRARIES.get(env.spec.engine, ()))
         _call(pip + pinned + [env.spec.requirement], f"installing {env.spec.requirement} beside {' '.join(pinned)} "
               "(this environment's versions: the worker's arrays must read as the parent's; an engine release that "
@@ -264,10 +284,12 @@ def create(name, log=lambda line: None, tool=None, problem=None):
         if why:
             raise ValueError(f"env create {name}: {why} — ask for a supported version")
         info = {"engine": env.spec.name, "requirement": env.spec.requirement, "engine_version": version,
-                "python": sys.version.split()[0], "installer": tool, "checkout": checkout,
+                "python": sys.version.split()[0], "installer": tool,
                 "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
         with open(os.path.join(partial, INFO), "w") as f:
             json.dump(info, f, indent=1)
+        if force:
+            shutil.rmtree(env.path, ignore_errors=True)
         os.replace(partial, env.path)  # whole or not at all: a run never finds half an environment
     except BaseException:
         shutil.rmtree(partial, ignore_errors=True)
@@ -275,8 +297,20 @@ def create(name, log=lambda line: None, tool=None, problem=None):
     return env
 
 
+def _version_order(info):
+    """Sorts environments by engine, then engine version (PEP 440: 3.10.0 after 3.9.0; one ``packaging`` cannot
+    read after the others, by text)."""
+    from packaging.version import InvalidVersion, Version
+
+    engine = engine_of(info["engine"])
+    try:
+        return (engine, 0, Version(info["engine_version"]), info["engine"])
+    except InvalidVersion:
+        return (engine, 1, info["engine_version"], info["engine"])
+
+
 def environments():
-    """Every made environment, ``[(engine name, info dict, path)]`` sorted by name."""
+    """Every made environment, ``[(engine name, info dict, path)]`` sorted by engine, then engine version."""
     root = cache_dir("environments")
     out = []
     for entry in sorted(os.listdir(root)):
@@ -286,7 +320,7 @@ def environments():
         except (OSError, ValueError):
             continue  # an unfinished one (``.partial``) or another file
         out.append((info["engine"], info, os.path.join(root, entry)))
-    return sorted(out, key=lambda e: e[0])
+    return sorted(out, key=lambda e: _version_order(e[1]))
 
 
 def remove(name):

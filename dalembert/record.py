@@ -34,7 +34,8 @@ checks          ``orthonormality``, ``quaternion_norm``, ``joint_residual`` (max
 judgement       ``within_tolerance``, ``beyond_tolerance`` and ``not_measured`` (names,
                 space-separated), ``verdict``, ``verdict_reason``
 engine          ``audit`` (JSON), ``model`` (text), ``provenance`` (JSON: host, pid, threads:
-                the width its BLAS and OpenMP pools were given)
+                the width its BLAS and OpenMP pools were given; libraries: the version of each
+                library loaded where it ran, ``{distribution: version}``)
 files           ``trajectory`` (path relative to the store)
 ==============  ==================================================================
 
@@ -155,7 +156,9 @@ class RunRecord:
     judgement : Judgement — the tolerances exceeded (``beyond``), the ``verdict`` and its ``reason``,
         ``within_tolerance`` (``dalembert.judge``; stored as the ``verdict_reason`` column and the others)
     audit : dict — effects read back from the engine; model : str — its model, as text
-    provenance : dict — where it ran (host, pid) and its BLAS/OpenMP pools' width (threads, None when not set)
+    provenance : dict — where it ran (host, pid), its BLAS/OpenMP pools' width (threads, None when not set) and
+        the libraries loaded where it ran (libraries: ``{distribution: version}``; none for a run its worker
+        did not finish)
     trajectory : str — path of its trajectory in the store, "" when none
     traceback : str — for failed runs
     schema_version : int

@@ -33,14 +33,26 @@ def cache(tmp_path, monkeypatch):
     return tmp_path / "cache"
 
 
-def fake(name, version, tmp_path):
+def fake(name, version, tmp_path, numpy=None):
     """Make the environment of ``name`` as this interpreter (``version``: what its ``environment.json`` says is
-    installed); returns the file its interpreter appends each worker's pid to."""
+    installed; ``numpy``: the numpy version its site-packages say they hold, default this process's); returns the
+    file its interpreter appends each worker's pid to.
+
+    Its own dalembert is a stale one (as an environment's editable install of a checkout since deleted), ahead
+    of this one on its path, which raises on import: its workers must import the starting process's code."""
     env = environment(name)
     pids = tmp_path / f"pids-{env.spec.directory}"
+    stale = tmp_path / "stale"
+    os.makedirs(stale / "dalembert", exist_ok=True)
+    (stale / "dalembert" / "__init__.py").write_text("raise ImportError('a stale dalembert was imported')\n")
     os.makedirs(os.path.join(env.path, "bin"))
+    info = os.path.join(env.path, "lib", f"python{sys.version_info[0]}.{sys.version_info[1]}", "site-packages",
+                        f"numpy-{numpy or metadata.version('numpy')}.dist-info")
+    os.makedirs(info)
+    with open(os.path.join(info, "METADATA"), "w") as f:
+        f.write(f"Metadata-Version: 2.1\nName: numpy\nVersion: {numpy or metadata.version('numpy')}\n")
     with open(env.python, "w") as f:
-        f.write(f"#!/bin/sh\necho $$ >> {pids}\nexec {sys.executable} \"$@\"\n")
+        f.write(f"#!/bin/sh\necho $$ >> {pids}\nPYTHONPATH={stale} exec {sys.executable} \"$@\"\n")
     os.chmod(env.python, 0o755)
     with open(os.path.join(env.path, INFO), "w") as f:
         json.dump({"engine": env.spec.name, "requirement": env.spec.requirement, "engine_version": version,
@@ -125,6 +137,64 @@ def test_env_list_and_remove(tmp_path, capsys):
     assert environments() == []
 
 
+def test_a_stale_environment_is_refused_and_listed_naming_the_command_that_remakes_it(tmp_path, capsys):
+    """An environment whose numpy differs from this process's (made before this one's numpy was upgraded) cannot
+    serve its workers' arrays: ``run`` refuses it before anything runs, ``env list`` marks it, both naming
+    ``env create --force``; one at this numpy is not stale."""
+    fake("mujoco==3.6.0", "3.6.0", tmp_path, numpy="1.26.4")
+    fake("mujoco==3.7.0", "3.7.0", tmp_path)
+    assert environment("mujoco==3.6.0").stale() == [f"numpy 1.26.4 there, {metadata.version('numpy')} here"]
+    assert environment("mujoco==3.7.0").stale() == []
+    assert main([*RUN, "--engine", "mujoco==3.6.0", "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert "its environment is stale (numpy 1.26.4 there" in err and "env create --force mujoco==3.6.0" in err, err
+    assert not (tmp_path / "r").exists()
+    assert main(["env", "list"]) == 0
+    out = capsys.readouterr().out
+    assert "stale: numpy 1.26.4 there" in out and "env create --force mujoco==3.6.0" in out
+    assert "--force mujoco==3.7.0" not in out
+
+
+def test_create_force_replaces_an_environment_only_once_the_new_one_is_made(tmp_path, monkeypatch):
+    """``env create --force`` makes a made environment again (the installer faked: no network), the old one kept
+    until the new one is whole, and kept when the install fails."""
+    from dalembert import environments
+
+    fake("mujoco==3.6.0", "3.6.0", tmp_path, numpy="1.26.4")
+    old = environment("mujoco==3.6.0")
+    fail = {"install": False}
+
+    def call(command, what, log):  # venv: a directory; pip: nothing, or a failure; the version: 3.6.0
+        if "venv" in command:
+            os.makedirs(os.path.join(command[-1], "bin"))
+        elif "install" in command and fail["install"]:
+            assert os.path.isfile(os.path.join(old.path, INFO))  # the old one is there while the new one is made
+            raise RuntimeError("env create: installing failed")
+        return "3.6.0\n"
+
+    monkeypatch.setattr(environments, "_call", call)
+    with pytest.raises(ValueError, match="already made"):
+        environments.create("mujoco==3.6.0", tool="pip")
+    fail["install"] = True
+    with pytest.raises(RuntimeError):
+        environments.create("mujoco==3.6.0", tool="pip", force=True)
+    assert old.info()["installer"] == "fake" and old.stale()  # the old one, untouched
+    fail["install"] = False
+    environments.create("mujoco==3.6.0", tool="pip", force=True)
+    assert old.info()["installer"] == "pip" and not os.path.exists(old.path + ".partial")
+
+
+def test_env_list_is_sorted_by_engine_then_version(tmp_path, capsys):
+    for version in ("3.10.0", "3.9.0", "3.2.7"):
+        fake(f"mujoco=={version}", version, tmp_path)
+    fake("exudyn==1.13.6", "1.13.6", tmp_path)
+    assert [name for name, _, _ in environments()] == ["exudyn==1.13.6", "mujoco==3.2.7", "mujoco==3.9.0",
+                                                      "mujoco==3.10.0"]
+    assert main(["env", "list"]) == 0
+    out = capsys.readouterr().out
+    assert out.index("mujoco==3.9.0") < out.index("mujoco==3.10.0")
+
+
 # ---------------------------------------------------------------- workers in their environment
 def _pids(path):
     return {int(p) for p in open(path).read().split()} if os.path.exists(path) else set()
@@ -143,6 +213,11 @@ def test_a_versioned_engines_runs_go_to_its_environments_interpreter_and_resume(
     records = store.records()
     assert sorted(r.engine for r in records) == sorted([name] * 2 + ["mujoco"] * 2)
     assert {r.engine_version for r in records} == {version}
+    # each run names the libraries loaded where it ran: the engine's, numpy's; not dalembert's nor the stdlib's
+    for r in records:
+        libraries = r.provenance["libraries"]
+        assert libraries["mujoco"] == version and libraries["numpy"] == metadata.version("numpy")
+        assert "dalembert" not in libraries and "json" not in libraries
     inside = {r.provenance["pid"] for r in records if r.engine == name}
     outside = {r.provenance["pid"] for r in records if r.engine == "mujoco"}
     assert inside and inside <= _pids(pids) and not outside & _pids(pids)
@@ -225,14 +300,16 @@ def test_a_real_environment_runs_its_engine_version(tmp_path, monkeypatch):
 
 
 # ---------------------------------------------------------------- the report pairs the versions
-def _record(engine, version, integrator, energy, case="free_top_intermediate"):
+def _record(engine, version, integrator, energy, case="free_top_intermediate", absl="2.1.0"):
     from types import SimpleNamespace
 
     from dalembert.settings import Settings
 
+    libraries = {"mujoco": version, "numpy": "2.4.6", "absl-py": absl}
     return SimpleNamespace(engine=engine, engine_version=version, case=case, case_version="v", params={},
                            settings=Settings(integrator, dt=5e-3), errors={"orientation": (1e-3, 1e-3)},
-                           drifts={"energy": energy, "angular_momentum": 1e-3}, key=f"{engine}-{integrator}")
+                           drifts={"energy": energy, "angular_momentum": 1e-3}, key=f"{engine}-{integrator}",
+                           provenance={"pid": 1, "libraries": libraries})
 
 
 def test_the_report_sets_an_engines_versions_side_by_side_and_names_what_changed():
@@ -252,11 +329,30 @@ def test_the_report_sets_an_engines_versions_side_by_side_and_names_what_changed
     rk4 = next(g for k, g in groups.items() if k[4].startswith("rk4"))
     assert [r.engine_version for r in rk4] == ["3.6.0", "3.11.0", "4.0.0"]  # PEP 440 order, not the text's
     md = versions(SimpleNamespace(records=records)).md
-    text = "\n".join(md)
+    (figure,) = [m for m in md if not isinstance(m, str)]  # the changed quantity's panel, not the unchanged rk4's
+    assert "free_top_intermediate, implicitfast" in figure.svg and "rk4" not in figure.svg
+    assert "3.11.0" in figure.svg and figure.name == "versions-mujoco"
+    text = "\n".join(m for m in md if isinstance(m, str))
     assert "implicitfast dt=0.005 energy drift on free_top_intermediate: 3.6.0 0.004, 3.11.0-4.0.0 0.35" in text
     assert "rk4 dt=0.005 energy drift" not in text.split("|")[0]  # 1.5x: under CHANGE_FACTOR, no finding
     assert CHANGE_FACTOR > 1.5
     assert "| mujoco==3.6.0 (3.6.0) | mujoco==3.11.0 (3.11.0) | mujoco (4.0.0) |" in text
+
+
+def test_the_versions_section_names_the_libraries_that_differ_between_an_engines_versions():
+    """A library whose versions differ between the engine's versions is a row (its version per engine name);
+    one at the same version everywhere (numpy) is not, nor one only one name's worker loaded."""
+    from types import SimpleNamespace
+
+    from dalembert.reports.sections.versions import library_rows, versions
+
+    records = [_record("mujoco==3.6.0", "3.6.0", "rk4", 1e-9, absl="2.1.0"),
+               _record("mujoco", "4.0.0", "rk4", 1e-9, absl="2.3.1")]
+    records[1].provenance["libraries"]["mujoco-core"] = "4.0.0"
+    rows = library_rows(records, ["mujoco==3.6.0", "mujoco"])
+    assert rows == [("absl-py", ["2.1.0", "2.3.1"]), ("mujoco", ["3.6.0", "4.0.0"])]
+    text = "\n".join(m for m in versions(SimpleNamespace(records=records)).md if isinstance(m, str))
+    assert "| absl-py | 2.1.0 | 2.3.1 |" in text and "numpy |" not in text
 
 
 def test_a_versioned_engine_never_runs_outside_its_environment(tmp_path):
@@ -309,3 +405,48 @@ def test_mujoco_before_its_spring_and_damper_flags_disables_passive_forces_by_th
     monkeypatch.setattr(mujoco, "mjtDisableBit", old)
     before = mjcf(case.scene, Settings("rk4", dt=5e-3))
     assert 'passive="disable"' in before and "spring=" not in before and "damper=" not in before
+
+
+def test_a_workers_packages_are_every_package_with_a_directory_of_its_own():
+    """``boot.PACKAGES`` names each package pyproject installs from a directory of its own (``package-dir``):
+    one left out would be imported, in an environment's worker, from the environment (or not at all)."""
+    import tomllib
+
+    from dalembert.harness.boot import PACKAGES, sources
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    with open(os.path.join(root, "pyproject.toml"), "rb") as f:
+        assert set(PACKAGES) == set(tomllib.load(f)["tool"]["setuptools"]["package-dir"])
+    import dalembert.reference
+
+    assert sources()["dalembert.reference"] == os.path.dirname(os.path.abspath(dalembert.reference.__file__))
+
+
+def test_an_integrator_an_older_version_lacks_is_refused_with_the_reason(monkeypatch):
+    """MuJoCo's ``discrete`` integrator arrived in 3.13.0 (3.12.0's MJCF parser rejects it): a run of it at 3.12.0
+    is refused with the reason, at 3.13.0 it runs, and the other integrators run at either."""
+    from dalembert.adapters import get_adapter
+    from dalembert.case import load_cases
+    from dalembert.settings import Settings
+
+    adapter = get_adapter("mujoco")
+    scene = load_cases()["free_top"]().scene
+    monkeypatch.setattr(type(adapter), "version", lambda self: "3.12.0")
+    why = adapter.unsupported(scene, Settings("discrete", dt=5e-3))
+    assert "mujoco 3.12.0 has no 'discrete' integrator" in why and "mujoco>=3.13" in why
+    assert adapter.unsupported(scene, Settings("implicitfast", dt=5e-3)) is None
+    monkeypatch.setattr(type(adapter), "version", lambda self: "3.13.0")
+    assert adapter.unsupported(scene, Settings("discrete", dt=5e-3)) is None
+
+
+def test_a_runs_libraries_name_each_loaded_distribution_once_found():
+    """The libraries loaded here, by distribution: Pinocchio's ``pin`` though its package lives inside cmeel's
+    prefix folder (not a top-level name of its own), and of the distributions sharing MuJoCo's folder only those
+    whose files are loaded (``mujoco-mjx`` only once ``mujoco.mjx`` is imported)."""
+    pytest.importorskip("pinocchio")
+    from dalembert.harness.execute import _libraries
+
+    libraries = _libraries()
+    assert libraries["pin"] == metadata.version("pin") and libraries["mujoco"] == mujoco.__version__
+    assert ("mujoco-mjx" in libraries) == ("mujoco.mjx" in sys.modules)
+    assert "dalembert" not in libraries and "json" not in libraries

@@ -105,10 +105,12 @@ class ExudynAdapter(Adapter):
     # ball joints and welds only with joints=redundant, loops only with implicit solvers (see ``unsupported``)
     # contact: sphere-sphere and sphere-plane connectors, implicit solvers only (``contact``, ``contact.why_not``)
     effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS | CONTACT_EFFECTS
-    # Measured in an engine environment: Exudyn 1.11.0 (the release before 1.13 on the index) has neither
-    # ``SimulationSettings.solution`` nor ``exudyn.HT``, which every run here uses; 1.13.6 runs.
+    # Measured in an engine environment: Exudyn 1.11.0 (the release before 1.13 on the index; no 1.12 has a wheel)
+    # has neither ``SimulationSettings.solution`` nor ``exudyn.HT``, and its markers take no ``localHT`` (a
+    # marker's frame would move into every joint's rotationMarker0/1: a port, not a shim); 1.13.6 runs.
     supported_versions = ">=1.13"
-    unsupported_versions_why = "before 1.13 Exudyn has no SimulationSettings.solution and no exudyn.HT, which it uses"
+    unsupported_versions_why = ("before 1.13 Exudyn has no SimulationSettings.solution, no exudyn.HT and no marker "
+                                "frames (localHT), which it uses")
     options = {
         **MODEL_OPTIONS,  # node, joints
         "spectral_radius": Option(minimum=0.0, maximum=1.0, only=("generalized-alpha",),

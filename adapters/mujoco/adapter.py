@@ -92,6 +92,8 @@ class MujocoAdapter(Adapter):
     # older name the passive-force flags otherwise (``mjcf._disabled_names``: a shim).
     supported_versions = ">=3.2"
     unsupported_versions_why = "releases before 3.2 were never run with this adapter's MJCF and API"
+    # (measured: 3.12.0's MJCF parser rejects integrator="discrete" as an invalid keyword; 3.13.0 has mjINT_DISCRETE)
+    integrator_versions = {"discrete": (">=3.13", "MuJoCo's discrete integrator arrived in 3.13.0")}
 
     def version(self):
         import mujoco

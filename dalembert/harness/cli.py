@@ -223,6 +223,8 @@ def _parser():
     en.add_argument("engine", nargs="?", default=None, help="ENGINE==VERSION (a PEP 440 requirement), e.g. "
                                                             "mujoco==3.6.0; none for list")
     en.add_argument("--verbose", "-v", action="store_true", help="print each install command, and each path")
+    en.add_argument("--force", action="store_true", help="create: make an existing environment again (one that "
+                                                          "env list says is stale), replacing it once made")
 
     v = sub.add_parser("validate", help="run every case (not tagged hard) with the reference solver against its truth",
                        epilog="example:\n  dalembert validate --case pivoted_rod",

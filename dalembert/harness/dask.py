@@ -14,7 +14,7 @@ import sys
 from dataclasses import asdict
 
 from dalembert.environments import is_versioned, require
-from dalembert.harness import threads
+from dalembert.harness import boot, threads
 from dalembert.harness.execute import Timing, unfinished
 from dalembert.harness.matrix import RunSpec
 from dalembert.harness.pool import DEFAULT_TIMEOUT_S, finish, stopped_from_outside, write_table
@@ -61,17 +61,16 @@ def execute_isolated(spec_json, timing_json, truth_npz, timeout, hosts=None):
     ``tasks_per_host``), as a local pool's workers do.
     """
     spec = RunSpec.from_json(spec_json)
-    python, environment = sys.executable, None
+    command, environment = [sys.executable, "-m", "dalembert.harness.worker"], None
     if is_versioned(spec.engine):  # its environment's interpreter, on this worker's host (ValueError: none there)
-        environment = require(spec.engine)
-        python, environment = environment.python, environment.path
+        made = require(spec.engine)
+        command, environment = boot.command(made.python, "run"), made.path
     payload = pickle.dumps({"spec": spec_json, "timing": timing_json, "truth": truth_npz, "parent": os.getpid(),
                             "environment": environment})
     n = _threads(hosts or {})
     env = None if n is None else {**os.environ, **{var: str(n) for var in threads.VARIABLES}}
     try:
-        proc = subprocess.run([python, "-m", "dalembert.harness.worker"], input=payload, capture_output=True,
-                              timeout=timeout, env=env)
+        proc = subprocess.run(command, input=payload, capture_output=True, timeout=timeout, env=env)
     except subprocess.TimeoutExpired:
         return unfinished(spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"), None
     stopped = stopped_from_outside(spec, proc.returncode)

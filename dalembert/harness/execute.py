@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import os
 import socket
+import sys
 import time
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -59,6 +60,62 @@ def _record(spec, status, message="", errors=None, drifts=None, tolerances=None,
                      **fields)
 
 
+def _libraries():
+    """The version of every library loaded in this process (``{distribution: version}``): the engine's, what its
+    adapter and the engine import, numpy's and scipy's — every public top-level module in ``sys.modules`` outside
+    the standard library and dalembert (the record's ``adapter_version``), by the distribution that installs it.
+    In a forked worker that includes what the parent had loaded; in an engine environment's worker, only what
+    this worker imported."""
+    from importlib import metadata
+
+    global _DISTRIBUTIONS
+    if _DISTRIBUTIONS is None:  # (reads every installed distribution's file list: once per process)
+        _DISTRIBUTIONS = metadata.packages_distributions()
+    modules = {name: getattr(module, "__file__", None) for name, module in list(sys.modules.items())}
+    # a private top-level name is an import hook or a compiled helper of a public one (``_distutils_hack``)
+    tops = ({name.partition(".")[0] for name in modules} - set(sys.stdlib_module_names) - {"dalembert"}
+            - {name for name in modules if name.startswith("_")})
+    out = {}
+    for top in tops:
+        files = {os.path.realpath(f) for name, f in modules.items() if f and name.partition(".")[0] == top}
+        dists = _DISTRIBUTIONS.get(top) or sorted({d for f in files for folder in _folders(f)
+                                                   for d in _DISTRIBUTIONS.get(folder, ())})
+        if len(dists) > 1:  # one folder, several distributions (mujoco's and mujoco-mjx's): those of a loaded file
+            dists = [d for d in dists if files & _files(d)]
+        for dist in dists:
+            try:
+                out[dist] = metadata.version(dist)
+            except metadata.PackageNotFoundError:  # (a name packages_distributions read but no metadata answers to)
+                continue
+    return dict(sorted(out.items()))
+
+
+def _folders(path):
+    """The top folder of file ``path`` under each ``sys.path`` entry that holds it: a package installed inside
+    another folder (cmeel's ``cmeel.prefix/lib/.../site-packages/pinocchio``, Pinocchio's) is known to
+    ``packages_distributions`` by that folder, not by its own name."""
+    out = set()
+    for entry in sys.path:
+        entry = os.path.realpath(entry or ".")
+        if path.startswith(entry + os.sep):
+            out.add(os.path.relpath(path, entry).split(os.sep)[0])
+    return out
+
+
+def _files(distribution):
+    """The real paths of the files ``distribution`` installed (a frozenset; read once per process)."""
+    from importlib import metadata
+
+    if distribution not in _FILES:
+        dist = metadata.distribution(distribution)
+        _FILES[distribution] = frozenset(os.path.realpath(dist.locate_file(p)) for p in dist.files or ())
+    return _FILES[distribution]
+
+
+# ``importlib.metadata.packages_distributions()``, read once per process (``_libraries``), and ``_files``' answers.
+_DISTRIBUTIONS, _FILES = None, {}
+
+
 def _pool_width():
     """The width this process's BLAS and OpenMP pools were given (``harness.threads``), or None."""
     width = os.environ.get(VARIABLES[0])
@@ -78,12 +135,8 @@ def _load():
         return float("nan")
 
 
-def execute(spec, timing=Timing(), truth=None, concurrent=1):
-    """Run ``spec`` in this process: ``(RunRecord, trajectory npz or None)``. Never raises.
-
-    ``truth``: the case's truth trajectory at its sample times (computed here when None);
-    ``concurrent``: runs in flight when this one started, itself included (stored with its cost).
-    """
+def _execute(spec, timing, truth, concurrent):
+    """``execute``'s run, without its libraries."""
     from dalembert import invariants
     from dalembert.adapters import get_adapter
     from dalembert.adapters.registry import adapter_distribution
@@ -157,6 +210,21 @@ def execute(spec, timing=Timing(), truth=None, concurrent=1):
                        checks=summary.checks, cost=cost, **found), npz
     except Exception as e:  # a failure is data
         return _record(spec, "failed", f"{type(e).__name__}: {e}", traceback=traceback.format_exc(), **found), None
+
+
+def execute(spec, timing=Timing(), truth=None, concurrent=1):
+    """Run ``spec`` in this process: ``(RunRecord, trajectory npz or None)``. Never raises.
+
+    ``truth``: the case's truth trajectory at its sample times (computed here when None);
+    ``concurrent``: runs in flight when this one started, itself included (stored with its cost). The record's
+    ``provenance`` names the versions of the libraries loaded where it ran (``libraries``: ``_libraries``).
+    """
+    record, npz = _execute(spec, timing, truth, concurrent)
+    try:
+        libraries = _libraries()
+    except Exception as e:  # noqa: BLE001 - a broken distribution's metadata must not lose the run
+        libraries = {"(unread)": f"{type(e).__name__}: {e}"}
+    return replace(record, provenance={**record.provenance, "libraries": libraries}), npz
 
 
 def _truth(case):

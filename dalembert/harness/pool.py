@@ -24,8 +24,8 @@ and group instead of once per run, where plain order would hand a sweep's runs t
 The matrix's runs and records are the same; only who runs which, and when, changes.
 
 Engine environments: the runs of a versioned engine (``mujoco==3.6.0``, ``dalembert.environments``) go to
-workers started from that environment's interpreter, a subprocess (``_Interpreter``: ``python -m``-like, the
-pipe's socket passed as a file descriptor) that serves the same protocol and sets up the same lifetime
+workers started from that environment's interpreter, a subprocess (``_Interpreter``: ``dalembert.harness.boot``,
+on this process's dalembert code; the pipe's socket passed as a file descriptor) that serves the same protocol and sets up the same lifetime
 (``die_with_parent``). A worker takes only runs of its interpreter; a free worker with none left in the
 queue ends and a worker for the next run's interpreter starts in its place, so ``jobs`` workers run at
 most. Timing, timeouts, deaths and stops from outside are told and stored as for any worker.
@@ -153,15 +153,14 @@ class _Interpreter:
     ``multiprocessing.Process`` the pool uses (``kill``, ``join``, ``is_alive``, ``exitcode``).
 
     ``fd``: the worker's end of the pipe (a socket), passed to it; the worker serves ``_serve``'s protocol on
-    it (``dalembert.harness.worker.serve``). The checkout on the path is left out (``''``): the worker imports
-    the dalembert installed in its environment, the same checkout installed editable."""
+    it (``dalembert.harness.worker.serve``), on this process's dalembert code (``dalembert.harness.boot``)."""
 
     def __init__(self, python, fd, parent, n_threads, engines):
-        boot = ("import sys; sys.path[:] = [p for p in sys.path if p not in ('', '.')]; "
-                "from dalembert.harness.worker import serve; serve()")
+        from dalembert.harness.boot import command
+
         args = json.dumps({"fd": fd, "parent": parent, "threads": n_threads, "engines": [list(e) for e in engines],
                            "environment": os.path.dirname(os.path.dirname(python))})  # (python: ENV/bin/python)
-        self.popen = subprocess.Popen([python, "-c", boot, args], pass_fds=(fd,), stdin=subprocess.DEVNULL)
+        self.popen = subprocess.Popen([*command(python, "serve"), args], pass_fds=(fd,), stdin=subprocess.DEVNULL)
 
     @property
     def exitcode(self):

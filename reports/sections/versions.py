@@ -1,6 +1,8 @@
 """One engine at several versions, side by side: per case, settings and quantity, each version's error or
 drift (the runs of ``mujoco==3.6.0``, ``mujoco==3.11.0`` and ``mujoco`` in one store, ``dalembert.environments``),
-and a line for each quantity that changed by more than ``CHANGE_FACTOR`` between two versions."""
+a line for each quantity that changed by more than ``CHANGE_FACTOR`` between two versions, a figure of those
+quantities against the version (``dalembert.reports.versions_figure``), and the libraries whose versions differ
+between the engine's versions (each run's ``provenance["libraries"]``, recorded in its worker)."""
 
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ from dalembert.reports.names import settings_text
 from dalembert.reports.page import Part
 from dalembert.reports.tables import Cell, Table, num
 
-__all__ = ["versions", "version_groups", "QUANTITIES", "CHANGE_FACTOR"]
+__all__ = ["versions", "version_groups", "library_rows", "QUANTITIES", "CHANGE_FACTOR", "MAX_PANELS"]
 
 # What the table shows per run: (label, where in the record, the key there). The orientation error says where
 # the body ends; the energy and angular momentum drifts (max relative change) say what the integrator conserves.
@@ -23,6 +25,8 @@ QUANTITIES = (("orientation error (rad)", "errors", "orientation"), ("energy dri
 CHANGE_FACTOR = 10.0
 # A table of more rows than this (ten settings' three quantities) is folded, its summary line shown.
 SHOWN_ROWS = 30
+# The figure draws at most this many panels (four rows of four), the largest changes first; the table has all.
+MAX_PANELS = 16
 
 
 def _engine(name):
@@ -81,6 +85,50 @@ def _changes(group, label):
     return ", ".join(f"{a}{'' if a == b else '-' + b} {text}" for a, b, text in spans)
 
 
+def _figure(mine, names, versions_of):
+    """The SVG of one engine's quantities that changed by more than ``CHANGE_FACTOR`` between its versions (a panel
+    per case, integrator and quantity, a line per setting), and how many such panels there were; None when none."""
+    from dalembert.reports.versions_figure import versions_figure
+
+    panels = {}
+    for (_, case, _, _, label), group in mine.items():
+        by = {r.engine: r for r in group}
+        for quantity, where, key in QUANTITIES:
+            values = [_value(by[n], where, key) if n in by else math.nan for n in names]
+            finite = [v for v in values if math.isfinite(v) and v > 0]
+            if len(finite) < 2 or max(finite) / min(finite) < CHANGE_FACTOR:
+                continue
+            panel = panels.setdefault((case, group[0].settings.integrator, quantity),
+                                      {"lines": {}, "change": 1.0})
+            panel["lines"][label] = values
+            panel["change"] = max(panel["change"], max(finite) / min(finite))
+    if not panels:
+        return None, 0
+    shown = sorted(panels.items(), key=lambda kv: -kv[1]["change"])[:MAX_PANELS]
+    order = [q for q, _, _ in QUANTITIES]
+    shown.sort(key=lambda kv: (kv[0][0], kv[0][1], order.index(kv[0][2])))
+    return versions_figure([versions_of[n] for n in names],
+                           [{"title": f"{case}, {integrator}", "ylabel": quantity, "lines": p["lines"]}
+                            for (case, integrator, quantity), p in shown]), len(panels)
+
+
+def library_rows(records, names):
+    """The libraries whose versions differ between engine names ``names`` (each name's runs'
+    ``provenance["libraries"]``): ``[(library, [version or "" per name])]``, by library. A library one name's
+    worker did not load is left out unless two names that loaded it differ (a forked worker holds what its
+    parent had loaded, which is the process's history, not the engine's)."""
+    loaded = {}
+    for r in records:
+        if r.engine in names and r.engine not in loaded and r.provenance.get("libraries"):
+            loaded[r.engine] = r.provenance["libraries"]
+    out = []
+    for library in sorted({lib for libs in loaded.values() for lib in libs}):
+        versions = [loaded.get(n, {}).get(library, "") for n in names]
+        if len({v for v in versions if v}) > 1:
+            out.append((library, versions))
+    return out
+
+
 def versions(rep):
     """The versions section (a ``Part``; empty when no engine ran at two versions)."""
     part = Part()
@@ -95,9 +143,11 @@ def versions(rep):
             if said:
                 lines.append(f"{engine} {label} {quantity} on {case}: {said}")
     part.para("The same case, integrator and step run by each version of an engine (each in its environment: "
-              "dalembert env create). " + (f"Changed by more than {CHANGE_FACTOR:g}x between versions: "
-                                           + "; ".join(lines) + "." if lines else
+              "dalembert env create). " + (f"Changed by more than {CHANGE_FACTOR:g}x between versions (each span of "
+                                           "versions with its value):" if lines else
                                            f"No quantity changed by more than {CHANGE_FACTOR:g}x between versions."))
+    if lines:
+        part.items(lines)
     for engine in sorted({k[0] for k in groups}):
         mine = {k: g for k, g in groups.items() if k[0] == engine}
         names = sorted({r.engine for g in mine.values() for r in g},
@@ -111,6 +161,19 @@ def versions(rep):
             for quantity, where, key in QUANTITIES:
                 rows.append([Cell(case), Cell(label, wrap=True), Cell(quantity)]
                             + [num(_value(by[n], where, key)) if n in by else num(None) for n in names])
+        figure, n_panels = _figure(mine, names, versions_of)
+        if figure:
+            more = f" (the {MAX_PANELS} that changed most of {n_panels}; the table has all)" if n_panels > MAX_PANELS \
+                else ""
+            part.figure(figure, f"{engine}: each quantity that changed by more than {CHANGE_FACTOR:g}x between "
+                        f"versions{more}, against the version (log scale; a gap: no finished run, or zero), one line "
+                        "per setting.", f"versions-{engine}")
         part.table(Table(head, rows), collapsed=f"{engine}: {len(names)} versions, {len(mine)} settings"
                    if len(rows) > SHOWN_ROWS else None)
+        libraries = library_rows([r for g in mine.values() for r in g], names)
+        if libraries:
+            part.para(f"{engine}: the libraries loaded in the workers whose versions differ between its versions "
+                      "(each run records the versions of every library loaded where it ran).")
+            part.table(Table(["library"] + head[3:], [[Cell(lib)] + [Cell(v or "-") for v in versions]
+                                                     for lib, versions in libraries]))
     return part

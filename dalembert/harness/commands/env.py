@@ -9,9 +9,10 @@ import sys
 __all__ = ["run", "main"]
 
 
-def run(action, engine=None, verbose=False):
+def run(action, engine=None, verbose=False, force=False):
     """Do ``action`` (``create``, ``list``, ``remove``) for ``engine`` (``mujoco==3.6.0``; none for ``list``);
-    returns the exit status. ValueError naming the engine for a bad name, a missing or an existing environment."""
+    returns the exit status. ``force``: ``create`` makes an existing environment again (a stale one). ValueError
+    naming the engine for a bad name, a missing or an existing environment."""
     from dalembert import environments
     from dalembert.adapters import get_adapter
     from dalembert.harness.commands.console import fail
@@ -21,24 +22,27 @@ def run(action, engine=None, verbose=False):
         if not made:
             print("no engine environments (make one with: dalembert env create ENGINE==VERSION)")
         for name, info, path in made:
+            stale = environments.Environment(environments.parse_engine(name), path).stale()
             print(f"{name:<24} {info['engine_version']:<10} python {info['python']}, {info['installer']}, "
-                  f"{info['created']}" + (f"\n    {path}" if verbose else ""))
+                  f"{info['created']}" + (f"\n    {path}" if verbose else "")
+                  + (f"\n    stale: {'; '.join(stale)} — remake it: dalembert env create --force {name}"
+                     if stale else ""))
         return 0
     if action == "remove":
         env = environments.remove(engine)
         print(f"removed {env.spec.name} ({env.path})")
         return 0
     env = environments.environment(engine)
-    if env.exists:
+    if env.exists and not force:
         raise ValueError(f"env create {engine}: already made, at {env.path} (engine {env.engine_version}) — use it, "
-                         f"or remove it first: dalembert env remove {env.spec.name}")
+                         f"or make it again: dalembert env create --force {env.spec.name}")
     tool = environments.installer()
     print(f"dalembert: making the environment of {engine} with {'uv' if tool == 'uv' else 'venv and pip'} "
           "(this reaches the package index)", file=sys.stderr)
     try:
         env = environments.create(engine, log=(lambda line: print(f"  {line}", file=sys.stderr)) if verbose
                                   else (lambda line: None), tool=tool,
-                                  problem=get_adapter(env.spec.engine).version_problem)
+                                  problem=get_adapter(env.spec.engine).version_problem, force=force)
     except RuntimeError as e:  # the installer's own failure (no such version, no network): its output said
         return fail(str(e))
     print(f"made {env.spec.name}: {env.spec.distribution} {env.engine_version} at {env.path}")
@@ -50,4 +54,5 @@ def main(args):
     if args.env_action != "list" and args.engine is None:
         raise ValueError(f"env {args.env_action}: no engine — write e.g. dalembert env {args.env_action} "
                          "mujoco==3.6.0")
-    return run(args.env_action, getattr(args, "engine", None), getattr(args, "verbose", False))
+    return run(args.env_action, getattr(args, "engine", None), getattr(args, "verbose", False),
+               getattr(args, "force", False))
