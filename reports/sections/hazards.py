@@ -9,6 +9,7 @@ from dalembert.reports.findings import CLOSURE_GROWTH, DISAGREEMENT_FACTOR, ENER
 from dalembert.reports.hazards import listed
 from dalembert.reports.page import Part
 from dalembert.reports.tables import escape_html, escape_md
+from dalembert.refusal import manifest_refusals
 
 __all__ = ["hazards", "HAZARD_TITLES"]
 
@@ -71,6 +72,15 @@ def hazards(rep):
             rest_md += [f"#### {escape_md(rep.titles[f])}", ""] + md
             for h in folded:
                 counts[h.kind] = counts.get(h.kind, 0) + 1
+    # a case every selected engine refused has no run, so no findings of its own: its refusals are listed here
+    run_cases = {(f.case.name, f.case.version) for f in rep.found}
+    orphans = [r for r in manifest_refusals(rep.manifest) if (r.case, r.case_version) not in run_cases]
+    for r in sorted(orphans, key=lambda r: (r.case, r.params, r.engine, r.reason)):
+        params = ", ".join(f"{k}={v}" for k, v in r.params)
+        text = f"{r.engine} cannot run {r.case}{f' ({params})' if params else ''} with {r.what}: {r.reason}"
+        rest_html.append(f"<ul><li>{escape_html(text)}</li></ul>")
+        rest_md += [f"- {escape_md(text)}", ""]
+        counts["unsupported"] = counts.get("unsupported", 0) + 1
     if counts:
         summary = ("The rest: " + ", ".join(f"{HAZARD_TITLES[k].lower()} ({n})" for k, n in
                                             sorted(counts.items(), key=lambda kv: HAZARDS.index(kv[0])))
