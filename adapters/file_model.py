@@ -36,12 +36,14 @@ import numpy as np
 
 from dalembert.adapters.base import Option, Prepared
 
-__all__ = ["FileOption", "FILE_OPTIONS", "FILE_OPTION_NAMES", "FILE_EFFECTS", "FileJoint", "FilePrepared",
+__all__ = ["SCENE", "FileOption", "FILE_OPTIONS", "FILE_OPTION_NAMES", "FILE_EFFECTS", "FileJoint", "FilePrepared",
            "model_file", "effects_on", "why_not", "urdf_joints", "locked_joints", "bare_urdf", "scene_subtree_masses",
            "check_same_model", "joint_columns", "trajectory", "MASS_MATCH_REL_TOL", "SUFFIXES"]
 
 # The files an engine reads here: URDF (every engine) and MJCF (MuJoCo's own format).
 SUFFIXES = (".urdf", ".xml")
+# model_file's value for "build the scene" (its default): a sweep model_file=scene,PATH puts both in one store.
+SCENE = "scene"
 FILE_EFFECTS = ("on", "off")
 # The engine's subtree masses against the scene's: the same file's inertials summed in another order (and a
 # fixed link merged by another reader) agree to roundoff; a different robot with the same link names (UR5 and
@@ -54,11 +56,13 @@ class FileOption(Option):
     """An option whose value is the path of a model file (``SUFFIXES``); checked to exist before anything runs."""
 
     def allowed(self):
-        return "the path of the robot's .urdf (or MuJoCo MJCF .xml) file"
+        return f"{SCENE!r} (the scene built) or the path of the robot's .urdf (or MuJoCo MJCF .xml) file"
 
     def problem(self, name, value, integrator):
         if self.only and integrator not in self.only:
             return super().problem(name, value, integrator)
+        if value == SCENE:
+            return None
         if not isinstance(value, str) or not value.lower().endswith(SUFFIXES):
             return f"options.{name}: {value!r} is not a .urdf or .xml file — give {self.allowed()}"
         if not os.path.isfile(value):
@@ -71,7 +75,7 @@ class FileOption(Option):
 
 
 FILE_OPTIONS = {
-    "model_file": FileOption(default=None, description="the engine reads this model file itself (its own URDF/MJCF "
+    "model_file": FileOption(default=SCENE, description="the engine reads this model file itself (its own URDF/MJCF "
                              "reader) instead of building the scene; the file must be the case's"),
     "file_effects": Option(FILE_EFFECTS, FILE_EFFECTS[0], "with model_file: the file's damping, friction, armature "
                            "and limits as the engine reads them (on), or zeroed after the reading (off)"),
@@ -80,8 +84,9 @@ FILE_OPTION_NAMES = tuple(FILE_OPTIONS)
 
 
 def model_file(settings):
-    """The file the run's engine reads itself, or None (the scene is built)."""
-    return settings.options.get("model_file")
+    """The file the run's engine reads itself, or None (the scene is built: ``SCENE``, the default)."""
+    value = settings.options.get("model_file", SCENE)
+    return None if value == SCENE else value
 
 
 def effects_on(settings):
@@ -242,7 +247,7 @@ class FilePrepared(Prepared):
 def effects_summary(values, unit, applied):
     """One line on an effect the engine read: ``{joint: value}`` (0 or None: none) -> ``"damping on 7 of 9 joints,
     0.003 to 0.3 N m s/rad, applied"``."""
-    given = {k: v for k, v in values.items() if v}
+    given = {k: v for k, v in values.items() if v and np.isfinite(v)}  # inf: URDF's "no limit"
     if not given:
         return "none"
     lo, hi = min(given.values()), max(given.values())

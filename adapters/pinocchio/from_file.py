@@ -71,9 +71,10 @@ def _build(scene, path):
 def _effects(model, on):
     names = [model.names[i] for i in range(1, model.njoints)]
     v = [model.joints[i].idx_v for i in range(1, model.njoints)]
-    lower, upper = model.lowerPositionLimit, model.upperPositionLimit
-    q = [model.joints[i].idx_q for i in range(1, model.njoints)]
-    finite = [n for n, iq in zip(names, q) if np.isfinite(lower[iq]) and lower[iq] > -1e10]
+    lower = model.lowerPositionLimit
+    joints = [model.joints[i] for i in range(1, model.njoints)]
+    # a continuous joint (nq = 2: cos, sin) has no limits; Pinocchio's bounds on its (cos, sin) are not the file's
+    finite = [n for n, j in zip(names, joints) if j.nq == 1 and np.isfinite(lower[j.idx_q]) and lower[j.idx_q] > -1e10]
     return {
         "damping": file_model.effects_summary({n: float(model.damping[i]) for n, i in zip(names, v)}, "N m s/rad",
                                               "read, not applied (pin.aba takes none)"),

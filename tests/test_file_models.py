@@ -1,0 +1,130 @@
+"""Engines reading the robot's file themselves (``--option model_file=PATH``; adapters/file_model.py and each
+engine's ``from_file``): without the file's effects each reading moves as the scene does, with them the engine's
+own effects show (and its audit says which), and a file that is not the scene's, or a request that cannot be
+run, is refused naming the option and the fix."""
+
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+from dalembert import Settings
+from dalembert.adapters import file_model, get_adapter
+from dalembert.models import read_urdf
+
+from engine_runs import installed
+from test_models_urdf import ARM, _write
+
+ENGINES = [e for e in ("mujoco", "pinocchio", "drake") if installed(e)]
+# Each engine's fixed-step method of order four or more (Drake has no fixed-step RK4: its RK5).
+INTEGRATOR = {"mujoco": "rk4", "pinocchio": "rk4", "drake": "rk5"}
+DT = 1e-3
+TIMES = np.linspace(0.0, 1.0, 101)
+# The same engine and integrator on the scene it built and on the file it read, effects off: the same motion
+# up to the roundoff of the readers' mass properties (measured 9e-16 to 4.4e-15 rad over the 1-s swing below).
+SAME_MOTION_TOL = 1e-11
+# The file's shoulder damping (0.5 N m s/rad) on the 2-kg arm's 1-s swing (4.8 rad peak to peak): 1.3 rad apart
+# from the scene's in MuJoCo (with its friction loss, 0.1 N m) and Drake (measured); near roundoff would mean
+# the damping was not applied.
+DAMPING_SHOWS = 1e-2
+POSE = {"shoulder": 0.7}
+
+
+# The test arm with its transmission typed as ROS writes it (Drake's parser refuses an untyped one).
+TYPED_ARM = ARM.replace('<transmission name="t1">',
+                        '<transmission name="t1"><type>transmission_interface/SimpleTransmission</type>')
+
+
+@pytest.fixture()
+def arm(tmp_path):
+    """``(path, scene)``: the test arm (a continuous shoulder with damping and friction, a massless slider the
+    scene drops) with its base fixed."""
+    path = _write(tmp_path, TYPED_ARM)
+    return path, read_urdf(path, positions=POSE).scene
+
+
+def _run(engine, scene, **options):
+    adapter = get_adapter(engine)
+    settings = Settings(INTEGRATOR[engine], dt=DT, options=options)
+    adapter.check(scene, TIMES, settings)
+    assert adapter.unsupported(scene, settings) is None
+    prepared = adapter.prepare(scene, TIMES, settings)
+    outcome = adapter.run(prepared)
+    return outcome.trajectory, adapter.audit(prepared, outcome)
+
+
+def _angle(traj):
+    return traj.joints["upper"].q[:, 0]
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_without_the_file_s_effects_the_engine_s_reading_moves_as_its_scene_does(engine, arm):
+    path, scene = arm
+    built, _ = _run(engine, scene)
+    read, audit = _run(engine, scene, model_file=path, file_effects="off")
+    assert np.abs(_angle(read) - _angle(built)).max() < SAME_MOTION_TOL
+    assert np.ptp(_angle(read)) > 1.0  # it swings (from 0.7 rad, under gravity)
+    for name, body in built.bodies.items():  # body terms through the scene's kinematics
+        assert np.abs(read.bodies[name].position - body.position).max() < SAME_MOTION_TOL
+    assert audit["file_effects"] == "off" and audit["locked"] == ["marker_slide"]  # the massless slider, fixed
+    assert "arm.urdf" in audit["model_source"] and audit["gravity"] == scene.gravity
+    assert not any(k.startswith("reaction_force") for k in read.extras)  # the scene's, not the engine's: left out
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_with_the_file_s_effects_the_engine_s_own_reading_shows_and_its_audit_says_so(engine, arm):
+    """MuJoCo and Drake apply the file's joint damping; Pinocchio reads it but its ``aba`` applies none."""
+    path, scene = arm
+    built, _ = _run(engine, scene)
+    read, audit = _run(engine, scene, model_file=path)
+    gap = np.abs(_angle(read) - _angle(built)).max()
+    damping = audit["file_effects_read"]["damping"]
+    assert "0.5" in damping and audit["file_effects"] == "on"
+    if engine == "pinocchio":
+        assert gap < SAME_MOTION_TOL and "not applied" in damping
+    else:
+        assert gap > DAMPING_SHOWS and "applied" in damping and "not applied" not in damping
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_file_that_is_not_the_scene_s_is_refused_naming_the_option(engine, arm, tmp_path):
+    path, scene = arm
+    heavier = _write(tmp_path, TYPED_ARM.replace('<mass value="1.5"/>', '<mass value="1.6"/>'), "heavier.urdf")
+    with pytest.raises(ValueError, match=r"options.model_file: .* kg below link 'upper' from heavier.urdf.*give the "
+                                         r"file the case's scene was read from"):
+        _run(engine, scene, model_file=heavier)
+    renamed = _write(tmp_path, TYPED_ARM.replace('"upper"', '"forearm"'), "renamed.urdf")
+    with pytest.raises(ValueError, match=r"options.model_file: .* no joint moving link 'upper' from renamed.urdf"):
+        _run(engine, scene, model_file=renamed)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_requests_that_cannot_run_are_refused_before_anything_runs(engine, arm, tmp_path):
+    path, scene = arm
+    adapter = get_adapter(engine)
+    settings = lambda **o: Settings(INTEGRATOR[engine], dt=DT, options=o)  # noqa: E731
+    with pytest.raises(ValueError, match=r"options.model_file: no file .*missing.urdf.*--param model"):
+        adapter.check(scene, TIMES, settings(model_file=str(tmp_path / "missing.urdf")))
+    with pytest.raises(ValueError, match=r"options.model_file: .*robot.obj.* is not a .urdf or .xml file"):
+        adapter.check(scene, TIMES, settings(model_file="robot.obj"))
+    assert adapter.unsupported(scene, settings(file_effects="off")).startswith(
+        "options.file_effects: off only with options.model_file — give model_file=PATH")
+    adapter.check(scene, TIMES, settings(model_file=file_model.SCENE))  # the default, spelt out: the scene
+    free = read_urdf(path, base="free").scene
+    assert "a floating base read from the file is not mapped" in adapter.unsupported(free, settings(model_file=path))
+
+
+def test_the_file_as_the_engines_read_it_has_no_geometry_and_the_scene_s_locked_joints_fixed(tmp_path):
+    path = _write(tmp_path, ARM.replace("<link name=\"tool\"/>", "<link name=\"tool\"><visual><geometry><mesh "
+                                        "filename=\"package://arm/tool.stl\"/></geometry></visual></link>"))
+    scene = read_urdf(path).scene
+    joints = file_model.urdf_joints(path)
+    assert [(j.name, j.kind, j.child) for j in joints][:2] == [("shoulder", "continuous", "upper"),
+                                                               ("tool_mount", "fixed", "tool")]
+    assert file_model.locked_joints(scene, joints) == ["marker_slide"]
+    root = ET.fromstring(file_model.bare_urdf(path, ["marker_slide"]))
+    assert not list(root.iter("visual")) and not list(root.iter("collision"))
+    types = {j.get("name"): j.get("type") for j in root.findall("joint")}
+    assert types == {"shoulder": "continuous", "tool_mount": "fixed", "weight_mount": "fixed", "marker_slide": "fixed"}
+    masses = file_model.scene_subtree_masses(scene)
+    assert masses["upper"] == pytest.approx(2.0)  # the arm, its weight merged in (1.5 + 0.5 kg)
