@@ -128,3 +128,32 @@ def test_the_file_as_the_engines_read_it_has_no_geometry_and_the_scene_s_locked_
     assert types == {"shoulder": "continuous", "tool_mount": "fixed", "weight_mount": "fixed", "marker_slide": "fixed"}
     masses = file_model.scene_subtree_masses(scene)
     assert masses["upper"] == pytest.approx(2.0)  # the arm, its weight merged in (1.5 + 0.5 kg)
+
+
+def _record(key, engine, integrator, dt, error, status="ok", **options):
+    from dalembert.record import Cost, RunRecord
+
+    audit = {"file_effects_read": {"damping": f"read by {engine}"}} if options.get("model_file", "scene") != "scene" \
+        else {}
+    return RunRecord(key, "robot_arm", "v1", engine, Settings(integrator, dt, options=options), status=status,
+                     t_final=2.0, errors={"joint": (error, error)}, audit=audit, cost=Cost(wall_s_median=0.1))
+
+
+def test_the_report_pairs_each_reading_of_a_file_with_its_engine_s_scene_built_run():
+    from dalembert.reports.file_models import file_readings
+
+    records = [_record("a", "mujoco", "rk4", 1e-3, 2e-4, model_file="scene"),
+               _record("b", "mujoco", "rk4", 1e-3, 2e-4, model_file="/x/panda.urdf", file_effects="off"),
+               _record("c", "mujoco", "rk4", 1e-3, 13.0, model_file="/x/panda.urdf", file_effects="on"),
+               _record("d", "mujoco", "rk4", 1e-3, 9.9, status="unsupported", model_file="scene", file_effects="off"),
+               _record("e", "mujoco", "rk4", 1e-2, 0.5),  # another step: its own pair, with no file read
+               _record("f", "pinocchio", "rk4", 1e-3, 3e-4),  # the scene's default, left out
+               _record("g", "pinocchio", "rk4", 1e-3, 3e-4, model_file="/x/panda.urdf")]
+    found = file_readings(records)
+    assert [(f.engine, f.label, f.file) for f in found] == [("mujoco", "rk4 dt=0.001", "panda.urdf"),
+                                                            ("pinocchio", "rk4 dt=0.001", "panda.urdf")]
+    mj, pin = found
+    assert (mj.scene_error, mj.bare_error, mj.file_error) == (2e-4, 2e-4, 13.0)
+    assert mj.effects == {"damping": "read by mujoco"} and mj.scene_cost == pytest.approx(0.05)
+    assert pin.scene_error == 3e-4 and np.isnan(pin.bare_error) and pin.file_error == 3e-4
+    assert file_readings(records[:1] + records[4:6]) == []  # no file read: no section
