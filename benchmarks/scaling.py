@@ -63,6 +63,10 @@ INTEGRATORS = {"reference": "rk4", "mujoco": "rk4", "pinocchio": "rk4", "exudyn"
 # Real robots: (label, case, parameters); their degrees of freedom are read from each case's scene.
 ROBOTS = (("ur5", "robot_arm", {"model": "ur5"}), ("panda", "robot_arm", {"model": "panda"}),
           ("solo12", "robot_free_fall", {}), ("talos", "robot_tree", {}))
+# Where an engine's default refuses a robot's welds, the integrator and options that run them (its cell is starred):
+# Exudyn's kinematic tree has single-axis joints only; its redundant coordinates take welds, as an index-3 DAE
+# that only its implicit integrators solve.
+ROBOT_FALLBACK = {"exudyn": ("generalized-alpha", {"joints": "redundant"})}
 DT = 1e-3
 REPEATS = 3
 MAX_HORIZON_S = 10.0
@@ -80,10 +84,10 @@ MAX_SIZE = {"mjx": 32}
 MJX_XLA_FLAGS = "--xla_cpu_use_fusion_emitters=false"
 
 
-def cost(adapter, n, budget, case_name="chain", **params):
+def cost(adapter, n, budget, case_name="chain", integrator=None, options=None, **params):
     """Stepping seconds per simulated second of the ``n``-rod chain (median of ``REPEATS``), or of case ``case_name``
-    with ``params`` (``n`` unused)."""
-    settings = Settings(INTEGRATORS[adapter.name], dt=DT)
+    with ``params`` (``n`` unused), with ``integrator`` (default ``INTEGRATORS``'s) and engine ``options``."""
+    settings = Settings(integrator or INTEGRATORS[adapter.name], dt=DT, options=options or {})
     horizon = 0.01
     if case_name == "chain":
         params = dict(params, n=n)
@@ -127,12 +131,23 @@ def robot_dofs(robots):
 
 
 def robot_row(name, robots, budget):
-    """Engine ``name``'s cost of each robot: ``{label: (cost s/s or NaN, the refusal or "")}``."""
+    """Engine ``name``'s cost of each robot: ``{label: (cost s/s or NaN, the refusal, or "*" where it ran with
+    ``ROBOT_FALLBACK``, or "")}``."""
     adapter, out = get_adapter(name), {}
     for label, case_name, params in robots:
         case = make_case(case_name, **params)
-        why = adapter.unsupported(case.scene, Settings(INTEGRATORS[name], dt=DT))
-        out[label] = (float("nan"), why) if why else (cost(adapter, 0, budget, case_name, **params), "")
+        integrator, options = INTEGRATORS[name], {}
+        why = adapter.unsupported(case.scene, Settings(integrator, dt=DT))
+        if why and name in ROBOT_FALLBACK:
+            integrator, options = ROBOT_FALLBACK[name]
+            why = adapter.unsupported(case.scene, Settings(integrator, dt=DT, options=options))
+        if why:
+            out[label] = (float("nan"), why)
+            continue
+        try:
+            out[label] = (cost(adapter, 0, budget, case_name, integrator, options, **params), "*" if options else "")
+        except RuntimeError as e:  # the engine stopped (its solver failed): a finding, in the row's note
+            out[label] = (float("nan"), f"{integrator} {options or ''} stopped: {e}")
     return out
 
 
@@ -150,10 +165,11 @@ def robot_line(label, robots, found, chain_sizes, chain_costs, dofs):
     cells, ratios = "", ""
     for r, _, _ in robots:
         c, why = found[r]
-        cells += f"{c:>14.3g}" if np.isfinite(c) else f"{'refused':>14}"
+        cells += (f"{c:>13.3g}" + (why or " ")) if np.isfinite(c) else \
+            f"{'stopped' if ' stopped: ' in why else 'refused':>14}"
         ratio = c / at_size(chain_sizes, chain_costs, dofs[r]) if np.isfinite(c) else float("nan")
         ratios += f"{ratio:>14.2f}" if np.isfinite(ratio) else f"{'-':>14}"
-    refusals = "; ".join(f"{r}: {found[r][1]}" for r, _, _ in robots if found[r][1])
+    refusals = "; ".join(f"{r}: {found[r][1]}" for r, _, _ in robots if found[r][1] and found[r][1] != "*")
     return f"{label:<13}{cells}\n{'  / chain':<13}{ratios}" + (f"\n  ({refusals})" if refusals else "")
 
 
@@ -209,7 +225,9 @@ def main(argv=None):
         return
     dofs = robot_dofs(robots)
     print(f"\nreal robots: stepping seconds per simulated second at dt = {DT:g} s, the same integrators; "
-          "'/ chain': against the chain's cost at as many joints (its line between the sizes run; '-' outside them)")
+          "'/ chain': against the chain's cost at as many joints (its line between the sizes run; '-' outside them); "
+          "*: " + ", ".join(f"{k} {i} with {o}" for k, (i, o) in ROBOT_FALLBACK.items())
+          + " (ROBOT_FALLBACK: the default refuses the robot's welds)")
     print(f"{'engine':<13}" + "".join(f"{f'{r} ({dofs[r]})':>14}" for r, _, _ in robots))
     for name in engines:
         if name == "mjx":
