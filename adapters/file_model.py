@@ -17,7 +17,8 @@ What every engine's reading shares, here:
 * geometry (``<visual>``, ``<collision>``) is not read (``bare_urdf``): these cases have no contact, and meshes
   resolve through ROS package paths no engine here has; joints the scene holds at zero (the case's
   ``locked``, a gripper's fingers) are fixed in the engine's model too, found as the file's moving joints whose
-  child link moves on no joint of the scene;
+  child link moves on no joint of the scene; a fixed joint's ``<mimic>`` is dropped (it moves nothing; Drake's
+  parser refuses a 0-dof joint that mimics, as talos_reduced.urdf's grippers do);
 * a fixed base only: a floating base's coordinates (the file's root frame, not the scene's COM) are not
   mapped (``why_not``);
 * the engine's joint coordinates are read back in the scene's order and turned into body terms by the scene's
@@ -152,7 +153,7 @@ def locked_joints(scene, joints):
 
 def bare_urdf(path, locked=()):
     """The URDF's text without ``<visual>`` and ``<collision>`` elements, the joints named in ``locked`` made
-    ``fixed``: what the engines read (module docstring)."""
+    ``fixed``, and no ``<mimic>`` on a fixed joint: what the engines read (module docstring)."""
     root = _root(path)
     for link in root.findall("link"):
         for tag in ("visual", "collision"):
@@ -161,6 +162,9 @@ def bare_urdf(path, locked=()):
     for el in root.findall("joint"):
         if el.get("name") in locked:
             el.set("type", "fixed")
+        if el.get("type") == "fixed":  # a fixed joint's <mimic> moves nothing (Drake refuses one: Talos has them)
+            for mimic in el.findall("mimic"):
+                el.remove(mimic)
     return ET.tostring(root, encoding="unicode")
 
 

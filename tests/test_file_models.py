@@ -116,7 +116,8 @@ def test_requests_that_cannot_run_are_refused_before_anything_runs(engine, arm, 
 
 def test_the_file_as_the_engines_read_it_has_no_geometry_and_the_scene_s_locked_joints_fixed(tmp_path):
     path = _write(tmp_path, ARM.replace("<link name=\"tool\"/>", "<link name=\"tool\"><visual><geometry><mesh "
-                                        "filename=\"package://arm/tool.stl\"/></geometry></visual></link>"))
+                                        "filename=\"package://arm/tool.stl\"/></geometry></visual></link>")
+                  .replace('<origin xyz="0.5 0 0"/>', '<origin xyz="0.5 0 0"/><mimic joint="shoulder"/>'))
     scene = read_urdf(path).scene
     joints = file_model.urdf_joints(path)
     assert [(j.name, j.kind, j.child) for j in joints][:2] == [("shoulder", "continuous", "upper"),
@@ -124,6 +125,7 @@ def test_the_file_as_the_engines_read_it_has_no_geometry_and_the_scene_s_locked_
     assert file_model.locked_joints(scene, joints) == ["marker_slide"]
     root = ET.fromstring(file_model.bare_urdf(path, ["marker_slide"]))
     assert not list(root.iter("visual")) and not list(root.iter("collision"))
+    assert not list(root.iter("mimic"))  # on a fixed joint it moves nothing (and Drake's parser refuses it)
     types = {j.get("name"): j.get("type") for j in root.findall("joint")}
     assert types == {"shoulder": "continuous", "tool_mount": "fixed", "weight_mount": "fixed", "marker_slide": "fixed"}
     masses = file_model.scene_subtree_masses(scene)
