@@ -159,3 +159,38 @@ def test_the_report_pairs_each_reading_of_a_file_with_its_engine_s_scene_built_r
     assert mj.effects == {"damping": "read by mujoco"} and mj.scene_cost == pytest.approx(0.05)
     assert pin.scene_error == 3e-4 and np.isnan(pin.bare_error) and pin.file_error == 3e-4
     assert file_readings(records[:1] + records[4:6]) == []  # no file read: no section
+
+
+MJCF_ARM = """\
+<mujoco model="arm2">
+  <worldbody>
+    <body name="upper" pos="0 0 1">
+      <joint name="shoulder" type="hinge" axis="0 1 0" damping="0.5"/>
+      <inertial pos="0.25 0 0" mass="1.5" diaginertia="0.001 0.03 0.031"/>
+      <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.02"/>
+      <body name="fore" pos="0.5 0 0">
+        <joint name="elbow" type="hinge" axis="0 1 0" range="-1 1"/>
+        <inertial pos="0.2 0 0" mass="1" diaginertia="0.001 0.02 0.021"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.skipif("mujoco" not in ENGINES, reason="MuJoCo not installed")
+def test_mujoco_reads_an_mjcf_file_itself_and_the_other_engines_say_they_read_urdf_only(tmp_path):
+    from dalembert.models import read_mjcf
+
+    path = _write(tmp_path, MJCF_ARM, "arm2.xml")
+    scene = read_mjcf(path, positions={"shoulder": 0.7, "elbow": 0.3}).scene
+    built, _ = _run("mujoco", scene)
+    bare, _ = _run("mujoco", scene, model_file=path, file_effects="off")
+    read, audit = _run("mujoco", scene, model_file=path)
+    assert np.abs(bare.joints["fore"].q - built.joints["fore"].q).max() < SAME_MOTION_TOL
+    assert np.abs(read.joints["fore"].q - built.joints["fore"].q).max() > DAMPING_SHOWS  # damping, the elbow's range
+    assert audit["model_source"] == "arm2.xml read by MuJoCo's MJCF compiler"
+    assert audit["file_effects_read"]["limits"] == "1 of 2 joints, enforced by the constraint solver"
+    for engine in set(ENGINES) - {"mujoco"}:
+        with pytest.raises(ValueError, match=r"options.model_file: arm2.xml — .* reads URDF files here"):
+            _run(engine, scene, model_file=path)
