@@ -19,8 +19,8 @@ What every engine's reading shares, here:
   ``locked``, a gripper's fingers) are fixed in the engine's model too, found as the file's moving joints whose
   child link moves on no joint of the scene; a fixed joint's ``<mimic>`` is dropped (it moves nothing; Drake's
   parser refuses a 0-dof joint that mimics, as talos_reduced.urdf's grippers do);
-* a fixed base only: a floating base's coordinates (the file's root frame, not the scene's COM) are not
-  mapped (``why_not``);
+* a fixed base of revolute and prismatic joints only: a floating base's coordinates (the file's root frame, not
+  the scene's COM) and a ball joint's are not mapped (``why_not``);
 * the engine's joint coordinates are read back in the scene's order and turned into body terms by the scene's
   kinematics (``trajectory``: the reference's Kane kinematics, exact for the scene's tree), so every error and
   invariant is measured as for a scene-built run; joint reactions are not read back (they would be the scene's
@@ -104,6 +104,9 @@ def why_not(scene, settings):
     if any(j.kind == "free" for j in scene.joints):
         return ("options.model_file: a floating base read from the file is not mapped (the engine's base is the "
                 "file's root frame, the scene's its COM) — run the fixed-base robot cases (robot_arm, robot_tree)")
+    if any(j.kind == "ball" for j in scene.joints):
+        return ("options.model_file: the scene has ball joints, whose engine coordinates are not mapped here (hinge "
+                "and slide joints are) — run a robot of revolute and prismatic joints, or drop the option")
     if scene.loops or scene.springs or scene.contacts or scene.loads:
         return ("options.model_file: the scene has loops, springs, loads or contact beyond the file's tree — "
                 "model_file runs robot scenes read from a file only; drop the option")
@@ -200,7 +203,8 @@ def check_same_model(scene, path, engine_masses, engine):
 
 def joint_columns(scene):
     """The scene's generalized coordinates in the reference's order (``Kane``: topological, the joints'
-    own): a list of the moving joints' child names, one per coordinate (a fixed base: one each)."""
+    own): a list of the moving joints' child names, one per coordinate (revolute and prismatic joints only:
+    ``why_not`` refuses the others)."""
     return [b.name for b in scene.topological_order() if scene.joint(b.name).kind not in ("weld",)]
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from dalembert import Settings
 from dalembert.adapters import file_model, get_adapter
-from dalembert.models import read_urdf
+from dalembert.models import read_mjcf, read_urdf
 
 from engine_runs import installed
 from test_models_urdf import ARM, _write
@@ -112,6 +112,8 @@ def test_requests_that_cannot_run_are_refused_before_anything_runs(engine, arm, 
     adapter.check(scene, TIMES, settings(model_file=file_model.SCENE))  # the default, spelt out: the scene
     free = read_urdf(path, base="free").scene
     assert "a floating base read from the file is not mapped" in adapter.unsupported(free, settings(model_file=path))
+    ball = _write(tmp_path, MJCF_ARM.replace('type="hinge" axis="0 1 0" range="-1 1"', 'type="ball"'), "ball.xml")
+    assert "ball joints" in adapter.unsupported(read_mjcf(ball).scene, settings(model_file=ball))
 
 
 def test_the_file_as_the_engines_read_it_has_no_geometry_and_the_scene_s_locked_joints_fixed(tmp_path):
@@ -180,8 +182,6 @@ MJCF_ARM = """\
 
 @pytest.mark.skipif("mujoco" not in ENGINES, reason="MuJoCo not installed")
 def test_mujoco_reads_an_mjcf_file_itself_and_the_other_engines_say_they_read_urdf_only(tmp_path):
-    from dalembert.models import read_mjcf
-
     path = _write(tmp_path, MJCF_ARM, "arm2.xml")
     scene = read_mjcf(path, positions={"shoulder": 0.7, "elbow": 0.3}).scene
     built, _ = _run("mujoco", scene)
