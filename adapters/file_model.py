@@ -37,7 +37,7 @@ import numpy as np
 
 from dalembert.adapters.base import Option, Prepared
 
-__all__ = ["SCENE", "FileOption", "FILE_OPTIONS", "FILE_OPTION_NAMES", "FILE_EFFECTS", "FileJoint", "FilePrepared",
+__all__ = ["SCENE", "NO_REPRO", "FileOption", "FILE_OPTIONS", "FILE_OPTION_NAMES", "FILE_EFFECTS", "FileJoint", "FilePrepared",
            "model_file", "effects_on", "why_not", "urdf_joints", "locked_joints", "bare_urdf", "scene_subtree_masses",
            "check_same_model", "joint_columns", "trajectory", "MASS_MATCH_REL_TOL", "SUFFIXES"]
 
@@ -93,6 +93,11 @@ def model_file(settings):
 def effects_on(settings):
     """Whether the file's effects stay as the engine read them (``file_effects``)."""
     return settings.options.get("file_effects", FILE_OPTIONS["file_effects"].default) == "on"
+
+
+# ``dalembert repro`` writes the model an engine built from the scene: a file-read run is not that model.
+NO_REPRO = ("options.model_file: dalembert repro writes runs of the model an engine built from the scene; this run is "
+            "the engine's own reading of a file (its audit's model_source) — dalembert export gives its trajectory")
 
 
 def why_not(scene, settings):

@@ -194,3 +194,11 @@ def test_mujoco_reads_an_mjcf_file_itself_and_the_other_engines_say_they_read_ur
     for engine in set(ENGINES) - {"mujoco"}:
         with pytest.raises(ValueError, match=r"options.model_file: arm2.xml — .* reads URDF files here"):
             _run(engine, scene, model_file=path)
+
+
+@pytest.mark.parametrize("engine", [e for e in ENGINES if e != "drake"])  # (Drake has no repro at all)
+def test_a_file_read_run_is_not_written_as_a_repro_of_the_scene_s_model(engine, arm):
+    path, scene = arm
+    settings = Settings(INTEGRATOR[engine], dt=DT, options={"model_file": path})
+    with pytest.raises(ValueError, match="options.model_file: dalembert repro writes runs of the model an engine built"):
+        get_adapter(engine).repro(scene, TIMES, settings, "joint")

@@ -106,6 +106,11 @@ class MujocoAdapter(Adapter):
             reason += f" (a distance loop: {DISTANCE_REASON})"
         return reason or contact.why_not(scene)
 
+    def repro(self, scene, times, settings, quantity):
+        if file_model.model_file(settings):
+            raise ValueError(file_model.NO_REPRO)
+        return super().repro(scene, times, settings, quantity)
+
     def variants(self, scene):
         """Default matrix: where the scene has welds, also as equality constraints."""
         return [{}, {"welds": "equality"}] if any(j.kind == "weld" for j in scene.joints) else [{}]

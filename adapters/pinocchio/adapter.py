@@ -125,6 +125,11 @@ class PinocchioAdapter(Adapter):
                     "constraint forces — use welds=tree")
         return None
 
+    def repro(self, scene, times, settings, quantity):
+        if file_model.model_file(settings):
+            raise ValueError(file_model.NO_REPRO)
+        return super().repro(scene, times, settings, quantity)
+
     def variants(self, scene):
         """Default matrix: where the scene has welds, also as constraints (where supported)."""
         out = [{}]
