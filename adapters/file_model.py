@@ -19,8 +19,10 @@ What every engine's reading shares, here:
   ``locked``, a gripper's fingers) are fixed in the engine's model too, found as the file's moving joints whose
   child link moves on no joint of the scene; a fixed joint's ``<mimic>`` is dropped (it moves nothing; Drake's
   parser refuses a 0-dof joint that mimics, as talos_reduced.urdf's grippers do);
-* a fixed base of revolute and prismatic joints only: a floating base's coordinates (the file's root frame, not
-  the scene's COM) and a ball joint's are not mapped (``why_not``);
+* revolute and prismatic joints, and a floating base read from a URDF: the engine then frees the file's root
+  link (its frame E at the link's origin, the scene's body frame at the COM of the root with its fixed links
+  merged in, the same axes), and ``base_initial`` / ``base_series`` move the state between the two; a ball
+  joint's coordinates are not mapped (``why_not``);
 * the engine's joint coordinates are read back in the scene's order and turned into body terms by the scene's
   kinematics (``trajectory``: the reference's Kane kinematics, exact for the scene's tree), so every error and
   invariant is measured as for a scene-built run; joint reactions are not read back (they would be the scene's
@@ -37,7 +39,7 @@ import numpy as np
 
 from dalembert.adapters.base import Option, Prepared
 
-__all__ = ["SCENE", "NO_REPRO", "FileOption", "FILE_OPTIONS", "FILE_OPTION_NAMES", "FILE_EFFECTS", "FileJoint", "FilePrepared",
+__all__ = ["SCENE", "NO_REPRO", "free_root", "base_initial", "base_series", "FileOption", "FILE_OPTIONS", "FILE_OPTION_NAMES", "FILE_EFFECTS", "FileJoint", "FilePrepared",
            "model_file", "effects_on", "why_not", "urdf_joints", "locked_joints", "bare_urdf", "scene_subtree_masses",
            "check_same_model", "joint_columns", "trajectory", "MASS_MATCH_REL_TOL", "SUFFIXES"]
 
@@ -106,9 +108,9 @@ def why_not(scene, settings):
         return "options.file_effects: off only with options.model_file — give model_file=PATH, or drop file_effects"
     if not model_file(settings):
         return None
-    if any(j.kind == "free" for j in scene.joints):
-        return ("options.model_file: a floating base read from the file is not mapped (the engine's base is the "
-                "file's root frame, the scene's its COM) — run the fixed-base robot cases (robot_arm, robot_tree)")
+    if free_root(scene) is not None and not model_file(settings).lower().endswith(".urdf"):
+        return ("options.model_file: a floating base is mapped from a URDF's root link only — give the robot's .urdf "
+                "(an MJCF's own free joints are not mapped)")
     if any(j.kind == "ball" for j in scene.joints):
         return ("options.model_file: the scene has ball joints, whose engine coordinates are not mapped here (hinge "
                 "and slide joints are) — run a robot of revolute and prismatic joints, or drop the option")
@@ -116,6 +118,36 @@ def why_not(scene, settings):
         return ("options.model_file: the scene has loops, springs, loads or contact beyond the file's tree — "
                 "model_file runs robot scenes read from a file only; drop the option")
     return None
+
+
+def free_root(scene):
+    """The scene's free joint (its floating base), or None."""
+    return next((j for j in scene.joints if j.kind == "free"), None)
+
+
+def base_initial(joint, c_E):
+    """The engine's root frame E at the scene's initial state: ``joint`` the scene's free joint (its body frame B at
+    the COM, E's axes), ``c_E`` (3,) B's origin in E (m). Returns ``p_WE`` (3,) m, ``q_WE`` (4,) scalar first,
+    ``v_WE_W`` (3,) m/s (E's origin, world axes), ``w_B`` (3,) rad/s (body axes, E's and B's alike)."""
+    from dalembert import spatial
+
+    q0, v0 = np.asarray(joint.q0, float), np.asarray(joint.v0, float)
+    R = spatial.quat_to_matrix(q0[3:] / np.linalg.norm(q0[3:]))
+    r_W = R @ np.asarray(c_E, float)
+    return q0[:3] - r_W, q0[3:], v0[:3] - np.cross(R @ v0[3:], r_W), v0[3:]
+
+
+def base_series(p_WE, q_WE, v_WE_W, w_B, c_E):
+    """The scene's free-joint coordinates from the engine's root frame E sampled: ``p_WE`` (n, 3), ``q_WE`` (n, 4)
+    scalar first as the engine gave it, ``v_WE_W`` (n, 3), ``w_B`` (n, 3) body axes; ``c_E`` (3,) as in
+    ``base_initial``. Returns ``q`` (n, 7) ``(p_WB, q_WB)`` and ``v`` (n, 6) ``(v_WB_W, w_B)``."""
+    from dalembert import spatial
+
+    R = spatial.quat_to_matrix(q_WE / np.linalg.norm(q_WE, axis=1, keepdims=True))
+    r_W = R @ np.asarray(c_E, float)
+    w_W = np.einsum("nij,nj->ni", R, w_B)
+    return (np.concatenate([p_WE + r_W, q_WE], axis=1),
+            np.concatenate([v_WE_W + np.cross(w_W, r_W), w_B], axis=1))
 
 
 @dataclass(frozen=True)
@@ -207,15 +239,15 @@ def check_same_model(scene, path, engine_masses, engine):
 
 
 def joint_columns(scene):
-    """The scene's generalized coordinates in the reference's order (``Kane``: topological, the joints'
-    own): a list of the moving joints' child names, one per coordinate (revolute and prismatic joints only:
-    ``why_not`` refuses the others)."""
+    """The scene's joints with coordinates in the reference's order (``Kane``: topological, the joints' own): a
+    list of their child names (revolute, prismatic and a free base: ``why_not`` refuses the others)."""
     return [b.name for b in scene.topological_order() if scene.joint(b.name).kind not in ("weld",)]
 
 
 def trajectory(scene, times, q, v):
     """Body terms of the engine's joint coordinates: ``q``, ``v`` dicts child link name -> (n,) arrays (rad or m,
-    rad/s or m/s) of each scene joint, through the scene's kinematics (the reference's Kane), reactions left out.
+    rad/s or m/s) of each scene joint (a free base's: (n, 7) and (n, 6), ``base_series``), through the scene's
+    kinematics (the reference's Kane), reactions left out.
 
     Returns
     -------

@@ -21,7 +21,8 @@ INTEGRATOR = {"mujoco": "rk4", "pinocchio": "rk4", "drake": "rk5"}
 DT = 1e-3
 TIMES = np.linspace(0.0, 1.0, 101)
 # The same engine and integrator on the scene it built and on the file it read, effects off: the same motion
-# up to the roundoff of the readers' mass properties (measured 9e-16 to 4.4e-15 rad over the 1-s swing below).
+# up to the roundoff of the readers' mass properties (measured 9e-16 to 4.4e-15 rad over the 1-s swing below; the
+# floating base's frame moves, 5e-15 to 5.1e-13 in m, m/s and rad/s, MuJoCo's the largest).
 SAME_MOTION_TOL = 1e-11
 # The file's shoulder damping (0.5 N m s/rad) on the 2-kg arm's 1-s swing (4.8 rad peak to peak): 1.3 rad apart
 # from the scene's in MuJoCo (with its friction loss, 0.1 N m) and Drake (measured); near roundoff would mean
@@ -72,6 +73,23 @@ def test_without_the_file_s_effects_the_engine_s_reading_moves_as_its_scene_does
 
 
 @pytest.mark.parametrize("engine", ENGINES)
+def test_a_floating_base_freed_from_the_file_s_root_link_moves_as_the_scene_s(engine, tmp_path):
+    """The engine frees the file's root link (its frame at the link's origin); the scene's base is the root's COM,
+    the weight merged in: the state is moved between the two frames both ways (``base_initial``, ``base_series``)."""
+    path = _write(tmp_path, TYPED_ARM)
+    scene = read_urdf(path, base="free", gravity=(0.0, 0.0, 0.0), positions=POSE,
+                      velocities={"base": (0.1, 0.0, 0.2, 0.5, 1.0, 2.0), "shoulder": 3.0}).scene
+    built, _ = _run(engine, scene)
+    read, _ = _run(engine, scene, model_file=path, file_effects="off")
+    for name, body in built.bodies.items():
+        assert np.abs(read.bodies[name].position - body.position).max() < SAME_MOTION_TOL
+        assert np.abs(read.bodies[name].velocity - body.velocity).max() < SAME_MOTION_TOL
+        assert np.abs(read.bodies[name].angular_velocity - body.angular_velocity).max() < SAME_MOTION_TOL
+    assert np.ptp(read.bodies["base"].position[:, 2]) > 0.1  # it flies (0.2 m/s up) and tumbles
+    assert np.abs(_angle(read) - _angle(built)).max() < SAME_MOTION_TOL
+
+
+@pytest.mark.parametrize("engine", ENGINES)
 def test_with_the_file_s_effects_the_engine_s_own_reading_shows_and_its_audit_says_so(engine, arm):
     """MuJoCo and Drake apply the file's joint damping; Pinocchio reads it but its ``aba`` applies none."""
     path, scene = arm
@@ -110,8 +128,10 @@ def test_requests_that_cannot_run_are_refused_before_anything_runs(engine, arm, 
     assert adapter.unsupported(scene, settings(file_effects="off")).startswith(
         "options.file_effects: off only with options.model_file — give model_file=PATH")
     adapter.check(scene, TIMES, settings(model_file=file_model.SCENE))  # the default, spelt out: the scene
-    free = read_urdf(path, base="free").scene
-    assert "a floating base read from the file is not mapped" in adapter.unsupported(free, settings(model_file=path))
+    free = _write(tmp_path, MJCF_ARM.replace('<joint name="shoulder" type="hinge" axis="0 1 0" damping="0.5"/>',
+                                             "<freejoint/>"), "free.xml")
+    assert adapter.unsupported(read_mjcf(free).scene, settings(model_file=free)).startswith(
+        "options.model_file: a floating base is mapped from a URDF's root link only")
     ball = _write(tmp_path, MJCF_ARM.replace('type="hinge" axis="0 1 0" range="-1 1"', 'type="ball"'), "ball.xml")
     assert "ball joints" in adapter.unsupported(read_mjcf(ball).scene, settings(model_file=ball))
 

@@ -3,7 +3,7 @@
 Drake's ``Parser`` reads the file without its geometry, the scene's locked joints fixed
 (``file_model.bare_urdf``), into a ``MultibodyPlant`` (continuous, or discrete with ``time_step = dt`` for the
 integrator ``discrete``), its root link welded to the world (Drake leaves a URDF's root floating unless it is
-the link ``world``). Drake reads a joint's ``<dynamics damping>`` as the joint's damping, applied in both modes;
+the link ``world``) or, where the scene's base floats, left floating (Drake's quaternion floating body). Drake reads a joint's ``<dynamics damping>`` as the joint's damping, applied in both modes;
 its ``<limit lower upper>`` as position limits, enforced by the discrete plant only (a continuous plant ignores
 them); ``friction`` is not read. ``file_effects=off`` zeroes the damping and removes the limits before the plant
 is finalized. The case's gravity is set on the plant; the stepping is the adapter's (``stepping.simulate``).
@@ -17,6 +17,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from dalembert import spatial
 from dalembert.adapters import file_model
 from dalembert.adapters.base import Outcome
 
@@ -52,7 +53,7 @@ def _plant(scene, settings, path):
         logger.removeFilter(keep)
     children = {j.child for j in joints}
     roots = [lk for lk in (b.name() for b in _links(plant, instance)) if lk not in children]
-    if roots and roots[0] != "world":
+    if roots and roots[0] != "world" and file_model.free_root(scene) is None:  # (a floating base stays free)
         plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(roots[0], instance))
     by_child = {}
     for j in joints:
@@ -68,6 +69,22 @@ def _plant(scene, settings, path):
     plant.mutable_gravity_field().set_gravity_vector(np.asarray(scene.gravity, float))
     plant.Finalize()
     return plant, builder.Build(), by_child, tuple(locked), effects
+
+
+def _base(plant, context, scene):
+    """``(position start, velocity start, c_E (3,))`` of the floating root body: ``c_E`` the COM of it and the bodies
+    welded to it, in its frame (m); None for a fixed base."""
+    base = file_model.free_root(scene)
+    if base is None:
+        return None
+    root = plant.GetBodyByName(base.child)
+    welded = plant.GetBodiesWeldedTo(root)  # (the root included)
+    mass, moment = 0.0, np.zeros(3)
+    for b in welded:
+        X = plant.CalcRelativeTransform(context, root.body_frame(), b.body_frame())
+        m = b.get_mass(context)
+        mass, moment = mass + m, moment + m * (X @ b.CalcCenterOfMassInBodyFrame(context))
+    return root.floating_positions_start(), root.floating_velocities_start_in_v(), moment / mass
 
 
 def _links(plant, instance):
@@ -103,6 +120,12 @@ def prepare(scene, times, settings):
               for c, j in by_child.items()}
     file_model.check_same_model(scene, path, masses, "Drake")
     q0, v0 = np.zeros(plant.num_positions()), np.zeros(plant.num_velocities())
+    base = _base(plant, context, scene)
+    if base is not None:  # Drake's floating body: (quaternion w x y z, p), then (w_W, v_W of its origin)
+        a, d, c_E = base
+        p_E, q_E, v_E, w_B = file_model.base_initial(file_model.free_root(scene), c_E)
+        R = spatial.quat_to_matrix(q_E / np.linalg.norm(q_E))
+        q0[a:a + 7], v0[d:d + 6] = np.concatenate([q_E, p_E]), np.concatenate([R @ w_B, v_E])
     for c, joint in file_model.moving_children(scene).items():
         j = by_child[c]
         q0[j.position_start()], v0[j.velocity_start()] = joint.q0[0], joint.v0[0]
@@ -127,6 +150,14 @@ def run(p):
         children = file_model.moving_children(p.scene)
         q = {c: X[:, by_child[c].position_start()] for c in children}
         v = {c: X[:, nq + by_child[c].velocity_start()] for c in children}
+        base = _base(model.plant, model.plant.CreateDefaultContext(), p.scene)
+        if base is not None:
+            a, d, c_E = base
+            q_E = X[:, a:a + 4]
+            R = spatial.quat_to_matrix(q_E / np.linalg.norm(q_E, axis=1, keepdims=True))
+            w_B = np.einsum("nji,nj->ni", R, X[:, nq + d:nq + d + 3])
+            root = file_model.free_root(p.scene).child
+            q[root], v[root] = file_model.base_series(X[:, a + 4:a + 7], q_E, X[:, nq + d + 3:nq + d + 6], w_B, c_E)
         return file_model.trajectory(p.scene, p.times, q, v)
 
     return Outcome(read, wall, n_steps, n_rhs, {"message": message})

@@ -1,7 +1,8 @@
 """MuJoCo reading the robot's file itself (option ``model_file``; ``dalembert.adapters.file_model``).
 
 A URDF goes through MuJoCo's own URDF compiler (``mujoco.MjSpec.from_string`` of the file without its
-geometry, the scene's locked joints fixed: ``file_model.bare_urdf``), an MJCF through ``MjSpec.from_file`` (its
+geometry, the scene's locked joints fixed: ``file_model.bare_urdf``; its root link given a free joint where the
+scene's base floats), an MJCF through ``MjSpec.from_file`` (its
 locked joints deleted, contact disabled: these cases have none). MuJoCo reads a URDF joint's
 ``<dynamics damping friction>`` as ``dof_damping`` and ``dof_frictionloss``, its ``<limit lower upper>`` as a
 range (``jnt_limited``) and its ``effort`` as an actuator-force range; with ``file_effects=on`` all stay as read
@@ -32,8 +33,16 @@ def _spec(scene, path):
 
     if path.lower().endswith(".urdf"):
         locked = file_model.locked_joints(scene, file_model.urdf_joints(path))
-        text = file_model.bare_urdf(path, locked)
-        return mujoco.MjSpec.from_string(text), tuple(locked)
+        spec = mujoco.MjSpec.from_string(file_model.bare_urdf(path, locked))
+        base = file_model.free_root(scene)
+        if base is not None:  # MuJoCo fixes a URDF's root link: freed as the scene's base is
+            root = spec.worldbody.first_body()
+            if root is None or root.name != base.child:
+                raise ValueError(f"options.model_file: MuJoCo's root body of {os.path.basename(path)} is "
+                                 f"{getattr(root, 'name', None)!r}, the scene's floating base {base.child!r} — give the "
+                                 "file the case's scene was read from (its --param model)")
+            root.add_freejoint()
+        return spec, tuple(locked)
     spec = mujoco.MjSpec.from_file(path)
     moving = file_model.moving_children(scene)
     locked = []
@@ -74,6 +83,17 @@ def _joints(model):
             if int(model.jnt_type[j]) in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))}
 
 
+def _base(model, scene):
+    """``(qpos address, dof address, c_E (3,))`` of the freed root (its COM in its frame, fixed links merged in), or
+    None for a fixed base."""
+    import mujoco
+
+    if file_model.free_root(scene) is None:
+        return None
+    (j,) = [j for j in range(model.njnt) if int(model.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_FREE)]
+    return int(model.jnt_qposadr[j]), int(model.jnt_dofadr[j]), model.body_ipos[model.jnt_bodyid[j]].copy()
+
+
 def _effects(model, on):
     """What MuJoCo read of the file's effects, by joint name, and what it applies (the audit's)."""
     import mujoco
@@ -112,6 +132,11 @@ def prepare(scene, times, settings):
     file_model.check_same_model(scene, path, {c: float(model.body_subtreemass[model.jnt_bodyid[j]])
                                               for c, j in joints.items()}, "MuJoCo")
     qpos0, qvel0 = model.qpos0.copy(), np.zeros(model.nv)
+    base = _base(model, scene)
+    if base is not None:
+        a, d, c_E = base
+        p_E, q_E, v_E, w_B = file_model.base_initial(file_model.free_root(scene), c_E)
+        qpos0[a:a + 7], qvel0[d:d + 6] = np.concatenate([p_E, q_E]), np.concatenate([v_E, w_B])
     for child, joint in file_model.moving_children(scene).items():
         j = joints[child]
         qpos0[model.jnt_qposadr[j]], qvel0[model.jnt_dofadr[j]] = joint.q0[0], joint.v0[0]
@@ -146,6 +171,12 @@ def run(p):
         children = file_model.moving_children(p.scene)
         q = {c: Q[:, model.jnt_qposadr[joints[c]]] for c in children}
         v = {c: V[:, model.jnt_dofadr[joints[c]]] for c in children}
+        base = _base(model, p.scene)
+        if base is not None:  # MuJoCo's free qvel: the frame origin's velocity in world axes, w in body axes
+            a, d, c_E = base
+            root = file_model.free_root(p.scene).child
+            q[root], v[root] = file_model.base_series(Q[:, a:a + 3], Q[:, a + 3:a + 7], V[:, d:d + 3], V[:, d + 3:d + 6],
+                                                      c_E)
         return file_model.trajectory(p.scene, p.times, q, v)
 
     return Outcome(read, wall, n_steps, n_steps * stages,

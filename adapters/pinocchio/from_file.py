@@ -1,7 +1,7 @@
 """Pinocchio reading the robot's URDF itself (option ``model_file``; ``dalembert.adapters.file_model``).
 
 ``pin.buildModelFromXML`` of the file without its geometry, the scene's locked joints fixed
-(``file_model.bare_urdf``): Pinocchio merges every fixed link into its parent's body and reads a joint's
+(``file_model.bare_urdf``), with a ``JointModelFreeFlyer`` root where the scene's base floats: Pinocchio merges every fixed link into its parent's body and reads a joint's
 ``<dynamics damping friction>`` into ``model.damping`` and ``model.friction``, its ``<limit>`` into the position,
 velocity and effort limits, and an armature (``model.armature``: zero from a URDF). Its forward dynamics
 (``pin.aba``) applies the armature only: damping, friction and limits are read for the caller to apply, and a
@@ -17,6 +17,7 @@ import os
 
 import numpy as np
 
+from dalembert import spatial
 from dalembert.adapters import file_model
 from dalembert.adapters.base import Outcome
 from dalembert.adapters.pinocchio.integrators import adaptive, fixed_step
@@ -59,7 +60,10 @@ def _build(scene, path):
     joints = file_model.urdf_joints(path)
     locked = file_model.locked_joints(scene, joints)
     try:
-        model = pin.buildModelFromXML(file_model.bare_urdf(path, locked))
+        text = file_model.bare_urdf(path, locked)
+        # a floating base: Pinocchio's FreeFlyer on the root link (its frame E, the link's)
+        model = (pin.buildModelFromXML(text) if file_model.free_root(scene) is None
+                 else pin.buildModelFromXML(text, pin.JointModelFreeFlyer()))
     except (ValueError, RuntimeError) as err:
         raise ValueError(f"options.model_file: Pinocchio cannot read {os.path.basename(path)} ({err}) — give a URDF "
                          "Pinocchio reads") from None
@@ -104,6 +108,12 @@ def prepare(scene, times, settings):
         model.armature[:] = 0.0
     model.gravity.linear = np.asarray(scene.gravity, float)
     q0, v0 = pin.neutral(model), np.zeros(model.nv)
+    base = file_model.free_root(scene)
+    if base is not None:  # FreeFlyer: (p, quaternion x y z w), velocities in the root frame E
+        p_E, q_E, v_E, w_B = file_model.base_initial(base, model.inertias[1].lever)
+        R = pin.Quaternion(*q_E).toRotationMatrix()  # (w, x, y, z)
+        q0[:7] = np.concatenate([p_E, q_E[1:], q_E[:1]])
+        v0[:6] = np.concatenate([R.T @ v_E, w_B])
     for c, joint in file_model.moving_children(scene).items():
         jm = model.joints[ids[c]]
         if jm.nq == 2:  # unit circle: (cos, sin)
@@ -141,6 +151,12 @@ def run(p):
             else:
                 q[c] = Q[:, jm.idx_q]
             v[c] = V[:, jm.idx_v]
+        base = file_model.free_root(p.scene)
+        if base is not None:
+            q_E = np.concatenate([Q[:, 6:7], Q[:, 3:6]], axis=1)  # scalar first
+            R = spatial.quat_to_matrix(q_E / np.linalg.norm(q_E, axis=1, keepdims=True))
+            q[base.child], v[base.child] = file_model.base_series(Q[:, :3], q_E, np.einsum("nij,nj->ni", R, V[:, :3]),
+                                                                  V[:, 3:6], model.inertias[1].lever)
         return file_model.trajectory(p.scene, p.times, q, v)
 
     return Outcome(read, wall, n_steps, n_rhs, {"loop": "Python (adapters/pinocchio/integrators.py) on the file's "
