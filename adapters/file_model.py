@@ -39,7 +39,8 @@ import numpy as np
 
 from dalembert.adapters.base import Option, Prepared
 
-__all__ = ["SCENE", "NO_REPRO", "free_root", "base_initial", "base_series", "FileOption", "FILE_OPTIONS", "FILE_OPTION_NAMES", "FILE_EFFECTS", "FileJoint", "FilePrepared",
+__all__ = ["SCENE", "NO_REPRO", "free_root", "base_initial", "base_series", "FileOption", "FILE_OPTIONS",
+           "FILE_OPTION_NAMES", "FILE_EFFECTS", "FileJoint", "FilePrepared",
            "model_file", "effects_on", "why_not", "urdf_joints", "locked_joints", "bare_urdf", "scene_subtree_masses",
            "check_same_model", "joint_columns", "trajectory", "MASS_MATCH_REL_TOL", "SUFFIXES"]
 

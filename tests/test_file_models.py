@@ -3,6 +3,7 @@ engine's ``from_file``): without the file's effects each reading moves as the sc
 own effects show (and its audit says which), and a file that is not the scene's, or a request that cannot be
 run, is refused naming the option and the fix."""
 
+import json
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -80,7 +81,8 @@ def test_a_floating_base_freed_from_the_file_s_root_link_moves_as_the_scene_s(en
     scene = read_urdf(path, base="free", gravity=(0.0, 0.0, 0.0), positions=POSE,
                       velocities={"base": (0.1, 0.0, 0.2, 0.5, 1.0, 2.0), "shoulder": 3.0}).scene
     built, _ = _run(engine, scene)
-    read, _ = _run(engine, scene, model_file=path, file_effects="off")
+    read, audit = _run(engine, scene, model_file=path, file_effects="off")
+    json.dumps(audit, sort_keys=True, default=str)  # as the store writes it (a free joint of no name broke it)
     for name, body in built.bodies.items():
         assert np.abs(read.bodies[name].position - body.position).max() < SAME_MOTION_TOL
         assert np.abs(read.bodies[name].velocity - body.velocity).max() < SAME_MOTION_TOL
@@ -220,5 +222,5 @@ def test_mujoco_reads_an_mjcf_file_itself_and_the_other_engines_say_they_read_ur
 def test_a_file_read_run_is_not_written_as_a_repro_of_the_scene_s_model(engine, arm):
     path, scene = arm
     settings = Settings(INTEGRATOR[engine], dt=DT, options={"model_file": path})
-    with pytest.raises(ValueError, match="options.model_file: dalembert repro writes runs of the model an engine built"):
+    with pytest.raises(ValueError, match="options.model_file: dalembert repro writes runs of the model an engine"):
         get_adapter(engine).repro(scene, TIMES, settings, "joint")

@@ -3,7 +3,8 @@
 Drake's ``Parser`` reads the file without its geometry, the scene's locked joints fixed
 (``file_model.bare_urdf``), into a ``MultibodyPlant`` (continuous, or discrete with ``time_step = dt`` for the
 integrator ``discrete``), its root link welded to the world (Drake leaves a URDF's root floating unless it is
-the link ``world``) or, where the scene's base floats, left floating (Drake's quaternion floating body). Drake reads a joint's ``<dynamics damping>`` as the joint's damping, applied in both modes;
+the link ``world``) or, where the scene's base floats, left floating (Drake's quaternion floating body). Drake
+reads a joint's ``<dynamics damping>`` as the joint's damping, applied in both modes;
 its ``<limit lower upper>`` as position limits, enforced by the discrete plant only (a continuous plant ignores
 them); ``friction`` is not read. ``file_effects=off`` zeroes the damping and removes the limits before the plant
 is finalized. The case's gravity is set on the plant; the stepping is the adapter's (``stepping.simulate``).
@@ -186,6 +187,7 @@ def describe(scene, settings):
     lines = [f"MultibodyPlant read from {file_model.model_file(settings)} (locked: {list(locked)}); "
              f"{plant.num_positions()} positions, {plant.num_velocities()} velocities"]
     lines += [f"  {j.name()} ({j.type_name()}): damping {j.default_damping():g}, limits "
-              f"{j.position_lower_limits().tolist()} .. {j.position_upper_limits().tolist()}" for j in by_child.values()]
+              f"{j.position_lower_limits().tolist()} .. {j.position_upper_limits().tolist()}"
+              for j in by_child.values()]
     lines += [f"  {k}: {v}" for k, v in effects.items()]
     return "\n".join(lines)

@@ -116,7 +116,7 @@ class MujocoAdapter(Adapter):
         return [{}, {"welds": "equality"}] if any(j.kind == "weld" for j in scene.joints) else [{}]
 
     def describe(self, scene, settings):
-        """The generated model (or the one MuJoCo read from ``model_file``), for reports and ``dalembert show-model``."""
+        """The generated model (or the one MuJoCo read from ``model_file``), for reports and ``show-model``."""
         return from_file.describe(scene, settings) if file_model.model_file(settings) else mjcf(scene, settings)
 
     # ------------------------------------------------------------- build

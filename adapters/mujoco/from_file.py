@@ -39,8 +39,8 @@ def _spec(scene, path):
             root = spec.worldbody.first_body()
             if root is None or root.name != base.child:
                 raise ValueError(f"options.model_file: MuJoCo's root body of {os.path.basename(path)} is "
-                                 f"{getattr(root, 'name', None)!r}, the scene's floating base {base.child!r} — give the "
-                                 "file the case's scene was read from (its --param model)")
+                                 f"{getattr(root, 'name', None)!r}, the scene's floating base {base.child!r} — give "
+                                 "the file the case's scene was read from (its --param model)")
             root.add_freejoint()
         return spec, tuple(locked)
     spec = mujoco.MjSpec.from_file(path)
@@ -98,27 +98,30 @@ def _effects(model, on):
     """What MuJoCo read of the file's effects, by joint name, and what it applies (the audit's)."""
     import mujoco
 
-    names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(model.njnt)]
+    # the file's joints (a free joint added for a floating base is the case's, unnamed)
+    names = {j: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(model.njnt)
+             if int(model.jnt_type[j]) != int(mujoco.mjtJoint.mjJNT_FREE)}
     dof = model.jnt_dofadr
     limits = {n: (tuple(float(x) for x in model.jnt_range[j]) if model.jnt_limited[j] else None)
-              for j, n in enumerate(names)}
+              for j, n in names.items()}
     applied = "applied" if on else "zeroed (file_effects=off)"
+    effort = int(np.count_nonzero(model.jnt_actfrclimited[list(names)]))
     return {
-        "damping": file_model.effects_summary({n: float(model.dof_damping[dof[j]]) for j, n in enumerate(names)},
+        "damping": file_model.effects_summary({n: float(model.dof_damping[dof[j]]) for j, n in names.items()},
                                               "N m s/rad", applied),
-        "friction": file_model.effects_summary({n: float(model.dof_frictionloss[dof[j]]) for j, n in enumerate(names)},
+        "friction": file_model.effects_summary({n: float(model.dof_frictionloss[dof[j]]) for j, n in names.items()},
                                                "N m", applied),
-        "armature": file_model.effects_summary({n: float(model.dof_armature[dof[j]]) for j, n in enumerate(names)},
+        "armature": file_model.effects_summary({n: float(model.dof_armature[dof[j]]) for j, n in names.items()},
                                                "kg m^2", applied),
         "limits": (f"{sum(v is not None for v in limits.values())} of {len(names)} joints, "
                    + ("enforced by the constraint solver" if on else "disabled (file_effects=off)")
                    if any(v is not None for v in limits.values()) else "none"),
-        "effort": (f"{int(np.count_nonzero(model.jnt_actfrclimited))} of {len(names)} joints, read as actuator-force "
-                   "ranges (no actuator: no force)" if np.any(model.jnt_actfrclimited) else "none"),
+        "effort": (f"{effort} of {len(names)} joints, read as actuator-force ranges (no actuator: no force)"
+                   if effort else "none"),
         "joint_values": {n: {"damping": float(model.dof_damping[dof[j]]),
                              "frictionloss": float(model.dof_frictionloss[dof[j]]),
                              "armature": float(model.dof_armature[dof[j]]), "range": limits[n]}
-                         for j, n in enumerate(names)},
+                         for j, n in names.items()},
     }
 
 
@@ -175,8 +178,8 @@ def run(p):
         if base is not None:  # MuJoCo's free qvel: the frame origin's velocity in world axes, w in body axes
             a, d, c_E = base
             root = file_model.free_root(p.scene).child
-            q[root], v[root] = file_model.base_series(Q[:, a:a + 3], Q[:, a + 3:a + 7], V[:, d:d + 3], V[:, d + 3:d + 6],
-                                                      c_E)
+            q[root], v[root] = file_model.base_series(Q[:, a:a + 3], Q[:, a + 3:a + 7], V[:, d:d + 3],
+                                                      V[:, d + 3:d + 6], c_E)
         return file_model.trajectory(p.scene, p.times, q, v)
 
     return Outcome(read, wall, n_steps, n_steps * stages,

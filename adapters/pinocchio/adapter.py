@@ -87,11 +87,13 @@ class PinocchioAdapter(Adapter):
         "euler": IntegratorSpec(True, ("loop", "welds", *contact.OPTIONS, *_file),
                                 "semi-implicit Euler on the group; with contact, the contact time-stepper (impulses "
                                 "from pin's ADMM or PGS cone solver each step)", order=1),
-        "rk4": IntegratorSpec(True, ("loop", "welds", *_file), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)",
+        "rk4": IntegratorSpec(True, ("loop", "welds", *_file),
+                              "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)",
                               order=4),
         # The order the name claims: on a joint whose group does not commute (free, ball) the missing dexp^-1
         # correction makes it second order (Munthe-Kaas, BIT 38, 1998), which the observed order shows.
-        "rk4-naive": IntegratorSpec(True, ("loop", "welds", *_file), "RK4 with stagewise integrate, no dexp^-1 correction",
+        "rk4-naive": IntegratorSpec(True, ("loop", "welds", *_file),
+                                    "RK4 with stagewise integrate, no dexp^-1 correction",
                                     order=4),
         "rk45": IntegratorSpec(False, ("welds", *_file), "scipy RK45 in local coordinates", order=5),
         "dop853": IntegratorSpec(False, ("welds", *_file), "scipy DOP853 in local coordinates", order=8),

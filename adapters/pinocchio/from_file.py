@@ -1,7 +1,8 @@
 """Pinocchio reading the robot's URDF itself (option ``model_file``; ``dalembert.adapters.file_model``).
 
 ``pin.buildModelFromXML`` of the file without its geometry, the scene's locked joints fixed
-(``file_model.bare_urdf``), with a ``JointModelFreeFlyer`` root where the scene's base floats: Pinocchio merges every fixed link into its parent's body and reads a joint's
+(``file_model.bare_urdf``), with a ``JointModelFreeFlyer`` root where the scene's base floats: Pinocchio
+merges every fixed link into its parent's body and reads a joint's
 ``<dynamics damping friction>`` into ``model.damping`` and ``model.friction``, its ``<limit>`` into the position,
 velocity and effort limits, and an armature (``model.armature``: zero from a URDF). Its forward dynamics
 (``pin.aba``) applies the armature only: damping, friction and limits are read for the caller to apply, and a
