@@ -224,3 +224,21 @@ def test_a_file_read_run_is_not_written_as_a_repro_of_the_scene_s_model(engine, 
     settings = Settings(INTEGRATOR[engine], dt=DT, options={"model_file": path})
     with pytest.raises(ValueError, match="options.model_file: dalembert repro writes runs of the model an engine"):
         get_adapter(engine).repro(scene, TIMES, settings, "joint")
+
+
+def test_the_report_section_names_the_largest_change_or_says_there_was_none():
+    from types import SimpleNamespace
+
+    from dalembert.reports.sections.file_models import file_models
+
+    records = [_record("a", "mujoco", "rk4", 1e-3, 2e-4, model_file="scene"),
+               _record("c", "mujoco", "rk4", 1e-3, 13.0, model_file="/x/panda.urdf"),
+               _record("f", "pinocchio", "rk4", 1e-3, 3e-4),
+               _record("g", "pinocchio", "rk4", 1e-3, 3e-4, model_file="/x/panda.urdf")]
+    md = "\n".join(x for x in file_models(SimpleNamespace(records=records)).md if isinstance(x, str))
+    assert ("Largest change: mujoco on robot_arm (panda.urdf, rk4 dt=0.001) ends 13 rad from the truth with the "
+            "file's effects on, against 0.0002 rad built from the scene (joint).") in md
+    assert "read by pinocchio" in md  # the effects each engine's audit says it read
+    md = "\n".join(x for x in file_models(SimpleNamespace(records=records[2:])).md if isinstance(x, str))
+    assert "No engine's reading of the file, with its effects on, changed the error" in md
+    assert not file_models(SimpleNamespace(records=records[2:3]))  # no file read: no section

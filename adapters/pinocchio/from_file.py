@@ -74,10 +74,12 @@ def _build(scene, path):
 
 
 def _effects(model, on):
-    names = [model.names[i] for i in range(1, model.njoints)]
-    v = [model.joints[i].idx_v for i in range(1, model.njoints)]
+    # the file's joints (a FreeFlyer added for a floating base is the case's)
+    kept = [i for i in range(1, model.njoints) if model.joints[i].shortname() != "JointModelFreeFlyer"]
+    names = [model.names[i] for i in kept]
+    v = [model.joints[i].idx_v for i in kept]
     lower = model.lowerPositionLimit
-    joints = [model.joints[i] for i in range(1, model.njoints)]
+    joints = [model.joints[i] for i in kept]
     # a continuous joint (nq = 2: cos, sin) has no limits; Pinocchio's bounds on its (cos, sin) are not the file's
     finite = [n for n, j in zip(names, joints) if j.nq == 1 and np.isfinite(lower[j.idx_q]) and lower[j.idx_q] > -1e10]
     return {

@@ -30,8 +30,11 @@ def file_models(rep):
               "the reference's on the scene: with the effects off a reading should move as the scene does (an error "
               "like the scene-built run's), with them on the gap is what the engine does with the file — a finding, "
               "not a failure of the engine.")
-    worst = max((f for f in found if math.isfinite(f.file_error)), key=lambda f: f.file_error, default=None)
-    if worst is not None:
+    changed = [f for f in found if math.isfinite(f.file_error) and f.file_error != f.scene_error]
+    worst = max(changed, key=lambda f: abs(f.file_error - f.scene_error), default=None)
+    if worst is None:
+        part.para("No engine's reading of the file, with its effects on, changed the error of the scene-built run.")
+    else:
         unit = UNITS.get(worst.quantity, "")
         part.para(f"Largest change: {worst.engine} on {worst.case} ({worst.file}, {worst.label}) ends "
                   f"{worst.file_error:.3g} {unit} from the truth with the file's effects on, against "
