@@ -231,7 +231,7 @@ def main(argv=None):
     print(f"{'engine':<13}" + "".join(f"{f'{r} ({dofs[r]})':>14}" for r, _, _ in robots))
     for name in engines:
         if name == "mjx":
-            print(robot_line("mjx (fus.)", robots, robot_row(name, robots, args.budget), sizes, chains[name][0], dofs))
+            print(robot_line("mjx", robots, robot_row(name, robots, args.budget), sizes, chains[name][0], dofs))
             print("\n".join(mjx_lines[1:]))
             continue
         print(robot_line(name, robots, robot_row(name, robots, args.budget), sizes, chains[name][0], dofs), flush=True)
