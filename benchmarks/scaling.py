@@ -1,13 +1,14 @@
-"""How stepping cost grows with the number of bodies, in every engine.
+"""How stepping cost grows with the number of bodies, in every engine, and what real robots cost beside the chain.
 
-    python -m benchmarks.scaling [--sizes 2,4,8,16,32,64] [--budget 0.2] [--engine NAME ...]
+    python -m benchmarks.scaling [--sizes 2,4,8,16,32,64] [--budget 0.2] [--engine NAME ...] [--robots ur5,panda,...]
 
 The ``chain`` case (N uniform rods in a revolute chain under gravity, released
 from rest at its default angles) is stepped by each installed engine's fourth-order fixed-step integrator at
 dt = 1e-3 (the reference solver: Kane's equations with RK4; MuJoCo RK4;
 Pinocchio's Lie-group RK4, compiled; Exudyn RK44 on its kinematic tree; Drake's
 RK5 at a fixed step, its only fixed-step method of order four or more; MJX RK4
-in float32, compiled once per N in ``prepare``, never timed). For
+in float32, compiled once per N in ``prepare``, never timed; DART, PyBullet and Simbody have no fixed-step
+method of order four: DART's and PyBullet's semi-implicit Euler, Simbody's Verlet). For
 each N the horizon grows tenfold from 0.01 s until one run takes at least
 ``--budget`` seconds (or 10 s of simulated time is reached), so every figure is
 a stepping time well above the timer's resolution; the cost is printed as
@@ -17,6 +18,13 @@ on log-log axes, over all N and over N >= 8 (where fixed per-step costs no longe
 dominate). Recursive O(N) algorithms (ABA in Pinocchio and MuJoCo's ``mj_step``
 up to its dense factorization) should show p near 1 at small N; a generalized-
 coordinate mass-matrix method p near 2 to 3.
+
+Real robots beside the chain (``ROBOTS``, from example-robot-data: ``pip install dalembert[robots]``): the
+robot cases at the same step and integrators, their cost against their degrees of freedom (UR5 6 and Panda 7
+on ``robot_arm``, Solo12's 18 in ``robot_free_fall``, Talos's 32 in ``robot_tree``), each beside the chain's
+cost at as many joints (its log-log line between the sizes run, where they bracket it): a ratio near 1 says
+the engine's cost is its number of joints; a branched tree (Talos, Solo) or a floating base may cost otherwise.
+A robot an engine refuses (``unsupported``) is marked with its reason.
 
 Timings are taken on whatever else the machine is doing; the exponents are
 ratios within one invocation.
@@ -50,7 +58,15 @@ from dalembert.case import make_case
 
 SIZES = (2, 4, 8, 16, 32, 64)
 # each engine's fourth-order fixed-step integrator (Drake has none at a fixed step: its RK5)
-INTEGRATORS = {"reference": "rk4", "mujoco": "rk4", "pinocchio": "rk4", "exudyn": "rk44", "drake": "rk5", "mjx": "rk4"}
+INTEGRATORS = {"reference": "rk4", "mujoco": "rk4", "pinocchio": "rk4", "exudyn": "rk44", "drake": "rk5", "mjx": "rk4",
+               "dart": "euler", "pybullet": "euler", "simbody": "verlet"}
+# Real robots: (label, case, parameters); their degrees of freedom are read from each case's scene.
+ROBOTS = (("ur5", "robot_arm", {"model": "ur5"}), ("panda", "robot_arm", {"model": "panda"}),
+          ("solo12", "robot_free_fall", {}), ("talos", "robot_tree", {}))
+# Where an engine's default refuses a robot's welds, the integrator and options that run them (its cell is starred):
+# Exudyn's kinematic tree has single-axis joints only; its redundant coordinates take welds, as an index-3 DAE
+# that only its implicit integrators solve.
+ROBOT_FALLBACK = {"exudyn": ("generalized-alpha", {"joints": "redundant"})}
 DT = 1e-3
 REPEATS = 3
 MAX_HORIZON_S = 10.0
@@ -68,12 +84,15 @@ MAX_SIZE = {"mjx": 32}
 MJX_XLA_FLAGS = "--xla_cpu_use_fusion_emitters=false"
 
 
-def cost(adapter, n, budget):
-    """Stepping seconds per simulated second of the ``n``-rod chain (median of ``REPEATS``)."""
-    settings = Settings(INTEGRATORS[adapter.name], dt=DT)
+def cost(adapter, n, budget, case_name="chain", integrator=None, options=None, **params):
+    """Stepping seconds per simulated second of the ``n``-rod chain (median of ``REPEATS``), or of case ``case_name``
+    with ``params`` (``n`` unused), with ``integrator`` (default ``INTEGRATORS``'s) and engine ``options``."""
+    settings = Settings(integrator or INTEGRATORS[adapter.name], dt=DT, options=options or {})
     horizon = 0.01
+    if case_name == "chain":
+        params = dict(params, n=n)
     while True:
-        case = make_case("chain", n=n, t_final=horizon, sample_interval=horizon)
+        case = make_case(case_name, t_final=horizon, sample_interval=horizon, **params)
         prepared = adapter.prepare(case.scene, case.times, settings)
         adapter.run(prepared)  # warm-up
         walls = [adapter.run(prepared).wall_s for _ in range(REPEATS)]
@@ -106,17 +125,75 @@ def line(label, costs, p_all, p_big):
     return f"{label:<13}" + cells + f"{p_all:>10.2f}{p_big:>10.2f}"
 
 
+def robot_dofs(robots):
+    """Degrees of freedom of each robot of ``robots`` (``ROBOTS`` rows): ``{label: int}``."""
+    return {label: sum(len(j.v0) for j in make_case(name, **params).scene.joints) for label, name, params in robots}
+
+
+def robot_row(name, robots, budget):
+    """Engine ``name``'s cost of each robot: ``{label: (cost s/s or NaN, the refusal, or "*" where it ran with
+    ``ROBOT_FALLBACK``, or "")}``."""
+    adapter, out = get_adapter(name), {}
+    for label, case_name, params in robots:
+        case = make_case(case_name, **params)
+        integrator, options = INTEGRATORS[name], {}
+        why = adapter.unsupported(case.scene, Settings(integrator, dt=DT))
+        if why and name in ROBOT_FALLBACK:
+            integrator, options = ROBOT_FALLBACK[name]
+            why = adapter.unsupported(case.scene, Settings(integrator, dt=DT, options=options))
+        if why:
+            out[label] = (float("nan"), why)
+            continue
+        try:
+            out[label] = (cost(adapter, 0, budget, case_name, integrator, options, **params), "*" if options else "")
+        except RuntimeError as e:  # the engine stopped (its solver failed): a finding, in the row's note
+            out[label] = (float("nan"), f"{integrator} {options or ''} stopped: {e}")
+    return out
+
+
+def at_size(sizes, costs, n):
+    """The chain's cost at ``n`` joints on its log-log line between the sizes run that bracket it, or NaN."""
+    pts = [(s, c) for s, c in zip(sizes, costs) if np.isfinite(c)]
+    for (a, ca), (b, cb) in zip(pts, pts[1:]):
+        if a <= n <= b:
+            return float(np.exp(np.interp(np.log(n), [np.log(a), np.log(b)], [np.log(ca), np.log(cb)])))
+    return float("nan")
+
+
+def robot_line(label, robots, found, chain_sizes, chain_costs, dofs):
+    """Two printed lines: the robots' costs, and each against the chain's at as many joints."""
+    cells, ratios = "", ""
+    for r, _, _ in robots:
+        c, why = found[r]
+        cells += (f"{c:>13.3g}" + (why or " ")) if np.isfinite(c) else \
+            f"{'stopped' if ' stopped: ' in why else 'refused':>14}"
+        ratio = c / at_size(chain_sizes, chain_costs, dofs[r]) if np.isfinite(c) else float("nan")
+        ratios += f"{ratio:>14.2f}" if np.isfinite(ratio) else f"{'-':>14}"
+    refusals = "; ".join(f"{r}: {found[r][1]}" for r, _, _ in robots if found[r][1] and found[r][1] != "*")
+    return f"{label:<13}{cells}\n{'  / chain':<13}{ratios}" + (f"\n  ({refusals})" if refusals else "")
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--sizes", default=",".join(map(str, SIZES)), help="numbers of bodies, comma-separated")
     p.add_argument("--budget", type=float, default=0.2, help="least stepping time of one timed run (s)")
     p.add_argument("--engine", action="append", help="engines (default: every installed one)")
-    p.add_argument("--row-only", metavar="LABEL", help=argparse.SUPPRESS)  # one engine's line (the MJX re-run)
+    p.add_argument("--robots", default=",".join(r[0] for r in ROBOTS),
+                   help="real robots beside the chain, comma-separated (of ur5, panda, solo12, talos; '' for none)")
+    p.add_argument("--row-only", metavar="LABEL", help=argparse.SUPPRESS)  # one engine's lines (the MJX re-run)
     args = p.parse_args(argv)
     sizes = [int(x) for x in args.sizes.split(",")]
+    robots = [r for r in ROBOTS if r[0] in args.robots.split(",")]
+    unknown = sorted(set(filter(None, args.robots.split(","))) - {r[0] for r in ROBOTS})
+    if unknown:
+        p.error(f"--robots: unknown {unknown} — use some of {', '.join(r[0] for r in ROBOTS)}")
     if args.row_only:
         (name,) = args.engine
-        print(line(args.row_only, *row(name, sizes, args.budget)))
+        found = row(name, sizes, args.budget)
+        print(line(args.row_only, *found))
+        if robots:
+            print(robot_line(args.row_only, robots, robot_row(name, robots, args.budget), sizes, found[0],
+                             robot_dofs(robots)))
         return
     engines = []
     for name in args.engine or adapter_names():
@@ -131,16 +208,33 @@ def main(argv=None):
           f"'not run': the cost passed {MAX_COST:g} s/s at a smaller N, or N is past what the engine can be built for "
           f"here ({', '.join(f'{k} {v}' for k, v in MAX_SIZE.items())}: MAX_SIZE)")
     print(f"{'engine':<13}" + "".join(f"{f'N={n}':>11}" for n in sizes) + f"{'p (all)':>10}{'p (N>=8)':>10}")
+    chains = {}
     for name in engines:
-        print(line(name, *row(name, sizes, args.budget)), flush=True)
+        chains[name] = row(name, sizes, args.budget)
+        print(line(name, *chains[name]), flush=True)
         if name == "mjx":  # again in a fresh process, XLA's fusion emitters off
             env = {**os.environ, "XLA_FLAGS": f"{os.environ.get('XLA_FLAGS', '')} {MJX_XLA_FLAGS}".strip()}
             out = subprocess.run([sys.executable, "-m", "benchmarks.scaling", "--engine", "mjx", "--sizes", args.sizes,
-                                  "--budget", str(args.budget), "--row-only", "mjx, no fus."],
+                                  "--budget", str(args.budget), "--row-only", "mjx, no fus.", "--robots", args.robots],
                                  env=env, capture_output=True, text=True, check=True)
-            print(out.stdout.strip().splitlines()[-1])
+            mjx_lines = out.stdout.strip().splitlines()
+            print(mjx_lines[0 if robots else -1])
     if "mjx" in engines:
         print(f"mjx, no fus.: MJX in a fresh process with XLA_FLAGS={MJX_XLA_FLAGS}")
+    if not robots:
+        return
+    dofs = robot_dofs(robots)
+    print(f"\nreal robots: stepping seconds per simulated second at dt = {DT:g} s, the same integrators; "
+          "'/ chain': against the chain's cost at as many joints (its line between the sizes run; '-' outside them); "
+          "*: " + ", ".join(f"{k} {i} with {o}" for k, (i, o) in ROBOT_FALLBACK.items())
+          + " (ROBOT_FALLBACK: the default refuses the robot's welds)")
+    print(f"{'engine':<13}" + "".join(f"{f'{r} ({dofs[r]})':>14}" for r, _, _ in robots))
+    for name in engines:
+        if name == "mjx":
+            print(robot_line("mjx", robots, robot_row(name, robots, args.budget), sizes, chains[name][0], dofs))
+            print("\n".join(mjx_lines[1:]))
+            continue
+        print(robot_line(name, robots, robot_row(name, robots, args.budget), sizes, chains[name][0], dofs), flush=True)
 
 
 if __name__ == "__main__":

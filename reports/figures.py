@@ -440,9 +440,9 @@ def map_costs(panels, xlabel, ylabel):
     return svg(fig)
 
 
-def scaling(lines, colours, sizes):
-    """One log-log panel: cost against the number of bodies, a line per (engine, label) coloured by engine
-    (``colours``), a line style per label within an engine; ``lines`` maps (engine, label) to
+def scaling(lines, colours, sizes, xlabel="bodies N"):
+    """One log-log panel: cost against the number of bodies (or ``xlabel``'s count), a line per (engine, label)
+    coloured by engine (``colours``), a line style per label within an engine; ``lines`` maps (engine, label) to
     [(N, cost s/s)], the label carrying its fitted exponent. ``sizes`` (the N run) are the x ticks."""
     fig, ax = plt.subplots(figsize=(2 * PANEL_W, 1.3 * PANEL_H))
     styles = {}
@@ -455,7 +455,7 @@ def scaling(lines, colours, sizes):
     ax.set_xticks(list(sizes))
     ax.set_xticklabels([str(n) for n in sizes])
     ax.minorticks_off()
-    ax.set_xlabel("bodies N")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("stepping time per simulated second (s/s)")
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
     return svg(fig)

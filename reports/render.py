@@ -29,6 +29,7 @@ from dalembert.reports.sections.case import case_header
 from dalembert.reports.sections.common import Report, section_id, title
 from dalembert.reports.sections.contact import contact
 from dalembert.reports.sections.engines import beyond_the_scene, engines_simulated
+from dalembert.reports.sections.file_models import file_models
 from dalembert.reports.sections.findings import findings
 from dalembert.reports.sections.hazards import hazards
 from dalembert.reports.sections.header import header, page_title
@@ -111,7 +112,7 @@ def build_report(store, out_dir=None):
     parts += [header(rep, [(a, t) for p, a, t in answers if p]),
               summary.folded("The Pareto fronts, the summary table and each case's findings", keep=1),
               hazards(rep), beyond_the_scene(rep), mapped_part, loops(rep).folded("Per case and engine line", keep=2),
-              scaling(rep), parity(rep), versions(rep)]
+              scaling(rep), file_models(rep), parity(rep), versions(rep)]
     for f in found:
         parts += _case_sections(rep, f, names, mapped)
     html_path, md_path = write_page([p for p in parts if p], out_dir)

@@ -12,13 +12,14 @@ sweep; this reads them from whatever a store holds.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 import numpy as np
 
 from dalembert.reports.work_precision import cost_per_sim_s
 
-__all__ = ["SizeSweep", "size_sweeps", "fitted_exponent"]
+__all__ = ["SizeSweep", "size_sweeps", "fitted_exponent", "line_key", "robot_costs"]
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,30 @@ def fitted_exponent(points):
     return float(np.polyfit(np.log(n), np.log(c), 1)[0])
 
 
+def line_key(r):
+    """The line a run belongs to within its engine: integrator, options, step or tolerance."""
+    step = f"dt={r.settings.dt:g}" if r.settings.dt is not None else f"rtol={r.settings.rtol:g}"
+    return " ".join(x for x in (r.settings.integrator, r.options_text, step) if x)
+
+
+def robot_costs(records, case_of):
+    """Real robots' stepping costs against their degrees of freedom: ``{(engine, line label): [(dof, cost s/s,
+    robot)]}``, by dof, from the finished, timed runs of cases tagged ``robot``. ``case_of(name, version)`` is the
+    stored ``CaseRecord``; a robot is named by its case's ``model`` parameter (a file by its name)."""
+    out = {}
+    for r in records:
+        cost = cost_per_sim_s(r)
+        if r.status != "ok" or not math.isfinite(cost) or cost <= 0.0:
+            continue
+        case = case_of(r.case, r.case_version)
+        if "robot" not in case.tags:
+            continue
+        dof = sum(len(j.v0) for j in case.scene.joints)
+        robot = os.path.splitext(os.path.basename(str(case.params.get("model", r.case))))[0]
+        out.setdefault((r.engine, line_key(r)), []).append((dof, cost, robot))
+    return {k: sorted(v) for k, v in out.items()}
+
+
 def size_sweeps(records, bodies_of):
     """The ``SizeSweep`` of every case whose stored versions have scenes of at least two sizes.
     ``bodies_of(case name, version) -> int``, the number of bodies of that version's scene.
@@ -64,9 +89,7 @@ def size_sweeps(records, bodies_of):
             cost = cost_per_sim_s(r)
             if r.status != "ok" or not math.isfinite(cost) or cost <= 0.0:
                 continue
-            step = f"dt={r.settings.dt:g}" if r.settings.dt is not None else f"rtol={r.settings.rtol:g}"
-            label = " ".join(x for x in (r.settings.integrator, r.options_text, step) if x)
-            lines.setdefault((r.engine, label), []).append((size[r.case_version], cost))
+            lines.setdefault((r.engine, line_key(r)), []).append((size[r.case_version], cost))
         lines = {k: sorted(v) for k, v in lines.items() if len({n for n, _ in v}) >= 2}
         if lines:
             out.append(SizeSweep(name, tuple(sorted(set(size.values()))), lines,

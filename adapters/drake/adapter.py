@@ -35,8 +35,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dalembert.adapters import file_model
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared
-from dalembert.adapters.drake import contact
+from dalembert.adapters.drake import contact, from_file
 from dalembert.adapters.drake.audit import audit
 from dalembert.adapters.drake.loops import CONTINUOUS_REASON, LOOP_KINDS
 from dalembert.adapters.drake.model import drake_version
@@ -72,7 +73,7 @@ ADAPTIVE_SUFFIX = "-adaptive"
 
 # The contact options (``contact.CONTACT_OPTIONS``), named by every integrator; ``contact_solver`` is the
 # discrete plant's alone (its ``Option.only``).
-OPTIONS = tuple(contact.CONTACT_OPTIONS)
+OPTIONS = (*contact.CONTACT_OPTIONS, *file_model.FILE_OPTION_NAMES)
 
 
 def _integrators():
@@ -111,13 +112,16 @@ class DrakeAdapter(Adapter):
     # modes, every integrator (``PrismaticJoint``, model)
     # contact: both modes, point contact (``contact``); restitution where an impact speed maps it
     effects = EFFECTS | frozenset(f"loop:{k}" for k in LOOP_KINDS) | SPRING_EFFECTS | CONTACT_EFFECTS
-    options = contact.CONTACT_OPTIONS  # contact_solver, point_contact_stiffness, hunt_crossley_dissipation, ...
+    # contact_solver, point_contact_stiffness, hunt_crossley_dissipation, ...; model_file, file_effects (from_file)
+    options = {**contact.CONTACT_OPTIONS, **file_model.FILE_OPTIONS}
     integrators = _integrators()
 
     def version(self):
         return drake_version()
 
     def unsupported(self, scene, settings):
+        if (why := file_model.why_not(scene, settings)):
+            return why
         reason = super().unsupported(scene, settings) or contact.why_not(scene, settings)
         if reason is None and scene.loops and settings.integrator != "discrete":
             kinds = ", ".join(sorted({lp.effect for lp in scene.loops}))
@@ -131,12 +135,16 @@ class DrakeAdapter(Adapter):
         """The plant's summary, for reports and ``dalembert show-model``."""
         from dalembert.adapters.drake.model import DrakeModel
 
+        if file_model.model_file(settings):
+            return from_file.describe(scene, settings)
         return DrakeModel(scene, settings.dt if settings.integrator == "discrete" else 0.0, settings).summary
 
     # ------------------------------------------------------------- build
     def prepare(self, scene, times, settings):
         from dalembert.adapters.drake.model import DrakeModel
 
+        if file_model.model_file(settings):
+            return from_file.prepare(scene, times, settings)
         discrete = settings.integrator == "discrete"
         model = DrakeModel(scene, settings.dt if discrete else 0.0, settings)
         q0, v0 = model.initial_state()
@@ -147,6 +155,8 @@ class DrakeAdapter(Adapter):
     def run(self, prepared):
         from dalembert.adapters.drake.readback import read_back
 
+        if isinstance(prepared, file_model.FilePrepared):
+            return from_file.run(prepared)
         p = prepared
         X, wall, n_steps, n_rhs, message, recharts = simulate(p)
         loads = p.model.loads
@@ -156,5 +166,7 @@ class DrakeAdapter(Adapter):
 
     # ------------------------------------------------------------- audit
     def audit(self, prepared, outcome):
+        if isinstance(prepared, file_model.FilePrepared):
+            return from_file.audit(prepared, outcome)
         return audit(prepared, outcome)
 

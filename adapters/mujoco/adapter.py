@@ -14,10 +14,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from dalembert import spatial
+from dalembert.adapters import file_model
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared, option_value
 from dalembert.adapters.mujoco.audit import audit
 from dalembert.adapters.mujoco.mjcf import MJCF_OPTIONS, engine_frames, mjcf
-from dalembert.adapters.mujoco import contact
+from dalembert.adapters.mujoco import contact, from_file
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mujoco.springs import check_springs
 from dalembert.adapters.mujoco.stepping import step_loop, step_rollout
@@ -26,7 +27,7 @@ from dalembert.settings import steps_per_interval
 
 __all__ = ["MujocoAdapter", "MujocoPrepared"]
 
-OPTIONS = ("loads", "welds", *contact.OPTIONS)
+OPTIONS = ("loads", "welds", *contact.OPTIONS, *file_model.FILE_OPTION_NAMES)
 # Why loop:distance is not declared (measured: a crank-coupler tree closed by a distance loop to the world,
 # the four-bar with a massless rocker, against the reference; tests/test_mujoco_loops.py).
 DISTANCE_REASON = ("the tendon equality holds the closure and the motion (7e-7 m from the reference at dt = 1e-4) but "
@@ -80,7 +81,8 @@ class MujocoAdapter(Adapter):
     # read back in the audit (``_joint_audit``).
     # Contact: geoms, planes and explicit pairs (``contact``), read back in the audit.
     effects = EFFECTS | (LOOP_EFFECTS - {"loop:distance"}) | SPRING_EFFECTS | CONTACT_EFFECTS
-    options = {**MJCF_OPTIONS, **contact.CONTACT_OPTIONS}  # loads, welds; cone, impratio, ...
+    # loads, welds; cone, impratio, ...; model_file, file_effects (the file read by MuJoCo itself: from_file)
+    options = {**MJCF_OPTIONS, **contact.CONTACT_OPTIONS, **file_model.FILE_OPTIONS}
     integrators = {
         "euler": IntegratorSpec(True, OPTIONS, "semi-implicit Euler", order=1),
         "rk4": IntegratorSpec(True, OPTIONS, "classical RK4", order=4),
@@ -101,23 +103,30 @@ class MujocoAdapter(Adapter):
         return mujoco.__version__
 
     def unsupported(self, scene, settings):
-        reason = super().unsupported(scene, settings)
+        reason = file_model.why_not(scene, settings) or super().unsupported(scene, settings)
         if reason and "loop:distance" in reason:
             reason += f" (a distance loop: {DISTANCE_REASON})"
         return reason or contact.why_not(scene)
+
+    def repro(self, scene, times, settings, quantity):
+        if file_model.model_file(settings):
+            raise ValueError(file_model.NO_REPRO)
+        return super().repro(scene, times, settings, quantity)
 
     def variants(self, scene):
         """Default matrix: where the scene has welds, also as equality constraints."""
         return [{}, {"welds": "equality"}] if any(j.kind == "weld" for j in scene.joints) else [{}]
 
     def describe(self, scene, settings):
-        """The generated model, for reports and ``dalembert show-model``."""
-        return mjcf(scene, settings)
+        """The generated model (or the one MuJoCo read from ``model_file``), for reports and ``show-model``."""
+        return from_file.describe(scene, settings) if file_model.model_file(settings) else mjcf(scene, settings)
 
     # ------------------------------------------------------------- build
     def prepare(self, scene, times, settings):
         import mujoco
 
+        if file_model.model_file(settings):
+            return from_file.prepare(scene, times, settings)
         text = mjcf(scene, settings)
         model = mujoco.MjModel.from_xml_string(text)
         welds = self.option(settings, "welds")
@@ -166,6 +175,8 @@ class MujocoAdapter(Adapter):
     def run(self, prepared):
         import mujoco
 
+        if isinstance(prepared, file_model.FilePrepared):
+            return from_file.run(prepared)
         p = prepared
         messages = []
         previous = mujoco.get_mju_user_warning()
@@ -192,5 +203,7 @@ class MujocoAdapter(Adapter):
 
     # ------------------------------------------------------------- audit
     def audit(self, prepared, outcome):
+        if isinstance(prepared, file_model.FilePrepared):
+            return from_file.audit(prepared, outcome)
         return audit(prepared, outcome)
 

@@ -27,8 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dalembert.adapters import file_model
 from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared, typed_options
-from dalembert.adapters.pinocchio import contact, loops
+from dalembert.adapters.pinocchio import contact, from_file, loops
 from dalembert.adapters.pinocchio.audit import audit
 from dalembert.adapters.pinocchio.integrators import STAGES, adaptive, fixed_step
 from dalembert.adapters.pinocchio.model import WELDS, PinocchioModel
@@ -79,19 +80,23 @@ class PinocchioAdapter(Adapter):
         "loop": Option(LOOPS, LOOPS[0], "the fixed-step loop: compiled (stepper.cpp) or the Python one"),
         "welds": Option(WELDS, WELDS[0], "welds as one rigid body (tree) or as constraints (pin.constraintDynamics)"),
         **contact.CONTACT_OPTIONS,  # contact_solver, contact_tolerance, contact_iterations (euler)
+        **file_model.FILE_OPTIONS,  # model_file, file_effects: the URDF read by Pinocchio itself (from_file)
     }
+    _file = file_model.FILE_OPTION_NAMES
     integrators = {
-        "euler": IntegratorSpec(True, ("loop", "welds", *contact.OPTIONS),
+        "euler": IntegratorSpec(True, ("loop", "welds", *contact.OPTIONS, *_file),
                                 "semi-implicit Euler on the group; with contact, the contact time-stepper (impulses "
                                 "from pin's ADMM or PGS cone solver each step)", order=1),
-        "rk4": IntegratorSpec(True, ("loop", "welds"), "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)",
+        "rk4": IntegratorSpec(True, ("loop", "welds", *_file),
+                              "Runge-Kutta-Munthe-Kaas 4 (exact dexp^-1 from dIntegrate)",
                               order=4),
         # The order the name claims: on a joint whose group does not commute (free, ball) the missing dexp^-1
         # correction makes it second order (Munthe-Kaas, BIT 38, 1998), which the observed order shows.
-        "rk4-naive": IntegratorSpec(True, ("loop", "welds"), "RK4 with stagewise integrate, no dexp^-1 correction",
+        "rk4-naive": IntegratorSpec(True, ("loop", "welds", *_file),
+                                    "RK4 with stagewise integrate, no dexp^-1 correction",
                                     order=4),
-        "rk45": IntegratorSpec(False, ("welds",), "scipy RK45 in local coordinates", order=5),
-        "dop853": IntegratorSpec(False, ("welds",), "scipy DOP853 in local coordinates", order=8),
+        "rk45": IntegratorSpec(False, ("welds", *_file), "scipy RK45 in local coordinates", order=5),
+        "dop853": IntegratorSpec(False, ("welds", *_file), "scipy DOP853 in local coordinates", order=8),
     }
 
     def version(self):
@@ -100,6 +105,8 @@ class PinocchioAdapter(Adapter):
         return pinocchio.__version__
 
     def unsupported(self, scene, settings):
+        if (why := file_model.why_not(scene, settings)):
+            return why
         constrained = bool(scene.loops) or (self.option(settings, "welds") == "constraint"
                                             and any(j.kind == "weld" for j in scene.joints))
         if (why := contact.why_not(scene, settings, constrained)):  # contact: euler, welds as a tree, no box-box
@@ -120,6 +127,11 @@ class PinocchioAdapter(Adapter):
                     "constraint forces — use welds=tree")
         return None
 
+    def repro(self, scene, times, settings, quantity):
+        if file_model.model_file(settings):
+            raise ValueError(file_model.NO_REPRO)
+        return super().repro(scene, times, settings, quantity)
+
     def variants(self, scene):
         """Default matrix: where the scene has welds, also as constraints (where supported)."""
         out = [{}]
@@ -128,12 +140,16 @@ class PinocchioAdapter(Adapter):
         return out
 
     def describe(self, scene, settings):
+        if file_model.model_file(settings):
+            return from_file.describe(scene, settings)
         pm = PinocchioModel(scene, self.option(settings, "welds"))
         return pm.summary + "\n" + "".join(f"{line}\n" for line in contact.Contacts(pm, scene).summary())
 
     def prepare(self, scene, times, settings):
         from dalembert.adapters.pinocchio import native
 
+        if file_model.model_file(settings):
+            return from_file.prepare(scene, times, settings)
         pm = PinocchioModel(scene, self.option(settings, "welds"))
         q0, v0 = pm.initial_state()
         times = np.asarray(times, dtype=float)
@@ -150,6 +166,8 @@ class PinocchioAdapter(Adapter):
 
     # ------------------------------------------------------------ stepping
     def run(self, prepared):
+        if isinstance(prepared, file_model.FilePrepared):
+            return from_file.run(prepared)
         p = prepared
         method = p.settings.integrator
         info = {}
@@ -185,4 +203,6 @@ class PinocchioAdapter(Adapter):
 
     # ------------------------------------------------------------ read-back, audit
     def audit(self, prepared, outcome):
+        if isinstance(prepared, file_model.FilePrepared):
+            return from_file.audit(prepared, outcome)
         return audit(prepared, outcome)
