@@ -74,9 +74,10 @@ def parity(rep):
         part.para("Its systematic gaps from MuJoCo C, from the stored runs (each where it shows, with the joints of "
                   "its cases):")
         part.items(gaps)
-    part.para(("Beyond these, the" if gaps else "The") + " same compiled model and integrator in both; the largest "
-              "difference between the two stored trajectories over the horizon, against the floors no "
-              "double-precision (and, for float32, no single-precision) computation beats. "
+    part.para(("Beyond these gaps, each" if gaps else "Each") + " port run against MuJoCo C's at the same settings "
+              "(the same compiled model and integrator): the largest difference between the two stored trajectories "
+              "over the horizon, against the floors no double-precision (and, for float32, no single-precision) "
+              "computation beats (an unstable motion grows any difference, roundoff included, up to the largest). "
               + ("; ".join(said) + "." if said else ""))
     head = ["case", "settings", "orientation (rad)", "position (m)", "case floor (rad)", "float32 floor (rad)",
             "orientation / floor (float32 floor where known)"]
