@@ -5,8 +5,9 @@ there are roundoff, a few are a chaotic case amplifying it. What the port comput
 case where it shows, is one of three gaps, each decided from the store:
 
 * *number type* — on the settings where the port's float64 run agrees with the original to within
-  ``AGREE_ROUNDOFF`` (the same computation), its float32 run's difference from the original is the float32
-  roundoff alone: the floor the port's default number type puts under every error (``NumberFloor``);
+  ``AGREE_ROUNDOFF`` (the same computation) and stays near the truth (orientation error below
+  ``reports.order.SATURATED_ANGLE``), its float32 run's difference from the original is the float32 roundoff
+  alone: the floor the port's default number type puts under every error (``NumberFloor``);
 * *order* — a port's integrator whose step pairs in the asymptotic range (``reports.order.step_pairs``) show an
   order below the original's on the same case, integrator and steps by more than ``reports.order.ORDER_MARGIN``
   (``OrderGap``). The original's order over the same two steps is taken from its raw errors, the roundoff floor
@@ -26,7 +27,7 @@ import statistics
 from dataclasses import dataclass
 
 from dalembert.reports.causes import single_precision
-from dalembert.reports.order import ORDER_MARGIN, step_pairs
+from dalembert.reports.order import ORDER_MARGIN, SATURATED_ANGLE, step_pairs
 from dalembert.reports.parity import PORT_ONLY_OPTIONS, PORTS
 
 __all__ = ["AGREE_ROUNDOFF", "SAME_RESULT", "NumberFloor", "OrderGap", "SameAs", "number_floors", "order_gaps",
@@ -52,7 +53,8 @@ class NumberFloor:
     ----------
     port, original : str — engine names
     low, high : float — the least and the largest orientation difference, rad
-    settings : int — how many settings gave one (each with its float64 twin within ``AGREE_ROUNDOFF``)
+    settings : int — how many settings gave one (each with its float64 twin within ``AGREE_ROUNDOFF`` of the
+        original and within ``SATURATED_ANGLE`` of the truth)
     cases : tuple of str
     """
 
@@ -137,6 +139,10 @@ def number_floors(parities, records):
     for (port, case, *_), pair in sorted(twins.items(), key=lambda kv: str(kv[0])):
         single, double = pair.get("float32"), pair.get("float64")
         if single is None or double is None or not double.orientation <= AGREE_ROUNDOFF:
+            continue
+        # a motion already far from the truth (an angle error past SATURATED_ANGLE: the heavy top at Euler's coarse
+        # steps) amplifies roundoff at every step: its float32 difference is no floor
+        if not records[double.port_key].max_error("orientation") < SATURATED_ANGLE:
             continue
         if math.isfinite(single.orientation):
             per_port.setdefault(port, []).append((case, single.orientation))
