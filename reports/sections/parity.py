@@ -9,6 +9,7 @@ import math
 from dalembert.errors import QUANTITIES as QUANTITY_UNITS
 from dalembert.reports.page import Part
 from dalembert.reports.formatting import counted
+from dalembert.reports.order import SATURATED_ANGLE
 from dalembert.reports.parity import PORT_NAMES, parities
 from dalembert.reports.port_gaps import AGREE_ROUNDOFF, SAME_RESULT, joint_kinds, number_floors, order_gaps, same_as
 from dalembert.reports.tables import Cell, Table, num
@@ -30,7 +31,8 @@ def gap_sentences(rep, found):
         out.append(f"Number type: {PORT_NAMES.get(g.port, g.port)}'s float32 (its default) puts a floor of "
                    f"{g.low:.2g} to {g.high:.2g} rad under its orientation — its float32 runs' difference from "
                    f"{_original(g.original)} on the {counted(g.settings, 'setting')} where its float64 twin is the "
-                   f"same computation (within {AGREE_ROUNDOFF:g} rad): {', '.join(g.cases)}.")
+                   f"same computation (within {AGREE_ROUNDOFF:g} rad) and near the truth (within "
+                   f"{SATURATED_ANGLE:g} rad): {', '.join(g.cases)}.")
     for g in order_gaps(rep.found):
         case, dts, mine, theirs = g.example
         kept = f"; it keeps the order on {_cases(g.kept, scenes)}" if g.kept else ""
