@@ -50,7 +50,7 @@ def beyond_conserved(r, case):
     return [n for n in case.conserved if n in case.tolerances and r.drifts.get(n, 0.0) > case.tolerances[n].value]
 
 
-_CACHE = {}  # (store path, run key, quantity) -> has_trend: a run's series is read once per report
+_CACHE = {}  # (store path, run key, trajectory, quantity, drift) -> has_trend: a run's series is read once per report
 
 
 def trend_words(store, r, case):
@@ -60,7 +60,7 @@ def trend_words(store, r, case):
         return {}
     out = {}
     for name in beyond_conserved(r, case):
-        key = (store.path, r.key, name)
+        key = (store.path, r.key, r.trajectory, name, r.drifts.get(name))
         if key not in _CACHE:
             _CACHE[key] = has_trend(*time_series.drift_series(store, r, case, name))
         out[name] = "drifts by" if _CACHE[key] else "varies by"
