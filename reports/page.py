@@ -6,6 +6,10 @@ parts in order, numbers the figures across the whole page (``report_files/NN-nam
 beside the Markdown; the same SVG inline in the HTML) and writes ``report.html`` and
 ``report.md``. The page's CSS and JavaScript are package data (``report.css``,
 ``report.js``) inlined into the HTML: nothing is loaded from the network.
+
+``report.md`` has the HTML's economy: a part folded with ``details=True`` (a case's evidence: its figures and
+tables) is written to ``report_details.md`` instead, under its case's heading and an anchor, and ``report.md``
+keeps one link to it in its place. Every number of the page is in one of the two files.
 """
 
 from __future__ import annotations
@@ -17,7 +21,9 @@ from importlib import resources
 from dalembert.reports.tables import escape_html, escape_md
 from dalembert.store import atomic_write, file_name
 
-__all__ = ["Part", "write_page", "static_text"]
+__all__ = ["Part", "write_page", "static_text", "DETAILS"]
+
+DETAILS = "report_details.md"  # beside report.md: the folded evidence report.md links to
 
 
 @dataclass(frozen=True)
@@ -27,6 +33,14 @@ class _Figure:
     svg: str
     caption: str
     name: str
+
+
+@dataclass(frozen=True)
+class _Detail:
+    """Markdown lines folded out of ``report.md`` into ``DETAILS``, under ``summary``."""
+
+    summary: str
+    lines: tuple
 
 
 class Part:
@@ -82,14 +96,18 @@ class Part:
         self.md += [f"<details><summary>{escape_html(summary)}</summary>", "", "```",
                     text.rstrip().replace("```", "'''"), "```", "", "</details>", ""]
 
-    def folded(self, summary, keep=0):
+    def folded(self, summary, keep=0, details=False):
         """This part with everything after its first ``keep`` HTML elements (a heading) inside a closed
-        ``<details>`` under ``summary``; the Markdown is left as it is (a file has no folding to do)."""
+        ``<details>`` under ``summary``. The Markdown is left as it is, or with ``details`` (and ``keep`` 0) moved
+        whole to ``DETAILS``, a link to it in its place (``write_page``)."""
+        if details and keep:
+            raise ValueError(f"Part.folded.keep: {keep} with details — a part moved to {DETAILS} moves whole: "
+                             "give keep=0")
         out = Part()
         if self:
             out.html = (self.html[:keep] + [f'<details class="fold"><summary>{escape_html(summary)}</summary>']
                         + self.html[keep:] + ["</details>"])
-            out.md = list(self.md)
+            out.md = [_Detail(summary, tuple(self.md))] if details else list(self.md)
         return out
 
     def raw(self, html, md=()):
@@ -125,11 +143,46 @@ def write_page(parts, out_dir, title="dalembert report", files="report_files"):
     def md(x):
         return [f"![{escape_md(x.caption)}]({files}/{names[id(x)]})", ""] if isinstance(x, _Figure) else [x]
 
+    main, details = _split_details([x for part in parts for x in part.md], md)
     body = "".join(html(x) for part in parts for x in part.html)
     page = (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>{escape_html(title)}</title>'
             f"<style>{static_text('report.css')}</style></head><body>{body}"
             f"<script>\n{static_text('report.js')}\n</script></body></html>")
     html_path, md_path = os.path.join(out_dir, "report.html"), os.path.join(out_dir, "report.md")
     atomic_write(html_path, page)
-    atomic_write(md_path, "\n".join(line for part in parts for x in part.md for line in md(x)) + "\n")
+    atomic_write(md_path, "\n".join(main) + "\n")
+    details_path = os.path.join(out_dir, DETAILS)
+    if details:
+        atomic_write(details_path, "\n".join(details) + "\n")
+    elif os.path.exists(details_path):  # (a report written before into this directory had some)
+        os.remove(details_path)
     return html_path, md_path
+
+
+def _split_details(elements, md):
+    """``report.md``'s lines and ``DETAILS``' ([] when nothing is folded out) from the page's Markdown elements
+    (lines, figures through ``md``, ``_Detail``s): a detail's lines go under the heading it was folded beneath,
+    behind an anchor ``detail-N``, and a link to it takes its place."""
+    main, details, context, placed, n = [], [], "", "", 0
+    for x in elements:
+        if not isinstance(x, _Detail):
+            if main and main[-1].startswith(f"- [") and f"]({DETAILS}#" in main[-1]:
+                main.append("")  # (the links of one case are one list: a blank line ends it)
+            main += md(x)
+            if isinstance(x, str) and x.startswith("## "):
+                context = x[3:]
+            continue
+        n += 1
+        if not details:
+            details = ["# dalembert report: details", "",
+                       "The evidence report.md folds: each case's figures and tables, under its heading, in page "
+                       "order. Each block is linked from its place in report.md.", ""]
+        if context != placed:
+            details += [f"## {context}", ""]
+            placed = context
+        details += [f'<a id="detail-{n}"></a>', "", f"**{escape_md(x.summary)}**", ""]
+        details += [line for y in x.lines for line in md(y)]
+        main.append(f"- [{escape_md(x.summary)}]({DETAILS}#detail-{n})")
+    if main and f"]({DETAILS}#" in main[-1]:
+        main.append("")
+    return main, details

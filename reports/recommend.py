@@ -2,7 +2,9 @@
 its cost, the runner-up, and whether the store can tell them apart — the answer the report opens with.
 
 A *class* of problem is a set of case versions (``PROBLEM_CLASSES``: decided from a case's tags and scene, in
-one place; the first class that claims a case keeps it). A *setting* is one engine, integrator, options and
+one place; the first class that claims a case keeps it), answered per headline unit: a class whose cases'
+headlines are in different units (a free top's orientation in rad, a particle's position in m) has one answer per
+unit, each over the cases in that unit, since a target bounds one unit. A *setting* is one engine, integrator, options and
 step (or tolerance). A setting *reaches* a target on a class when, on every case version of the class, its
 finished, non-diverged run has a headline figure (``reports.work_precision``: the headline error, or the case's
 headline metric, in the case's unit) at most the target. Its *cost* on the class is the geometric mean over the
@@ -108,8 +110,8 @@ class Recommendation:
     ----------
     problem : ProblemClass
     target : float — the headline figure's bound, in each case's unit
-    cases : tuple of str — the case versions' titles the class holds
-    units : tuple of str — their headline units
+    cases : tuple of str — the case versions' titles the class holds whose headline is in ``units``
+    units : tuple of str — their headline unit (one: a target bounds one unit)
     best, runner_up : Candidate or None — the cheapest reaching setting and the next engine's (None: none)
     apart : bool — the two costs are apart beyond their spreads (True where there is no runner-up)
     grid : str — why the step grid may have decided it ("" when it did not)
@@ -207,21 +209,21 @@ def _grid_decides(best, candidates, target):
 
 
 def recommend(found, titles=None, targets=TARGETS):
-    """The ``Recommendation`` of every class of problem ``found`` (``CaseFindings``, any order) holds, per target
-    in ``targets``; classes in ``PROBLEM_CLASSES`` order. ``titles``: each ``CaseFindings``' heading (default:
+    """The ``Recommendation`` of every class of problem ``found`` (``CaseFindings``, any order) holds, per headline
+    unit and target in ``targets``; classes in ``PROBLEM_CLASSES`` order, a class's units in name order (a class
+    whose cases' headlines are in rad and in m is answered for each unit apart: one target bounds one unit). ``titles``: each ``CaseFindings``' heading (default:
     its case's name)."""
     groups = {}
     for f in found:
         problem = problem_class(f.case)
         if problem is not None and f.ranked:
-            groups.setdefault(problem, []).append(f)
+            # a target bounds one unit: a class whose cases' headlines differ in unit (rad, m) is answered per unit
+            groups.setdefault((problem, f.ranked_unit), []).append(f)
     out = []
-    for problem in PROBLEM_CLASSES:
-        members = groups.get(problem)
-        if not members:
-            continue
+    for problem, unit in sorted(groups, key=lambda pu: (PROBLEM_CLASSES.index(pu[0]), pu[1])):
+        members = groups[(problem, unit)]
         names = tuple(dict.fromkeys((titles or {}).get(f, f.case.name) for f in members))
-        units = tuple(dict.fromkeys(f.ranked_unit for f in members))
+        units = (unit,)
         candidates = _candidates(members)
         for target in targets:
             reaching = [c for c in candidates if c.error <= target]

@@ -84,8 +84,9 @@ def _case_sections(rep, f, names, mapped):
                   + " above stand(s) for them; every run is in the store (dalembert export --all).")
         return [part]
     name = f"{f.case.name}-{f.case.version}" if count > 1 else f.case.name
-    # the case says what it is; its evidence is folded, one line each (the page stays a few screens long)
-    return [case_header(rep, f)] + [part.folded(summary) for part, summary in (
+    # the case says what it is; its evidence is folded, one line each (the page stays a few screens long), and
+    # in Markdown moved to report_details.md, a link each in report.md
+    return [case_header(rep, f)] + [part.folded(summary, details=True) for part, summary in (
         (work_precision(rep, f, name), "What accuracy costs: the work-precision figure and each line's best"),
         (stability(rep, f, name), "Stability: the drift figure and the stored verdicts"),
         (against_time(rep, f, name), "Against time: the runs that matter"),

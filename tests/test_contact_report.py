@@ -33,13 +33,20 @@ def _page(store):
 
 
 def _section(md, case):
-    """The Markdown of one case's section (from its heading to the next case's)."""
-    return md.split(f"\n## {case}\n")[1].split("\n## ")[0]
+    """The Markdown of one case's section (from its heading to the next case's): its head in report.md and its
+    evidence in report_details.md, together."""
+    return "".join(part.split("\n## ")[0] for part in md.split(f"\n## {case}\n")[1:])
 
 
 def _md(store):
-    with open(os.path.join(store.path, "report.md")) as fh:
-        return fh.read()
+    """report.md, then report_details.md (the evidence report.md links to)."""
+    text = ""
+    for name in ("report.md", "report_details.md"):
+        path = os.path.join(store.path, name)
+        if os.path.exists(path):
+            with open(path) as fh:
+                text += fh.read()
+    return text
 
 
 def test_contact_figures_appear_for_contact_cases_only(store):

@@ -97,6 +97,20 @@ def test_a_line_missing_at_a_cheaper_step_lets_the_grid_decide(seed):
     assert _one(recommend(_found(seed, *runs)), 1e-6).grid == ""
 
 
+def test_a_class_whose_headlines_differ_in_unit_is_answered_per_unit(seed):
+    """A target bounds one unit: a free top's orientation (rad) and a particle's position (m) are not one answer."""
+    first = base(seed)
+    case = seed.case(first.case, first.case_version)
+    runs = [_run(first, "a", "alpha", 0.1, 1e-4), _run(first, "b", "beta", 0.2, 1e-4)]
+    moved = [changed(r, errors={**r.errors, "position": (5e-3, 5e-3)}) for r in runs]
+    found = [CaseFindings(case, tuple(runs), "orientation", (), (), ()),
+             CaseFindings(case, tuple(moved), "position", (), (), ())]
+    recs = [r for r in recommend(found, {found[0]: "top", found[1]: "particle"}) if r.target == 1e-3]
+    assert [(r.problem.name, r.units, r.cases) for r in recs] == [("free bodies", ("m",), ("particle",)),
+                                                                  ("free bodies", ("rad",), ("top",))]
+    assert recs[0].best is None and recs[1].best.engine == "alpha"  # the position misses 1e-3 m; the angle meets it
+
+
 def test_a_pick_met_only_at_the_finest_step_lets_the_grid_decide(seed):
     first = base(seed)
     runs = [_run(first, "a1", "alpha", 0.1, 3e-3), _run(first, "a2", "alpha", 1.0, 1e-5, dt=1e-3)]

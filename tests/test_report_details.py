@@ -3,6 +3,7 @@ is shown with its description and unit, times and parameters print without float
 case's versions read in the order of their parameter's values."""
 
 import math
+import os
 import re
 
 import numpy as np
@@ -74,8 +75,14 @@ def diverged_store(tmp_path_factory):
     return store
 
 
+def _md(path):
+    """report.md, then report_details.md (the evidence report.md links to)."""
+    return "".join(open(f"{path}/{name}").read() for name in ("report.md", "report_details.md")
+                   if os.path.exists(f"{path}/{name}"))
+
+
 def test_no_float_noise_in_times(diverged_store):
-    md = open(f"{diverged_store.path}/report.md").read()
+    md = _md(diverged_store.path)
     page = open(f"{diverged_store.path}/report.html").read()
     assert "at t = 0.35 s" in md and "t=0.35 s" in page  # the hazard's sentence, the status cell
     assert "(t = 0.35 s)" in open(next(f for f in _figures(diverged_store) if f.endswith("-diverged.svg"))).read()
@@ -103,7 +110,7 @@ def declared_store(tmp_path_factory):
 def test_declared_quantities_show_description_and_unit(declared_store):
     case = declared_store.case(base(declared_store).case, base(declared_store).case_version)
     assert {inv.name for inv in case.invariants} >= {"vertical_angular_momentum", "spin"}
-    md = open(f"{declared_store.path}/report.md").read()
+    md = _md(declared_store.path)
     page = open(f"{declared_store.path}/report.html").read()
     for inv in case.invariants:
         assert escape_md(inv.description) in md and escape_html(inv.description) in page, inv.name

@@ -34,8 +34,15 @@ def _importable(name):
 
 
 def _section(md, case):
-    """The Markdown of one case's section (from its heading to the next case's)."""
-    return md.split(f"\n## {case}\n")[1].split("\n## ")[0]
+    """The Markdown of one case's section (from its heading to the next case's): its head in report.md and its
+    evidence in report_details.md (``_md``), together."""
+    return "".join(part.split("\n## ")[0] for part in md.split(f"\n## {case}\n")[1:])
+
+
+def _md(path):
+    """report.md, then report_details.md (the evidence report.md links to), of the report in ``path``."""
+    return "".join(open(os.path.join(path, name)).read() for name in ("report.md", "report_details.md")
+                   if os.path.exists(os.path.join(path, name)))
 
 
 def _headline(case):
@@ -50,17 +57,30 @@ def test_report_files_and_values_equal_the_store(store):
     for _, s in summary.iterrows():
         mine = [r.max_error(_headline(s.case)) for r in records if r.case == s.case and r.engine == s.engine]
         assert s.best_error == min(mine)  # full precision in the CSV
-    md = open(os.path.join(store.path, "report.md")).read()
+    md = _md(store.path)
     for r in records:  # every stored headline error appears as shown (3 significant digits) in its case's runs
         assert f"{r.max_error(_headline(r.case)):.2e}" in _section(md, r.case)
     figures = re.findall(r"!\[[^\]]*\]\((report_files/[^)]+)\)", md)
     assert figures and all(os.path.exists(os.path.join(store.path, f)) for f in figures)
 
 
+def test_report_md_links_each_case_s_evidence_in_report_details(store):
+    """report.md has the HTML's economy: a case's folded evidence is in report_details.md, one link each in its
+    place, every link to an anchor there (every number reachable, ``test_report_files_and_values_equal_the_store``)."""
+    main = open(os.path.join(store.path, "report.md")).read()
+    details = open(os.path.join(store.path, "report_details.md")).read()
+    links = re.findall(r"\(report_details\.md#(detail-\d+)\)", main)
+    assert links and len(set(links)) == len(links)
+    assert all(f'<a id="{a}"></a>' in details for a in links)
+    assert "### Every run" not in main and "### Every run" in details
+    for case in ("free_top", "pivoted_rod"):  # each case's head stays in report.md, its evidence under its name
+        assert f"\n## {case}\n" in main and f"\n## {case}\n" in details
+
+
 def test_energy_drift_rates_are_shown_as_stored(store):
     """The drift-rate table: every successful run's stored slope, signed, per engine + integrator
     and step (explicit Euler's secular drift and RK4's near-zero one side by side)."""
-    md = open(os.path.join(store.path, "report.md")).read()
+    md = _md(store.path)
     section = _section(md, "free_top").split("### Energy drift rate")[1].split("###")[0]
     top = [r for r in store.records() if r.case == "free_top" and r.ok and r.engine == "reference"]
     assert len(top) == 4
@@ -180,7 +200,7 @@ def test_report_reads_only_the_store(store, tmp_path):
               f"raise SystemExit(main(['report', {str(out)!r}]))\n")
     ran = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert ran.returncode == 0, ran.stderr[-2000:]
-    md = (out / "report.md").read_text()
+    md = _md(out)
     for r in Store(out).records():
         assert r.judgement.verdict in md
     assert "as judged when it ran" in md

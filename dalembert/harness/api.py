@@ -65,7 +65,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     cases, tags : list of str or None — case names, or tags selecting cases (default: every case
         not tagged ``hard``)
     engines, integrators : list of str or None — default: every installed engine, every integrator
-    dts : list of float or None — fixed steps, s (default 1e-2, 1e-3)
+    dts : list of float or None — fixed steps, s (default 1e-2, 5e-3, 2e-3, 1e-3)
     rtols : list of float or None — tolerances of adaptive integrators (default 1e-6, 1e-9)
     params : dict or None — case parameters, e.g. ``{"t_final": 2.0}``; a list sweeps
         (``{"spin": [5, 50]}``), a tuple is a vector, a str is the command line's text

@@ -94,7 +94,8 @@ def _parser():
     r.add_argument("--tag", action="append", help="select cases by tag (repeatable)")
     r.add_argument("--engine", action="append", help="engine name (repeatable; default: every installed one)")
     r.add_argument("--integrator", action="append", help="integrator name (repeatable; default: all)")
-    r.add_argument("--dt", action="append", type=_floats, help="step sizes in s, comma-separated (default 1e-2,1e-3)")
+    r.add_argument("--dt", action="append", type=_floats,
+                   help="step sizes in s, comma-separated (default 1e-2,5e-3,2e-3,1e-3)")
     r.add_argument("--rtol", action="append", type=_floats, help="tolerances for adaptive integrators (default 1e-6,1e-9)")
     r.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="case parameter override")
     r.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",

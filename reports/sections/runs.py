@@ -1,7 +1,7 @@
 """Every run of one case in a sortable table: settings, status, cost and its spread, each error,
 each conserved quantity's drift (the case's declared ones too, relative to their scale in their
 unit), each metric in its unit, what is beyond the tolerance (and what the run did not measure), and the stored
-verdict."""
+verdict ("varies" for a ``drifts`` verdict whose quantities oscillate within bounds: ``reports.trend``)."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from dalembert.reports.formatting import value_text
 from dalembert.reports.page import Part
 from dalembert.reports.sections.common import drifts_of, shown_value, stored_label
 from dalembert.reports.tables import MISSING, Cell, Table, num
+from dalembert.reports.trend import reason_text, verdict_word
 from dalembert.reports.work_precision import cost_per_sim_s, sweep_key
 
 __all__ = ["every_run"]
@@ -47,7 +48,7 @@ def every_run(rep, f):
         rows.append([Cell(r.engine), Cell(settings_text(r), wrap=True), status, num(cost_per_sim_s(r), "{:.2g}"),
                      spread] + [num(r.max_error(q)) for q in errs] + [num(shown_value(r, n, f.case)) for n in drifts]
                     + [Cell(_beyond_text(r.judgement) if r.ok else MISSING, wrap=True),
-                       Cell(r.judgement.verdict, title=r.judgement.reason)])
+                       Cell(verdict_word(rep.store, r, f.case), title=reason_text(rep.store, r, f.case))])
     part.heading("Every run", 3)
     part.table(Table(head, rows, row_ids=[f"run-{r.key}" for r in runs],
                      row_classes=[r.judgement.verdict for r in runs], cls="runs"),

@@ -11,6 +11,7 @@ from dalembert.reports.formatting import counted, value_text
 from dalembert.reports.page import Part
 from dalembert.reports.sections.common import grid_row
 from dalembert.reports.tables import Cell, Table, num
+from dalembert.reports.trend import reason_text, verdict_word
 from dalembert.reports.work_precision import sweep_key
 
 __all__ = ["stability"]
@@ -37,7 +38,7 @@ def stability(rep, f, name):
             value = r.drifts.get(measure) if energy else r.max_error(measure)
             note = f"t={value_text(r.t_diverged, 's')}" if r.t_diverged is not None else ""
             cells[(grid_row(r), r.sweep_label)] = (value if r.ok and value is not None and math.isfinite(value)
-                                                   else None, r.judgement.verdict, note)
+                                                   else None, verdict_word(rep.store, r, f.case), note)
         blocks.append(dict(title=title, cells=cells,
                            rows=sorted({k[0] for k in cells}),
                            columns=[c for c in dict.fromkeys(r.sweep_label for r in sorted(runs, key=sweep_key))]))
@@ -47,14 +48,15 @@ def stability(rep, f, name):
     bound = f.case.tolerances.get(measure)
     part.figure(figures.stability(blocks, label, bound.value if bound else None),
                 f"{name}: {label} per run (colour, log scale; the bar marks the case's bound) and its stored verdict "
-                "(word: it weighs every conserved quantity the case bounds, the colour this one); fixed-step and "
+                "(word: it weighs every conserved quantity the case bounds, the colour this one; \"varies\": beyond the "
+                "bound but within bounds, no trend, \"drifts\": a trend); fixed-step and "
                 "adaptive runs apart. Black: diverged (at the time shown); grey, hatched: stopped early.",
                 f"{name}-stability")
     n_unsupported = len(f.runs) - len(shown)
     if n_unsupported:
         part.para(f"{counted(n_unsupported, 'unsupported run')} not drawn; the hazards above list them with the reason.")
-    reasons = [f"{run_name(r)}: {r.judgement.verdict} — {r.judgement.reason}" for r in shown if r.judgement.reason
-               and r.judgement.verdict != "stable"]
+    reasons = [f"{run_name(r)}: {verdict_word(rep.store, r, f.case)} — {reason_text(rep.store, r, f.case)}"
+               for r in shown if r.judgement.reason and r.judgement.verdict != "stable"]
     if reasons:
         part.details(f"why {len(reasons)} run(s) are not stable (stored verdict reasons)", "\n".join(reasons))
     _drift_rates(part, f)

@@ -294,8 +294,8 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     cases, tags, engines, integrators : list of str or None — names (``--case``, ``--tag``, ...;
         default: every case not tagged ``hard``, every installed engine, every integrator); a name
         given twice counts once
-    dts, rtols : list of float or None — steps, s, and tolerances (default 1e-2, 1e-3 and 1e-6,
-        1e-9); the command line's one list per use is accepted too
+    dts, rtols : list of float or None — steps, s, and tolerances (default 1e-2, 5e-3, 2e-3,
+        1e-3 and 1e-6, 1e-9); the command line's one list per use is accepted too
     params : dict or list of str or None — case parameters, ``{"t_final": 2.0}`` (a list of values
         sweeps: ``{"spin": [5, 50]}``; a tuple is a vector; a str is the command line's text,
         ``"log:5,500,7"``) or the command line's ``["t_final=2"]``
