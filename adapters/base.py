@@ -278,6 +278,13 @@ class Adapter:
         ``mjx.put_model``) returns here all but that part, with the same text; the rest stays a run's refusal."""
         return self.unsupported(scene, settings)
 
+    def beyond_scene(self, scene, settings):
+        """What a run with ``settings`` simulates beyond ``scene`` because the user asked for it (a robot file's own
+        damping, friction and limits as the engine read them), as words, or None (this default: the run simulates
+        the scene). Such a run is a finding about the engine, not judged against the case's tolerances, which hold
+        for the scene alone (``dalembert.judge``'s ``beyond_scene``)."""
+        return None
+
     def variants(self, scene):
         """Engine option sets the default matrix runs on ``scene`` (``[{}]``: the defaults only)."""
         return [{}]

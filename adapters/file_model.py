@@ -103,6 +103,15 @@ NO_REPRO = ("options.model_file: dalembert repro writes runs of the model an eng
             "the engine's own reading of a file (its audit's model_source) — dalembert export gives its trajectory")
 
 
+def beyond(settings):
+    """What a run with ``settings`` simulates beyond its scene (``Adapter.beyond_scene``): the file's effects as
+    the engine read them, when it reads the file with them on; else None (effects off: the scene's motion)."""
+    if model_file(settings) and effects_on(settings):
+        return ("the engine read options.model_file itself with file_effects=on: the file's damping, friction, "
+                "armature and limits as the engine applies them")
+    return None
+
+
 def why_not(scene, settings):
     """Why a run with ``settings`` cannot read its file (a reason for ``Adapter.unsupported``), or None."""
     if not effects_on(settings) and not model_file(settings):  # (its default, "on", changes nothing: harmless)

@@ -62,7 +62,8 @@ class Judgement:
     ----------
     beyond : tuple of str — names of the case's tolerances the run exceeds (empty unless ``ok``)
     verdict : str — one of ``VERDICTS``
-    reason : str — why the verdict is not ``stable`` ("" when it is)
+    reason : str — why the verdict is not ``stable`` ("" when it is), and why the tolerances were not judged
+        where the run simulated more than the scene
     within_tolerance : bool or None — every tolerance was measured and holds (True), some measured one is
         exceeded (False); None for a run that did not finish, or when nothing measured is beyond and some bound
         was not measured
@@ -77,7 +78,7 @@ class Judgement:
     not_measured: tuple = ()
 
 
-def judge(status, message, errors, drifts, tolerances, growths=None):
+def judge(status, message, errors, drifts, tolerances, growths=None, beyond_scene=None):
     """Judge one run.
 
     Parameters
@@ -91,6 +92,9 @@ def judge(status, message, errors, drifts, tolerances, growths=None):
     growths : dict name -> float or None — change of each conserved quantity in units of its scale
         on the true motion (``dalembert.invariants.growth``; a drift, scaled by the run's own
         largest value, cannot show a blow-up)
+    beyond_scene : str or None — what the run simulated beyond the scene at the user's request
+        (``Adapter.beyond_scene``): its stability is judged as any run's, but the case's tolerances hold for the
+        scene alone, so ``within_tolerance`` is None (not established) and the reason says why
 
     Returns
     -------
@@ -123,4 +127,7 @@ def judge(status, message, errors, drifts, tolerances, growths=None):
         if value > tol.value:
             drifted.append(_beyond_text(name, value, tol))
     verdict, reason = ("drifts", "; ".join(drifted)) if drifted else ("stable", "")
+    if beyond_scene:
+        reason = "; ".join(filter(None, (reason, f"not judged against the tolerances: {beyond_scene}")))
+        within = None
     return Judgement(beyond, verdict, reason, within, missing)

@@ -242,3 +242,25 @@ def test_the_report_section_names_the_largest_change_or_says_there_was_none():
     md = "\n".join(x for x in file_models(SimpleNamespace(records=records[2:])).md if isinstance(x, str))
     assert "No engine's reading of the file, with its effects on, changed the error" in md
     assert not file_models(SimpleNamespace(records=records[2:3]))  # no file read: no section
+
+
+def test_a_run_with_the_file_s_effects_is_judged_for_stability_but_not_against_the_scene_s_tolerances(arm):
+    """The case's tolerances hold for the scene: a run that read the file with its damping is a finding about the
+    engine (``Adapter.beyond_scene``), its ``within_tolerance`` not established; with the effects off it is the
+    scene's motion and is judged."""
+    from dalembert.adapters import get_adapter
+    from dalembert.judge import judge
+    from dalembert.settings import Settings
+    from dalembert.tolerance import Tolerance
+
+    path, scene = arm
+    adapter = get_adapter("mujoco")
+    on = adapter.beyond_scene(scene, Settings("rk4", dt=1e-3, options={"model_file": path}))
+    off = adapter.beyond_scene(scene, Settings("rk4", dt=1e-3, options={"model_file": path, "file_effects": "off"}))
+    assert "file_effects=on" in on and off is None
+    assert adapter.beyond_scene(scene, Settings("rk4", dt=1e-3)) is None
+    tolerances = {"joint": Tolerance(1e-6, "test bound")}
+    beyond = judge("ok", "", {"joint": 9.0}, {}, tolerances, beyond_scene=on)
+    assert beyond.within_tolerance is None and "not judged against the tolerances" in beyond.reason
+    assert beyond.verdict == "stable"
+    assert judge("ok", "", {"joint": 9.0}, {}, tolerances, beyond_scene=off).within_tolerance is False

@@ -119,6 +119,9 @@ class DrakeAdapter(Adapter):
     def version(self):
         return drake_version()
 
+    def beyond_scene(self, scene, settings):
+        return file_model.beyond(settings)  # the robot file's effects, when the engine reads the file with them
+
     def unsupported(self, scene, settings):
         if (why := file_model.why_not(scene, settings)):
             return why

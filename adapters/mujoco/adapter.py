@@ -102,6 +102,9 @@ class MujocoAdapter(Adapter):
 
         return mujoco.__version__
 
+    def beyond_scene(self, scene, settings):
+        return file_model.beyond(settings)  # the robot file's effects, when the engine reads the file with them
+
     def unsupported(self, scene, settings):
         reason = file_model.why_not(scene, settings) or super().unsupported(scene, settings)
         if reason and "loop:distance" in reason:

@@ -104,6 +104,9 @@ class PinocchioAdapter(Adapter):
 
         return pinocchio.__version__
 
+    def beyond_scene(self, scene, settings):
+        return file_model.beyond(settings)  # the robot file's effects, when the engine reads the file with them
+
     def unsupported(self, scene, settings):
         if (why := file_model.why_not(scene, settings)):
             return why

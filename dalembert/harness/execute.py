@@ -52,7 +52,7 @@ def _record(spec, status, message="", errors=None, drifts=None, tolerances=None,
     """The record of ``spec`` ending in ``status``, judged."""
     errors, drifts = errors or {}, drifts or {}
     verdict = judge(status, message, {q: mx for q, (mx, _) in errors.items()}, drifts, tolerances or {},
-                    fields.get("growths"))
+                    fields.get("growths"), fields.pop("beyond_scene", None))
     return RunRecord(key=spec.key, case=spec.case, case_version=spec.case_version, engine=spec.engine,
                      settings=spec.settings, params=dict(spec.params), status=status, message=message,
                      errors=errors, drifts=drifts, judgement=verdict,
@@ -162,6 +162,7 @@ def _execute(spec, timing, truth, concurrent):
         reason = adapter.unsupported(case.scene, settings)
         if reason:
             return _record(spec, "unsupported", reason, **found), None
+        found["beyond_scene"] = adapter.beyond_scene(case.scene, settings)
         t0 = time.perf_counter()
         prepared = adapter.prepare(case.scene, case.times, settings)
         build_s = time.perf_counter() - t0
