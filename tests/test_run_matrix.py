@@ -163,8 +163,7 @@ def test_interrupted_run_resumes_to_the_same_store(tmp_path):
     cut = tmp_path / "cut"
     proc = _cli("run", *selection, "--out", str(cut))
     store = Store(cut)
-    deadline = time.monotonic() + 120
-    while len(store.done_keys()) < 2 and time.monotonic() < deadline:
+    while len(store.done_keys()) < 2 and proc.poll() is None:  # no deadline: a busy machine is slow, not wrong
         time.sleep(0.05)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
