@@ -28,5 +28,13 @@ def shared_dir(tmp_path_factory, worker_id):
 def pytest_collection_modifyitems(config, items):
     """Tests marked ``long`` (each takes >= ~10 s on 2 cores: an engine's contract over every case, MJX
     compilations, matrices through the command line) run first, so that pytest-xdist's workers, handed
-    tests in collection order, do not end the session with one of them running alone."""
-    items.sort(key=lambda item: item.get_closest_marker("long") is None)  # stable: the order otherwise kept
+    tests in collection order, do not end the session with one of them running alone.
+
+    Tests marked ``leaves_threads`` run last: a Python thread they leave in the process (an in-process Dask
+    client leaves distributed's offload thread) makes every later matrix in it start its workers from a
+    forkserver (``harness.pool``: forking a process with threads is unsafe), each of them importing its
+    engines again instead of sharing the test process's (~1 s more per matrix)."""
+    def order(item):
+        return 2 if item.get_closest_marker("leaves_threads") else 0 if item.get_closest_marker("long") else 1
+
+    items.sort(key=order)  # stable: the order otherwise kept

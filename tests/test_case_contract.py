@@ -10,7 +10,7 @@ import pytest
 from dalembert import testing
 from dalembert.case import CASES, load_cases
 from dalembert.reference import truth
-from truths import shared_truth
+from truths import shared_reference, shared_truth
 
 load_cases()
 NAMES = list(CASES)
@@ -47,12 +47,14 @@ def test_truth_conserves_what_the_case_declares(case, case_truth):
     testing.check_truth_conserves(case, case_truth)
 
 
-def test_an_independent_solution_agrees_with_the_truth(case, case_truth):
+def test_an_independent_solution_agrees_with_the_truth(case, case_truth, shared_dir, monkeypatch):
     """The closed form against the reference; a truth from the reference against a second integrator
-    (and formulation, where the truth's is not Kane's), never against itself."""
+    (and formulation, where the truth's is not Kane's), never against itself. The reference against a closed
+    form is computed once in the session (``truths.shared_reference``: test_reference_check.py judges it too)."""
     why = testing.reference_cannot_judge(case)
     if why:  # contact: tests/test_contact_cases.py checks each closed form against an event-driven integration
         pytest.skip(why)
+    monkeypatch.setattr(testing, "_reference_through_singular_positions", lambda c: shared_reference(c, shared_dir))
     testing.check_reference_agrees(case, case_truth)
 
 

@@ -132,11 +132,33 @@ def sweep_store(tmp_path_factory):
         {"harness_version": "test", "engines": {"reference": "test"}, "specs": [],
          "machine": {"cores": 2, "cpu": "test", "host": "test", "os": "test", "python": "test"}})
     run_matrix(specs, store, jobs=1, timing=QUICK)
-    build_report(store)
     return store
 
 
-def test_sweep_rows_in_value_order(sweep_store):
+@pytest.fixture(scope="module")
+def sweep_report(sweep_store):
+    """The sweep's report, built once (a report's figures take seconds) from the store opened afresh, with what
+    it read counted: ``(store, case records read, trajectories read)``, each read as ``(name, version)`` or key."""
+    cases, trajectories = [], []
+    read_case, read_trajectory = Store._read_case, Store._read_trajectory
+
+    def counted_case(self, name, version):
+        cases.append((name, version))
+        return read_case(self, name, version)
+
+    def counted_trajectory(self, key):
+        trajectories.append(key)
+        return read_trajectory(self, key)
+
+    store = Store.open(sweep_store.path)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(Store, "_read_case", counted_case)
+        patch.setattr(Store, "_read_trajectory", counted_trajectory)
+        build_report(store)
+    return store, cases, trajectories
+
+
+def test_sweep_rows_in_value_order(sweep_store, sweep_report):
     by_hash = [r.params["t_final"] for r in sorted(sweep_store.records(), key=lambda r: r.case_version)]
     assert by_hash != sorted(by_hash), "the sweep's hashes happen to sort by value: the test would prove nothing"
     md = open(f"{sweep_store.path}/report.md").read()
@@ -148,34 +170,17 @@ def test_sweep_rows_in_value_order(sweep_store):
     assert not FLOAT_NOISE.search(md), FLOAT_NOISE.search(md).group(0)
 
 
-def test_each_case_record_is_read_once(sweep_store, monkeypatch, tmp_path):
+def test_each_case_record_is_read_once(sweep_store, sweep_report):
     """The sections share the store's case records: building the report reads each case file once."""
-    reads = []
-    read = Store._read_case
-
-    def counted(self, name, version):
-        reads.append((name, version))
-        return read(self, name, version)
-
-    monkeypatch.setattr(Store, "_read_case", counted)
-    build_report(Store.open(sweep_store.path), tmp_path)
+    _, reads, _ = sweep_report
     stored = {(r.case, r.case_version) for r in sweep_store.records()}
     assert sorted(reads) == sorted(stored), reads
 
 
-def test_each_trajectory_is_read_once(sweep_store, monkeypatch, tmp_path):
+def test_each_trajectory_is_read_once(sweep_report):
     """The sections and findings share the store's trajectories: building the report reads each run's file
     at most once, and the shared arrays are read-only (no reader can change another's data)."""
-    reads = []
-    read = Store._read_trajectory
-
-    def counted(self, key):
-        reads.append(key)
-        return read(self, key)
-
-    monkeypatch.setattr(Store, "_read_trajectory", counted)
-    store = Store.open(sweep_store.path)
-    build_report(store, tmp_path)
+    store, _, reads = sweep_report
     assert reads and len(reads) == len(set(reads)), reads
     traj = store.trajectory(reads[0])
     assert not traj.t.flags.writeable

@@ -19,8 +19,11 @@ from stores import small_store
 ARTIFACTS = os.environ.get("DALEMBERT_ARTIFACTS")
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def store(tmp_path_factory):
+    """A small matrix of two cases and its report. Session-scoped, though only this module uses it: the long test
+    below runs first (tests/conftest.py), apart from the others, and a module fixture would be built again for them
+    after the modules in between (a matrix and a report: seconds)."""
     engines = ("reference", "mujoco") if _importable("mujoco") else ("reference",)
     s = small_store(tmp_path_factory.mktemp("store"), engines=engines)
     build_report(s)

@@ -163,8 +163,7 @@ def test_interrupted_run_resumes_to_the_same_store(tmp_path):
     cut = tmp_path / "cut"
     proc = _cli("run", *selection, "--out", str(cut))
     store = Store(cut)
-    deadline = time.monotonic() + 120
-    while len(store.done_keys()) < 2 and time.monotonic() < deadline:
+    while len(store.done_keys()) < 2 and proc.poll() is None:  # no deadline: a busy machine is slow, not wrong
         time.sleep(0.05)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
@@ -183,6 +182,7 @@ def test_interrupted_run_resumes_to_the_same_store(tmp_path):
     assert {r.cost.repeats for r in after.values() if r.status == "ok"} == {1}
 
 
+@pytest.mark.leaves_threads  # the in-process client leaves distributed's offload thread behind
 def test_dask_cluster_gives_the_same_rows(tmp_path, monkeypatch):
     """The same rows as a local pool; each task's BLAS and OpenMP pools get its share of its host's cores (two
     single-threaded workers on one host: half of them each, as a local pool of two), whatever the workers

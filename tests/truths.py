@@ -7,16 +7,23 @@ session: the first worker to ask computes it under a file lock and leaves it in 
 temporary directory; a worker asking later loads it, one asking meanwhile waits for it (never longer than
 computing it itself). This is pytest-xdist's documented pattern for a session fixture run once; its
 ``xdist_group`` marks cannot serve here, since pytest 9 ignores the node ids xdist 3.8 rewrites for them.
+
+``shared_reference`` does the same for the case contract's independent solution of a closed-form case (the
+reference through a loop's singular positions: ~6 s of CPU for ``n_four_bar``), which
+``test_reference_check.py`` also judges against the closed form.
 """
 
 import fcntl
 import pickle
 
+from dalembert import testing
 from dalembert.reference import truth
 
-__all__ = ["shared_truth"]
+__all__ = ["shared_truth", "shared_reference"]
 
-_TRUTHS = {}  # this process's, by (case name, version)
+_SHARED = {}  # this process's, by (what, case name, version)
+# the function itself, taken once here: the case contract hands ``shared_reference`` to ``testing`` in its place
+_REFERENCE = testing._reference_through_singular_positions
 
 
 def shared_truth(case, shared_dir):
@@ -28,14 +35,26 @@ def shared_truth(case, shared_dir):
         otherwise is another truth
     shared_dir : pathlib.Path — a directory every worker of the session sees (the ``shared_dir`` fixture)
     """
-    key = (case.name, case.version)
-    if key not in _TRUTHS:
-        path = shared_dir / f"truth-{case.name}-{case.version}.pickle"
+    return _shared("truth", truth, case, shared_dir)
+
+
+def shared_reference(case, shared_dir):
+    """``testing._reference_through_singular_positions(case)``: ``(label, trajectory)`` of the reference's
+    DOP853 against a closed form (retried at the looser tolerance where it stops at a singular position),
+    computed once per case version in the session; arguments as ``shared_truth``'s."""
+    return _shared("reference", _REFERENCE, case, shared_dir)
+
+
+def _shared(what, compute, case, shared_dir):
+    """``compute(case)``, computed by the first worker to ask under a file lock and loaded by the others."""
+    key = (what, case.name, case.version)
+    if key not in _SHARED:
+        path = shared_dir / f"{what}-{case.name}-{case.version}.pickle"
         with open(path.with_suffix(".lock"), "w") as lock:
             fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
             if path.exists():
-                _TRUTHS[key] = pickle.loads(path.read_bytes())
+                _SHARED[key] = pickle.loads(path.read_bytes())
             else:
-                _TRUTHS[key] = truth(case)
-                path.write_bytes(pickle.dumps(_TRUTHS[key]))
-    return _TRUTHS[key]
+                _SHARED[key] = compute(case)
+                path.write_bytes(pickle.dumps(_SHARED[key]))
+    return _SHARED[key]
