@@ -119,7 +119,8 @@ class TestRun:
         p, out = _run(pendulum, "xpbd", 1e-3, np.asarray(pendulum.times)[:3])
         audit = ADAPTER.audit(p, out)
         assert audit["device"] == "cpu" and audit["number_type"] == "float32"
-        assert audit["gravity"][2] == float(np.float32(-9.81)) != -9.81  # stored in float32
+        assert audit["gravity_float32"][2] == float(np.float32(-9.81)) != -9.81  # stored in float32
+        assert audit["gravity"] == (0.0, 0.0, -9.81)  # that float32's shortest decimal
         assert audit["integrator"] == "Newton SolverXPBD"
         assert audit["solver_settings"] == {"angular_damping": 0.0, "iterations": 2, "joint_linear_relaxation": 0.7,
                                             "joint_angular_relaxation": 0.4, "joint_linear_compliance": 0.0,

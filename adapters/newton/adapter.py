@@ -134,7 +134,11 @@ class NewtonAdapter(Adapter):
         p, m = prepared, prepared.model.model
         dofs = m.joint_dof_count
         out = {
-            "gravity": tuple(float(g) for g in m.gravity.numpy()[0]),  # as stored: float32 (-9.81 -> -9.8100004)
+            # Newton holds gravity in float32 only: each component as the shortest decimal that float32 value reads
+            # back as (numpy's float32 repr: -9.81 for the float32 nearest -9.81), and the float32 value widened
+            # exactly (-9.8100004196167)
+            "gravity": tuple(float(str(g)) for g in m.gravity.numpy()[0]),
+            "gravity_float32": tuple(float(g) for g in m.gravity.numpy()[0]),
             "integrator": f"Newton {solvers.FAMILIES[p.family][0]}",
             "solver_settings": solvers.settings(p.solver, p.family, m),
             "timestep": float(np.float32(p.settings.dt)),
