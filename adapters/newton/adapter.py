@@ -201,7 +201,8 @@ def _read_back(p, Q, V):
     for b in scene.bodies:
         i = index[b.name]
         quat = spatial.xyzw_to_wxyz(Q[:, i, 3:])
-        R[b.name] = spatial.quat_to_matrix(spatial.quat_normalize(quat))
+        with np.errstate(invalid="ignore"):  # a diverged run's NaN rows stay NaN
+            R[b.name] = spatial.quat_to_matrix(spatial.quat_normalize(quat))
         bodies[b.name] = BodyStates(Q[:, i, :3].copy(), quat, V[:, i, :3].copy(), V[:, i, 3:].copy())
     n = len(p.times)
     world = dict(R=np.broadcast_to(np.eye(3), (n, 3, 3)), p=np.zeros((n, 3)), v=np.zeros((n, 3)),
