@@ -133,6 +133,13 @@ class TestRun:
         assert ADAPTER.audit(p, out)["solver_settings"]["angular_damping"] == 0.0
         assert p.solver.angular_damping == 0.0  # Newton's default is 0.05
 
+    def test_defaults_engine_keeps_newtons_damping(self, top):
+        """``defaults=engine`` builds with Newton's own angular damping (0.05 /s in Featherstone), read back."""
+        p, out = _run(top, "featherstone", 1e-3, [0.0, 0.01], defaults="engine")
+        assert p.solver.angular_damping == 0.05
+        assert ADAPTER.audit(p, out)["solver_settings"]["angular_damping"] == 0.05
+        assert "defaults=engine" in ADAPTER.describe(top.scene, p.settings)
+
     def test_repeatable(self, pendulum):
         times = np.asarray(pendulum.times)[:6]
         p, out = _run(pendulum, "steel", 1e-3, times)
@@ -158,7 +165,7 @@ class TestRefusals:
     def test_bad_option_named_before_anything_runs(self, pendulum):
         with pytest.raises(ValueError, match="options.iterations"):
             ADAPTER.check(pendulum.scene, pendulum.times, Settings("xpbd", dt=1e-3, options={"iterations": "0"}))
-        with pytest.raises(ValueError, match="joint_attach_ke"):
+        with pytest.raises(ValueError, match="options.joint_attach_ke: only semi_implicit"):
             ADAPTER.check(pendulum.scene, pendulum.times,
                           Settings("featherstone", dt=1e-3, options={"joint_attach_ke": "1e5"}))
 

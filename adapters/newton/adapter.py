@@ -79,8 +79,9 @@ class NewtonAdapter(Adapter):
     effects = EFFECTS
     options = solvers.OPTIONS
     refusal_notes = NOT_MAPPED
-    integrators = {family: IntegratorSpec(True, opts, description, order=order)
-                   for family, (_, description, order, opts) in solvers.FAMILIES.items()}
+    # every family names every option; ``Option.only`` says which families take it (``check`` refuses the others)
+    integrators = {family: IntegratorSpec(True, tuple(solvers.OPTIONS), description, order=order)
+                   for family, (_, description, order, _) in solvers.FAMILIES.items()}
 
     def version(self):
         return version()
@@ -94,16 +95,24 @@ class NewtonAdapter(Adapter):
         return super().unsupported(scene, settings) or why_not(scene)
 
     def describe(self, scene, settings):
-        """Newton's model, read back from its arrays, for reports and ``dalembert show-model``."""
-        return summary(build(scene))
+        """Newton's model, read back from its arrays, and the solver settings it is stepped with, for reports and
+        ``dalembert show-model``."""
+        options = typed_options(self.options, settings)
+        family = settings.integrator
+        damping = solvers.angular_damping(options)
+        nm = _build(scene, family, options)
+        names = solvers.FAMILIES[family][3]
+        given = {n: options[n] for n in names if n != "angular_damping" and options[n] is not None}
+        return (summary(nm) + f"\nsolver: Newton {solvers.FAMILIES[family][0]}, defaults={options['defaults']}, "
+                f"angular damping {'Newton' + chr(39) + 's own' if damping is None else damping}"
+                + (f", {given}" if given else ""))
 
     # ------------------------------------------------------------- build
     def prepare(self, scene, times, settings):
         wp, newton, _ = engine()
         family = settings.integrator
         options = typed_options(self.options, settings)
-        nm = build(scene, color=family == "vbd",
-                   steel_angular_damping=options["angular_damping"] if family == "steel" else None)
+        nm = _build(scene, family, options)
         check_mass_properties(nm, scene)
         with wp.ScopedDevice(DEVICE):
             solver = solvers.make(newton, nm.model, family, options)
@@ -165,6 +174,14 @@ class NewtonAdapter(Adapter):
 
             out["float32_floor"] = float32_floor(p.scene, p.times, p.settings.dt)
         return out
+
+
+def _build(scene, family, options):
+    """The Newton model for a run of ``family`` with ``options``: coloured for VBD; Steel's angular damping set on
+    the model (unless Newton's own is asked for); Newton's inertia balancing only with ``defaults=engine``."""
+    damping = solvers.angular_damping(options)
+    return build(scene, color=family == "vbd", steel_angular_damping=damping if family == "steel" else None,
+                 balance_inertia=options["defaults"] == "engine")
 
 
 def _max_of(model, name):

@@ -89,15 +89,17 @@ def _trees(scene):
     return list(trees.values())
 
 
-def build(scene, color=False, steel_angular_damping=None):
+def build(scene, color=False, steel_angular_damping=None, balance_inertia=False):
     """The Newton model of ``scene`` (``NewtonModel``) on the CPU. ``color``: the body graph coloured
     (``ModelBuilder.color``), which VBD requires. ``steel_angular_damping`` (1/s, or None: not for Steel): Steel's
     per-body angular damping of free bodies, a model attribute (``steel:rigid_body_angular_damping``) that Steel
-    otherwise takes as 0.05 (PhysX's default), registered and set on every body."""
+    otherwise takes as 0.05 (PhysX's default), registered and set on every body. ``balance_inertia``: Newton's
+    correction of inertias that violate the triangle inequality (its default on; off here unless asked: a scene's
+    inertia is as given, and ``check_mass_properties`` then says where Newton changed one)."""
     wp, newton, _ = engine()
     start = spatial.initial_body_states(scene)
     b = newton.ModelBuilder(gravity=tuple(float(g) for g in scene.gravity))
-    b.balance_inertia = False  # the scene's inertia as given
+    b.balance_inertia = bool(balance_inertia)
     extra = None
     if steel_angular_damping is not None:
         newton.solvers.SolverSteel.register_custom_attributes(b)
@@ -169,6 +171,9 @@ def summary(nm):
     names = {i: n for n, i in nm.index.items()}
     lines = [f"newton.Model on {DEVICE}: {m.body_count} bodies, {m.joint_count} joints, "
              f"{m.articulation_count} articulations, gravity {m.gravity.numpy()[0].tolist()} m/s^2 (float32)"]
+    steel = getattr(getattr(m, "steel", None), "rigid_body_angular_damping", None)
+    if steel is not None:
+        lines.append(f"steel:rigid_body_angular_damping {float(steel.numpy().max(initial=0.0)):g} 1/s (every body)")
     mass, inertia = m.body_mass.numpy(), m.body_inertia.numpy()
     for i in range(m.body_count):
         lines.append(f"body {names[i]}: mass {mass[i]:.9g} kg, inertia about the COM "

@@ -25,8 +25,9 @@ moves by ~1e-4 over 0.5 s in every family but Featherstone (float32 roundoff ove
 1e-5; VBD's implicit Euler damps it by 1.7e-3). Steel's attitude error on the free top grows as the step shrinks
 (3.7e-4 rad at 1e-3 s, 8.8e-4 at 5e-4 over 1 s).
 
-Options: one declaration per name (``OPTIONS``), each taken only by the families that have it (``Option.only``).
-An option's default is the value this adapter builds with: Newton's own default, except ``angular_damping``,
+Options: one declaration per name (``OPTIONS``), each taken only by the families that have it (``Option.only``),
+and ``defaults`` (every family). An option's default is the value this adapter builds with: Newton's own default,
+except ``angular_damping`` under ``defaults=scene``,
 whose Newton default (0.05 in Featherstone, semi-implicit and, on free bodies, Steel: PhysX's default) is a damping
 no scene asks for, so it is 0 here. Steel takes it as a model attribute, not a constructor argument
 (``model.build``: ``steel_angular_damping``).
@@ -37,7 +38,7 @@ from __future__ import annotations
 
 from dalembert.adapters.base import Option
 
-__all__ = ["FAMILIES", "NOT_FAMILIES", "OPTIONS", "make", "settings"]
+__all__ = ["FAMILIES", "NOT_FAMILIES", "OPTIONS", "angular_damping", "make", "settings"]
 
 # family -> (Newton's class, description, order of accuracy, its options in the order its constructor takes them)
 FAMILIES = {
@@ -67,10 +68,13 @@ def _only(name):
 
 
 OPTIONS = {
-    "angular_damping": Option(default=0.0, minimum=0.0, only=_only("angular_damping"),
-                              description="angular velocity damping (1/s); 0: none (Newton's default in "
-                                          "Featherstone, semi-implicit and Steel is 0.05, a damping no scene asks "
-                                          "for)"),
+    "defaults": Option(choices=("scene", "engine"), default="scene",
+                       description="scene: nothing the scene does not ask for (angular damping 0, the inertia as "
+                                   "given); engine: Newton's own defaults (angular damping 0.05 in Featherstone, "
+                                   "semi-implicit and Steel, inertia balancing on), to measure what they do"),
+    "angular_damping": Option(default=None, minimum=0.0, only=_only("angular_damping"),
+                              description="angular velocity damping (1/s); default: 0 with defaults=scene, Newton's "
+                                          "own (0.05 in Featherstone, semi-implicit and Steel) with defaults=engine"),
     "update_mass_matrix_interval": Option(default=1, minimum=1.0, integer=True,
                                           only=_only("update_mass_matrix_interval"),
                                           description="steps between mass-matrix updates (Newton's default 1)"),
@@ -102,10 +106,19 @@ OPTIONS = {
 }
 
 
+def angular_damping(options):
+    """The angular damping a run builds with (1/s), or None: Newton's own (``defaults=engine``, none given)."""
+    given = options.get("angular_damping")
+    if given is not None:
+        return given
+    return 0.0 if options.get("defaults", "scene") == "scene" else None
+
+
 def make(newton, model, family, options):
     """The solver of ``family`` on ``model``, built with ``options`` (name -> typed value, ``typed_options``):
     only the family's own, and ``iterations`` only when given (None: the solver's own default)."""
     cls, _, _, names = FAMILIES[family]
+    options = {**options, "angular_damping": angular_damping(options)}
     kwargs = {n: options[n] for n in names if options.get(n) is not None and (family, n) not in _MODEL_SETTINGS}
     return getattr(newton.solvers, cls)(model, **kwargs)
 
@@ -125,7 +138,9 @@ def settings(solver, family, model):
     for name in FAMILIES[family][3]:
         if (family, name) in _MODEL_SETTINGS:
             namespace, attr = _MODEL_SETTINGS[(family, name)]
-            out[name] = float(getattr(getattr(model, namespace), attr).numpy().max(initial=0.0))
+            held = getattr(getattr(model, namespace, None), attr, None)
+            out[name] = (float(held.numpy().max(initial=0.0)) if held is not None
+                         else f"Newton's default ({namespace}:{attr} not registered on the model)")
             continue
         for attr in _ATTRIBUTES.get(name, (name,)):
             if hasattr(solver, attr):
