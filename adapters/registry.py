@@ -34,6 +34,7 @@ BUILTIN = {
     "dart": "dalembert.adapters.dart:DartAdapter",
     "simbody": "dalembert.adapters.simbody:SimbodyAdapter",
     "mujoco_warp": "dalembert.adapters.mujoco_warp:MujocoWarpAdapter",
+    "newton": "dalembert.adapters.newton:NewtonAdapter",
 }
 # The entry-point group third-party adapters register in (a package's ``[project.entry-points."dalembert.adapters"]``).
 GROUP = "dalembert.adapters"

@@ -32,7 +32,8 @@ CONTRACT_HORIZON = 0.2  # s: 20 samples of every case (sampling, repeatability a
 # tests' top, the reliability test's rod), where the contract took 7 programs on the largest cases before.
 # MuJoCo Warp likewise (Warp compiles kernels per model structure, and each step is ms of Python launches: its
 # contract over every case took 627 s on 2 busy cores).
-JIT_COMPILED = {"mjx": "euler", "mujoco_warp": "euler"}
+# Newton likewise (Warp kernels per model structure and solver; VBD's steps cost ~10-30 ms of Python each).
+JIT_COMPILED = {"mjx": "euler", "mujoco_warp": "euler", "newton": "featherstone"}
 JIT_TREE_CASE = "pivoted_rod"
 
 

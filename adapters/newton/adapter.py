@@ -1,0 +1,242 @@
+"""``NewtonAdapter``: the contract (``dalembert.adapters``) for Newton (``newton`` 1.8) on Warp's CPU backend.
+
+``prepare`` builds the scene's Newton model (``model.build``: bodies at their COMs, joints in their frames,
+nothing the scene does not call for; mass properties checked), the solver of the run's family
+(``solvers.make``) and takes one step on a scratch state, so that Warp's kernels are compiled (or loaded from its
+cache) before any timed run; ``run`` steps (``stepping.simulate``) and reads the bodies' states back; ``audit``
+reads what Newton simulated back from its model and the solver object.
+
+Number type: float32 only (Newton's arrays are ``wp.float32``; there is no float64 build). The float32 attitude
+floor of a torque-free top (``mjx.parity.float32_floor``: RK4 in float32 against the same RK4 in double) is in
+every run's audit, so a reader sees whether an error is the method's or the number type's.
+
+Read-back: Newton's ``body_q`` and ``body_qd`` at each sample, widened exactly to double: COM position, the
+quaternion as Newton integrated it (x, y, z, w, turned scalar first), COM velocity and angular velocity in world
+axes. Joint coordinates come from the bodies' motion (``spatial.joint_coordinates``), the same for the
+joint-coordinate solvers and the body-coordinate ones, so a body-coordinate solver's joint error shows in them.
+Reactions are not read back (Newton 1.8 reports none the same way for every solver): not measured.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from dalembert import spatial
+from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared, typed_options
+from dalembert.adapters.newton import solvers
+from dalembert.adapters.newton.engine import DEVICE, engine, version
+from dalembert.adapters.newton.model import build, check_mass_properties, summary, why_not
+from dalembert.adapters.newton.stepping import fresh_states, load_plan, simulate
+from dalembert.scene import EFFECTS, SPRING_EFFECT, WORLD
+from dalembert.settings import steps_per_interval
+
+__all__ = ["NewtonAdapter", "NewtonPrepared"]
+
+# What each effect Newton's adapter does not map would take (``unsupported``).
+NOT_MAPPED = {
+    "loop": ("closed kinematic loops: Newton closes a loop with a joint outside every articulation or an equality "
+             "constraint, which Featherstone ignores and the others solve each their own way; not mapped"),
+    SPRING_EFFECT: ("linear spring-dampers between two points: Newton's springs join particles, not rigid bodies' "
+                    "points; the adapter would apply the force itself from Python, not the engine"),
+    "contact": ("contact: Newton's contact is between shapes, each solver with its own contact model (penalty, "
+                "compliant, position-based, complementarity); not mapped yet"),
+}
+
+
+@dataclass(frozen=True, eq=False)
+class NewtonPrepared(Prepared):
+    """Newton's prepared run (``Prepared``).
+
+    Attributes
+    ----------
+    model : model.NewtonModel — the finalized model and the initial state
+    solver : newton.solvers.SolverBase — the family's solver on it (stateless between runs but for its
+        warm starts, which ``run`` rebuilds: see ``NewtonAdapter.run``)
+    family : str — the integrator family (``solvers.FAMILIES``)
+    steps : ndarray (n - 1,) of int — steps per sample interval
+    loads : list — the loads as the stepping applies them (``stepping.load_plan``)
+    compile_s : float — the scratch step's wall time in ``prepare``: kernel compilation or cache load, s
+    """
+
+    model: object
+    solver: object
+    family: str
+    steps: np.ndarray
+    loads: list
+    compile_s: float
+
+
+class NewtonAdapter(Adapter):
+    """Newton (``newton`` 1.8, NVIDIA, Google DeepMind and Disney Research) on Warp's CPU backend, float32: each
+    rigid-body solver an integrator family (``solvers.FAMILIES``), its settings as options."""
+
+    name = "newton"
+    # gravity, free, revolute, prismatic, ball and weld joints, world and follower loads; loops, springs and
+    # contact: NOT_MAPPED
+    effects = EFFECTS
+    options = solvers.OPTIONS
+    refusal_notes = NOT_MAPPED
+    # every family names every option; ``Option.only`` says which families take it (``check`` refuses the others)
+    integrators = {family: IntegratorSpec(True, tuple(solvers.OPTIONS), description, order=order)
+                   for family, (_, description, order, _) in solvers.FAMILIES.items()}
+
+    def version(self):
+        return version()
+
+    def load(self):
+        """Warp initialized on the CPU and Newton imported (``version`` imports neither)."""
+        self.version()
+        engine()
+
+    def unsupported(self, scene, settings):
+        return super().unsupported(scene, settings) or why_not(scene)
+
+    def describe(self, scene, settings):
+        """Newton's model, read back from its arrays, and the solver settings it is stepped with, for reports and
+        ``dalembert show-model``."""
+        options = typed_options(self.options, settings)
+        family = settings.integrator
+        damping = solvers.angular_damping(options)
+        nm = _build(scene, family, options)
+        names = solvers.FAMILIES[family][3]
+        given = {n: options[n] for n in names if n != "angular_damping" and options[n] is not None}
+        return (summary(nm) + f"\nsolver: Newton {solvers.FAMILIES[family][0]}, defaults={options['defaults']}, "
+                f"angular damping {'Newton' + chr(39) + 's own' if damping is None else damping}"
+                + (f", {given}" if given else ""))
+
+    # ------------------------------------------------------------- build
+    def prepare(self, scene, times, settings):
+        wp, newton, _ = engine()
+        family = settings.integrator
+        options = typed_options(self.options, settings)
+        nm = _build(scene, family, options)
+        check_mass_properties(nm, scene)
+        with wp.ScopedDevice(DEVICE):
+            solver = solvers.make(newton, nm.model, family, options)
+            compile_s = _scratch_step(nm, solver, settings.dt)
+        times = np.asarray(times, dtype=float)
+        return NewtonPrepared(scene, times, settings, model=nm, solver=solver, family=family,
+                              steps=steps_per_interval(times, settings.dt), loads=load_plan(nm, scene),
+                              compile_s=compile_s)
+
+    # ------------------------------------------------------------- run
+    def run(self, prepared):
+        p = prepared
+        if p.family in ("vbd", "steel"):
+            # their warm starts (VBD's persisted multipliers, Steel's impulses) live on the solver: a fresh one per
+            # run, so every run starts from the same solver state (not timed)
+            wp, newton, _ = engine()
+            with wp.ScopedDevice(DEVICE):
+                p = _replace_solver(p, solvers.make(newton, p.model.model, p.family,
+                                                    typed_options(self.options, p.settings)))
+        Q, V, wall, bad = simulate(p)
+        n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())
+        info = {"message": f"Newton: non-finite state at t = {p.times[bad]:g} s" if bad else ""}
+        return Outcome(lambda: _read_back(p, Q, V), wall, n_steps, n_steps, info)
+
+    # ------------------------------------------------------------- audit
+    def audit(self, prepared, outcome):
+        wp, newton, init_message = engine()
+        p, m = prepared, prepared.model.model
+        dofs = m.joint_dof_count
+        out = {
+            # Newton holds gravity in float32 only: each component as the shortest decimal that float32 value reads
+            # back as (numpy's float32 repr: -9.81 for the float32 nearest -9.81), and the float32 value widened
+            # exactly (-9.8100004196167)
+            "gravity": tuple(float(str(g)) for g in m.gravity.numpy()[0]),
+            "gravity_float32": tuple(float(g) for g in m.gravity.numpy()[0]),
+            "integrator": f"Newton {solvers.FAMILIES[p.family][0]}",
+            "solver_settings": solvers.settings(p.solver, p.family, m),
+            "timestep": float(np.float32(p.settings.dt)),
+            "precision": str(m.body_q.dtype.__name__ if hasattr(m.body_q.dtype, "__name__") else m.body_q.dtype),
+            "number_type": str(m.body_mass.numpy().dtype),
+            "device": str(m.device), "warp_version": wp.__version__, "newton_version": self.version(),
+            "warp_init": init_message, "kernel_compile_s": p.compile_s,
+            "bodies": m.body_count, "joints": m.joint_count, "articulations": m.articulation_count,
+            "joint_dofs": dofs,
+            # what Newton adds to the joints by default, as stored in the model the run stepped with
+            "joint_armature_max": float(np.abs(m.joint_armature.numpy()).max(initial=0.0)),
+            "joint_damping_max": float(np.abs(m.joint_target_kd.numpy()).max(initial=0.0)),
+            "joint_passive_damping_max": _max_of(m, "joint_damping"),
+            "joint_stiffness_max": float(np.abs(m.joint_target_ke.numpy()).max(initial=0.0)),
+            "joint_friction_max": _max_of(m, "joint_friction"),
+            "joint_limit_ke_max": _max_of(m, "joint_limit_ke"),
+            "shapes": m.shape_count, "contact": "none: no shapes are built",
+            "loads": [f"{ld.kind} ({ld.frame}) on {ld.body} in State.body_f, from the step's start state"
+                      for ld in p.scene.loads],
+            "reactions": "not read back",
+        }
+        if p.settings.dt is not None:
+            from dalembert.adapters.mjx.parity import float32_floor
+
+            out["float32_floor"] = float32_floor(p.scene, p.times, p.settings.dt)
+        return out
+
+
+def _build(scene, family, options):
+    """The Newton model for a run of ``family`` with ``options``: coloured for VBD; Steel's angular damping set on
+    the model (unless Newton's own is asked for); Newton's inertia balancing only with ``defaults=engine``."""
+    damping = solvers.angular_damping(options)
+    return build(scene, color=family == "vbd", steel_angular_damping=damping if family == "steel" else None,
+                 balance_inertia=options["defaults"] == "engine")
+
+
+def _max_of(model, name):
+    """The largest magnitude of the model's per-dof array ``name`` (0 where the model has none)."""
+    a = getattr(model, name, None)
+    return float(np.abs(a.numpy()).max(initial=0.0)) if a is not None else 0.0
+
+
+def _replace_solver(p, solver):
+    from dataclasses import replace
+
+    return replace(p, solver=solver)
+
+
+def _scratch_step(nm, solver, dt):
+    """One step of ``solver`` on scratch states, so every kernel a step launches is compiled (or loaded from the
+    cache) before a timed run: the wall time, s."""
+    wp, _, _ = engine()
+    a, b = fresh_states(nm)
+    start = time.perf_counter()
+    solver.step(a, b, nm.model.control(), None, float(dt))
+    wp.synchronize_device(DEVICE)
+    return time.perf_counter() - start
+
+
+def _read_back(p, Q, V):
+    """The ``Trajectory`` of the sampled body states ``Q (n, nbody, 7)``, ``V (n, nbody, 6)`` (float32, NaN rows
+    stay NaN), widened to double; joint coordinates from the bodies' motion."""
+    from dalembert.trajectory import BodyStates, JointStates, Trajectory
+
+    scene, index = p.scene, p.model.index
+    Q, V = Q.astype(float), V.astype(float)
+    bodies, joints, R = {}, {}, {}
+    for b in scene.bodies:
+        i = index[b.name]
+        quat = spatial.xyzw_to_wxyz(Q[:, i, 3:])
+        with np.errstate(invalid="ignore"):  # a diverged run's NaN rows stay NaN
+            R[b.name] = spatial.quat_to_matrix(spatial.quat_normalize(quat))
+        bodies[b.name] = BodyStates(Q[:, i, :3].copy(), quat, V[:, i, :3].copy(), V[:, i, 3:].copy())
+    n = len(p.times)
+    world = dict(R=np.broadcast_to(np.eye(3), (n, 3, 3)), p=np.zeros((n, 3)), v=np.zeros((n, 3)),
+                 w=np.zeros((n, 3)))
+    for j in scene.joints:
+        c = bodies[j.child]
+        if j.kind == "free":
+            joints[j.name] = JointStates(*spatial.free_joint_coordinates(c.position, c.quaternion, c.velocity,
+                                                                         c.angular_velocity, R[j.child]))
+            continue
+        if j.parent == WORLD:
+            P = world
+        else:
+            pb = bodies[j.parent]
+            P = dict(R=R[j.parent], p=pb.position, v=pb.velocity, w=pb.angular_velocity)
+        with np.errstate(invalid="ignore"):
+            q, v = spatial.joint_coordinates(j, P["R"], R[j.child], P["w"], c.angular_velocity, P["p"], c.position,
+                                             P["v"], c.velocity)
+        joints[j.name] = JointStates(q, v)
+    return Trajectory(p.times, bodies, joints, {})

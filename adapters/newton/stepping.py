@@ -1,0 +1,82 @@
+"""Newton's stepping: ``solver.step`` step by step between two states, the loads applied before each, the
+bodies' states copied out at every sample.
+
+Loads: Newton takes an external wrench per body in ``State.body_f`` — force at the COM and torque, both in world
+axes — cleared by ``State.clear_forces`` and read by every solver's step. A load is applied before each step from
+the state the step starts at (the explicit evaluation the solvers make of every other force): a follower load
+turned into world axes by the body's attitude then, a force at a point adds its moment about the COM,
+``(R_WB r_B) x F_W``. The wrench is computed in numpy on the CPU arrays' host memory (Warp's CPU backend: no copy).
+
+A blow-up is data: the first sample with a non-finite coordinate ends the run, NaN from there on.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from dalembert import spatial
+from dalembert.adapters.newton.engine import DEVICE, engine
+
+__all__ = ["load_plan", "fresh_states", "simulate"]
+
+
+def load_plan(nm, scene):
+    """The loads as the stepping applies them: a list of ``(body index, kind, frame, vector (3,), point_B (3,))``."""
+    return [(nm.index[ld.body], ld.kind, ld.frame, np.asarray(ld.vector, dtype=float),
+             np.asarray(ld.point, dtype=float)) for ld in scene.loads]
+
+
+def _apply(plan, body_q, body_f):
+    """Write every load of ``plan`` into ``body_f`` (nbody, 6) from the attitudes in ``body_q`` (nbody, 7)."""
+    body_f[:] = 0.0
+    for i, kind, frame, vec, point in plan:
+        R = spatial.quat_to_matrix(spatial.xyzw_to_wxyz(body_q[i, 3:].astype(float)))
+        v = R @ vec if frame == "body" else vec
+        if kind == "torque":
+            body_f[i, 3:] += v
+        else:
+            body_f[i, :3] += v
+            body_f[i, 3:] += np.cross(R @ point, v)
+
+
+def fresh_states(nm):
+    """Two Newton states, the first at the initial state (body and joint coordinates), the second scratch."""
+    a, b = nm.model.state(), nm.model.state()
+    a.body_q.assign(nm.body_q0)
+    a.body_qd.assign(nm.body_qd0)
+    a.joint_q.assign(nm.joint_q0)
+    a.joint_qd.assign(nm.joint_qd0)
+    return a, b
+
+
+def simulate(p):
+    """Run the prepared ``p`` (``NewtonPrepared``) from its initial state: ``(Q (n, nbody, 7), V (n, nbody, 6),
+    wall s, sample where it diverged or None)``, float32 as Newton holds them, NaN from the first non-finite
+    sample on. The wall time is the stepping and the per-sample copies (host memory on the CPU backend)."""
+    wp, _, _ = engine()
+    nm, solver, dt = p.model, p.solver, float(p.settings.dt)
+    control = nm.model.control()
+    s0, s1 = fresh_states(nm)
+    nb = nm.model.body_count
+    Q, V = np.full((len(p.times), nb, 7), np.nan, np.float32), np.full((len(p.times), nb, 6), np.nan, np.float32)
+    Q[0], V[0] = nm.body_q0, nm.body_qd0
+    plan, step = p.loads, solver.step
+    bad = None
+    with wp.ScopedDevice(DEVICE):
+        start = time.perf_counter()
+        for k, nstep in enumerate(p.steps, 1):
+            for _ in range(int(nstep)):
+                s0.clear_forces()
+                if plan:
+                    _apply(plan, s0.body_q.numpy(), s0.body_f.numpy())
+                step(s0, s1, control, None, dt)
+                s0, s1 = s1, s0
+            q, v = s0.body_q.numpy(), s0.body_qd.numpy()
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                bad = k
+                break
+            Q[k], V[k] = q, v
+        wall = time.perf_counter() - start
+    return Q, V, wall, bad
