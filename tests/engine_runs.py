@@ -1,7 +1,10 @@
 """One engine run as the engine tests take it: prepared, run, read back, audited."""
 
+import importlib.util
+import os
+
 from dalembert import Settings, invariants
-from dalembert.adapters import get_adapter
+from dalembert.adapters import adapter_names, adapter_path, get_adapter
 from dalembert.case import make_case
 
 __all__ = ["run_with_audit", "run_case", "installed"]
@@ -38,3 +41,16 @@ def installed(engine):
     except ImportError:
         return False
     return True
+
+
+def real_engines():
+    """Every registered engine but the suite's own test adapters (classes defined in tests/: a test module
+    registers them when it is imported, so which of them a process holds depends on what xdist gave it)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    out = []
+    for name in adapter_names():
+        spec = importlib.util.find_spec(adapter_path(name).partition(":")[0])
+        origin = os.path.abspath(spec.origin) if spec and spec.origin else ""
+        if os.path.dirname(origin) != here:
+            out.append(name)
+    return out

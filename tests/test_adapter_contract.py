@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from dalembert import Settings, make_case
-from dalembert.adapters import Adapter, Option, Prepared, adapter_names, adapter_path, get_adapter
+from dalembert.adapters import Adapter, Option, Prepared, get_adapter
+from engine_runs import real_engines
 
-# Every registered engine but the suite's deliberately broken ones (tests/broken_adapters.py, registered by
-# test_run_matrix when it is collected first)
-ENGINES = [name for name in adapter_names() if not adapter_path(name).startswith("broken_adapters:")]
+# Every registered engine but the suite's own test adapters (registered by whichever test module was collected first)
+ENGINES = real_engines()
 # A jointed tree with a load that every engine runs with its defaults (MJX too: a hinge, an actuator), on a short
 # horizon: these tests build models, they do not judge motion.
 CASE = "pivoted_rod"

@@ -6,7 +6,7 @@ import pytest
 from dalembert import Settings, make_case, spatial
 from dalembert.case import load_cases
 from dalembert.errors import QUANTITIES, trajectory_errors
-from dalembert.harness.matrix import expand
+from dalembert.harness.matrix import expand, split
 from dalembert.judge import VERDICTS, judge
 from dalembert.store import Store
 from dalembert.reference import simulate
@@ -108,8 +108,11 @@ def test_every_engine_gets_a_verdict_on_every_hard_case(tmp_path):
     records = Store(out).records()
     specs, _ = expand(tags=["hard"], engines=ENGINES, integrators=SMOKE_INTEGRATORS, dts=[1e-2],
                       params={"t_final": 1.0})
-    assert len(records) == len(specs)
-    assert {(r.case, r.engine) for r in records} == {(c, e) for c in HARD for e in ENGINES}
+    runnable, _ = split(specs)  # (what an engine refuses before the build is listed in the manifest, not run)
+    assert len(records) == len(runnable)
+    assert {(r.case, r.engine) for r in records} == {(s.case, s.engine) for s in runnable}
+    # every hard case runs in some engine, and every engine runs some hard case
+    assert {r.case for r in records} == set(HARD) and {r.engine for r in records} == set(ENGINES)
     verdicts = {}
     for r in records:
         verdict = r.judgement.verdict

@@ -289,7 +289,13 @@ def test_a_worker_stopped_from_outside_ends_its_run_without_failing_it(sig, tmp_
     out = tmp_path / "r"
     proc = _cli("run", *STOPPABLE, "--out", str(out))
     (worker,) = _busy_workers(proc, 1)
-    while proc.poll() is None and sum(worker.cpu_times()[:2]) < MID_RUN_CPU_S:
+    while proc.poll() is None:
+        try:
+            if sum(worker.cpu_times()[:2]) >= MID_RUN_CPU_S:
+                break
+        except psutil.NoSuchProcess:  # a worker the pool ended (its runs done) while it was read: follow the next
+            (worker,) = _busy_workers(proc, 1) or (worker,)
+            continue
         time.sleep(0.02)
     worker.send_signal(sig)
     _, err = proc.communicate()

@@ -12,7 +12,7 @@ import pytest
 
 from dalembert.adapters import adapter_names, check_adapter, register_adapter
 from broken_adapters import Broken, Loaded, NoFollower, SlowReadBack, Threads, Unloadable
-from engine_runs import installed
+from engine_runs import installed, real_engines
 from dalembert.harness.execute import QUICK, Timing, execute
 from dalembert.harness.matrix import RunSpec, expand
 from dalembert.harness.pool import run_matrix
@@ -37,7 +37,7 @@ JIT_COMPILED = {"mjx": "euler", "mujoco_warp": "euler", "newton": "featherstone"
 JIT_TREE_CASE = "pivoted_rod"
 
 
-ENGINES = adapter_names()  # before the test-only adapters below are registered
+ENGINES = real_engines()  # not the test-only adapters below, nor those another test module registered
 for _name, _cls in (("broken", Broken), ("no-follower", NoFollower), ("threads", Threads),
                     ("slow-read-back", SlowReadBack), ("loaded", Loaded), ("unloadable", Unloadable)):
     if _name not in adapter_names():
