@@ -12,9 +12,10 @@ models differ: ``batch_problem``) runs world by world through ``execute``, its r
 ordinary runs.
 
 ``groups`` makes the groups: batches where ``batched`` and the engine has batches, else chunks of at
-most ``chunk`` runs of one affinity group (``pool.affinity``: one compiled program), which a Dask task
-runs one after another in one process (``execute_group``), so a cluster's task is a row or a chunk of
-probes, not one probe with a process of its own.
+most ``chunk`` runs of one case, engine, integrator and options (``chunk_key``: a search round's probes
+across the swept parameter, or a sweep's steps), which a Dask task runs one after another in one process
+(``execute_group``), so a cluster's task is a row or a chunk of probes, not one probe with a process of
+its own.
 
 ``python -m dalembert.harness.batches``: run one group read (pickled: specs, timing, truths by case,
 parent pid, the engine environment) from stdin; write the pickled ``[(RunRecord, npz)]`` to stdout (a
@@ -32,7 +33,7 @@ import numpy as np
 
 from dalembert.harness.execute import Timing, _load, _record, _truth, execute
 
-__all__ = ["batch_key", "groups", "execute_group", "execute_batch", "DEFAULT_CHUNK"]
+__all__ = ["batch_key", "chunk_key", "groups", "execute_group", "execute_batch", "DEFAULT_CHUNK"]
 
 # Runs per Dask task where nothing is batched: enough that a task's process start and the engine's import and
 # compilation (seconds: ~10 s to import dalembert and MuJoCo Warp on 2 loaded cores) are paid once per ~a map row
@@ -46,14 +47,18 @@ def batch_key(spec):
     return (spec.case, spec.engine, spec.adapter, s.integrator, s.dt, s.rtol, s.atol, tuple(sorted(s.options.items())))
 
 
+def chunk_key(spec):
+    """What the runs of one chunk share: the case (any parameters, any step), engine, integrator and options."""
+    return (spec.case, spec.engine, spec.adapter, spec.settings.integrator, tuple(sorted(spec.settings.options.items())))
+
+
 def groups(specs, batched=False, chunk=DEFAULT_CHUNK):
     """``specs`` as a list of tuples of specs, in the order first met: where ``batched`` and the engine has batches,
     one tuple per ``batch_key`` (at most ``adapters.batch.MAX_BATCH`` each), else chunks of at most ``chunk`` specs of
-    one ``pool.affinity`` group (``chunk`` 1: every spec alone)."""
+    one ``chunk_key`` (``chunk`` 1: every spec alone). Returns ``[(tuple of specs, batched)]``, ``batched`` True for a
+    batch of more than one world."""
     from dalembert.adapters import get_adapter
     from dalembert.adapters.batch import MAX_BATCH, has_batches
-    from dalembert.harness.pool import affinity
-
     if chunk < 1:
         raise ValueError(f"chunk: {chunk} runs per task — give at least 1")
     batches = {}
@@ -64,7 +69,7 @@ def groups(specs, batched=False, chunk=DEFAULT_CHUNK):
         if batches.get(s.engine):
             key, size = ("batch", batch_key(s)), MAX_BATCH
         else:
-            key, size = ("chunk", affinity(s)), chunk
+            key, size = ("chunk", chunk_key(s)), chunk
         parts = out.setdefault(key, [[]])
         if len(parts[-1]) == size:
             parts.append([])
