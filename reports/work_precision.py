@@ -75,9 +75,10 @@ def line_label(r):
 
 
 def batch_text(r):
-    """``(per world, batch of N)`` for a run stepped in a batch of N > 1 worlds, else ""."""
-    n = getattr(r.cost, "batch_size", 1)
-    return f"(per world, batch of {n})" if n > 1 else ""
+    """``(per world of a batch)`` for a run stepped in a batch of more than one world (its cost its share of the
+    batch's), else "". One text for every size: a sweep's batches differ in size from step to step, and each run's
+    cost is per world either way."""
+    return "(per world of a batch)" if getattr(r.cost, "batch_size", 1) > 1 else ""
 
 
 def lines_of(pts):

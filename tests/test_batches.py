@@ -61,8 +61,9 @@ def test_the_work_precision_lines_keep_batched_runs_apart():
         return RunRecord(f"k{n}{dt}", "free_top_fast_spin", "v", "mujoco_warp", Settings("rk4", dt), status="ok",
                          cost=Cost(batch_size=n))
 
-    lines = lines_of([Point(1.0, 1e-3, run(n, dt)) for n in (1, 16) for dt in (1e-3, 1e-2)])
-    assert sorted(lines) == ["mujoco_warp rk4", "mujoco_warp rk4 (per world, batch of 16)"]
+    lines = lines_of([Point(1.0, 1e-3, run(n, dt)) for n in (1, 16, 3) for dt in (1e-3, 1e-2)])
+    assert sorted(lines) == ["mujoco_warp rk4", "mujoco_warp rk4 (per world of a batch)"]
+    assert [len(v) for _, v in sorted(lines.items())] == [2, 4]
 
 
 warp = pytest.mark.skipif(not __import__("importlib").util.find_spec("mujoco_warp"), reason="dalembert[mujoco-warp]")
@@ -124,3 +125,48 @@ def test_a_searched_map_finds_the_same_boundaries_batched(tmp_path):
     assert max(r.cost.batch_size for r in batch) == 2 and {r.cost.batch_size for r in one} == {1}
     assert [(b.stable, b.finite) for b in boundaries(one)] == [(b.stable, b.finite) for b in boundaries(batch)]
     assert Store(str(tmp_path / "batch")).manifest()["batch"] is True
+    from dalembert.reports.maps import stability_maps
+
+    units = lambda name: {"spin": "rad/s"}  # noqa: E731
+    assert [m.batch for m in stability_maps(batch, units)] == [2] and [m.batch for m in stability_maps(one, units)] == [1]
+
+
+# MJX's vmapped worlds against the same scene run alone: XLA vectorizes the batch's arithmetic differently, so they
+# agree to float32 round-off, not bit for bit. Measured over 10 RK4 steps of free_top_fast_spin: 6e-12 (spin 5) and
+# 3.0e-7 (spin 50) in a quaternion component, ~3 float32 ulps of 1; this bound is ~30x that. Another world's state
+# (another spin) differs by O(1).
+VMAP_TOL = 1e-5
+
+
+@pytest.mark.skipif(not __import__("importlib").util.find_spec("jax"), reason="dalembert[mjx]")
+@pytest.mark.long  # MJX compiles the vmapped rollout (~1 min on 2 busy cores; JAX's cache keeps it)
+def test_mjx_worlds_are_each_scene_alone_to_float32_roundoff():
+    from dalembert import make_case
+    from dalembert.adapters import get_adapter
+
+    adapter, settings = get_adapter("mjx"), Settings("rk4", dt=0.05)
+    cases = [make_case("free_top_fast_spin", spin=s, **SHORT) for s in (5.0, 50.0)]
+    batch = adapter.prepare_batch([c.scene for c in cases], cases[0].times, settings)
+    out = adapter.run_batch(batch)
+    assert batch.device == "cpu" and len(out.worlds) == 2
+    for case, world in zip(cases, out.worlds):
+        alone = adapter.run(adapter.prepare(case.scene, case.times, settings)).trajectory
+        assert np.max(np.abs(world.trajectory.bodies["top"].quaternion - alone.bodies["top"].quaternion)) < VMAP_TOL
+
+
+def test_a_dask_task_runs_its_chunk_in_one_process():
+    """``execute_group_isolated`` (a Dask task's body, here without a cluster): the chunk's runs in one subprocess,
+    their records those of the runs in this process, in order."""
+    from dalembert.harness.dask import execute_group_isolated
+    from dalembert.harness.truths import built_case
+    from dalembert.reference import truth
+    from dalembert.store import trajectory_to_npz
+
+    specs, _ = expand(cases=["pivoted_rod"], engines=["reference"], integrators=["rk4"], dts=[1e-2, 5e-3],
+                      params={"t_final": 0.5})
+    truths = [((s.case, s.case_version), trajectory_to_npz(truth(built_case(s.case, s.params)[0]))) for s in specs[:1]]
+    results = execute_group_isolated([s.to_json() for s in specs], vars(QUICK), truths, timeout=600.0)
+    assert [r.key for r, _ in results] == [s.key for s in specs]
+    for spec, (record, npz) in zip(specs, results):
+        alone, _ = execute(spec, QUICK)
+        assert record.status == alone.status == "ok" and record.errors == alone.errors and npz is not None
