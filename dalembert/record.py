@@ -114,9 +114,11 @@ class Cost:
     load_start, load_end : the machine's 1-minute load average when the run started and ended
         (a load above the cores by more than a matrix's own footprint means the timings were shared with
         other work: ``reports.timing``)
-    batch_size : worlds stepped at once in the engine call that made this run (``dalembert.harness.batches``;
-        1: the run stepped alone). Where it is above 1, ``wall_s_*`` are this world's share of the batch's
-        stepping (the batch's time over ``batch_size``: per world), never a single world's latency
+    batch_size : worlds stepped at once in the engine call that made this run (a ``--batch`` batch,
+        ``dalembert.harness.batches``, or copies an adapter stepped beside it, MuJoCo Warp's ``worlds``; 1: the run
+        stepped alone). Where it is above 1, ``wall_s_*``, ``overhead_s`` and ``stepping_total_s`` are this world's
+        share of the batch's (its time over ``batch_size``: per world), never a single world's latency; a
+        ``--batch`` run's ``build_s`` and ``worker_s`` are its share too
     batch_wall_s : the batch's stepping wall time (median over the timed repeats), every world; NaN for a run
         stepped alone
     world_steps_per_s : the batch's throughput, world-steps per second (``batch_size * n_steps / batch_wall_s``);

@@ -39,6 +39,20 @@ def test_batch_fields_survive_the_row_and_rows_without_them_read_as_one_world():
     assert RunRecord.from_row({**row, "batch_size": float("nan"), "device": None}).cost.batch_size == 1  # (pandas)
 
 
+def test_a_run_that_stepped_copies_beside_it_is_timed_per_world():
+    """MuJoCo Warp's ``worlds=4`` times 4 copies of the run at once (``Outcome.info["batch_size"]``): its record's
+    stepping times are per world, the batch's beside them; a run alone keeps its times and gains its device."""
+    from dalembert.harness.batches import per_world
+
+    cost = Cost(wall_s_median=0.8, wall_s_min=0.4, wall_s_max=1.2, wall_s_repeats=(0.8, 0.4, 1.2), n_steps=100,
+                overhead_s=0.04, stepping_total_s=3.2, build_s=2.0)
+    four = per_world(cost, {"batch_size": 4, "device": "cpu"})
+    assert (four.batch_size, four.batch_wall_s, four.device, four.build_s) == (4, 0.8, "cpu", 2.0)
+    assert (four.wall_s_median, four.wall_s_min, four.wall_s_max) == (0.2, 0.1, 0.3)
+    assert four.wall_s_repeats == (0.2, 0.1, 0.3) and four.world_steps_per_s == pytest.approx(4 * 100 / 0.8)
+    assert per_world(cost, {"device": "cpu"}) == Cost(**{**cost.__dict__, "device": "cpu"})
+
+
 def test_runs_group_into_batches_by_everything_but_the_case_parameters():
     specs = _specs("mujoco_warp", [5, 50, 500], dts=(0.05, 0.1))
     made = groups(specs, batched=True)

@@ -206,7 +206,7 @@ class MjxAdapter(MujocoAdapter):
     def _outcome(self, p, Q, V, wall):
         """The ``Outcome`` of the rollout's samples ``Q``, ``V`` (``run_rollout``'s chunks, one world's) from ``p``."""
         n_steps = int(p.steps.sum())
-        info = {"message": ""}
+        info = {"message": "", "device": p.backend}
 
         def read():
             Qh, Vh = to_host(Q, V, p.qpos0, p.qvel0, len(p.times))

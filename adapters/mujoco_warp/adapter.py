@@ -19,7 +19,8 @@ number type's. Options: ``welds`` as for MuJoCo, contact as MuJoCo's (``cone``,
 ``impratio``, ``noslip_iterations``, ``contact_timeconst``: MuJoCo Warp reads
 all four); ``worlds`` = N steps N copies of the case at once (MuJoCo Warp's ``nworld``), world k's initial
 velocities raised by k ``WORLD_DV``: the trajectory is world 0's (the case's own, the same float32 arithmetic as
-one world), the run's wall time the batch's, and the audit holds the batch size, its throughput (world-steps per
+one world), the run's wall time the batch's (``Outcome.info["batch_size"]``: its record's cost is per world, the
+batch's beside it, ``dalembert.record.Cost``), and the audit holds the batch size, its throughput (world-steps per
 second) and the worlds' spread at the end. Loads go through MuJoCo's site actuators only (applied inside every
 integrator stage); MuJoCo's ``loads=xfrc_applied`` path, a Python call per
 step, is not offered. What MuJoCo Warp refuses (``mjw.put_model``: a geometry
@@ -157,7 +158,7 @@ class MujocoWarpAdapter(MujocoAdapter):
         Q, V, wall, bad = step_samples(p.mx, d, p.steps, p.qpos0, p.qvel0)
         n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())  # interval `bad` was stepped whole
         message = f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else ""
-        info = {"message": message}
+        info = {"message": message, "device": DEVICE, "batch_size": p.worlds}
         if p.worlds > 1:
             # the batch: every world stepped n_steps in ``wall``; world 0 is the run's, the others its perturbed
             # copies (their spread from world 0 at the end: NaN if a world diverged)
@@ -209,7 +210,7 @@ class MujocoWarpAdapter(MujocoAdapter):
         """World ``p``'s ``Outcome`` of a batch: its samples ``Q (n, nq)``, ``V (n, nv)``, first bad sample ``bad``
         (None: none), the batch's ``wall``; as ``run`` makes one."""
         n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())  # interval `bad` was stepped whole
-        info = {"message": f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else ""}
+        info = {"message": f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else "", "device": DEVICE}
 
         def read():
             traj, info["audit"] = read_back(p, Q, V)

@@ -33,7 +33,7 @@ import numpy as np
 
 from dalembert.harness.execute import Timing, _load, _record, _truth, execute
 
-__all__ = ["batch_key", "chunk_key", "groups", "execute_group", "execute_batch", "DEFAULT_CHUNK"]
+__all__ = ["batch_key", "chunk_key", "groups", "execute_group", "execute_batch", "per_world", "DEFAULT_CHUNK"]
 
 # Runs per Dask task where nothing is batched: enough that a task's process start and the engine's import and
 # compilation (seconds: ~10 s to import dalembert and MuJoCo Warp on 2 loaded cores) are paid once per ~a map row
@@ -198,6 +198,24 @@ def _run_batch(adapter, specs, cases, timing, truths, concurrent, found, started
         out[where[k]] = _record(s, "ok", "", errors, summary.drifts, case.tolerances, drift_rates=summary.drift_rates,
                                 growths=summary.growths, checks=summary.checks, cost=cost, **here), \
             trajectory_to_npz(traj)
+
+
+def per_world(cost, info):
+    """``cost`` (a ``Cost`` of one run, as ``execute`` times it) with what the run's ``Outcome.info`` says of its
+    device (``device``) and of the worlds it stepped beside its own (``batch_size``: MuJoCo Warp's option ``worlds``,
+    copies of the run whose wall time is the batch's): then its stepping times are per world, the batch's
+    median, size and throughput beside them."""
+    from dataclasses import replace
+
+    n, device = int(info.get("batch_size", 1)), str(info.get("device", cost.device))
+    if n == 1:
+        return replace(cost, device=device)
+    batch = cost.wall_s_median
+    return replace(cost, device=device, batch_size=n, batch_wall_s=batch,
+                   world_steps_per_s=n * cost.n_steps / batch if batch > 0 else float("nan"),
+                   wall_s_median=batch / n, wall_s_min=cost.wall_s_min / n, wall_s_max=cost.wall_s_max / n,
+                   wall_s_repeats=tuple(w / n for w in cost.wall_s_repeats), overhead_s=cost.overhead_s / n,
+                   stepping_total_s=cost.stepping_total_s / n)
 
 
 def main():
