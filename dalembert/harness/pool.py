@@ -23,6 +23,10 @@ and integrator (MJX: seconds per compilation, kept in the process) then compiles
 and group instead of once per run, where plain order would hand a sweep's runs to the workers in turn.
 The matrix's runs and records are the same; only who runs which, and when, changes.
 
+Batches (``run_matrix(batched=True)``, ``--batch``): the runs an engine steps as one batch of worlds
+(``dalembert.harness.batches.groups``) go to one worker as one job, a ``Group``; its answer is a record
+per world, its timeout, death or stop from outside every one of its runs'.
+
 Engine environments: the runs of a versioned engine (``mujoco==3.6.0``, ``dalembert.environments``) go to
 workers started from that environment's interpreter, a subprocess (``_Interpreter``: ``python -m``-like, the
 pipe's socket passed as a file descriptor) that serves the same protocol and sets up the same lifetime
