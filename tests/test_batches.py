@@ -185,3 +185,15 @@ def test_a_dask_task_runs_its_chunk_in_one_process():
     for spec, (record, npz) in zip(specs, results):
         alone, _ = execute(spec, QUICK)
         assert record.status == alone.status == "ok" and record.errors == alone.errors and npz is not None
+
+
+@warp
+@pytest.mark.long
+def test_a_dask_task_runs_its_batch_in_one_process():
+    """``execute_group_isolated`` with ``batched``: the spins of one step as one batch in the task's process."""
+    from dalembert.harness.dask import execute_group_isolated
+
+    specs = _specs("mujoco_warp", [5, 50])
+    results = execute_group_isolated([s.to_json() for s in specs], vars(QUICK), [], timeout=600.0, batched=True)
+    assert [r.key for r, _ in results] == [s.key for s in specs]
+    assert [(r.status, r.cost.batch_size) for r, _ in results] == [("ok", 2), ("ok", 2)]
