@@ -8,7 +8,10 @@ once per size: kernels or JIT compilation) and ``run_batch`` (the median of 3 af
 world stepped, every sample copied to the host), against the adapter's ``run`` of one world. Printed per
 size: the batch's wall time per step, its share per world, and world-steps per second. The engines here
 launch their work from Python per step (MuJoCo Warp) or per sample interval (MJX), so on the CPU a
-batch costs about one world's launches plus every world's arithmetic.
+batch costs about one world's launches plus every world's arithmetic. Measured on 2 shared cores at a
+load of ~2: MuJoCo Warp 4.85 ms a step for one world, 5.2 / 5.8 / 5.4 / 8.0 ms a batch step at 1 / 8 /
+64 / 256 worlds (155x one world's throughput at 256); MJX 0.03 ms for one world, its batches 1.0 / 1.9 /
+5.3 / 4.4x one world's throughput (arithmetic-bound on the CPU).
 """
 
 from __future__ import annotations
