@@ -27,16 +27,20 @@ from dataclasses import replace
 SIZES = (1_000, 10_000, 100_000)
 
 
-def _cluster_map(tmp):
+def _cluster_map(tmp, engine="reference", integrators=("rk4", "rkmk4"), spins=4, batch=False):
+    """The map of part 1 on a 2-worker ``LocalCluster``: ``(store path, wall s)``. Each Dask task runs a chunk of
+    probes (a search round's probes of one curve family: ``dalembert.harness.batches``), or with ``batch`` on an
+    engine that has batches (``mujoco_warp``, ``mjx``) the spins of one step as one batch of worlds."""
     from distributed import LocalCluster
 
     out = os.path.join(tmp, "map")
+    args = [a for i in integrators for a in ("--integrator", i)] + (["--batch"] if batch else [])
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=None) as cluster:
         t0 = time.perf_counter()
         proc = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--case", "free_top_fast_spin",
-                               "--param", "spin=log:5,500,4", "--param", "t_final=1", "--param", "sample_interval=0.1",
-                               "--engine", "reference", "--integrator", "rk4", "--integrator", "rkmk4",
+                               "--param", f"spin=log:5,500,{spins}", "--param", "t_final=1", "--param",
+                               "sample_interval=0.1", "--engine", engine, *args,
                                "--search", "dt", "--dt", "1e-3,1e-1", "--resolution", "1.5",
                                "--scheduler", cluster.scheduler_address, "--out", out], capture_output=True, text=True)
         wall = time.perf_counter() - t0

@@ -3,6 +3,7 @@
     python -m benchmarks.mjx            # both parts
     python -m benchmarks.mjx parity     # part 1 only
     python -m benchmarks.mjx cost       # part 2 only
+    python -m benchmarks.mjx batch      # part 3 only
     python -m benchmarks.mjx --all      # every MJX integrator, not only RK4
 
 1. Parity (``dalembert.adapters.mjx.parity``), per canonical case, integrator and precision at
@@ -13,6 +14,8 @@
    precision) and the adapter's stepping per simulated second (``Outcome.wall_s``: the compiled
    scan, ``block_until_ready``) against a bare jitted ``mjx.step`` loop of ``jax.lax.scan`` over
    all steps without sampling, each the median of 3 runs after a warm-up; and MuJoCo C's.
+3. Batch: the adapter's batches (``prepare_batch``/``run_batch``: ``jax.vmap`` of the rollout, every sample read
+   back) of ``free_top_fast_spin`` at 1, 8, 64 and 256 spins against one world's ``run`` (``benchmarks.batches``).
 """
 
 from __future__ import annotations
@@ -89,7 +92,7 @@ def cost():
                 ours = np.median([mjx.run(p).wall_s for _ in range(REPEATS)])
                 theirs = bare_scan(p)
                 per_s = 1e3 / case.t_final
-                print(f"{case.name:<24}{integ:<14}{prec:<10}{p['compile_s']:>9.1f}{ours * per_s:>10.2f}"
+                print(f"{case.name:<24}{integ:<14}{prec:<10}{p.compile_s:>9.1f}{ours * per_s:>10.2f}"
                       f"{theirs * per_s:>10.2f}{ours / theirs:>7.2f}{c_wall * per_s:>10.2f}", flush=True)
 
 
@@ -98,11 +101,15 @@ def main(argv):
     if "--all" in argv:
         INTEGRATORS = tuple(get_adapter("mjx").integrators)
         argv = [a for a in argv if a != "--all"]
-    parts = argv or ["parity", "cost"]
+    parts = argv or ["parity", "cost", "batch"]
     if "parity" in parts:
         parity()
     if "cost" in parts:
         cost()
+    if "batch" in parts:
+        from benchmarks.batches import throughput
+
+        throughput("mjx")
 
 
 if __name__ == "__main__":

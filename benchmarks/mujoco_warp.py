@@ -2,7 +2,7 @@
 throughput of a batch of worlds, on Warp's CPU backend.
 
     python -m benchmarks.mujoco_warp                 # all three parts, 1 s of each case
-    python -m benchmarks.mujoco_warp parity          # part 1 only (also: cost, worlds)
+    python -m benchmarks.mujoco_warp parity          # part 1 only (also: cost, worlds, batch)
     python -m benchmarks.mujoco_warp --seconds 20    # the cases' first 20 s (their whole horizon, or less)
     python -m benchmarks.mujoco_warp --all           # every integrator, not only RK4
 
@@ -16,6 +16,8 @@ throughput of a batch of worlds, on Warp's CPU backend.
    after a warm-up; and MuJoCo C's.
 3. Worlds: ``mjw.step`` on ``nworld`` copies of the pendulum at once (``mjw.put_data(nworld=...)``): the wall
    time of a step and the per-world throughput (steps of one world per second) against nworld.
+4. Batch: the adapter's batches (``prepare_batch``/``run_batch``, every sample read back) of ``free_top_fast_spin``
+   at 1, 8, 64 and 256 spins against one world's ``run`` (``benchmarks.batches``).
 
 Every step launches its kernels one by one from Python (no CUDA graphs on the CPU), so the stepping cost is
 Python's launch overhead more than arithmetic; the figures scale with how busy the machine is.
@@ -36,7 +38,7 @@ REPEATS = 3
 DT = 1e-3
 INTEGRATORS = ("rk4",)
 SECONDS = 1.0  # model time per case (``--seconds``): a step costs ~1.5-5 ms of Python (module docstring)
-WORLDS = (1, 8, 64, 512)
+WORLDS = (1, 8, 64, 256)
 WORLD_STEPS = 50  # steps timed per batch size
 
 
@@ -124,6 +126,12 @@ def worlds():
             print(f"{integ:<14}{n:>8}{wall * 1e3:>10.2f}{n / wall:>15.0f}", flush=True)
 
 
+def batch():
+    from benchmarks.batches import throughput
+
+    throughput("mujoco_warp")
+
+
 def main(argv):
     global INTEGRATORS, SECONDS
     if "--all" in argv:
@@ -133,8 +141,8 @@ def main(argv):
         i = argv.index("--seconds")
         SECONDS = float(argv[i + 1])
         argv = argv[:i] + argv[i + 2:]
-    parts = argv or ["parity", "cost", "worlds"]
-    for name, part in (("parity", parity), ("cost", cost), ("worlds", worlds)):
+    parts = argv or ["parity", "cost", "worlds", "batch"]
+    for name, part in (("parity", parity), ("cost", cost), ("worlds", worlds), ("batch", batch)):
         if name in parts:
             part()
 

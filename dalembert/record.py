@@ -25,7 +25,9 @@ cost            ``build_s``, ``wall_s_median``, ``wall_s_min``, ``wall_s_max`` (
                 alone), ``wall_s_repeats`` (JSON: every timed repeat's stepping time, s, in the
                 order run, so a later ``compare`` can test significance), ``repeats``, ``n_steps``, ``n_rhs``, ``overhead_s``, ``readback_s``,
                 ``stepping_total_s``, ``worker_s`` (all s), ``concurrent`` (runs in
-                flight), ``load_start``, ``load_end`` (1-minute load average)
+                flight), ``load_start``, ``load_end`` (1-minute load average), ``batch_size``
+                (worlds stepped in one engine call), ``batch_wall_s`` (the batch's stepping time, s),
+                ``world_steps_per_s`` (the batch's throughput), ``device`` (where it stepped)
 errors          ``err_<quantity>_max``, ``err_<quantity>_final`` (``dalembert.errors.QUANTITIES``)
 drifts          ``drift_<name>``, ``drift_rate_<name>`` (1/s) per conserved quantity,
                 ``growth_<name>`` (its change in units of its scale on the true motion), built-in or
@@ -48,6 +50,9 @@ Schemas 1 to 3 have no ``adapter_distribution``, ``adapter_version``, ``integrat
 ``not_measured``: ``from_row`` reads them as "" (not recorded), None and no names; their
 ``within_tolerance`` reads as it was judged then (a
 bound whose quantity the run did not report counted as within).
+Rows written before batched worlds (``dalembert.harness.batches``) have no ``batch_size``, ``batch_wall_s``,
+``world_steps_per_s`` nor ``device``: ``from_row`` reads them as one world, NaN, NaN and "" (not recorded),
+under the same schema (the columns are optional, their defaults what those rows ran).
 """
 
 from __future__ import annotations
@@ -75,7 +80,8 @@ BAD_STATUSES = ("failed", "diverged", "timeout")
 CHECKS = ("orthonormality", "quaternion_norm", "joint_residual")
 
 _NAN = float("nan")
-_COUNTS = ("repeats", "n_steps", "n_rhs", "concurrent")  # the integer fields of Cost
+_COUNTS = ("repeats", "n_steps", "n_rhs", "concurrent", "batch_size")  # the integer fields of Cost
+_TEXTS = ("device",)  # the text fields of Cost
 
 
 # The judgement of a record made without one (schema 1 stores kept no verdict).
@@ -109,6 +115,16 @@ class Cost:
     load_start, load_end : the machine's 1-minute load average when the run started and ended
         (a load above the cores by more than a matrix's own footprint means the timings were shared with
         other work: ``reports.timing``)
+    batch_size : worlds stepped at once in the engine call that made this run (a ``--batch`` batch,
+        ``dalembert.harness.batches``, or copies an adapter stepped beside it, MuJoCo Warp's ``worlds``; 1: the run
+        stepped alone). Where it is above 1, ``wall_s_*``, ``overhead_s`` and ``stepping_total_s`` are this world's
+        share of the batch's (its time over ``batch_size``: per world), never a single world's latency; a
+        ``--batch`` run's ``build_s`` and ``worker_s`` are its share too
+    batch_wall_s : the batch's stepping wall time (median over the timed repeats), every world; NaN for a run
+        stepped alone
+    world_steps_per_s : the batch's throughput, world-steps per second (``batch_size * n_steps / batch_wall_s``);
+        NaN for a run stepped alone
+    device : where the engine stepped (``cpu``, ``cuda:0``; "": not recorded)
     """
 
     build_s: float = _NAN
@@ -126,6 +142,10 @@ class Cost:
     concurrent: int = 0
     load_start: float = _NAN
     load_end: float = _NAN
+    batch_size: int = 1
+    batch_wall_s: float = _NAN
+    world_steps_per_s: float = _NAN
+    device: str = ""
 
 
 @dataclass(frozen=True, eq=False)
@@ -304,7 +324,11 @@ class RunRecord:
 def _cost_field(name, value):
     """A stored ``Cost`` field back: counts as int, the repeats' JSON list as a tuple of floats."""
     if name in _COUNTS:
+        if name == "batch_size" and (value is None or value != value):  # (absent, null or NaN: stepped alone)
+            return 1
         return int(value or 0)
+    if name in _TEXTS:
+        return value if isinstance(value, str) else ""
     if name == "wall_s_repeats":
         return tuple(_num(w) for w in json.loads(value)) if isinstance(value, str) else ()
     return _num(value)

@@ -38,6 +38,9 @@ class StabilityMap:
     costs : dict (engine, line label) -> list of (value, cost s/s of its cheapest run reaching
         COST_TARGET, or None), by value
     quantity : str or None — the headline error the costs reach COST_TARGET of
+    batch : int — the most worlds one engine call stepped among its runs (``Cost.batch_size``; 1: every probe ran
+        alone). Probes of one step batch across the swept parameter (``dalembert.harness.batches``); the costs of
+        batched probes are per world, on lines of their own (``work_precision.batch_text``)
     """
 
     case: str
@@ -47,6 +50,7 @@ class StabilityMap:
     curves: dict
     costs: dict
     quantity: str | None
+    batch: int = 1
 
 
 def _swept(params_by_version):
@@ -86,5 +90,6 @@ def stability_maps(records, units_of):
         unit = units_of(name).get(parameter, "")
         out.append(StabilityMap(name, parameter, unit, unit in RATE_UNITS,
                                 {k: sorted(v, key=lambda p: p[0]) for k, v in curves.items()},
-                                {k: sorted(v, key=lambda p: p[0]) for k, v in costs.items()}, quantity))
+                                {k: sorted(v, key=lambda p: p[0]) for k, v in costs.items()}, quantity,
+                                max(r.cost.batch_size for r in runs)))
     return out

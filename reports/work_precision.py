@@ -5,7 +5,8 @@ second (the median of its timed repeats over the case's horizon) against its
 headline error (the max over the horizon), or the case's headline figure where it declares one
 (a contact case's ``dalembert.metrics.Metric`` with ``headline``: the creep of a box that must stick,
 the roll onset of a ball; ``headline_metric``), in its unit. Points group into lines by engine,
-integrator and options, ordered along their sweep from the coarsest step or
+integrator and options (and batch size: a batched run's cost is its share of a batch of worlds, per world,
+never mixed with runs stepped alone), ordered along their sweep from the coarsest step or
 tolerance to the finest. An engine's Pareto front is the best error it reaches
 at each cost: its points that no cheaper point beats. What a target accuracy costs is
 the cost of the cheapest run that reached it (a run that was made, never an
@@ -18,7 +19,7 @@ import math
 from typing import NamedTuple
 
 __all__ = ["ERROR_DISPLAY_FLOOR", "Point", "headline_quantity", "headline_metric", "figure_of", "cost_per_sim_s",
-           "line_label", "lines_of",
+           "line_label", "batch_text", "lines_of",
            "sweep_key", "points", "series", "pareto_front", "cheapest_reaching"]
 
 # Errors of exactly 0 are drawn at this level on log axes (below any double-precision roundoff).
@@ -68,19 +69,29 @@ def cost_per_sim_s(r):
 
 
 def line_label(r):
-    """A work-precision line: ``engine integrator`` and its options (as a reader reads them, ``options_text``)."""
-    return " ".join(x for x in (r.engine, r.settings.integrator, r.options_text) if x)
+    """A work-precision line: ``engine integrator`` and its options (as a reader reads them, ``options_text``); a
+    batched run's (``Cost.batch_size`` > 1) says its cost is per world of its batch."""
+    return " ".join(x for x in (r.engine, r.settings.integrator, r.options_text, batch_text(r)) if x)
+
+
+def batch_text(r):
+    """``(per world of a batch)`` for a run stepped in a batch of more than one world (its cost its share of the
+    batch's), else "". One text for every size: a sweep's batches differ in size from step to step, and each run's
+    cost is per world either way."""
+    return "(per world of a batch)" if getattr(r.cost, "batch_size", 1) > 1 else ""
 
 
 def lines_of(pts):
-    """``{label: [Point, ...]}``: the points grouped by line, a line being one engine, integrator and exact options.
+    """``{label: [Point, ...]}``: the points grouped by line, a line being one engine, integrator, exact options and
+    batch size (``batch_text``).
 
     The label is ``line_label``; where two lines' options differ only beyond the digits a reader is shown, each
     keeps its options exactly as given (``options_label``), so that no two lines merge.
     """
     exact = {}
     for p in pts:
-        exact.setdefault((p.run.engine, p.run.settings.integrator, p.run.options_label), []).append(p)
+        exact.setdefault((p.run.engine, p.run.settings.integrator, p.run.options_label, batch_text(p.run)),
+                         []).append(p)
     labels = {}
     for key, group in exact.items():
         labels.setdefault(line_label(group[0].run), []).append(key)

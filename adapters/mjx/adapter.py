@@ -28,6 +28,10 @@ from MJX itself, a frictionless pair (condim 1) under the elliptic cone
 geometry pair MJX has no collision function for (``mjx.put_model``). Contact forces are MJX's
 own (``mjx.contact``): ``mjx.forward`` at each sampled state, its ``efc_force`` decoded per
 contact as ``mj_contactForce`` does (MuJoCo C's solver on MJX's states would be another solver's).
+
+Batches (``dalembert.adapters.batch``): the scenes of one model (the same MJCF: they differ in their
+initial state only) are stepped as one ``jax.vmap`` of the rollout over their stacked initial states;
+each world's read-back, contact forces and audit are its own scene's.
 """
 
 from __future__ import annotations
@@ -39,14 +43,16 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from dalembert.adapters.base import IntegratorSpec, Option, Outcome
+from dalembert.adapters.batch import BatchOutcome, BatchPrepared, same_model
 from dalembert.adapters.mujoco import MujocoAdapter
 from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.adapter import MujocoPrepared
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mjx.contact import read_forces
-from dalembert.adapters.mjx.stepping import PRECISIONS, chunks, compile_rollout, mjx, precision, run_rollout, to_host
+from dalembert.adapters.mjx.stepping import (PRECISIONS, chunks, compile_rollout, mjx, precision, run_rollout, stack,
+                                             to_host)
 
-__all__ = ["MjxAdapter", "MjxPrepared"]
+__all__ = ["MjxAdapter", "MjxPrepared", "MjxBatch"]
 
 OPTIONS = ("precision", "welds", *contact.OPTIONS)
 STAGES = {"euler": 1, "rk4": 4, "implicitfast": 1}  # evaluations of the dynamics per step
@@ -77,6 +83,22 @@ class MjxPrepared(MujocoPrepared):
     steps_device: list
     compile_s: float
     backend: str
+
+
+@dataclass(frozen=True, eq=False)
+class MjxBatch(BatchPrepared):
+    """A batch on MJX (``BatchPrepared``: ``worlds``, each an ``MjxPrepared`` of its scene sharing the one device
+    model; ``device``: JAX's backend).
+
+    Attributes
+    ----------
+    mx : mjx.Model — the model on the device, every world's
+    dx0 : mjx.Data — the worlds' initial states, stacked on a leading axis (``stepping.stack``), padded to a power of
+        two with copies of the last (``_padded``; their samples are dropped)
+    """
+
+    mx: object
+    dx0: object
 
 
 class MjxAdapter(MujocoAdapter):
@@ -132,29 +154,65 @@ class MjxAdapter(MujocoAdapter):
     def prepare(self, scene, times, settings):
         import jax
         import jax.numpy as jnp
-        import mujoco
 
         p = super().prepare(scene, times, settings)  # compiled MJCF, checked; the initial state
         chosen = self.option(settings, "precision")
-        data = mujoco.MjData(p.model)
-        data.qpos[:], data.qvel[:] = p.qpos0, p.qvel0
-        if p.load_path == "actuator":
-            data.ctrl[:] = 1.0
         with precision(chosen):
             mx = mjx().put_model(p.model)
-            dx0 = mjx().put_data(p.model, data)
+            dx0 = _initial(p)
             steps_device = [jnp.asarray(c) for c in chunks(p.steps)]
             compile_s = compile_rollout(mx, dx0)
         return MjxPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, precision=chosen, mx=mx, dx0=dx0,
                            steps_device=steps_device, compile_s=compile_s, backend=jax.default_backend())
+
+    # ------------------------------------------------------------- batches
+    def batch_problem(self, scenes, times, settings):
+        """Why ``scenes`` cannot be the worlds of one vmapped rollout: their MJCF differs (``batch.same_model``);
+        None when they can."""
+        from dalembert.adapters.mujoco.mjcf import mjcf
+
+        return same_model([mjcf(s, settings) for s in scenes], self.name)
+
+    def prepare_batch(self, scenes, times, settings):
+        """Each scene's MuJoCo model and initial state (``MujocoAdapter.prepare``), one device model (world 0's:
+        they are one MJCF), the initial states stacked, the vmapped rollout compiled for the batch's size."""
+        import jax
+        import jax.numpy as jnp
+
+        ps = [MujocoAdapter.prepare(self, s, times, settings) for s in scenes]
+        chosen = self.option(settings, "precision")
+        with precision(chosen):
+            mx = mjx().put_model(ps[0].model)
+            starts = [_initial(p) for p in ps]
+            # padded with copies of the last world to a power of two: one compilation serves every size up to it
+            dx0 = stack(starts + starts[-1:] * (_padded(len(starts)) - len(starts)))
+            steps_device = [jnp.asarray(c) for c in chunks(ps[0].steps)]
+            compile_s = compile_rollout(mx, dx0, batched=True)
+        backend = jax.default_backend()
+        worlds = tuple(MjxPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, precision=chosen, mx=mx, dx0=d,
+                                   steps_device=steps_device, compile_s=compile_s, backend=backend)
+                       for p, d in zip(ps, starts))
+        return MjxBatch(worlds=worlds, device=backend, mx=mx, dx0=dx0)
+
+    def run_batch(self, prepared):
+        """Every world stepped at once (one vmapped rollout from the stacked initial states)."""
+        p0 = prepared.worlds[0]
+        with precision(p0.precision):
+            Q, V, wall = run_rollout(prepared.mx, prepared.dx0, p0.steps_device, batched=True)
+        return BatchOutcome(wall, tuple(self._outcome(p, [q[k] for q in Q], [v[k] for v in V], wall)
+                                        for k, p in enumerate(prepared.worlds)))
 
     # ------------------------------------------------------------- run
     def run(self, prepared):
         p = prepared
         with precision(p.precision):
             Q, V, wall = run_rollout(p.mx, p.dx0, p.steps_device)
+        return self._outcome(p, Q, V, wall)
+
+    def _outcome(self, p, Q, V, wall):
+        """The ``Outcome`` of the rollout's samples ``Q``, ``V`` (``run_rollout``'s chunks, one world's) from ``p``."""
         n_steps = int(p.steps.sum())
-        info = {"message": ""}
+        info = {"message": "", "device": p.backend}
 
         def read():
             Qh, Vh = to_host(Q, V, p.qpos0, p.qvel0, len(p.times))
@@ -205,6 +263,25 @@ def why_not(scene, settings):
                 "noslip_iterations, so the run would silently be one without noslip; only MJX's Warp backend, a GPU "
                 "one, has one) — run noslip on MuJoCo C (--engine mujoco), or MJX with noslip_iterations=0")
     return None
+
+
+def _padded(n):
+    """The worlds a batch of ``n`` is stepped as: the next power of two. JAX compiles the vmapped rollout once per
+    batch size (~1.5-2 min on 2 busy cores: ``benchmarks.batches``), and a search's rounds batch 1 to N worlds, so
+    sizes share a compilation; the padding at most doubles a batch's arithmetic (the cheap part on the CPU: 64
+    worlds cost ~14x one, measured there)."""
+    return 1 << max(0, n - 1).bit_length()
+
+
+def _initial(p):
+    """The initial state of MuJoCo's prepared ``p`` on the device (``mjx.put_data``, in the precision in force)."""
+    import mujoco
+
+    data = mujoco.MjData(p.model)
+    data.qpos[:], data.qvel[:] = p.qpos0, p.qvel0
+    if p.load_path == "actuator":
+        data.ctrl[:] = 1.0
+    return mjx().put_data(p.model, data)
 
 
 @functools.lru_cache(maxsize=64)

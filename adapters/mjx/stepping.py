@@ -9,7 +9,8 @@ structure (array shapes and dtypes, MJX's static fields such as the joint
 types and the integrator) serves every horizon, sample interval and dt. The
 jitted function is built once per process and JAX caches its compilations, so
 a prepared model of a structure already seen in this process compiles
-nothing. ``compile_rollout`` compiles it by calling it once with zero steps
+nothing. A batch of worlds (``dalembert.adapters.batch``) runs the same rollout under ``jax.vmap``
+over the state (the model shared), compiled once per structure and batch size. ``compile_rollout`` compiles it by calling it once with zero steps
 (nothing is stepped); ``run_rollout`` times the calls through
 ``block_until_ready``.
 
@@ -38,7 +39,7 @@ import time
 
 import numpy as np
 
-__all__ = ["mjx", "precision", "chunks", "compile_rollout", "run_rollout", "to_host", "PRECISIONS", "CHUNK"]
+__all__ = ["mjx", "precision", "chunks", "compile_rollout", "run_rollout", "stack", "to_host", "PRECISIONS", "CHUNK"]
 
 PRECISIONS = ("float32", "float64")
 # Sample intervals per compiled call. A call costs ~1.5 ms beyond its steps (measured on 2 cores: free_top,
@@ -71,6 +72,23 @@ def precision(name):
 
 @functools.cache
 def _rollout():
+    """The rollout, jitted (one world)."""
+    import jax
+
+    return jax.jit(_rollout_fn())
+
+
+@functools.cache
+def _batch_rollout():
+    """The rollout over a batch of worlds: ``jax.vmap`` over the state's leading axis (the model shared), jitted;
+    its samples ``(nworld, CHUNK, nq)``."""
+    import jax
+
+    return jax.jit(jax.vmap(_rollout_fn(), in_axes=(None, 0, None)))
+
+
+@functools.cache
+def _rollout_fn():
     import jax
 
     from dalembert.cache import cache_dir
@@ -93,7 +111,7 @@ def _rollout():
         d, (Q, V) = jax.lax.scan(interval, d, steps)
         return d, Q, V
 
-    return jax.jit(rollout)
+    return rollout
 
 
 def chunks(steps):
@@ -105,20 +123,22 @@ def chunks(steps):
     return [padded[i:i + CHUNK] for i in range(0, len(padded), CHUNK)]
 
 
-def compile_rollout(m, d):
+def compile_rollout(m, d, batched=False):
     """Compile the rollout for ``m`` and ``d`` (JAX's cache keeps it): one call with zero steps per
-    interval, so nothing is stepped. Returns the compile wall time, s."""
+    interval, so nothing is stepped. ``batched``: ``d`` is a batch of worlds (``stack``). Returns the compile
+    wall time, s."""
     start = time.perf_counter()
-    _, Q, V = _rollout()(m, d, np.zeros(CHUNK, dtype=np.int32))
+    _, Q, V = (_batch_rollout() if batched else _rollout())(m, d, np.zeros(CHUNK, dtype=np.int32))
     Q.block_until_ready()
     return time.perf_counter() - start
 
 
-def run_rollout(m, d, steps):
+def run_rollout(m, d, steps, batched=False):
     """Step from ``d`` through the intervals, ``steps`` from ``chunks``: ``(Q, V, wall s)``, ``Q`` and ``V``
-    lists of ``(CHUNK, nq)`` and ``(CHUNK, nv)`` device arrays, one per chunk; the wall time of the compiled
-    calls alone (each call waits for the state of the one before it; ``block_until_ready`` on the last)."""
-    rollout, Q, V = _rollout(), [], []
+    lists of ``(CHUNK, nq)`` and ``(CHUNK, nv)`` device arrays, one per chunk (``batched``: ``d`` a batch of
+    worlds, the arrays ``(nworld, CHUNK, nq)``); the wall time of the compiled calls alone (each call waits for
+    the state of the one before it; ``block_until_ready`` on the last)."""
+    rollout, Q, V = _batch_rollout() if batched else _rollout(), [], []
     start = time.perf_counter()
     for chunk in steps:
         d, q, v = rollout(m, d, chunk)
@@ -127,6 +147,14 @@ def run_rollout(m, d, steps):
     Q[-1].block_until_ready()
     V[-1].block_until_ready()
     return Q, V, time.perf_counter() - start
+
+
+def stack(states):
+    """One ``mjx.Data`` of a batch of worlds from one per world (each leaf stacked on a new leading axis)."""
+    import jax
+    import jax.numpy as jnp
+
+    return jax.tree.map(lambda *leaves: jnp.stack(leaves), *states)
 
 
 def to_host(Q, V, q0, v0, n):

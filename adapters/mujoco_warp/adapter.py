@@ -19,12 +19,18 @@ number type's. Options: ``welds`` as for MuJoCo, contact as MuJoCo's (``cone``,
 ``impratio``, ``noslip_iterations``, ``contact_timeconst``: MuJoCo Warp reads
 all four); ``worlds`` = N steps N copies of the case at once (MuJoCo Warp's ``nworld``), world k's initial
 velocities raised by k ``WORLD_DV``: the trajectory is world 0's (the case's own, the same float32 arithmetic as
-one world), the run's wall time the batch's, and the audit holds the batch size, its throughput (world-steps per
+one world), the run's wall time the batch's (``Outcome.info["batch_size"]``: its record's cost is per world, the
+batch's beside it, ``dalembert.record.Cost``), and the audit holds the batch size, its throughput (world-steps per
 second) and the worlds' spread at the end. Loads go through MuJoCo's site actuators only (applied inside every
 integrator stage); MuJoCo's ``loads=xfrc_applied`` path, a Python call per
 step, is not offered. What MuJoCo Warp refuses (``mjw.put_model``: a geometry
 type, a solver, a flag, an integrator it lacks) is refused with its reason
 before anything runs.
+
+Batches (``dalembert.adapters.batch``): ``prepare_batch`` and ``run_batch`` step the scenes of one model (the
+same MJCF: they differ in their initial state only) as the worlds of one ``mjw.Data``, each world's arithmetic
+that of the scene run alone (MuJoCo Warp's kernels compute every world by the same code); each world's
+read-back and audit are its own scene's.
 """
 
 from __future__ import annotations
@@ -35,13 +41,15 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from dalembert.adapters.base import IntegratorSpec, Option, Outcome
+from dalembert.adapters.batch import BatchOutcome, BatchPrepared, same_model
 from dalembert.adapters.mujoco import MujocoAdapter
 from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.adapter import MujocoPrepared
 from dalembert.adapters.mujoco.readback import read_back
-from dalembert.adapters.mujoco_warp.stepping import DEVICE, compile_step, device_model, put_state, step_samples, warp
+from dalembert.adapters.mujoco_warp.stepping import (DEVICE, compile_step, device_model, put_state, put_worlds,
+                                                     step_samples, step_worlds, warp)
 
-__all__ = ["MujocoWarpAdapter", "MujocoWarpPrepared"]
+__all__ = ["MujocoWarpAdapter", "MujocoWarpPrepared", "MujocoWarpBatch"]
 
 OPTIONS = ("welds", "worlds", *contact.OPTIONS)
 # Batched worlds (option ``worlds``): world k starts with every velocity coordinate raised by k WORLD_DV (m/s,
@@ -77,6 +85,19 @@ class MujocoWarpPrepared(MujocoPrepared):
     ctrl: object
     worlds: int
     compile_s: float
+
+
+@dataclass(frozen=True, eq=False)
+class MujocoWarpBatch(BatchPrepared):
+    """A batch on MuJoCo Warp (``BatchPrepared``: ``worlds``, each a ``MujocoWarpPrepared`` of its scene sharing
+    the one device model; ``device``).
+
+    Attributes
+    ----------
+    mx : mujoco_warp.Model — the model on the device, every world's
+    """
+
+    mx: object
 
 
 class MujocoWarpAdapter(MujocoAdapter):
@@ -141,7 +162,7 @@ class MujocoWarpAdapter(MujocoAdapter):
         Q, V, wall, bad = step_samples(p.mx, d, p.steps, p.qpos0, p.qvel0)
         n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())  # interval `bad` was stepped whole
         message = f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else ""
-        info = {"message": message}
+        info = {"message": message, "device": DEVICE, "batch_size": p.worlds}
         if p.worlds > 1:
             # the batch: every world stepped n_steps in ``wall``; world 0 is the run's, the others its perturbed
             # copies (their spread from world 0 at the end: NaN if a world diverged)
@@ -154,6 +175,49 @@ class MujocoWarpAdapter(MujocoAdapter):
         def read():
             traj, info["audit"] = read_back(p, Q, V)
             info["audit"].update(info.get("worlds", {}))
+            return traj
+
+        return Outcome(read, wall, n_steps, n_steps * STAGES[p.settings.integrator], info)
+
+    # ------------------------------------------------------------- batches
+    def batch_problem(self, scenes, times, settings):
+        """Why ``scenes`` cannot be the worlds of one ``mjw.Data``: their MJCF differs (``batch.same_model``), or
+        option ``worlds`` is given (a batch's worlds are its scenes); None when they can."""
+        from dalembert.adapters.mujoco.mjcf import mjcf
+
+        if int(self.option(settings, "worlds")) != 1:
+            return ("options.worlds: a batch's worlds are its scenes, not copies of one — drop --option worlds, or "
+                    "run without --batch")
+        return same_model([mjcf(s, settings) for s in scenes], self.name)
+
+    def prepare_batch(self, scenes, times, settings):
+        """Each scene's MuJoCo model and initial state (``MujocoAdapter.prepare``), one device model (world 0's:
+        they are one MJCF), and the step's kernels compiled for the batch's size."""
+        ps = [MujocoAdapter.prepare(self, s, times, settings) for s in scenes]
+        ctrl = 1.0 if ps[0].load_path == "actuator" and ps[0].model.nu else None
+        mx = device_model(ps[0].model)
+        compile_s = compile_step(mx, ps[0].model, ps[0].qpos0, ps[0].qvel0, ctrl, len(ps))
+        worlds = tuple(MujocoWarpPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, mx=mx, ctrl=ctrl,
+                                          worlds=1, compile_s=compile_s) for p in ps)
+        return MujocoWarpBatch(worlds=worlds, device=DEVICE, mx=mx)
+
+    def run_batch(self, prepared):
+        """Every world stepped at once from its own initial state (a fresh ``mjw.Data`` each call, not timed)."""
+        ps = prepared.worlds
+        Q0, V0 = np.array([p.qpos0 for p in ps]), np.array([p.qvel0 for p in ps])
+        d = put_worlds(ps[0].model, Q0, V0, ps[0].ctrl)
+        Q, V, wall, bad = step_worlds(prepared.mx, d, ps[0].steps, Q0, V0)
+        return BatchOutcome(wall, tuple(self._world(p, Q[:, k], V[:, k], int(bad[k]) or None, wall)
+                                        for k, p in enumerate(ps)))
+
+    def _world(self, p, Q, V, bad, wall):
+        """World ``p``'s ``Outcome`` of a batch: its samples ``Q (n, nq)``, ``V (n, nv)``, first bad sample ``bad``
+        (None: none), the batch's ``wall``; as ``run`` makes one."""
+        n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())  # interval `bad` was stepped whole
+        info = {"message": f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else "", "device": DEVICE}
+
+        def read():
+            traj, info["audit"] = read_back(p, Q, V)
             return traj
 
         return Outcome(read, wall, n_steps, n_steps * STAGES[p.settings.integrator], info)

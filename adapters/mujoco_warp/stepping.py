@@ -35,7 +35,8 @@ import time
 
 import numpy as np
 
-__all__ = ["warp", "device_model", "sizes", "put_state", "compile_step", "step_samples", "DEVICE", "NCONMAX"]
+__all__ = ["warp", "device_model", "sizes", "put_state", "put_worlds", "compile_step", "step_samples", "step_worlds",
+           "DEVICE", "NCONMAX"]
 
 DEVICE = "cpu"  # Warp's CPU backend: the adapter runs where no accelerator is
 # Contacts allocated per world: MuJoCo Warp's own default for a model without height fields, flexes or SDFs (45,
@@ -118,6 +119,28 @@ def put_state(model, qpos, qvel, ctrl, nworld=1, dv=0.0):
         return d
 
 
+def put_worlds(model, qpos, qvel, ctrl):
+    """A device ``mjw.Data`` of one world per row of ``qpos (nworld, nq)`` and ``qvel (nworld, nv)`` (a batch's
+    initial states), with ``ctrl`` (None, or the actuators' constant control); its contact and constraint arrays
+    sized by ``sizes`` for the world that needs the most rows at its initial state."""
+    import mujoco
+
+    wp, mjw, _ = warp()
+    qpos, qvel = np.atleast_2d(qpos), np.atleast_2d(qvel)
+    data, most = mujoco.MjData(model), (NCONMAX, 1)
+    if ctrl is not None:
+        data.ctrl[:] = ctrl
+    for q, v in zip(qpos, qvel):
+        data.qpos[:], data.qvel[:] = q, v
+        mujoco.mj_forward(model, data)
+        most = max(most, sizes(model, data), key=lambda s: s[1])
+    with wp.ScopedDevice(DEVICE):
+        d = mjw.put_data(model, data, nworld=len(qpos), nconmax=most[0], njmax=most[1])
+        d.qpos.assign(qpos.astype(np.float32))
+        d.qvel.assign(qvel.astype(np.float32))
+        return d
+
+
 def compile_step(mx, model, qpos, qvel, ctrl, nworld=1):
     """One step on a scratch state of ``nworld`` worlds, so that every kernel a step launches is compiled (or
     loaded from the cache) before a timed run: the wall time, s."""
@@ -152,5 +175,33 @@ def step_samples(mx, d, steps, q0, v0):
                 bad = k
                 break
             Q[k], V[k] = q, v
+        wall = time.perf_counter() - start
+    return Q, V, wall, bad
+
+
+def step_worlds(mx, d, steps, Q0, V0):
+    """Step every world of ``d`` through the sample intervals (``steps[k]`` steps in interval k) and read all
+    worlds' samples back: ``(Q (n, nworld, nq), V (n, nworld, nv), wall s, bad (nworld,))``, float64 widened
+    exactly from float32, the initial states ``Q0 (nworld, nq)``, ``V0`` first; world w is NaN from its first
+    non-finite sample ``bad[w]`` on (0: none). The loop stops once every world is non-finite. The wall time is
+    the stepping of the batch and the per-sample copies to the host."""
+    wp, mjw, _ = warp()
+    n, nworld = len(steps) + 1, len(Q0)
+    Q, V = np.full((n, nworld, Q0.shape[1]), np.nan), np.full((n, nworld, V0.shape[1]), np.nan)
+    Q[0], V[0] = Q0, V0
+    bad = np.zeros(nworld, dtype=int)
+    step = mjw.step
+    with wp.ScopedDevice(DEVICE):
+        start = time.perf_counter()
+        for k, nstep in enumerate(steps, 1):
+            for _ in range(int(nstep)):
+                step(mx, d)
+            q, v = d.qpos.numpy(), d.qvel.numpy()
+            finite = np.all(np.isfinite(q), axis=1) & np.all(np.isfinite(v), axis=1)
+            bad[(bad == 0) & ~finite] = k
+            ok = bad == 0
+            Q[k, ok], V[k, ok] = q[ok], v[ok]
+            if not ok.any():
+                break
         wall = time.perf_counter() - start
     return Q, V, wall, bad

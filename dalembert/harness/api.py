@@ -55,7 +55,7 @@ class MatrixError(RuntimeError):
 
 def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=None, params=None, options=None,
         jobs=None, timeout=None, quick=False, scheduler=None, out=None, resume=None, search=None, resolution=None,
-        no_maps=False, force=False, strict=False, timing=None, progress=None, debug=False):
+        no_maps=False, force=False, strict=False, timing=None, progress=None, debug=False, batch=False):
     """Run a selection of the matrix into a new store (or finish one: ``resume``) and return its
     records as a DataFrame: ``dalembert run``, a keyword per flag (``dalembert.harness.commands.run.run``
     documents each; a repeatable flag's keyword is its plural, ``--no-maps`` is ``no_maps``).
@@ -83,6 +83,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     timing : dalembert.harness.execute.Timing or None — how each run is timed (not with ``quick``)
     progress : callable or None — ``progress(done, total, failures, record)`` after each run
     debug : bool — keep Dask's own log
+    batch : bool — as ``--batch``: runs that differ only in the case's parameters stepped as one batch of worlds
 
     Returns
     -------
@@ -99,7 +100,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     outcome = run_command.run(cases, tags, engines, integrators, dts, rtols, params, options, jobs, timeout, quick,
                               scheduler, out, resume, search, resolution, no_maps, force, strict, timing, progress,
                               debug, command="dalembert.harness.api.run("
-                              + ", ".join(f"{k}={v!r}" for k, v in given.items()) + ")")
+                              + ", ".join(f"{k}={v!r}" for k, v in given.items()) + ")", batch=batch)
     if outcome.interrupted:
         raise KeyboardInterrupt(f"interrupted; finish with api.run(resume={outcome.store.path!r})")
     if outcome.lost:

@@ -114,6 +114,10 @@ def _parser():
     r.add_argument("--resolution", type=float, default=None,
                    help="with --search: stop when the failing step is within this factor of the passing one "
                         "(default 1.2)")
+    r.add_argument("--batch", action="store_true",
+                   help="step the runs that differ only in the case's parameters (--param sweeps, a map's swept "
+                        "parameter) as the worlds of one engine call, on engines that have batches (mujoco_warp, "
+                        "mjx); their costs are then per world, the batch's beside them")
     r.add_argument("--no-maps", action="store_true",
                    help="leave out the default stability maps of the selected tags (e.g. --tag hard runs them)")
     r.add_argument("--force", action="store_true",

@@ -1,8 +1,13 @@
 """Running a matrix on a Dask cluster: the same runs, records and store as the local pool.
 
-Each run is a Dask task that runs it in a fresh Python process; that process stopped from
-outside (SIGTERM, SIGKILL: ``pool.STOPPED_FROM_OUTSIDE``) ends the run without failing it, as a
-local worker's: the task raises ``WorkerStopped``, the run is not stored, ``--resume`` runs it.
+Each task runs a group of runs in a fresh Python process (``harness.batches.groups``): with
+``batched``, the runs an engine steps as one batch of worlds (a map's row: the swept parameter at one
+step); otherwise a chunk of at most ``chunk`` runs of one engine, integrator and options, one after
+another, so a task's process start, the engine's import and its compilation are paid once per chunk,
+not per probe (``chunk=1``: a task per run). Progress and an estimate of the time left are told per
+run as each task's runs are stored (``progress``). A task's process stopped from outside (SIGTERM,
+SIGKILL: ``pool.STOPPED_FROM_OUTSIDE``) ends its runs without failing them, as a local worker's: the
+task raises ``WorkerStopped``, its runs are not stored, ``--resume`` runs them.
 """
 
 from __future__ import annotations
@@ -15,12 +20,13 @@ from dataclasses import asdict
 
 from dalembert.environments import is_versioned, require
 from dalembert.harness import boot, threads
+from dalembert.harness.batches import DEFAULT_CHUNK, groups
 from dalembert.harness.execute import Timing, unfinished
 from dalembert.harness.matrix import RunSpec
 from dalembert.harness.pool import DEFAULT_TIMEOUT_S, finish, stopped_from_outside, write_table
 from dalembert.harness.truths import prepare_cases
 
-__all__ = ["run_matrix_dask", "execute_isolated", "tasks_per_host", "WorkerStopped"]
+__all__ = ["run_matrix_dask", "execute_isolated", "execute_group_isolated", "tasks_per_host", "WorkerStopped"]
 
 
 class WorkerStopped(RuntimeError):
@@ -81,13 +87,46 @@ def execute_isolated(spec_json, timing_json, truth_npz, timeout, hosts=None):
     return pickle.loads(proc.stdout)
 
 
-def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None):
+def execute_group_isolated(specs_json, timing_json, truths_npz, timeout, hosts=None, batched=False):
+    """Run a group of specs (``harness.batches.groups``) in one fresh Python subprocess (a Dask task):
+    ``[(RunRecord, npz)]`` in their order. ``truths_npz``: ``[((case, version), npz)]`` of their cases; ``timeout``:
+    the per-run limit, the group's being that times its runs. As ``execute_isolated`` otherwise."""
+    specs = [RunSpec.from_json(s) for s in specs_json]
+    python, environment = sys.executable, None
+    if is_versioned(specs[0].engine):  # (a group is one engine's)
+        environment = require(specs[0].engine)
+        python, environment = environment.python, environment.path
+    payload = pickle.dumps({"specs": specs_json, "timing": timing_json, "truths": truths_npz, "parent": os.getpid(),
+                            "environment": environment, "batched": batched})
+    n = _threads(hosts or {})
+    env = None if n is None else {**os.environ, **{var: str(n) for var in threads.VARIABLES}}
+    limit = timeout * len(specs)
+    try:
+        proc = subprocess.run([python, "-m", "dalembert.harness.batches"], input=payload, capture_output=True,
+                              timeout=limit, env=env)
+    except subprocess.TimeoutExpired:
+        return [(unfinished(s, "timeout", f"stopped after its task's limit of {limit:g} s ({len(specs)} runs of "
+                                          f"{timeout:g} s)"), None) for s in specs]
+    stopped = stopped_from_outside(specs[0], proc.returncode)
+    if stopped:
+        raise WorkerStopped(stopped)
+    if proc.returncode != 0:
+        why = f"worker exited with {proc.returncode}: {proc.stderr.decode()[-500:]}"
+        return [(unfinished(s, "failed", why), None) for s in specs]
+    return pickle.loads(proc.stdout)
+
+
+def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None,
+                    batched=False, chunk=DEFAULT_CHUNK):
     """Like ``dalembert.harness.pool.run_matrix`` on the Dask cluster at ``scheduler`` (address or Client).
+
+    ``batched``: a task per batch of worlds where the engine has batches; the other runs in tasks of at most
+    ``chunk`` runs (module docstring).
 
     A run whose task the cluster lost (the scheduler gone, a worker lost) is the infrastructure's
     failure: it is not stored, and is returned in ``[(key, reason)]`` for ``--resume`` to run again.
-    (A run's own failure never reaches here as an exception: ``execute_isolated`` returns it; a run whose process
-    was stopped from outside, ``WorkerStopped``, is lost too, named by its message.)
+    (A run's own failure never reaches here as an exception: the task returns it; the runs of a task whose
+    process was stopped from outside, ``WorkerStopped``, are lost too, named by its message.)
     """
     from distributed import Client, as_completed
 
@@ -98,22 +137,26 @@ def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=T
     todo = [s for s in specs if s.key not in store.done_keys()]
     counts = {"done": 0, "bad": 0, "total": len(todo)}
     hosts = tasks_per_host(client)  # (workers that join later share by their own threads)
-    futures = {client.submit(execute_isolated, s.to_json(), asdict(timing), truths[(s.case, s.case_version)],
-                             timeout, hosts, pure=False): s for s in todo}
+    futures = {}
+    for group, batch in groups(todo, batched, chunk):
+        cases = sorted({(s.case, s.case_version) for s in group})
+        futures[client.submit(execute_group_isolated, [s.to_json() for s in group], asdict(timing),
+                              [(k, truths[k]) for k in cases], timeout, hosts, batch, pure=False)] = group
     lost = []
     try:
         for fut in as_completed(futures):
-            spec = futures[fut]
+            group = futures[fut]
             try:
-                record, npz = fut.result()
+                results = fut.result()
             except WorkerStopped as e:
-                lost.append((spec.key, str(e)))
+                lost += [(s.key, str(e)) for s in group]
                 continue
-            except Exception as e:  # noqa: BLE001 - whatever the cluster raises, the run was not run
-                lost.append((spec.key, f"{spec.case} {spec.engine} {spec.settings.label()}: the cluster lost its task "
-                                       f"({type(e).__name__}: {e})"))
+            except Exception as e:  # noqa: BLE001 - whatever the cluster raises, the runs were not run
+                lost += [(s.key, f"{s.case} {s.engine} {s.settings.label()}: the cluster lost its task "
+                                 f"({type(e).__name__}: {e})") for s in group]
                 continue
-            finish(store, record, npz, progress, counts)
+            for record, npz in results:
+                finish(store, record, npz, progress, counts)
     except BaseException:  # the error under way is the one told (``pool.write_table``)
         write_table(store, failing=True)
         raise

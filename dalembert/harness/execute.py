@@ -141,6 +141,7 @@ def _execute(spec, timing, truth, concurrent):
     from dalembert.adapters import get_adapter
     from dalembert.adapters.registry import adapter_distribution
     from dalembert.errors import trajectory_errors
+    from dalembert.harness.batches import per_world
     from dalembert.harness.truths import built_case
     from dalembert.store import trajectory_to_npz
 
@@ -206,6 +207,7 @@ def _execute(spec, timing, truth, concurrent):
                     overhead_s=float(np.median(np.array(totals) - np.array(walls))), readback_s=readback_s,
                     stepping_total_s=float(first.wall_s + sum(walls)), worker_s=time.perf_counter() - started,
                     concurrent=concurrent, load_start=load_start, load_end=_load())
+        cost = per_world(cost, first.info)  # its device; a batch the adapter stepped beside it: cost per world
         return _record(spec, "ok", "", errors, summary.drifts, case.tolerances, drift_rates=summary.drift_rates,
                        growths=summary.growths,
                        checks=summary.checks, cost=cost, **found), npz

@@ -23,6 +23,10 @@ and integrator (MJX: seconds per compilation, kept in the process) then compiles
 and group instead of once per run, where plain order would hand a sweep's runs to the workers in turn.
 The matrix's runs and records are the same; only who runs which, and when, changes.
 
+Batches (``run_matrix(batched=True)``, ``--batch``): the runs an engine steps as one batch of worlds
+(``dalembert.harness.batches.groups``) go to one worker as one job, a ``Group``; its answer is a record
+per world, its timeout, death or stop from outside every one of its runs'.
+
 Engine environments: the runs of a versioned engine (``mujoco==3.6.0``, ``dalembert.environments``) go to
 workers started from that environment's interpreter, a subprocess (``_Interpreter``: ``dalembert.harness.boot``,
 on this process's dalembert code; the pipe's socket passed as a file descriptor) that serves the same protocol and sets up the same lifetime
@@ -112,14 +116,35 @@ def _serve(conn, parent_pid, n_threads, engines):
         if job is None:
             return
         spec, timing, truth, concurrent = job
+        if isinstance(spec, Group):  # several runs, one answer (``harness.batches``); truth: the new cases' truths
+            from dalembert.harness.batches import execute_group
+
+            truths.update(truth)
+            conn.send(execute_group(spec.specs, timing, truths, concurrent, spec.batched))
+            continue
         key = (spec.case, spec.case_version)
         if truth is not None:
             truths[key] = truth
         conn.send(execute(spec, timing, truths[key], concurrent))
 
 
+class Group:
+    """Runs a worker runs as one job (``run_matrix``'s ``groups``): ``specs`` (a tuple of RunSpec), as one batch of
+    worlds when ``batched`` (``dalembert.harness.batches``). Its ``engine`` is its first run's, as its affinity."""
+
+    def __init__(self, specs, batched=False):
+        self.specs, self.batched = tuple(specs), batched
+        self.engine = self.specs[0].engine
+
+
+def _runs(job):
+    """The runs of a job: a spec, or a ``Group``'s."""
+    return job.specs if isinstance(job, Group) else (job,)
+
+
 def affinity(spec):
-    """The group of runs that share an engine's compiled program (module docstring)."""
+    """The group of runs that share an engine's compiled program (module docstring); a ``Group``'s first run's."""
+    spec = _runs(spec)[0]
     return (spec.case, spec.case_version, spec.engine, spec.settings.integrator, spec.settings.options)
 
 
@@ -203,12 +228,18 @@ class _Worker:
         self.spec, self.started, self.truths, self.group = None, 0.0, set(), None
 
     def submit(self, spec, timing, truth, concurrent):
-        key = (spec.case, spec.case_version)
+        """Send a run (``truth``: its case's) or a ``Group`` (``truth``: (case, version) -> truth of its runs)."""
+        if isinstance(spec, Group):
+            send = {k: t for k, t in truth.items() if k not in self.truths}
+            keys = set(truth)
+        else:
+            key = (spec.case, spec.case_version)
+            send, keys = None if key in self.truths else truth, {key}
         try:
-            self.conn.send((spec, timing, None if key in self.truths else truth, concurrent))
+            self.conn.send((spec, timing, send, concurrent))
         except OSError:  # it died before it got the run (stopped, crashed): its end reaches ``wait`` as any death
             pass
-        self.truths.add(key)
+        self.truths |= keys
         self.spec, self.started, self.group = spec, time.monotonic(), affinity(spec)
 
     def kill(self):
@@ -259,23 +290,31 @@ def _unwritable(store, e, what):
     return err
 
 
-def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None):
+def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None, batched=False):
     """Run ``specs`` not yet in ``store`` on ``jobs`` long-lived workers (default: the cores).
+
+    ``batched``: the runs an engine can step as one batch of worlds (``dalembert.harness.batches``) go to a
+    worker as one job, its timeout the batch's; the rest one by one.
 
     Returns the runs lost to the infrastructure, not stored: ``[(key, reason)]``.
     """
+    from dalembert.harness.batches import groups
+
     pythons = _pythons(specs)  # (a missing environment refused before anything runs)
     truths = prepare_cases(specs, store)
     todo = [s for s in specs if s.key not in store.done_keys()]
+    if batched:
+        todo = [Group(g, True) if batch else g[0] for g, batch in groups(todo, True, chunk=1)]
+    n_runs = sum(len(_runs(j)) for j in todo)
     n_threads = threads.per_worker(jobs or os.cpu_count())  # as asked (the manifest's), not as capped below
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(todo) or 1))
     ctx = _context()
-    engines = tuple(sorted({(s.engine, s.adapter) for s in todo}))
+    engines = tuple(sorted({(s.engine, s.adapter) for j in todo for s in _runs(j)}))
 
     def start(python):  # a worker for ``python``'s runs, loading only their engines
         return _Worker(ctx, n_threads, tuple(e for e in engines if pythons.get(e[0]) == python), python)
 
-    counts = {"done": 0, "bad": 0, "total": len(todo)}
+    counts = {"done": 0, "bad": 0, "total": n_runs}
     queue = [(affinity(s), s) for s in reversed(todo)]
     idle, busy, lost = [], {}, []  # busy: connection -> worker
     try:
@@ -289,33 +328,38 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
                     worker.stop()
                     worker = start(pythons.get(queue[-1][1].engine))
                     spec = _take(queue, worker, {w.group for w in busy.values()}, pythons)
-                worker.submit(spec, timing, truths[(spec.case, spec.case_version)], len(busy) + 1)
+                truth = ({(s.case, s.case_version): truths[(s.case, s.case_version)] for s in _runs(spec)}
+                         if isinstance(spec, Group) else truths[(spec.case, spec.case_version)])
+                worker.submit(spec, timing, truth, len(busy) + 1)
                 busy[worker.conn] = worker
             # each worker stays in ``busy`` or ``idle`` until it is gone: a Ctrl-C at any point finds it
             for conn in wait(list(busy), timeout=POLL_S):
                 worker = busy[conn]
                 try:
-                    record, npz = conn.recv()
+                    answer = conn.recv()
                 except EOFError:  # the worker died without an answer (crash, stopped): replace it
                     worker.kill()
                     del busy[conn]
-                    dead, code = worker.spec, worker.proc.exitcode
+                    code = worker.proc.exitcode
                     idle.append(start(worker.python))
-                    stopped = stopped_from_outside(dead, code)
-                    if stopped:  # not the run's doing: not stored, --resume runs it
-                        lost.append((dead.key, stopped))
-                    else:
-                        finish(store, unfinished(dead, "failed", f"worker process died (exit code {code})"), None,
-                               progress, counts)
+                    for dead in _runs(worker.spec):
+                        stopped = stopped_from_outside(dead, code)
+                        if stopped:  # not the run's doing: not stored, --resume runs it
+                            lost.append((dead.key, stopped))
+                        else:
+                            finish(store, unfinished(dead, "failed", f"worker process died (exit code {code})"), None,
+                                   progress, counts)
                     continue
                 idle.append(busy.pop(conn))  # (before a store that cannot take its run ends the matrix)
-                finish(store, record, npz, progress, counts)
+                for record, npz in (answer if isinstance(worker.spec, Group) else [answer]):
+                    finish(store, record, npz, progress, counts)
             for conn, worker in list(busy.items()):
                 if time.monotonic() - worker.started > timeout:
                     worker.kill()
                     del busy[conn]
-                    finish(store, unfinished(worker.spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"),
-                           None, progress, counts)
+                    for spec in _runs(worker.spec):
+                        finish(store, unfinished(spec, "timeout", f"stopped after the per-run limit of {timeout:g} s"),
+                               None, progress, counts)
                     idle.append(start(worker.python))
     except BaseException:  # an error or Ctrl-C: no worker is left behind, the error under way is the one told
         _close(idle, busy)

@@ -8,6 +8,15 @@ probe is an ordinary run, stored as usual; a probe's step is snapped to divide t
 sample interval. Rounds run all curves' next probes at once (locally or on Dask), so a map
 costs tens of runs per curve instead of hundreds. A stopped search resumes from what is
 stored: the probes already run are not redone.
+
+Batches (``--batch``, ``dalembert.harness.batches``): a round's probes that share everything but the
+case's parameters (the same engine, integrator, options and step, at different values of the swept
+parameter) run as the worlds of one engine call, where the engine has batches. They batch across the
+swept parameter, never across steps: every world of a batch takes the same number of steps per sample
+interval (MuJoCo Warp's and MJX's batches step in lock-step, one ``dt`` for all), so probes of two
+steps are two calls. The probes are the search's own either way (batching picks none), so a batched
+map probes the same steps as one run probe by probe, and on an engine whose worlds are bit for bit
+the runs alone (MuJoCo Warp) finds the same boundaries.
 """
 
 from __future__ import annotations

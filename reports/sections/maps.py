@@ -45,7 +45,9 @@ def maps(rep):
         part.para(f"{m.case} swept over {m.parameter}{unit} = {', '.join(value_text(v) for v in values)}. Per engine "
                   "and integrator, the largest step probed that stays stable (every conserved quantity within the "
                   f"case's bound) and that stays finite, as {what}"
-                  + (", the angle turned per step for a spin rate" if m.rate else "") + ":")
+                  + (", the angle turned per step for a spin rate" if m.rate else "")
+                  + (f". Probes of one step ran as batches of worlds across {m.parameter} (up to {m.batch} in one "
+                     "engine call): their costs are per world, the batch's share" if m.batch > 1 else "") + ":")
         part.items(lines)
         panels = [dict(title=engine, lines={label: pts for (e, label), pts in m.curves.items() if e == engine})
                   for engine in sorted({e for e, _ in m.curves})]

@@ -33,7 +33,7 @@ KEYWORDS = {"case": "cases", "tag": "tags", "engine": "engines", "integrator": "
             "rtol": "rtols", "param": "params", "option": "options"}
 # The flags that make a matrix, which --resume cannot change (its manifest fixes them).
 _MATRIX_FLAGS = ("cases", "tags", "engines", "integrators", "dts", "rtols", "params", "options", "out", "timeout",
-                 "force", "search", "resolution", "no_maps", "quick", "timing")
+                 "force", "search", "resolution", "no_maps", "quick", "timing", "batch")
 _FLAG = {v: k for k, v in KEYWORDS.items()}
 
 
@@ -283,7 +283,7 @@ def _resume(path, given_flags, jobs, scheduler, debug):
 
 def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=None, params=None, options=None,
         jobs=None, timeout=None, quick=False, scheduler=None, out=None, resume=None, search=None, resolution=None,
-        no_maps=False, force=False, strict=False, timing=None, progress=None, debug=False, command=None):
+        no_maps=False, force=False, strict=False, timing=None, progress=None, debug=False, command=None, batch=False):
     """Run a matrix into a new store (or finish one, ``resume``); every input checked first.
 
     Each keyword is a flag of ``dalembert run`` (``KEYWORDS`` names those that differ; see
@@ -319,6 +319,8 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     progress : callable or None — ``progress(done, total, failures, record)`` after each run
     debug : bool — keep Dask's own log
     command : str or None — the command line to record in the manifest
+    batch : bool — step the runs that differ only in the case's parameters as one batch of worlds, where the
+        engine has batches (``dalembert.harness.batches``; kept in the manifest for ``--resume``)
 
     Returns
     -------
@@ -343,12 +345,13 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
         raise ValueError("quick: and timing both given — quick is Timing's QUICK; give one")
     keywords = dict(cases=cases, tags=tags, engines=engines, integrators=integrators, dts=dts, rtols=rtols,
                     params=params, options=options, out=out, timeout=timeout, force=force, search=search,
-                    resolution=resolution, no_maps=no_maps, quick=quick, timing=timing)
+                    resolution=resolution, no_maps=no_maps, quick=quick, timing=timing, batch=batch)
     command = command or command_line()
     if resume is not None:
         given_flags = [_flag(k) for k in _MATRIX_FLAGS
                        if keywords[k] is not None and keywords[k] is not False and keywords[k] != []]
         store, lock, specs, timeout, timing, jobs, client = _resume(resume, given_flags, jobs, scheduler, debug)
+        batch = bool(store.manifest().get("batch", False))
     else:
         args = SimpleNamespace(case=cases, tag=tags, engine=engines, integrator=integrators, dt=_groups(dts),
                                rtol=_groups(rtols), param=_texts("--param", params, _param_text),
@@ -366,6 +369,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
         client = _connect(scheduler, debug) if scheduler else None
         manifest = session.manifest(specs, command, timeout, timing, jobs, scheduler)
         manifest["refused"] = [r.to_json() for r in chosen.refused]  # once each, not runs: a report reads them here
+        manifest["batch"] = bool(batch)
         if chosen.searches:
             manifest["searches"] = [{"parameter": "dt", "resolution": res, "first": [s.to_json() for s in first]}
                                     for first, res in chosen.searches]
@@ -381,10 +385,10 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
         print(f"dalembert: {len(specs)} runs, {len(specs) - len(store.done_keys())} to do -> {store.path}",
               file=sys.stderr)
 
-        def run_batch(batch):
+        def run_batch(runs):
             if client is not None:
-                return run_matrix_dask(batch, store, client, timeout, timing, progress)
-            return run_matrix(batch, store, jobs, timeout, timing, progress)
+                return run_matrix_dask(runs, store, client, timeout, timing, progress, batched=batch)
+            return run_matrix(runs, store, jobs, timeout, timing, progress, batched=batch)
 
         try:
             plans = store.manifest().get("searches", [])
