@@ -155,8 +155,13 @@ class SegmentWriter:
                                os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_APPEND | os.O_CLOEXEC, 0o666)
             self._pid = os.getpid()
         view = memoryview(row_line(row))
-        while view:  # a write the kernel cut short (a signal, a full pipe of a slow disk): the rest at once
-            view = view[os.write(self._fd, view):]
+        try:
+            while view:  # a write the kernel cut short (a signal, a disk filling up): the rest at once
+                view = view[os.write(self._fd, view):]
+        except OSError:  # (a full disk): the line may be torn, so no row may follow it in this segment
+            fd, self._fd = self._fd, None
+            os.close(fd)
+            raise
 
     def sync(self):
         """Flush the segment to the disk (the end of a batch); nothing when no row was written."""

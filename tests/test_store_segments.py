@@ -2,6 +2,7 @@
 table; a torn last line (a crash mid-write) is no run and ``--resume`` redoes it; damage is named by file
 and line; a store of layout 1 (``rows/*.json``, or a manifest from before layouts) reads as before."""
 
+import errno
 import json
 import math
 import os
@@ -148,6 +149,27 @@ def test_a_writer_killed_at_any_point_leaves_every_complete_row(files, tmp_path)
     assert len(got) > 10 and Store(seg.path).done_keys() == {r.key for r in got}
     _same_records(got, [replace(originals[r.key.rsplit("-", 1)[0]], key=r.key) for r in got])
     assert len(Store(seg.path).table()) == len(got)
+
+
+def test_a_write_the_disk_cuts_short_leaves_a_torn_line_and_the_next_row_a_new_segment(files, tmp_path,
+                                                                                      monkeypatch):
+    records = files.records()
+    seg = _segmented(files, tmp_path / "seg", records[:2])
+    write = os.write
+
+    def full(fd, data):  # the disk fills halfway through the line
+        monkeypatch.setattr(os, "write", write)
+        write(fd, bytes(data[:len(data) // 2]))
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "write", full)
+    with pytest.raises(OSError, match="No space left"):
+        seg.write_record(records[2])
+    assert Store(seg.path).done_keys() == {r.key for r in records[:2]}
+    for r in records[2:]:  # the disk freed: written after, in a segment of their own
+        seg.write_record(r)
+    assert len(segment_names(seg.segments_dir)) == 2
+    _same_records(Store(seg.path).records(), records)
 
 
 def test_a_damaged_line_is_named_with_its_file_and_line(files, tmp_path):
