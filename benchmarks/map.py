@@ -16,7 +16,8 @@ the report grow with the number of rows.
    (``Store.table``: what aggregates read), to read them back as ``RunRecord`` objects
    (``Store.records``) and to build the report (``build_report``, which reads the records) — each
    per 1000 rows, so that growth worse than linear shows. ``--json FILE`` writes the totals, s:
-   ``{"rows": {"10000": {"write_s": .., "table_s": .., "read_s": .., "records_s": .., "report_s": ..}}}``
+   ``{"rows": {"10000": {"write_s": .., "table_s": .., "read_s": .., "records_s": .., "report_s": ..}}}``,
+   each step's CPU time beside (``write_cpu_s``, ...: on a loaded machine the wall time is mostly waiting)
    (``read_s`` was the records' read before layouts: compare it with ``records_s`` across versions).
    ``--report-up-to N`` leaves the records and the report out above N rows (null in the JSON): a
    million records need several GB of memory. ``--source STORE`` takes the rows' models from a store
@@ -75,19 +76,32 @@ def _synthetic(source, path, n, layout):
     return store, time.perf_counter() - t0
 
 
+def _cpu():
+    """This process's CPU time so far, s, every thread's (Arrow reads with threads): beside the wall time, it
+    shows what a loaded machine took from a step."""
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
 def store_figures(source, path, size, layout, report=True):
     """The store's times, s, for ``size`` synthetic rows written at ``path``: ``{"write_s", "table_s", "read_s",
-    "records_s", "report_s"}`` (the module docstring; the last two None without ``report``)."""
+    "records_s", "report_s"}`` (the module docstring; the last two None without ``report``), each step's CPU
+    time beside as ``<step>_cpu_s``, and the 1-minute load average at the end, ``load``."""
     from dalembert.reports.render import build_report
 
-    store, write = _synthetic(source, path, size, layout)
-    figures = {"write_s": write}
+    steps = ("write_s", "table_s", "read_s", "records_s", "report_s")
+    figures = {k: None for k in steps} | {k.replace("_s", "_cpu_s"): None for k in steps}
+    c0 = _cpu()
+    store, figures["write_s"] = _synthetic(source, path, size, layout)
+    figures["write_cpu_s"] = _cpu() - c0
     for name, step in (("table_s", store.write_table), ("read_s", store.table),
                        *((("records_s", store.records), ("report_s", lambda: build_report(store))) if report else ())):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), _cpu()
         step()
-        figures[name] = time.perf_counter() - t0
-    return {"write_s": None, "table_s": None, "read_s": None, "records_s": None, "report_s": None, **figures}
+        figures[name], figures[name.replace("_s", "_cpu_s")] = time.perf_counter() - t0, _cpu() - c0
+    return {**figures, "load": os.getloadavg()[0]}
 
 
 def main(argv=None):
@@ -119,8 +133,8 @@ def main(argv=None):
             results[str(size)] = f
             order = ("write_s", "table_s", "read_s", "records_s", "report_s")
             per = " ".join("       -" if f[k] is None else f"{f[k] / (size / 1000):>8.3f}" for k in order)
-            print(f"{size:>8} {per}   (totals {' / '.join('-' if f[k] is None else f'{f[k]:.1f}' for k in order)}; "
-                  f"load {os.getloadavg()[0]:.2f})", flush=True)
+            total = " / ".join("-" if f[k] is None else f"{f[k]:.1f} ({f[k.replace('_s', '_cpu_s')]:.1f})" for k in order)
+            print(f"{size:>8} {per}   (totals, s (CPU s): {total}; load {f['load']:.2f})", flush=True)
             shutil_rm(os.path.join(tmp, f"rows{size}"))
             if args.json:  # after each size: a long run stopped later keeps what it measured
                 with open(args.json, "w") as fh:
