@@ -3,8 +3,9 @@
 ``runs.parquet`` holds the rows of the segments it covers, sorted by key; its schema's
 metadata (``COVERS``) names each segment it read and how many bytes of it, so that a
 reader adds only what was appended since (``read``) and a rebuild at the end of a batch
-parses only the new lines (``consolidate``): the work grows with the rows added, and the
-rows already in the table are never parsed again. The segments stay the store's record
+parses only the new lines (``consolidate``): the JSON parsed grows with the rows added, and
+the rows already in the table are never parsed again (the table itself is read and rewritten
+whole, as columns). The segments stay the store's record
 of its rows (``dalembert.segments``); the table is made from them, and a table that
 covers more than its segments hold is refused as damage.
 
@@ -26,8 +27,9 @@ __all__ = ["COVERS", "TABLE_FILE", "complete_size", "consolidate", "read"]
 
 TABLE_FILE = "runs.parquet"
 COVERS = b"dalembert.covers"  # the schema metadata: {"segments": {name: bytes read}}
-# Arrow's JSON reader parses blocks of this many bytes, and a row must fit in one: a failed run's
-# traceback and a large model's text stay far below it (the largest default row is ~10 kB).
+# Arrow's JSON reader parses blocks of this many bytes, and a row must fit in one: 16 MiB is ~6000 times a row
+# of benchmarks/map.py's map (2.7 kB); a longer row (a huge traceback) fails the reader and its segment is read
+# line by line instead (``_parse``), slower but the same rows.
 JSON_BLOCK_BYTES = 16 << 20
 _TAIL_CHUNK = 1 << 16
 

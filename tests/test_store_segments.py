@@ -17,6 +17,7 @@ import pandas as pd
 import pytest
 
 import dalembert.store as store_module
+from dalembert import runs_table
 from dalembert.harness.cli import main
 from dalembert.record import RunRecord
 from dalembert.segments import segment_names
@@ -92,6 +93,12 @@ def test_the_table_is_the_rows_as_columns_before_and_after_each_rebuild(files, t
     _same_table(Store(seg.path).table(), want)
     _same_table(seg.write_table(), want)
     _same_table(pd.read_parquet(os.path.join(seg.path, "runs.parquet")), want)
+
+
+def test_rows_longer_than_the_json_readers_block_read_line_by_line_the_same(files, tmp_path, monkeypatch):
+    monkeypatch.setattr(runs_table, "JSON_BLOCK_BYTES", 1000)  # every row of these runs is longer (2-3 kB)
+    seg = _segmented(files, tmp_path / "seg")
+    _same_table(seg.write_table(), pd.DataFrame(files.rows()))
 
 
 def _segment(store):
