@@ -2,11 +2,14 @@
 
 Layout of a run directory::
 
-    manifest.json          schema version, harness version/commit, machine, OS, Python, engine
-                           versions, command line, start/end time, and the full list of run specs
-    rows/<key>.json        one finished run: ``RunRecord.to_row()`` (written atomically when it ends)
-    runs.parquet           all rows as a table (rebuilt from rows/ after every batch)
-    trajectories/<key>.npz one trajectory per run that produced one
+    manifest.json          schema version, store layout, harness version/commit, machine, OS, Python,
+                           engine versions, command line, start/end time, and the full list of run specs
+    rows/<key>.json        layout 1: one finished run, ``RunRecord.to_row()`` (written atomically when it ends)
+    segments/<name>.jsonl  layout 2: finished runs, one row per line, appended by each writing process to a
+                           segment of its own (``dalembert.segments``)
+    runs.parquet           all rows as a table (rebuilt after every batch; in layout 2 from the lines
+                           added since, ``dalembert.runs_table``)
+    trajectories/<key>.npz one trajectory per run that produced one (``dalembert.trajectory_files``)
     cases/<case>__<version>.json  each case as it was run (``CaseRecord``: scene, parameters,
                            tolerances with reasons, conserved quantities, floor)
     truth/<case>__<version>.npz   each case's truth at its sample times
@@ -14,18 +17,18 @@ Layout of a run directory::
 A report or a comparison needs nothing but these files: no case is rebuilt from
 code and no integrator runs to read a store.
 
-Trajectory files (``.npz``) use these array names: ``t`` (n,); per body
-``body.<name>.position`` (n,3) COM in world, m; ``body.<name>.quaternion``
-(n,4) q_WB scalar first; ``body.<name>.velocity`` (n,3) COM velocity in world,
-m/s; ``body.<name>.angular_velocity`` (n,3) w_WB_W, rad/s; optionally
-``body.<name>.rotation`` (n,3,3) R_WB when the engine's attitude is a matrix;
-per joint ``joint.<name>.q`` (n,nq) and ``joint.<name>.v`` (n,nv); extras as
-``extra.<name>`` (e.g. ``extra.reaction_force:rod`` (n,3), N, world).
+The store layout (``LAYOUTS``, the manifest's ``store_layout``; 1 when absent: every store
+written before layouts) is how the rows are kept, apart from the rows' schema. Layout 1, a
+file per run, is what a user opens, diffs or deletes by hand, and reads linearly up to a few
+thousand runs; past ``FILES_UP_TO`` runs a new store takes layout 2, whose rows append to
+segments (a crash leaves at most a torn last line, ignored: its run is redone by
+``--resume``) and whose table reads as columns (``Store.table``), linearly to a million runs.
+Both layouts read and write through the same methods.
 
-Every write goes to a temporary file in the same directory, then ``os.replace``:
+Every other write goes to a temporary file in the same directory, then ``os.replace``:
 a reader or an interrupted run never sees half a file. (Files the user names
 outside a store are written in place: ``dalembert.output``.) ``resume`` runs only
-the specs without a row file. The schema version (``dalembert.record.SCHEMA_VERSION``)
+the specs without a row. The schema version (``dalembert.record.SCHEMA_VERSION``)
 is in the manifest and in every row; a store of another schema is refused with
 a message that says so.
 
@@ -44,20 +47,26 @@ import fcntl
 import io
 import json
 import os
-import platform
 import socket
-import subprocess
-import sys
 import tempfile
-from datetime import datetime, timezone
 
-import numpy as np
-
+from dalembert import runs_table
 from dalembert.case import CaseRecord
+from dalembert.provenance import harness_commit, library_versions, machine_info, now
 from dalembert.record import SCHEMA_VERSION, RunRecord, SchemaError
-from dalembert.trajectory import BodyStates, JointStates, Trajectory
+from dalembert.segments import SegmentWriter, segment_keys, segment_names, segment_rows
+from dalembert.trajectory_files import read_only, trajectory_from_npz, trajectory_to_npz
 
-__all__ = ["Store", "StoreError", "StoreLock", "atomic_write", "file_name", "trajectory_to_npz", "trajectory_from_npz", "machine_info", "library_versions", "harness_commit"]
+__all__ = ["Store", "StoreError", "StoreLock", "atomic_write", "file_name", "trajectory_to_npz", "trajectory_from_npz",
+           "machine_info", "library_versions", "harness_commit", "now", "LAYOUTS", "FILES_UP_TO"]
+
+# Store layouts: 1, a JSON file per run under rows/; 2, rows appended to segments/ (the module docstring).
+FILES, SEGMENTS = 1, 2
+LAYOUTS = (FILES, SEGMENTS)
+# A new store of more runs than this takes layout 2: a file per run reads at ~0.1 ms per run while the
+# directory is small (0.11 s per 1000 rows at 1e4, benchmarks/map.py) and 5-14x worse per row at 1e5, while
+# 2000 files still read in well under a second; below it, rows stay files a user can edit by hand.
+FILES_UP_TO = 2000
 
 
 def _umask():
@@ -128,87 +137,6 @@ def file_name(name, what, where, fix="the store was edited or damaged; rerun the
     raise StoreError(f"{where}: {what} {name!r} is not a file name — {fix}")
 
 
-def trajectory_to_npz(traj):
-    """Serialize a Trajectory to ``.npz`` bytes (array names in the module docstring)."""
-    arrays = {"t": traj.t}
-    for name, b in traj.bodies.items():
-        for f in ("position", "quaternion", "velocity", "angular_velocity"):
-            arrays[f"body.{name}.{f}"] = getattr(b, f)
-        if b.rotation is not None:
-            arrays[f"body.{name}.rotation"] = b.rotation
-    for name, j in traj.joints.items():
-        arrays[f"joint.{name}.q"], arrays[f"joint.{name}.v"] = j.q, j.v
-    for name, x in traj.extras.items():
-        arrays[f"extra.{name}"] = x
-    buf = io.BytesIO()
-    # uncompressed: doubles' mantissas barely compress (11% smaller for 18x the time, measured on a
-    # 2001-sample body), and this is written once per run inside the worker
-    np.savez(buf, **arrays)
-    return buf.getvalue()
-
-
-def trajectory_from_npz(source):
-    """Inverse of ``trajectory_to_npz``; ``source`` is a path or bytes."""
-    if isinstance(source, bytes):
-        source = io.BytesIO(source)
-    with np.load(source) as z:
-        data = {k: z[k] for k in z.files}
-    bodies, joints, extras = {}, {}, {}
-    for key in data:
-        kind, _, rest = key.partition(".")
-        if kind == "body":
-            name, field = rest.rsplit(".", 1)
-            bodies.setdefault(name, {})[field] = data[key]
-        elif kind == "joint":
-            name, field = rest.rsplit(".", 1)
-            joints.setdefault(name, {})[field] = data[key]
-        elif kind == "extra":
-            extras[rest] = data[key]
-    return Trajectory(data["t"], {n: BodyStates(**f) for n, f in bodies.items()},
-                      {n: JointStates(f["q"], f["v"]) for n, f in joints.items()}, extras)
-
-
-def harness_commit():
-    """The git commit of the harness source (with ``-dirty`` if modified), or 'unknown'."""
-    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    try:
-        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True,
-                                timeout=10).stdout.strip()
-        # --no-optional-locks: reading must not take .git/index.lock in the user's checkout
-        dirty = subprocess.run(["git", "--no-optional-locks", "status", "--porcelain", "--untracked-files=no"], cwd=here,
-                               capture_output=True, text=True, timeout=10).stdout.strip()
-        return (commit + ("-dirty" if dirty else "")) or "unknown"
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
-
-
-def library_versions():
-    """The numerical libraries every engine's numbers pass through (``{"numpy": ..., "scipy": ...}``): the
-    reference and every read-back compute with them, so a store records them beside the engines' versions."""
-    import scipy
-
-    return {"numpy": np.__version__, "scipy": scipy.__version__}
-
-
-def machine_info():
-    """CPU model, cores, OS, Python, host."""
-    cpu = platform.processor() or ""
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return {"cpu": cpu or "unknown", "cores": os.cpu_count(), "os": platform.platform(),
-            "python": sys.version.split()[0], "host": socket.gethostname()}
-
-
-def now():
-    return datetime.now(timezone.utc).isoformat(timespec="seconds")
-
-
 class StoreLock:
     """A held one-writer lock on a store (``Store.writer``); ``release()`` or leave its ``with``."""
 
@@ -238,18 +166,6 @@ class StoreError(ValueError):
 TRAJECTORY_CACHE = 64
 
 
-def _read_only(traj):
-    """``traj`` with every array made read-only: a cached trajectory is shared by its readers."""
-    for states in (*traj.bodies.values(), *traj.joints.values()):
-        for value in vars(states).values():
-            if isinstance(value, np.ndarray):
-                value.flags.writeable = False
-    for value in (traj.t, *traj.extras.values()):
-        if isinstance(value, np.ndarray):
-            value.flags.writeable = False
-    return traj
-
-
 class Store:
     """A results directory (see the module docstring)."""
 
@@ -259,15 +175,29 @@ class Store:
         self.traj_dir = os.path.join(self.path, "trajectories")
         self.cases_dir = os.path.join(self.path, "cases")
         self.truth_dir = os.path.join(self.path, "truth")
+        self.segments_dir = os.path.join(self.path, "segments")
+        self._layout = None  # the manifest's store layout, read once (``layout``): it is fixed when made
+        self._segment = SegmentWriter(self.segments_dir)  # this process's segment (layout 2), opened on its first row
         self._cases = {}  # (name, version) -> CaseRecord, read once (``case``)
         self._trajectories = {}  # key -> Trajectory, the TRAJECTORY_CACHE last read (``trajectory``)
 
     # -------------------------------------------------------------- create, open
-    def create(self, manifest):
-        """Make the directories and write ``manifest`` (with the schema version)."""
-        for d in (self.rows_dir, self.traj_dir, self.cases_dir, self.truth_dir):
+    def create(self, manifest, layout=None):
+        """Make the directories and write ``manifest`` (with the schema version and the store layout).
+
+        ``layout``: one of ``LAYOUTS``; None: 1 for a matrix of up to ``FILES_UP_TO`` runs (the manifest's
+        ``specs``), else 2.
+        """
+        if layout is None:
+            specs = manifest.get("specs")
+            layout = SEGMENTS if isinstance(specs, list) and len(specs) > FILES_UP_TO else FILES
+        if layout not in LAYOUTS:
+            raise ValueError(f"layout: unknown store layout {layout!r} — use one of {LAYOUTS} (or None: by the runs)")
+        for d in (self.rows_dir if layout == FILES else self.segments_dir, self.traj_dir, self.cases_dir,
+                  self.truth_dir):
             os.makedirs(d, exist_ok=True)
-        self.write_manifest({**manifest, "schema_version": SCHEMA_VERSION})
+        self.write_manifest({**manifest, "schema_version": SCHEMA_VERSION, "store_layout": layout})
+        self._layout = layout
         return self
 
     @classmethod
@@ -320,6 +250,16 @@ class Store:
         """The store's schema (1 for stores written before the schema was recorded)."""
         return self.manifest().get("schema_version", 1)
 
+    def layout(self):
+        """The store layout (``LAYOUTS``; 1 for stores written before layouts); ``StoreError`` for another."""
+        if self._layout is None:
+            layout = self.manifest().get("store_layout", FILES) if self.exists() else FILES
+            if layout not in LAYOUTS:
+                raise StoreError(f"{self.path}: written in store layout {layout!r}, and this dalembert reads layouts "
+                                 f"{' and '.join(map(str, LAYOUTS))} — read it with the version that wrote it")
+            self._layout = layout
+        return self._layout
+
     def exists(self):
         return os.path.exists(os.path.join(self.path, "manifest.json"))
 
@@ -353,64 +293,119 @@ class Store:
 
     # -------------------------------------------------------------- runs
     def write_record(self, record, trajectory_npz=None):
-        """Store one finished run: its trajectory (if any), then its row (the commit point)."""
+        """Store one finished run: its trajectory (if any), then its row (the commit point: its file in
+        layout 1, its whole line in this process's segment in layout 2)."""
         file_name(record.key, "run key", self.rows_dir, "a run spec named outside the store; nothing was written")
         if trajectory_npz is not None:
             atomic_write(os.path.join(self.traj_dir, f"{record.key}.npz"), trajectory_npz)
             self._trajectories.pop(record.key, None)
             record = record.with_trajectory(f"trajectories/{record.key}.npz")
-        atomic_write(os.path.join(self.rows_dir, f"{record.key}.json"),
-                     json.dumps(record.to_row(), sort_keys=True, allow_nan=False))
+        if self.layout() == SEGMENTS:
+            self._segment.append(record.to_row())
+        else:
+            atomic_write(os.path.join(self.rows_dir, f"{record.key}.json"),
+                         json.dumps(record.to_row(), sort_keys=True, allow_nan=False))
 
     def done_keys(self):
+        """The keys of the runs stored (a row file, or a complete segment line whose key reads)."""
+        if self.layout() == SEGMENTS:
+            return {k for name in segment_names(self.segments_dir)
+                    for k in segment_keys(os.path.join(self.segments_dir, name)) if k is not None}
         if not os.path.isdir(self.rows_dir):
             return set()
         return {f[:-5] for f in os.listdir(self.rows_dir) if f.endswith(".json") and not f.startswith(".tmp-")}
 
     def rows(self):
-        """Every stored row as written (a dict of columns), sorted by key. Only ``rows/*.json`` are
-        rows (other files there are ignored); a damaged one is a ``StoreError`` naming it."""
-        out = []
-        for key in sorted(self.done_keys()):
-            path = os.path.join(self.rows_dir, f"{key}.json")
-            row = self._json(path, "a stored run", self._redo(key))
+        """Every stored row as written (a dict of columns), sorted by key. Only ``rows/*.json`` (layout 1) or the
+        complete lines of ``segments/*.jsonl`` (layout 2) are rows (other files there are ignored); a damaged
+        one is a ``StoreError`` naming it (and its line)."""
+        return [row for _, row in self._stored()]
+
+    def _stored(self):
+        """``[(where, row)]`` sorted by key: the row's file, or its segment and line; the names in each row
+        that become paths checked (``file_name``)."""
+        out = self._found()
+        for where, row in out:
             for name in ROW_NAMES:  # what becomes a path (a trajectory, a case record, a report's figure)
                 if isinstance(row, dict) and isinstance(row.get(name), str):  # not a str: records() refuses it
-                    file_name(row[name], name, path, "the store was edited or damaged; " + self._redo(key))
-            out.append(row)
+                    file_name(row[name], name, where, "the store was edited or damaged; " + self._redo(row.get("key", "?")))
         return out
 
+    def _found(self):
+        """``[(where, row)]`` as read, sorted by key."""
+        if self.layout() == FILES:
+            out = []
+            for key in sorted(self.done_keys()):
+                path = os.path.join(self.rows_dir, f"{key}.json")
+                out.append((path, self._json(path, "a stored run", self._redo(key))))
+            return out
+        found = {}
+        for name in segment_names(self.segments_dir):
+            path = os.path.join(self.segments_dir, name)
+            try:
+                rows = segment_rows(path, self._redo)
+            except ValueError as e:
+                raise StoreError(str(e)) from None
+            for n, row in rows:
+                where = f"{path} line {n}"
+                if row["key"] in found:
+                    raise StoreError(f"{where}: run {row['key']!r} is stored twice (first at {found[row['key']][0]}) — "
+                                     f"the store was edited or damaged; delete one of the lines")
+                found[row["key"]] = (where, row)
+        return [found[k] for k in sorted(found)]
+
     def _redo(self, key, delete="it"):
-        """The fix for a damaged file of run ``key``: redo the run."""
+        """The fix for a damaged file (or segment line) of run ``key``: redo the run."""
         return f"delete {delete} and run `dalembert run --resume {self.path}` to redo that run"
+
+    def _row_name(self, key):
+        """Where run ``key``'s row is, for a message: its file, or the segments."""
+        return f"rows/{key}.json" if self.layout() == FILES else "its line in segments/"
 
     def records(self):
         """Every stored run as a ``RunRecord``, sorted by key."""
         out = []
-        for row in self.rows():
+        for where, row in self._stored():
             try:
                 out.append(RunRecord.from_row(row))
             except SchemaError:
                 raise
             except (KeyError, TypeError, ValueError) as e:
                 key = row.get("key", "?") if isinstance(row, dict) else "?"
-                raise StoreError(f"{os.path.join(self.rows_dir, f'{key}.json')}: not a run dalembert wrote "
-                                 f"({type(e).__name__}: {e}) — {self._redo(key)}") from None
+                raise StoreError(f"{where}: not a run dalembert wrote ({type(e).__name__}: {e}) — "
+                                 f"{self._redo(key)}") from None
         return out
 
     def table(self):
-        """All rows as a pandas DataFrame (one column per row field; ``RunRecord`` names them)."""
+        """All rows as a pandas DataFrame sorted by key (one column per row field; ``RunRecord`` names them).
+        Layout 2 reads it as columns: ``runs.parquet`` and the segment lines added since (``runs_table``)."""
         import pandas as pd
 
-        return pd.DataFrame(self.rows())
+        if self.layout() == FILES:
+            return pd.DataFrame(self.rows())
+        table = self._read_table(runs_table.read)
+        return pd.DataFrame() if table is None else table.to_pandas()
+
+    def _read_table(self, read, *args):
+        try:
+            return read(self.path, self.segments_dir, self._redo, *args)
+        except ValueError as e:
+            raise StoreError(str(e)) from None
 
     def write_table(self):
-        """Rebuild ``runs.parquet`` from the row files (atomically)."""
-        df = self.table()
-        buf = io.BytesIO()
-        df.to_parquet(buf, index=False)
-        atomic_write(os.path.join(self.path, "runs.parquet"), buf.getvalue())
-        return df
+        """Rebuild ``runs.parquet`` (atomically): from the row files (layout 1), or from the table it holds and
+        the segment lines added since, this process's segment synced to the disk first (layout 2)."""
+        import pandas as pd
+
+        if self.layout() == FILES:
+            df = self.table()
+            buf = io.BytesIO()
+            df.to_parquet(buf, index=False)
+            atomic_write(os.path.join(self.path, runs_table.TABLE_FILE), buf.getvalue())
+            return df
+        self._segment.sync()
+        table = self._read_table(runs_table.consolidate, atomic_write)
+        return pd.DataFrame() if table is None else table.to_pandas()
 
     def trajectory(self, key):
         """The stored trajectory of run ``key``, read-only; ``StoreError`` naming the file when it is missing or
@@ -428,12 +423,12 @@ class Store:
     def _read_trajectory(self, key):
         path = os.path.join(self.traj_dir, f"{file_name(key, 'run key', self.traj_dir)}.npz")
         try:
-            return _read_only(trajectory_from_npz(path))
+            return read_only(trajectory_from_npz(path))
         except FileNotFoundError:
-            raise StoreError(f"{path}: missing — {self._redo(key, f'rows/{key}.json')}") from None
+            raise StoreError(f"{path}: missing — {self._redo(key, self._row_name(key))}") from None
         except (OSError, ValueError, KeyError, TypeError) as e:
             raise StoreError(f"{path}: cannot be read as a trajectory ({type(e).__name__}: {e}) — "
-                             f"{self._redo(key, f'it and rows/{key}.json')}") from None
+                             f"{self._redo(key, 'it and ' + self._row_name(key))}") from None
 
     # -------------------------------------------------------------- cases and truths
     def _case_file(self, directory, name, version, ext):

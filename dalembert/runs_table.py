@@ -1,0 +1,147 @@
+"""The table of a store's runs (layout 2): every row of its segments as one columnar table.
+
+``runs.parquet`` holds the rows of the segments it covers, sorted by key; its schema's
+metadata (``COVERS``) names each segment it read and how many bytes of it, so that a
+reader adds only what was appended since (``read``) and a rebuild at the end of a batch
+parses only the new lines (``consolidate``): the JSON parsed grows with the rows added, and
+the rows already in the table are never parsed again (the table itself is read and rewritten
+whole, as columns). The segments stay the store's record
+of its rows (``dalembert.segments``); the table is made from them, and a table that
+covers more than its segments hold is refused as damage.
+
+New lines are parsed by Arrow's JSON reader (columns in C++, no Python object per
+value); where a segment's columns do not parse as one type (a case parameter given as a
+vector in one row and a number in another), its rows are read line by line as
+``Store.rows`` reads them and converted as pandas converts a list of rows.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+
+from dalembert.segments import parse_lines, segment_names, segment_rows
+
+__all__ = ["COVERS", "TABLE_FILE", "complete_size", "consolidate", "read"]
+
+TABLE_FILE = "runs.parquet"
+COVERS = b"dalembert.covers"  # the schema metadata: {"segments": {name: bytes read}}
+# Arrow's JSON reader parses blocks of this many bytes, and a row must fit in one: 16 MiB is ~6000 times a row
+# of benchmarks/map.py's map (2.7 kB); a longer row (a huge traceback) fails the reader and its segment is read
+# line by line instead (``_parse``), slower but the same rows.
+JSON_BLOCK_BYTES = 16 << 20
+_TAIL_CHUNK = 1 << 16
+
+
+def complete_size(path):
+    """The size of ``path``'s complete lines: its size less a torn last line (text after the last newline)."""
+    with open(path, "rb") as fh:
+        pos = fh.seek(0, os.SEEK_END)
+        while pos > 0:
+            start = max(0, pos - _TAIL_CHUNK)
+            fh.seek(start)
+            chunk = fh.read(pos - start)
+            i = chunk.rfind(b"\n")
+            if i >= 0:
+                return start + i + 1
+            pos = start
+        return 0
+
+
+def _covers(path):
+    """``{segment name: bytes}`` that ``runs.parquet`` at ``path`` covers, and the file's Arrow schema."""
+    import pyarrow.parquet as pq
+
+    schema = pq.read_schema(path)
+    meta = (schema.metadata or {}).get(COVERS)
+    covers = json.loads(meta)["segments"] if meta else {}
+    return covers, schema
+
+
+def _parse(path, start, end, fix):
+    """The rows of ``path``'s bytes ``start:end`` (complete lines) as an Arrow table."""
+    import pyarrow as pa
+    import pyarrow.json as pj
+
+    with pa.memory_map(path) as mm:
+        data = mm.read_buffer()[start:end]
+        try:
+            return pj.read_json(pa.BufferReader(data), read_options=pj.ReadOptions(block_size=JSON_BLOCK_BYTES))
+        except pa.ArrowInvalid:  # a column of two types, or a damaged line (``segment_rows`` names it)
+            try:
+                rows = [row for _, row in parse_lines(data.to_pybytes().splitlines(), path, fix)]
+            except ValueError:  # a damaged line: named with its number in the whole segment
+                segment_rows(path, fix)
+                raise
+    import pandas as pd
+
+    return pa.Table.from_pandas(pd.DataFrame(rows), preserve_index=False)
+
+
+def read(store_dir, segments_dir, fix, with_covers=False):
+    """Every row of the segments in ``segments_dir`` as one Arrow table sorted by ``key`` (None: no row).
+
+    Parameters
+    ----------
+    store_dir : str
+        The store (its ``runs.parquet``, when there is one, gives the rows it covers).
+    segments_dir : str
+        Its ``segments/``.
+    fix : callable(str) -> str
+        The fix for a damaged row of that key (``Store._redo``).
+    with_covers : bool
+        Also return ``{segment name: bytes read}``, what the table covers.
+
+    Raises
+    ------
+    ValueError
+        A damaged segment line (its file and line named), or a ``runs.parquet`` that covers a segment missing or
+        shorter than it read.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table_path = os.path.join(store_dir, TABLE_FILE)
+    tables, covers = [], {}
+    if os.path.exists(table_path):
+        try:
+            covers, _ = _covers(table_path)
+            old = pq.read_table(table_path)
+        except (OSError, ValueError, KeyError, TypeError, pa.ArrowException) as e:
+            raise ValueError(f"{table_path}: cannot be read as the table of runs ({type(e).__name__}: {e}) — delete "
+                             "it: it is rebuilt from segments/ by the next `dalembert run --resume`, and read from them "
+                             "until then") from None
+        tables.append(old)
+    covers = dict(covers)
+    names = segment_names(segments_dir)
+    for name in sorted(set(covers) - set(names)):
+        raise ValueError(f"{table_path}: covers segments/{name}, which is missing — the store was edited or damaged; "
+                         "restore the segment, or delete runs.parquet (its runs are then redone by --resume)")
+    for name in names:
+        path = os.path.join(segments_dir, name)
+        start, end = covers.get(name, 0), complete_size(path)
+        if end < start:
+            raise ValueError(f"{table_path}: covers {start} bytes of segments/{name}, which holds {end} — the store "
+                             "was edited or damaged; delete runs.parquet (it is rebuilt from the segments)")
+        if end > start:
+            tables.append(_parse(path, start, end, fix))
+        covers[name] = end
+    tables = [t.replace_schema_metadata(None) for t in tables if t.num_rows]
+    table = pa.concat_tables(tables, promote_options="permissive").sort_by("key") if tables else None
+    return (table, covers) if with_covers else table
+
+
+def consolidate(store_dir, segments_dir, fix, write):
+    """Rebuild ``runs.parquet`` from the table it holds and the segment lines since; returns the table (Arrow,
+    None when no row). ``write(path, bytes)`` writes a file atomically (``dalembert.store.atomic_write``)."""
+    import pyarrow.parquet as pq
+
+    table, covers = read(store_dir, segments_dir, fix, with_covers=True)
+    if table is None:
+        return None
+    meta = {COVERS: json.dumps({"segments": covers}, sort_keys=True).encode()}
+    buf = io.BytesIO()
+    pq.write_table(table.replace_schema_metadata(meta), buf)
+    write(os.path.join(store_dir, TABLE_FILE), buf.getvalue())
+    return table
