@@ -264,14 +264,6 @@ def _refusal(xml):
 
 @functools.cache  # (installed packages do not change under a process)
 def _version():
-    from importlib.metadata import PackageNotFoundError, version
-    from importlib.util import find_spec
+    from dalembert.adapters.warp_runtime import distribution_version
 
-    for module in ("warp", "mujoco_warp"):
-        if find_spec(module) is None:
-            raise ImportError(f"No module named {module!r} (install dalembert[mujoco-warp])")
-    try:
-        return version("mujoco-warp")
-    except PackageNotFoundError as e:
-        raise ImportError("mujoco_warp is importable but its distribution is not installed "
-                          "(install dalembert[mujoco-warp])") from e
+    return distribution_version(("warp", "mujoco_warp"), "mujoco-warp", "mujoco-warp")

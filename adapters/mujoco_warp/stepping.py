@@ -29,8 +29,6 @@ from __future__ import annotations
 
 import copy
 import functools
-import os
-import tempfile
 import time
 
 import numpy as np
@@ -47,25 +45,11 @@ NCONMAX = 48
 @functools.cache
 def warp():
     """``(warp, mujoco_warp, init message)``: Warp initialized once per process on its kernel cache, its log
-    quiet; the message is what Warp's native code printed on stderr at init (on a machine without a GPU: that
-    no CUDA driver was found), kept for the audit instead of printed."""
-    import warp as wp
+    quiet (``adapters.warp_runtime.init``); the message is what Warp's native code printed on stderr at init (on a
+    machine without a GPU: that no CUDA driver was found), kept for the audit instead of printed."""
+    from dalembert.adapters.warp_runtime import init
 
-    from dalembert.cache import cache_dir
-
-    wp.config.log_level = wp.LOG_ERROR  # no "Module ... load ... (compiled)" line per kernel
-    if not os.environ.get("WARP_CACHE_PATH"):
-        wp.config.kernel_cache_dir = cache_dir("warp")
-    with tempfile.TemporaryFile(mode="w+") as err:  # native code writes to fd 2, past sys.stderr
-        saved = os.dup(2)
-        os.dup2(err.fileno(), 2)
-        try:
-            wp.init()
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
-        err.seek(0)
-        message = err.read().strip()
+    wp, message = init()
     import mujoco_warp as mjw
 
     return wp, mjw, message
