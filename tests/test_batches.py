@@ -54,14 +54,17 @@ def test_a_run_that_stepped_copies_beside_it_is_timed_per_world():
 
 
 def test_runs_group_into_batches_by_everything_but_the_case_parameters():
-    specs = _specs("mujoco_warp", [5, 50, 500], dts=(0.05, 0.1))
+    # MJX (in dalembert[all], so the test runs wherever the suite does): its matrix runs two precisions
+    specs = _specs("mjx", [5, 50, 500], dts=(0.05, 0.1))
+    variants = len({tuple(sorted(s.settings.options.items())) for s in specs})
+    assert variants == 2
     made = groups(specs, batched=True)
-    assert sorted(len(g) for g, batched in made) == [3, 3] and all(batched for _, batched in made)
+    assert sorted(len(g) for g, batched in made) == [3] * 2 * variants and all(batched for _, batched in made)
     for group, _ in made:
         assert len({batch_key(s) for s in group}) == 1 and len({s.params for s in group}) == 3
     # without --batch, or on an engine without batches: chunks of one case, engine, integrator and options
-    assert [len(g) for g, batched in groups(specs, batched=False, chunk=4) if not batched] == [4, 2]
-    assert [len(g) for g, _ in groups(specs, batched=False, chunk=1)] == [1] * 6
+    assert sorted(len(g) for g, batched in groups(specs, batched=False, chunk=4) if not batched) == [2, 2, 4, 4]
+    assert [len(g) for g, _ in groups(specs, batched=False, chunk=1)] == [1] * 12
     reference = _specs("reference", [5, 50], dts=(0.05, 0.1))
     assert not any(batched for _, batched in groups(reference, batched=True))
     with pytest.raises(ValueError, match="chunk"):
