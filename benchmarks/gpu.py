@@ -4,15 +4,15 @@ stability map, each beside the same on the CPU. Safe to run blindly: without a G
     python -m benchmarks.gpu            # a few minutes on a GPU (most of it the engines' first compilations)
 
 1. Parity (``adapters.mujoco_warp.parity``, ``adapters.mjx.parity``), MuJoCo Warp with ``device=cuda`` and MJX
-   with ``device=gpu`` (float32), on four canonical cases (``CASES``) at RK4, dt = 1e-3: 100 steps' largest ``qpos``/``qvel``
-   difference from MuJoCo C (same compiled model), and the largest attitude (rad) and position (m) differences
-   over the first ``SECONDS`` of the case beside the torque-free top's float32 floor (RK4 in float32 against
-   itself in double). A GPU's kernels round as the CPU's in float32 but sum in another order, so a difference at
-   the floor is the number type's; one far above it a different computation.
+   with ``device=gpu`` (float32), on four canonical cases (``CASES``) at RK4, dt = 1e-3: 100 steps' largest
+   ``qpos``/``qvel`` difference from MuJoCo C (same compiled model), and the largest attitude (rad) and position
+   (m) differences over the first ``SECONDS`` of the case beside the torque-free top's float32 floor (RK4 in
+   float32 against itself in double). A GPU's kernels round as the CPU's in float32 but may sum in another
+   order, so a difference at the floor is the number type's; one far above it a different computation.
 2. Map: ``dalembert run --case free_top_fast_spin --param spin=log:5,500,16 --param t_final=1 --engine
-   mujoco_warp --integrator rk4 --search dt --dt 1e-3,1e-1 --batch`` (sampled every 0.1 s) with ``--option device=cuda`` and on the
-   CPU: each map's wall time and runs, and each spin's stable step (the largest stable probe) on both; the same
-   arithmetic type on both, so the boundaries should agree to the search's resolution.
+   mujoco_warp --integrator rk4 --search dt --dt 1e-3,1e-1 --batch`` (sampled every 0.1 s) with ``--option
+   device=cuda`` and on the CPU: each map's wall time and runs, and each spin's stable step (the largest stable
+   probe) on both; the same number type on both, so the boundaries should agree to the search's resolution.
 """
 
 from __future__ import annotations

@@ -103,7 +103,8 @@ class MjxBatch(BatchPrepared):
 
 class MjxAdapter(MujocoAdapter):
     """MJX (``mujoco-mjx``) on JAX's CPU backend or its GPU (option ``device``). Options: ``precision`` =
-    ``float32`` | ``float64``; ``welds`` = ``tree`` | ``equality``; contact as MuJoCo's (``cone``, ``impratio``, ``contact_timeconst``;
+    ``float32`` | ``float64``; ``welds`` = ``tree`` | ``equality``; contact as MuJoCo's (``cone``, ``impratio``,
+    ``contact_timeconst``;
     ``noslip_iterations`` only at its default 0: MJX's JAX implementation has no noslip pass)."""
 
     name = "mjx"

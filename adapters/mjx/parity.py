@@ -44,8 +44,8 @@ def one_step(case, settings, n_steps=1):
 
 
 def horizon(case, settings):
-    """MJX and MuJoCo C on ``case`` at ``settings`` (MuJoCo C ignores ``precision`` and ``device``): the largest differences
-    over the horizon and the floors they are set against.
+    """MJX and MuJoCo C on ``case`` at ``settings`` (MuJoCo C ignores ``precision`` and ``device``): the largest
+    differences over the horizon and the floors they are set against.
 
     Returns
     -------

@@ -90,12 +90,13 @@ def _trees(scene):
 
 
 def build(scene, color=False, steel_angular_damping=None, balance_inertia=False, device=DEVICE):
-    """The Newton model of ``scene`` (``NewtonModel``) on Warp's ``device`` (``cpu``, ``cuda:0``). ``color``: the body graph coloured
-    (``ModelBuilder.color``), which VBD requires. ``steel_angular_damping`` (1/s, or None: not for Steel): Steel's
-    per-body angular damping of free bodies, a model attribute (``steel:rigid_body_angular_damping``) that Steel
-    otherwise takes as 0.05 (PhysX's default), registered and set on every body. ``balance_inertia``: Newton's
-    correction of inertias that violate the triangle inequality (its default on; off here unless asked: a scene's
-    inertia is as given, and ``check_mass_properties`` then says where Newton changed one)."""
+    """The Newton model of ``scene`` (``NewtonModel``) on Warp's ``device`` (``cpu``, ``cuda:0``). ``color``: the
+    body graph coloured (``ModelBuilder.color``), which VBD requires. ``steel_angular_damping`` (1/s, or None: not
+    for Steel): Steel's per-body angular damping of free bodies, a model attribute
+    (``steel:rigid_body_angular_damping``) that Steel otherwise takes as 0.05 (PhysX's default), registered and set
+    on every body. ``balance_inertia``: Newton's correction of inertias that violate the triangle inequality (its
+    default on; off here unless asked: a scene's inertia is as given, and ``check_mass_properties`` then says where
+    Newton changed one)."""
     wp, newton, _ = engine()
     start = spatial.initial_body_states(scene)
     b = newton.ModelBuilder(gravity=tuple(float(g) for g in scene.gravity))
