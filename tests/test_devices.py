@@ -91,3 +91,14 @@ def test_a_default_run_records_the_cpu(engine):
     record, _ = execute(specs[0], QUICK)
     assert record.status == "ok", record.message
     assert record.cost.device == "cpu"
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("engine", [_engine(e) for e in ("mjx", "mujoco_warp")])
+def test_a_run_that_diverges_records_its_device_too(engine):
+    """The top spun at 500 rad/s blows up at dt 0.1 s (RK4; non-finite by t = 0.3 s in float32)."""
+    specs, _ = expand(cases=["free_top_fast_spin"], engines=[engine], integrators=["rk4"], dts=[0.1],
+                      params={"spin": 500.0, "t_final": 1.0, "sample_interval": 0.1})
+    record, _ = execute(specs[0], QUICK)
+    assert record.status == "diverged", record.message
+    assert record.cost.device == "cpu"
