@@ -60,6 +60,8 @@ STAGES = {"euler": 1, "rk4": 4, "implicitfast": 1}  # evaluations of the dynamic
 # (integrator, cone, solver, flags, geometry pairs, condim, sensors), never a step, which enters the MJCF only as
 # numbers (timestep, solref), so one check serves every step of a sweep (~8 ms a check).
 REFUSAL_DT = 1e-3
+# MJX's implementation, named: the one the adapter maps (on a GPU, MJX may otherwise pick its Warp one)
+IMPL = "jax"
 
 
 @dataclass(frozen=True, eq=False)
@@ -157,14 +159,13 @@ class MjxAdapter(MujocoAdapter):
     # ------------------------------------------------------------- build
     def prepare(self, scene, times, settings):
         import jax
-        import jax.numpy as jnp
 
         p = super().prepare(scene, times, settings)  # compiled MJCF, checked; the initial state
         chosen, on = self.option(settings, "precision"), jax_device(self.option(settings, "device"))
         with precision(chosen):
-            mx = mjx().put_model(p.model, device=on)
+            mx = mjx().put_model(p.model, device=on, impl=IMPL)
             dx0 = _initial(p, on)
-            steps_device = [jnp.asarray(c) if on is None else jax.device_put(c, on) for c in chunks(p.steps)]
+            steps_device = [jax.device_put(c, on) for c in chunks(p.steps)]
             compile_s = compile_rollout(mx, dx0)
         return MjxPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, precision=chosen, mx=mx, dx0=dx0,
                            steps_device=steps_device, compile_s=compile_s, backend=device_name(on))
@@ -181,16 +182,15 @@ class MjxAdapter(MujocoAdapter):
         """Each scene's MuJoCo model and initial state (``MujocoAdapter.prepare``), one device model (world 0's:
         they are one MJCF), the initial states stacked, the vmapped rollout compiled for the batch's size."""
         import jax
-        import jax.numpy as jnp
 
         ps = [MujocoAdapter.prepare(self, s, times, settings) for s in scenes]
         chosen, on = self.option(settings, "precision"), jax_device(self.option(settings, "device"))
         with precision(chosen):
-            mx = mjx().put_model(ps[0].model, device=on)
+            mx = mjx().put_model(ps[0].model, device=on, impl=IMPL)
             starts = [_initial(p, on) for p in ps]
             # padded with copies of the last world to a power of two: one compilation serves every size up to it
             dx0 = stack(starts + starts[-1:] * (_padded(len(starts)) - len(starts)))
-            steps_device = [jnp.asarray(c) if on is None else jax.device_put(c, on) for c in chunks(ps[0].steps)]
+            steps_device = [jax.device_put(c, on) for c in chunks(ps[0].steps)]
             compile_s = compile_rollout(mx, dx0, batched=True)
         backend = device_name(on)
         worlds = tuple(MjxPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, precision=chosen, mx=mx, dx0=d,
@@ -277,7 +277,7 @@ def _padded(n):
     return 1 << max(0, n - 1).bit_length()
 
 
-def _initial(p, device=None):
+def _initial(p, device):
     """The initial state of MuJoCo's prepared ``p`` on ``device`` (``stepping.jax_device``'s; ``mjx.put_data``, in
     the precision in force)."""
     import mujoco
@@ -286,7 +286,7 @@ def _initial(p, device=None):
     data.qpos[:], data.qvel[:] = p.qpos0, p.qvel0
     if p.load_path == "actuator":
         data.ctrl[:] = 1.0
-    return mjx().put_data(p.model, data, device=device)
+    return mjx().put_data(p.model, data, device=device, impl=IMPL)
 
 
 @functools.lru_cache(maxsize=64)

@@ -15,7 +15,8 @@ over the state (the model shared), compiled once per structure and batch size. `
 ``block_until_ready``.
 
 Device (option ``device``): JAX's CPU backend, or its first GPU where JAX has one; the model, the initial state
-and the steps are put on it, and the compiled rollout runs where its arguments are.
+and the steps are put on it (MJX's JAX implementation named: on a GPU, MJX may pick its Warp one by default), and
+the compiled rollout runs where its arguments are.
 
 Precision: float32 (JAX's default, MJX's) or float64 (``jax_enable_x64``),
 switched per call with ``jax.enable_x64`` so runs of both precisions can share a
@@ -78,21 +79,18 @@ def device_problem(name):
 
 
 def jax_device(name):
-    """The JAX device of option ``device`` ``name``: None for ``cpu`` (JAX's default device, as every CPU run has
-    been put), else JAX's first device of that platform (``device_problem`` first)."""
-    if name == "cpu":
-        return None
+    """The JAX device of option ``device`` ``name``: JAX's first device of that platform (``device_problem``
+    first). Named even for ``cpu``: MJX puts a model given no device on JAX's first device, which is a GPU
+    wherever JAX has one, so the CPU default would not be the CPU there."""
     import jax
 
     return jax.devices(name)[0]
 
 
 def device_name(device):
-    """Where a run on ``device`` (``jax_device``'s) steps, as the record stores it: JAX's default backend
-    (``cpu``) for None, else the device's platform and index (``gpu:0``)."""
-    import jax
-
-    return jax.default_backend() if device is None else f"{device.platform}:{device.id}"
+    """Where a run on ``device`` (``jax_device``'s) steps, as the record stores it: ``cpu``, or the device's
+    platform and index (``gpu:0``)."""
+    return "cpu" if device.platform == "cpu" else f"{device.platform}:{device.id}"
 
 
 _LAST_PRECISION = []  # the precision this process compiled for last
