@@ -13,7 +13,15 @@ import functools
 import os
 import tempfile
 
-__all__ = ["init", "distribution_version"]
+from dalembert.adapters.base import Option
+
+__all__ = ["init", "distribution_version", "DEVICES", "DEVICE_OPTION", "device_problem", "device"]
+
+# The devices option ``device`` takes: Warp's CPU backend (the default: every stored number is from it), its
+# current CUDA device, or CUDA device N (up to 8 per machine, the most a node of the usual GPU servers holds).
+DEVICES = ("cpu", "cuda", *(f"cuda:{n}" for n in range(8)))
+DEVICE_OPTION = Option(DEVICES, "cpu", "where Warp steps: its CPU backend, or a CUDA device (cuda: the current "
+                       "one); refused where Warp finds none")
 
 
 @functools.cache
@@ -39,6 +47,31 @@ def init():
         err.seek(0)
         message = err.read().strip()
     return wp, message
+
+
+def device_problem(name):
+    """Why Warp cannot step on device ``name`` (one of ``DEVICES``) in this process, in the project's words, or
+    None. ``cpu`` is always there and asks nothing; a CUDA device initializes Warp (``init``) to find out."""
+    if name == "cpu":
+        return None
+    wp, _ = init()
+    count = wp.get_cuda_device_count() if wp.is_cuda_available() else 0
+    if count == 0:
+        return (f"options.device: no CUDA device here (Warp found none) — run with device=cpu, or on a machine "
+                f"with a GPU")
+    if name != "cuda" and int(name.split(":")[1]) >= count:
+        return (f"options.device: {name} is not here (Warp found {count} CUDA device{'s' * (count > 1)}: cuda:0"
+                f"{f' to cuda:{count - 1}' if count > 1 else ''}) — run with one of those, or device=cpu")
+    return None
+
+
+def device(name):
+    """Warp's name of device ``name`` (``cuda`` becomes the current CUDA device, ``cuda:0``), as the record
+    stores where the engine stepped; ``device_problem`` first."""
+    if name == "cpu":
+        return "cpu"
+    wp, _ = init()
+    return str(wp.get_device(name))
 
 
 def distribution_version(modules, distribution, extra):

@@ -1,4 +1,4 @@
-"""``MjxAdapter``: the contract (``dalembert.adapters``) for MuJoCo XLA (``mujoco.mjx``) on JAX's CPU backend.
+"""``MjxAdapter``: the contract (``dalembert.adapters``) for MuJoCo XLA (``mujoco.mjx``) on JAX's CPU backend or a GPU.
 
 The model is the MuJoCo adapter's: the same generated MJCF (``mujoco.mjcf``),
 compiled by MuJoCo C and checked against the scene (``MujocoAdapter.prepare``),
@@ -49,17 +49,19 @@ from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.adapter import MujocoPrepared
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mjx.contact import read_forces
-from dalembert.adapters.mjx.stepping import (PRECISIONS, chunks, compile_rollout, mjx, precision, run_rollout, stack,
-                                             to_host)
+from dalembert.adapters.mjx.stepping import (DEVICES, PRECISIONS, chunks, compile_rollout, device_name,
+                                             device_problem, jax_device, mjx, precision, run_rollout, stack, to_host)
 
 __all__ = ["MjxAdapter", "MjxPrepared", "MjxBatch"]
 
-OPTIONS = ("precision", "welds", *contact.OPTIONS)
+OPTIONS = ("precision", "welds", "device", *contact.OPTIONS)
 STAGES = {"euler": 1, "rk4": 4, "implicitfast": 1}  # evaluations of the dynamics per step
 # The step the refusal check compiles every model with: ``mjx.put_model`` and ``mjx.make_data`` refuse features
 # (integrator, cone, solver, flags, geometry pairs, condim, sensors), never a step, which enters the MJCF only as
 # numbers (timestep, solref), so one check serves every step of a sweep (~8 ms a check).
 REFUSAL_DT = 1e-3
+# MJX's implementation, named: the one the adapter maps (on a GPU, MJX may otherwise pick its Warp one)
+IMPL = "jax"
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,7 +76,7 @@ class MjxPrepared(MujocoPrepared):
     dx0 : mjx.Data — the initial state on the device
     steps_device : list of jax.Array — the steps per sample interval, in the rollout's chunks
     compile_s : float — the rollout's JIT compilation, s (build, not stepping)
-    backend : str — JAX's default backend (``cpu``)
+    backend : str — where it steps (option ``device``): JAX's default backend (``cpu``), or a GPU (``gpu:0``)
     """
 
     precision: str
@@ -102,8 +104,9 @@ class MjxBatch(BatchPrepared):
 
 
 class MjxAdapter(MujocoAdapter):
-    """MJX (``mujoco-mjx``) on JAX's CPU backend. Options: ``precision`` = ``float32`` | ``float64``;
-    ``welds`` = ``tree`` | ``equality``; contact as MuJoCo's (``cone``, ``impratio``, ``contact_timeconst``;
+    """MJX (``mujoco-mjx``) on JAX's CPU backend or its GPU (option ``device``). Options: ``precision`` =
+    ``float32`` | ``float64``; ``welds`` = ``tree`` | ``equality``; contact as MuJoCo's (``cone``, ``impratio``,
+    ``contact_timeconst``;
     ``noslip_iterations`` only at its default 0: MJX's JAX implementation has no noslip pass)."""
 
     name = "mjx"
@@ -111,6 +114,8 @@ class MjxAdapter(MujocoAdapter):
         "precision": Option(PRECISIONS, PRECISIONS[0], "JAX's number type: float32 (MJX's default) or float64 "
                             "(jax_enable_x64)"),
         "welds": MujocoAdapter.options["welds"],
+        "device": Option(DEVICES, DEVICES[0], "where JAX steps: its CPU backend, or its first GPU; refused where JAX "
+                         "finds none"),
         **contact.CONTACT_OPTIONS,
     }
     effects = MujocoAdapter.effects  # contact included: MuJoCo's mapping, what MJX lacks refused (``why_not``)
@@ -134,8 +139,9 @@ class MjxAdapter(MujocoAdapter):
     def unsupported(self, scene, settings):
         """The base check, then MJX's own: the contact options MJX lacks (``why_not``), and where
         ``mjx.put_model`` or ``mjx.make_data`` refuses the compiled model (NotImplementedError, e.g. a
-        feature MJX lacks), the reason is MJX's."""
-        reason = self.unsupported_before_build(scene, settings)
+        feature MJX lacks), the reason is MJX's; option ``device`` where JAX has no such device here
+        (``stepping.device_problem``: it imports JAX, so not in ``unsupported_before_build``)."""
+        reason = self.unsupported_before_build(scene, settings) or device_problem(self.option(settings, "device"))
         if reason:
             return reason
         from dalembert.adapters.mujoco.mjcf import mjcf
@@ -153,17 +159,16 @@ class MjxAdapter(MujocoAdapter):
     # ------------------------------------------------------------- build
     def prepare(self, scene, times, settings):
         import jax
-        import jax.numpy as jnp
 
         p = super().prepare(scene, times, settings)  # compiled MJCF, checked; the initial state
-        chosen = self.option(settings, "precision")
+        chosen, on = self.option(settings, "precision"), jax_device(self.option(settings, "device"))
         with precision(chosen):
-            mx = mjx().put_model(p.model)
-            dx0 = _initial(p)
-            steps_device = [jnp.asarray(c) for c in chunks(p.steps)]
+            mx = mjx().put_model(p.model, device=on, impl=IMPL)
+            dx0 = _initial(p, on)
+            steps_device = [jax.device_put(c, on) for c in chunks(p.steps)]
             compile_s = compile_rollout(mx, dx0)
         return MjxPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, precision=chosen, mx=mx, dx0=dx0,
-                           steps_device=steps_device, compile_s=compile_s, backend=jax.default_backend())
+                           steps_device=steps_device, compile_s=compile_s, backend=device_name(on))
 
     # ------------------------------------------------------------- batches
     def batch_problem(self, scenes, times, settings):
@@ -177,18 +182,17 @@ class MjxAdapter(MujocoAdapter):
         """Each scene's MuJoCo model and initial state (``MujocoAdapter.prepare``), one device model (world 0's:
         they are one MJCF), the initial states stacked, the vmapped rollout compiled for the batch's size."""
         import jax
-        import jax.numpy as jnp
 
         ps = [MujocoAdapter.prepare(self, s, times, settings) for s in scenes]
-        chosen = self.option(settings, "precision")
+        chosen, on = self.option(settings, "precision"), jax_device(self.option(settings, "device"))
         with precision(chosen):
-            mx = mjx().put_model(ps[0].model)
-            starts = [_initial(p) for p in ps]
+            mx = mjx().put_model(ps[0].model, device=on, impl=IMPL)
+            starts = [_initial(p, on) for p in ps]
             # padded with copies of the last world to a power of two: one compilation serves every size up to it
             dx0 = stack(starts + starts[-1:] * (_padded(len(starts)) - len(starts)))
-            steps_device = [jnp.asarray(c) for c in chunks(ps[0].steps)]
+            steps_device = [jax.device_put(c, on) for c in chunks(ps[0].steps)]
             compile_s = compile_rollout(mx, dx0, batched=True)
-        backend = jax.default_backend()
+        backend = device_name(on)
         worlds = tuple(MjxPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, precision=chosen, mx=mx, dx0=d,
                                    steps_device=steps_device, compile_s=compile_s, backend=backend)
                        for p, d in zip(ps, starts))
@@ -273,15 +277,16 @@ def _padded(n):
     return 1 << max(0, n - 1).bit_length()
 
 
-def _initial(p):
-    """The initial state of MuJoCo's prepared ``p`` on the device (``mjx.put_data``, in the precision in force)."""
+def _initial(p, device):
+    """The initial state of MuJoCo's prepared ``p`` on ``device`` (``stepping.jax_device``'s; ``mjx.put_data``, in
+    the precision in force)."""
     import mujoco
 
     data = mujoco.MjData(p.model)
     data.qpos[:], data.qvel[:] = p.qpos0, p.qvel0
     if p.load_path == "actuator":
         data.ctrl[:] = 1.0
-    return mjx().put_data(p.model, data)
+    return mjx().put_data(p.model, data, device=device, impl=IMPL)
 
 
 @functools.lru_cache(maxsize=64)

@@ -44,8 +44,8 @@ def one_step(case, settings, n_steps=1):
 
 
 def horizon(case, settings):
-    """MJX and MuJoCo C on ``case`` at ``settings`` (MuJoCo C ignores ``precision``): the largest differences
-    over the horizon and the floors they are set against.
+    """MJX and MuJoCo C on ``case`` at ``settings`` (MuJoCo C ignores ``precision`` and ``device``): the largest
+    differences over the horizon and the floors they are set against.
 
     Returns
     -------
@@ -60,7 +60,7 @@ def horizon(case, settings):
     mjx_adapter, mj = get_adapter("mjx"), get_adapter("mujoco")
     a = mjx_adapter.run(mjx_adapter.prepare(case.scene, case.times, settings)).trajectory
     c_settings = Settings(settings.integrator, dt=settings.dt,
-                          options={k: v for k, v in settings.options.items() if k != "precision"})
+                          options={k: v for k, v in settings.options.items() if k not in ("precision", "device")})
     b = mj.run(mj.prepare(case.scene, case.times, c_settings)).trajectory
     orientation = max(float(np.max(spatial.rotation_angle(a.bodies[n].quaternion, b.bodies[n].quaternion)))
                       for n in a.bodies)

@@ -14,6 +14,10 @@ over the state (the model shared), compiled once per structure and batch size. `
 (nothing is stepped); ``run_rollout`` times the calls through
 ``block_until_ready``.
 
+Device (option ``device``): JAX's CPU backend, or its first GPU where JAX has one; the model, the initial state
+and the steps are put on it (MJX's JAX implementation named: on a GPU, MJX may pick its Warp one by default), and
+the compiled rollout runs where its arguments are.
+
 Precision: float32 (JAX's default, MJX's) or float64 (``jax_enable_x64``),
 switched per call with ``jax.enable_x64`` so runs of both precisions can share a
 worker process; each precision compiles its own rollout. JAX 0.10's caches do
@@ -39,9 +43,12 @@ import time
 
 import numpy as np
 
-__all__ = ["mjx", "precision", "chunks", "compile_rollout", "run_rollout", "stack", "to_host", "PRECISIONS", "CHUNK"]
+__all__ = ["mjx", "precision", "device_problem", "jax_device", "device_name", "chunks", "compile_rollout",
+           "run_rollout", "stack", "to_host", "PRECISIONS", "DEVICES", "CHUNK"]
 
 PRECISIONS = ("float32", "float64")
+# Option ``device``: JAX's CPU backend (the default: every stored MJX number is from it) or its first GPU.
+DEVICES = ("cpu", "gpu")
 # Sample intervals per compiled call. A call costs ~1.5 ms beyond its steps (measured on 2 cores: free_top,
 # RK4, 16 to 1024 intervals of zero steps, 1.3-2.0 ms a call) and a padded interval ~1 us, against >= 20 us
 # for an MJX step: 1024 keeps every default-horizon run in one call (free_top: 1000 intervals) and adds
@@ -54,6 +61,36 @@ def mjx():
     with contextlib.redirect_stdout(io.StringIO()):
         from mujoco import mjx as module
     return module
+
+
+def device_problem(name):
+    """Why JAX cannot step on device ``name`` (one of ``DEVICES``) in this process, in the project's words, or
+    None. ``cpu`` asks nothing; ``gpu`` imports JAX (a worker's, never the harness's main process) to find out."""
+    if name == "cpu":
+        return None
+    import jax
+
+    try:
+        jax.devices(name)
+    except RuntimeError:
+        return (f"options.device: no GPU here (JAX found none: its backend is {jax.default_backend()}) — run with "
+                f"device=cpu, or on a machine with a GPU and JAX's CUDA build (jax[cuda12])")
+    return None
+
+
+def jax_device(name):
+    """The JAX device of option ``device`` ``name``: JAX's first device of that platform (``device_problem``
+    first). Named even for ``cpu``: MJX puts a model given no device on JAX's first device, which is a GPU
+    wherever JAX has one, so the CPU default would not be the CPU there."""
+    import jax
+
+    return jax.devices(name)[0]
+
+
+def device_name(device):
+    """Where a run on ``device`` (``jax_device``'s) steps, as the record stores it: ``cpu``, or the device's
+    platform and index (``gpu:0``)."""
+    return "cpu" if device.platform == "cpu" else f"{device.platform}:{device.id}"
 
 
 _LAST_PRECISION = []  # the precision this process compiled for last

@@ -1,4 +1,4 @@
-"""``MujocoWarpAdapter``: the contract (``dalembert.adapters``) for MuJoCo Warp (``mujoco_warp``) on Warp's CPU backend.
+"""``MujocoWarpAdapter``: the contract (``dalembert.adapters``) for MuJoCo Warp (``mujoco_warp``) on a Warp device.
 
 The model is the MuJoCo adapter's: the same generated MJCF (``mujoco.mjcf``),
 compiled by MuJoCo C and checked against the scene (``MujocoAdapter.prepare``),
@@ -15,7 +15,9 @@ audit says so).
 Number type: float32 only (MuJoCo Warp's kernels are written in it); the
 float32 attitude floor of a torque-free top (``mjx.parity.float32_floor``) is in
 every run's audit, so a reader sees whether an error is the method's or the
-number type's. Options: ``welds`` as for MuJoCo, contact as MuJoCo's (``cone``,
+number type's. Option ``device``: Warp's CPU backend (``cpu``, the default) or a CUDA device (``cuda``,
+``cuda:N``), refused with a reason where Warp finds none; the record's device is the one stepped on. Options:
+``welds`` as for MuJoCo, contact as MuJoCo's (``cone``,
 ``impratio``, ``noslip_iterations``, ``contact_timeconst``: MuJoCo Warp reads
 all four); ``worlds`` = N steps N copies of the case at once (MuJoCo Warp's ``nworld``), world k's initial
 velocities raised by k ``WORLD_DV``: the trajectory is world 0's (the case's own, the same float32 arithmetic as
@@ -46,12 +48,13 @@ from dalembert.adapters.mujoco import MujocoAdapter
 from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.adapter import MujocoPrepared
 from dalembert.adapters.mujoco.readback import read_back
-from dalembert.adapters.mujoco_warp.stepping import (DEVICE, compile_step, device_model, put_state, put_worlds,
-                                                     step_samples, step_worlds, warp)
+from dalembert.adapters.mujoco_warp.stepping import (compile_step, device_model, put_state, put_worlds, step_samples,
+                                                     step_worlds, warp)
+from dalembert.adapters.warp_runtime import DEVICE_OPTION, device, device_problem
 
 __all__ = ["MujocoWarpAdapter", "MujocoWarpPrepared", "MujocoWarpBatch"]
 
-OPTIONS = ("welds", "worlds", *contact.OPTIONS)
+OPTIONS = ("welds", "worlds", "device", *contact.OPTIONS)
 # Batched worlds (option ``worlds``): world k starts with every velocity coordinate raised by k WORLD_DV (m/s,
 # rad/s), ~1e-4 of the cases' velocities (~1-10), so the worlds' spread at the end measures how the case amplifies
 # a small difference. A smaller one is lost in float32: its change of qpos per step, dv dt, falls below float32's
@@ -79,12 +82,14 @@ class MujocoWarpPrepared(MujocoPrepared):
     worlds : int — option ``worlds``: the worlds each run steps at once (world 0 the case's)
     compile_s : float — the first step's wall time in ``prepare``: Warp's kernel compilation, or its load from the
         kernel cache, s (build, not stepping)
+    device : str — Warp's device the run steps on (option ``device``: ``cpu``, ``cuda:0``)
     """
 
     mx: object
     ctrl: object
     worlds: int
     compile_s: float
+    device: str
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,8 +106,9 @@ class MujocoWarpBatch(BatchPrepared):
 
 
 class MujocoWarpAdapter(MujocoAdapter):
-    """MuJoCo Warp (``mujoco-warp``) on Warp's CPU backend, float32. Options: ``welds`` = ``tree`` |
-    ``equality``; contact as MuJoCo's (``cone``, ``impratio``, ``noslip_iterations``, ``contact_timeconst``)."""
+    """MuJoCo Warp (``mujoco-warp``) on Warp's CPU backend or a CUDA device (option ``device``), float32. Options:
+    ``welds`` = ``tree`` | ``equality``; contact as MuJoCo's (``cone``, ``impratio``, ``noslip_iterations``,
+    ``contact_timeconst``)."""
 
     name = "mujoco_warp"
     options = {
@@ -111,6 +117,7 @@ class MujocoWarpAdapter(MujocoAdapter):
                          description="worlds stepped at once (mjw nworld); world k's initial velocities raised by "
                                      f"k * {WORLD_DV:g}; the trajectory is world 0's, the audit has the batch's "
                                      "throughput and spread"),
+        "device": DEVICE_OPTION,
         **contact.CONTACT_OPTIONS,
     }
     effects = MujocoAdapter.effects  # MuJoCo's mapping; what MuJoCo Warp lacks is refused (``_refusal``)
@@ -127,14 +134,16 @@ class MujocoWarpAdapter(MujocoAdapter):
         return _version()
 
     def load(self):
-        """Warp initialized on the CPU and MuJoCo Warp imported (``version`` imports neither)."""
+        """Warp initialized and MuJoCo Warp imported (``version`` imports neither)."""
         self.version()
         warp()
 
     def unsupported(self, scene, settings):
-        """The base check, then where ``mjw.put_model`` refuses the compiled model (NotImplementedError or
-        ValueError: a feature MuJoCo Warp lacks), the reason is MuJoCo Warp's."""
-        reason = self.unsupported_before_build(scene, settings)
+        """The base check, then option ``device`` where Warp finds no such device here
+        (``warp_runtime.device_problem``: it imports Warp, so not in ``unsupported_before_build``), then where
+        ``mjw.put_model`` refuses the compiled model (NotImplementedError or ValueError: a feature MuJoCo Warp
+        lacks), the reason is MuJoCo Warp's."""
+        reason = self.unsupported_before_build(scene, settings) or device_problem(self.option(settings, "device"))
         if reason:
             return reason
         from dalembert.adapters.mujoco.mjcf import mjcf
@@ -150,19 +159,20 @@ class MujocoWarpAdapter(MujocoAdapter):
         p = super().prepare(scene, times, settings)  # compiled MJCF, checked; the initial state
         ctrl = 1.0 if p.load_path == "actuator" and p.model.nu else None
         worlds = int(self.option(settings, "worlds"))
-        mx = device_model(p.model)
-        compile_s = compile_step(mx, p.model, p.qpos0, p.qvel0, ctrl, worlds)
+        on = device(self.option(settings, "device"))
+        mx = device_model(p.model, on)
+        compile_s = compile_step(mx, p.model, p.qpos0, p.qvel0, ctrl, worlds, on)
         return MujocoWarpPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, mx=mx, ctrl=ctrl,
-                                  worlds=worlds, compile_s=compile_s)
+                                  worlds=worlds, compile_s=compile_s, device=on)
 
     # ------------------------------------------------------------- run
     def run(self, prepared):
         p = prepared
-        d = put_state(p.model, p.qpos0, p.qvel0, p.ctrl, p.worlds, WORLD_DV)  # a fresh state each run, not timed
+        d = put_state(p.model, p.qpos0, p.qvel0, p.ctrl, p.worlds, WORLD_DV, p.device)  # a fresh state, not timed
         Q, V, wall, bad = step_samples(p.mx, d, p.steps, p.qpos0, p.qvel0)
         n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())  # interval `bad` was stepped whole
         message = f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else ""
-        info = {"message": message, "device": DEVICE, "batch_size": p.worlds}
+        info = {"message": message, "device": p.device, "batch_size": p.worlds}
         if p.worlds > 1:
             # the batch: every world stepped n_steps in ``wall``; world 0 is the run's, the others its perturbed
             # copies (their spread from world 0 at the end: NaN if a world diverged)
@@ -195,17 +205,18 @@ class MujocoWarpAdapter(MujocoAdapter):
         they are one MJCF), and the step's kernels compiled for the batch's size."""
         ps = [MujocoAdapter.prepare(self, s, times, settings) for s in scenes]
         ctrl = 1.0 if ps[0].load_path == "actuator" and ps[0].model.nu else None
-        mx = device_model(ps[0].model)
-        compile_s = compile_step(mx, ps[0].model, ps[0].qpos0, ps[0].qvel0, ctrl, len(ps))
+        on = device(self.option(settings, "device"))
+        mx = device_model(ps[0].model, on)
+        compile_s = compile_step(mx, ps[0].model, ps[0].qpos0, ps[0].qvel0, ctrl, len(ps), on)
         worlds = tuple(MujocoWarpPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, mx=mx, ctrl=ctrl,
-                                          worlds=1, compile_s=compile_s) for p in ps)
-        return MujocoWarpBatch(worlds=worlds, device=DEVICE, mx=mx)
+                                          worlds=1, compile_s=compile_s, device=on) for p in ps)
+        return MujocoWarpBatch(worlds=worlds, device=on, mx=mx)
 
     def run_batch(self, prepared):
         """Every world stepped at once from its own initial state (a fresh ``mjw.Data`` each call, not timed)."""
         ps = prepared.worlds
         Q0, V0 = np.array([p.qpos0 for p in ps]), np.array([p.qvel0 for p in ps])
-        d = put_worlds(ps[0].model, Q0, V0, ps[0].ctrl)
+        d = put_worlds(ps[0].model, Q0, V0, ps[0].ctrl, prepared.device)
         Q, V, wall, bad = step_worlds(prepared.mx, d, ps[0].steps, Q0, V0)
         return BatchOutcome(wall, tuple(self._world(p, Q[:, k], V[:, k], int(bad[k]) or None, wall)
                                         for k, p in enumerate(ps)))
@@ -214,7 +225,8 @@ class MujocoWarpAdapter(MujocoAdapter):
         """World ``p``'s ``Outcome`` of a batch: its samples ``Q (n, nq)``, ``V (n, nv)``, first bad sample ``bad``
         (None: none), the batch's ``wall``; as ``run`` makes one."""
         n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())  # interval `bad` was stepped whole
-        info = {"message": f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else "", "device": DEVICE}
+        info = {"message": f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else "",
+                "device": p.device}
 
         def read():
             traj, info["audit"] = read_back(p, Q, V)
@@ -233,7 +245,7 @@ class MujocoWarpAdapter(MujocoAdapter):
             "integrator": f"MuJoCo Warp {mjw.IntegratorType(int(mx.opt.integrator)).name}",
             "timestep": float(np.asarray(mx.opt.timestep.numpy()).reshape(-1)[0]),
             "precision": str(mx.opt.timestep.numpy().dtype),
-            "device": DEVICE, "warp_version": wp.__version__, "mujoco_warp_version": self.version(),
+            "device": p.device, "warp_version": wp.__version__, "mujoco_warp_version": self.version(),
             "warp_init": init_message,
             "kernel_compile_s": p.compile_s,
             "autoreset": "none: MuJoCo Warp has no auto-reset (the flag is cleared on the device model's copy); "

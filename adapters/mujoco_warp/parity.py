@@ -29,7 +29,8 @@ def one_step(case, settings, n_steps=1):
 
     times = np.asarray(case.times[:1], dtype=float)
     p = get_adapter("mujoco_warp").prepare(case.scene, np.append(times, times[0] + n_steps * settings.dt), settings)
-    Q, V, _, _ = step_samples(p.mx, put_state(p.model, p.qpos0, p.qvel0, p.ctrl), [n_steps], p.qpos0, p.qvel0)
+    d = put_state(p.model, p.qpos0, p.qvel0, p.ctrl, device=p.device)  # on the device option ``device`` names
+    Q, V, _, _ = step_samples(p.mx, d, [n_steps], p.qpos0, p.qvel0)
     model, data = p.model, mujoco.MjData(p.model)
     data.qpos[:], data.qvel[:] = p.qpos0, p.qvel0
     if p.ctrl is not None:
@@ -51,12 +52,15 @@ def horizon(case, settings, times=None):
     from dalembert import spatial
     from dalembert.adapters import get_adapter
     from dalembert.adapters.mjx.parity import float32_floor
+    from dalembert.settings import Settings
 
     whole = times is None  # the case's floor is for its own horizon
     times = np.asarray(case.times if whole else times, dtype=float)
     warp_adapter, mj = get_adapter("mujoco_warp"), get_adapter("mujoco")
     a = warp_adapter.run(warp_adapter.prepare(case.scene, times, settings)).trajectory
-    b = mj.run(mj.prepare(case.scene, times, settings)).trajectory
+    c_settings = Settings(settings.integrator, dt=settings.dt,  # MuJoCo C runs on the host: no ``device``
+                          options={k: v for k, v in settings.options.items() if k != "device"})
+    b = mj.run(mj.prepare(case.scene, times, c_settings)).trajectory
     with np.errstate(invalid="ignore"):
         orientation = max(float(np.max(spatial.rotation_angle(a.bodies[n].quaternion, b.bodies[n].quaternion)))
                           for n in a.bodies)

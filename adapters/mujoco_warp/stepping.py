@@ -1,4 +1,4 @@
-"""MuJoCo Warp's stepping on Warp's CPU backend: the model and state put on the device, ``mjw.step`` per step.
+"""MuJoCo Warp's stepping on a Warp device: the model and state put on the device, ``mjw.step`` per step.
 
 Warp compiles each kernel module on its first launch in a process and keeps the
 compiled code on disk (Warp's kernel cache, keyed by the kernel's source, its
@@ -36,7 +36,7 @@ import numpy as np
 __all__ = ["warp", "device_model", "sizes", "put_state", "put_worlds", "compile_step", "step_samples", "step_worlds",
            "DEVICE", "NCONMAX"]
 
-DEVICE = "cpu"  # Warp's CPU backend: the adapter runs where no accelerator is
+DEVICE = "cpu"  # Warp's CPU backend, the default (option ``device``: ``warp_runtime.DEVICES``)
 # Contacts allocated per world: MuJoCo Warp's own default for a model without height fields, flexes or SDFs (45,
 # rounded up to its size 48); the contact cases here touch at most 4 points at once (a box on a plane).
 NCONMAX = 48
@@ -55,16 +55,17 @@ def warp():
     return wp, mjw, message
 
 
-def device_model(model):
+def device_model(model, device=DEVICE):
     """``mjw.put_model`` of a copy of MuJoCo C's ``model`` with the auto-reset flag cleared: the MJCF disables
     MuJoCo C's auto-reset (a bad state must show, not restart), MuJoCo Warp has none to disable and refuses the
-    flag; the copy keeps the compiled model the read-back and audit read unchanged."""
+    flag; the copy keeps the compiled model the read-back and audit read unchanged. ``device``: Warp's device
+    name (``cpu``, ``cuda:0``)."""
     import mujoco
 
     wp, mjw, _ = warp()
     m = copy.copy(model)
     m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
-    with wp.ScopedDevice(DEVICE):
+    with wp.ScopedDevice(device):
         return mjw.put_model(m)
 
 
@@ -83,10 +84,10 @@ def sizes(model, data):
     return NCONMAX, int(data.nefc) + NCONMAX * rows
 
 
-def put_state(model, qpos, qvel, ctrl, nworld=1, dv=0.0):
+def put_state(model, qpos, qvel, ctrl, nworld=1, dv=0.0, device=DEVICE):
     """A device ``mjw.Data`` of ``nworld`` worlds at ``qpos (nq,)``, ``qvel (nv,)`` with ``ctrl`` (None, or
     the actuators' constant control), its contact and constraint arrays sized by ``sizes``. World k's velocity is
-    ``qvel + k dv`` in every coordinate (m/s, rad/s): world 0 is the given state."""
+    ``qvel + k dv`` in every coordinate (m/s, rad/s): world 0 is the given state. ``device``: Warp's device name."""
     import mujoco
 
     wp, mjw, _ = warp()
@@ -96,17 +97,17 @@ def put_state(model, qpos, qvel, ctrl, nworld=1, dv=0.0):
         data.ctrl[:] = ctrl
     mujoco.mj_forward(model, data)  # the initial state's constraint rows, for ``sizes``
     nconmax, njmax = sizes(model, data)
-    with wp.ScopedDevice(DEVICE):
+    with wp.ScopedDevice(device):
         d = mjw.put_data(model, data, nworld=nworld, nconmax=nconmax, njmax=njmax)
         if nworld > 1 and dv:
             d.qvel.assign((np.asarray(qvel) + dv * np.arange(nworld)[:, None]).astype(np.float32))
         return d
 
 
-def put_worlds(model, qpos, qvel, ctrl):
+def put_worlds(model, qpos, qvel, ctrl, device=DEVICE):
     """A device ``mjw.Data`` of one world per row of ``qpos (nworld, nq)`` and ``qvel (nworld, nv)`` (a batch's
     initial states), with ``ctrl`` (None, or the actuators' constant control); its contact and constraint arrays
-    sized by ``sizes`` for the world that needs the most rows at its initial state."""
+    sized by ``sizes`` for the world that needs the most rows at its initial state. ``device``: Warp's device name."""
     import mujoco
 
     wp, mjw, _ = warp()
@@ -118,22 +119,22 @@ def put_worlds(model, qpos, qvel, ctrl):
         data.qpos[:], data.qvel[:] = q, v
         mujoco.mj_forward(model, data)
         most = max(most, sizes(model, data), key=lambda s: s[1])
-    with wp.ScopedDevice(DEVICE):
+    with wp.ScopedDevice(device):
         d = mjw.put_data(model, data, nworld=len(qpos), nconmax=most[0], njmax=most[1])
         d.qpos.assign(qpos.astype(np.float32))
         d.qvel.assign(qvel.astype(np.float32))
         return d
 
 
-def compile_step(mx, model, qpos, qvel, ctrl, nworld=1):
-    """One step on a scratch state of ``nworld`` worlds, so that every kernel a step launches is compiled (or
-    loaded from the cache) before a timed run: the wall time, s."""
+def compile_step(mx, model, qpos, qvel, ctrl, nworld=1, device=DEVICE):
+    """One step on a scratch state of ``nworld`` worlds on ``device`` (``mx``'s), so that every kernel a step
+    launches is compiled (or loaded from the cache) before a timed run: the wall time, s."""
     wp, mjw, _ = warp()
-    d = put_state(model, qpos, qvel, ctrl, nworld)
+    d = put_state(model, qpos, qvel, ctrl, nworld, device=device)
     start = time.perf_counter()
-    with wp.ScopedDevice(DEVICE):
+    with wp.ScopedDevice(device):
         mjw.step(mx, d)
-        wp.synchronize_device(DEVICE)
+        wp.synchronize_device(device)
     return time.perf_counter() - start
 
 
@@ -142,14 +143,14 @@ def step_samples(mx, d, steps, q0, v0):
     back: ``(Q (n, nq), V (n, nv), wall s, first bad sample or None)``, float64 widened exactly from float32, the
     initial state first, NaN from the first non-finite sample of world 0 on (the loop stops there). The wall time
     is the stepping of every world and the per-sample copies to the host (the CPU backend's arrays are host
-    memory). The other worlds' last state stays in ``d``."""
+    memory; a CUDA device's, copies). The other worlds' last state stays in ``d``."""
     wp, mjw, _ = warp()
     n = len(steps) + 1
     Q, V = np.full((n, len(q0)), np.nan), np.full((n, len(v0)), np.nan)
     Q[0], V[0] = q0, v0
     step = mjw.step
     bad = None
-    with wp.ScopedDevice(DEVICE):
+    with wp.ScopedDevice(d.qpos.device):  # the state's device (a CUDA copy's .numpy() waits for its kernels)
         start = time.perf_counter()
         for k, nstep in enumerate(steps, 1):
             for _ in range(int(nstep)):
@@ -175,7 +176,7 @@ def step_worlds(mx, d, steps, Q0, V0):
     Q[0], V[0] = Q0, V0
     bad = np.zeros(nworld, dtype=int)
     step = mjw.step
-    with wp.ScopedDevice(DEVICE):
+    with wp.ScopedDevice(d.qpos.device):
         start = time.perf_counter()
         for k, nstep in enumerate(steps, 1):
             for _ in range(int(nstep)):

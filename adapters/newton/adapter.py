@@ -1,4 +1,5 @@
-"""``NewtonAdapter``: the contract (``dalembert.adapters``) for Newton (``newton`` 1.8) on Warp's CPU backend.
+"""``NewtonAdapter``: the contract (``dalembert.adapters``) for Newton (``newton`` 1.8) on a Warp device (option
+``device``: its CPU backend by default, or a CUDA device; refused with a reason where Warp finds none).
 
 ``prepare`` builds the scene's Newton model (``model.build``: bodies at their COMs, joints in their frames,
 nothing the scene does not call for; mass properties checked), the solver of the run's family
@@ -27,14 +28,17 @@ import numpy as np
 from dalembert import spatial
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared, typed_options
 from dalembert.adapters.newton import solvers
-from dalembert.adapters.newton.engine import DEVICE, engine, version
+from dalembert.adapters.newton.engine import engine, version
 from dalembert.adapters.newton.model import build, check_mass_properties, summary, why_not
 from dalembert.adapters.newton.stepping import fresh_states, load_plan, simulate
+from dalembert.adapters.warp_runtime import DEVICE_OPTION, device, device_problem
 from dalembert.scene import EFFECTS, SPRING_EFFECT, WORLD
 from dalembert.settings import steps_per_interval
 
 __all__ = ["NewtonAdapter", "NewtonPrepared"]
 
+# The solvers' options (``solvers.OPTIONS``) and the Warp device it steps on
+OPTIONS = {**solvers.OPTIONS, "device": DEVICE_OPTION}
 # What each effect Newton's adapter does not map would take (``unsupported``).
 NOT_MAPPED = {
     "loop": ("closed kinematic loops: Newton closes a loop with a joint outside every articulation or an equality "
@@ -70,28 +74,37 @@ class NewtonPrepared(Prepared):
 
 
 class NewtonAdapter(Adapter):
-    """Newton (``newton`` 1.8, NVIDIA, Google DeepMind and Disney Research) on Warp's CPU backend, float32: each
-    rigid-body solver an integrator family (``solvers.FAMILIES``), its settings as options."""
+    """Newton (``newton`` 1.8, NVIDIA, Google DeepMind and Disney Research) on Warp's CPU backend or a CUDA device
+    (option ``device``), float32: each rigid-body solver an integrator family (``solvers.FAMILIES``), its settings
+    as options."""
 
     name = "newton"
     # gravity, free, revolute, prismatic, ball and weld joints, world and follower loads; loops, springs and
     # contact: NOT_MAPPED
     effects = EFFECTS
-    options = solvers.OPTIONS
+    options = OPTIONS
     refusal_notes = NOT_MAPPED
     # every family names every option; ``Option.only`` says which families take it (``check`` refuses the others)
-    integrators = {family: IntegratorSpec(True, tuple(solvers.OPTIONS), description, order=order)
+    integrators = {family: IntegratorSpec(True, tuple(OPTIONS), description, order=order)
                    for family, (_, description, order, _) in solvers.FAMILIES.items()}
 
     def version(self):
         return version()
 
     def load(self):
-        """Warp initialized on the CPU and Newton imported (``version`` imports neither)."""
+        """Warp initialized and Newton imported (``version`` imports neither)."""
         self.version()
         engine()
 
     def unsupported(self, scene, settings):
+        """The base check, what the adapter does not map (``model.why_not``), then option ``device`` where Warp
+        finds no such device here (``warp_runtime.device_problem``: it imports Warp, so the harness's main process,
+        which asks ``unsupported_before_build``, never does)."""
+        return (super().unsupported(scene, settings) or why_not(scene)
+                or device_problem(self.option(settings, "device")))
+
+    def unsupported_before_build(self, scene, settings):
+        """``unsupported`` but for the device check (which imports Warp)."""
         return super().unsupported(scene, settings) or why_not(scene)
 
     def describe(self, scene, settings):
@@ -114,7 +127,7 @@ class NewtonAdapter(Adapter):
         options = typed_options(self.options, settings)
         nm = _build(scene, family, options)
         check_mass_properties(nm, scene)
-        with wp.ScopedDevice(DEVICE):
+        with wp.ScopedDevice(nm.model.device):
             solver = solvers.make(newton, nm.model, family, options)
             compile_s = _scratch_step(nm, solver, settings.dt)
         times = np.asarray(times, dtype=float)
@@ -129,12 +142,13 @@ class NewtonAdapter(Adapter):
             # their warm starts (VBD's persisted multipliers, Steel's impulses) live on the solver: a fresh one per
             # run, so every run starts from the same solver state (not timed)
             wp, newton, _ = engine()
-            with wp.ScopedDevice(DEVICE):
+            with wp.ScopedDevice(p.model.model.device):
                 p = _replace_solver(p, solvers.make(newton, p.model.model, p.family,
                                                     typed_options(self.options, p.settings)))
         Q, V, wall, bad = simulate(p)
         n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())
-        info = {"message": f"Newton: non-finite state at t = {p.times[bad]:g} s" if bad else ""}
+        info = {"message": f"Newton: non-finite state at t = {p.times[bad]:g} s" if bad else "",
+                "device": str(p.model.model.device)}
         return Outcome(lambda: _read_back(p, Q, V), wall, n_steps, n_steps, info)
 
     # ------------------------------------------------------------- audit
@@ -181,7 +195,7 @@ def _build(scene, family, options):
     the model (unless Newton's own is asked for); Newton's inertia balancing only with ``defaults=engine``."""
     damping = solvers.angular_damping(options)
     return build(scene, color=family == "vbd", steel_angular_damping=damping if family == "steel" else None,
-                 balance_inertia=options["defaults"] == "engine")
+                 balance_inertia=options["defaults"] == "engine", device=device(options["device"]))
 
 
 def _max_of(model, name):
@@ -203,7 +217,7 @@ def _scratch_step(nm, solver, dt):
     a, b = fresh_states(nm)
     start = time.perf_counter()
     solver.step(a, b, nm.model.control(), None, float(dt))
-    wp.synchronize_device(DEVICE)
+    wp.synchronize_device(nm.model.device)
     return time.perf_counter() - start
 
 

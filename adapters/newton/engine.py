@@ -8,7 +8,7 @@ import functools
 
 __all__ = ["DEVICE", "engine", "version"]
 
-DEVICE = "cpu"  # Warp's CPU backend: the adapter runs where no accelerator is
+DEVICE = "cpu"  # Warp's CPU backend, the default (option ``device``: ``warp_runtime.DEVICES``)
 
 
 @functools.cache

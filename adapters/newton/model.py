@@ -44,7 +44,7 @@ class NewtonModel:
 
     Attributes
     ----------
-    model : newton.Model — on Warp's CPU device, float32
+    model : newton.Model — on a Warp device (``model.device``: the CPU unless option ``device`` says), float32
     index : dict body name -> int — the body's index in Newton's arrays
     joint_index : dict joint name -> int
     body_q0 : ndarray (nbody, 7) float32 — the initial ``body_q``, ``(p_WB, q_WB x y z w)``, m
@@ -89,13 +89,14 @@ def _trees(scene):
     return list(trees.values())
 
 
-def build(scene, color=False, steel_angular_damping=None, balance_inertia=False):
-    """The Newton model of ``scene`` (``NewtonModel``) on the CPU. ``color``: the body graph coloured
-    (``ModelBuilder.color``), which VBD requires. ``steel_angular_damping`` (1/s, or None: not for Steel): Steel's
-    per-body angular damping of free bodies, a model attribute (``steel:rigid_body_angular_damping``) that Steel
-    otherwise takes as 0.05 (PhysX's default), registered and set on every body. ``balance_inertia``: Newton's
-    correction of inertias that violate the triangle inequality (its default on; off here unless asked: a scene's
-    inertia is as given, and ``check_mass_properties`` then says where Newton changed one)."""
+def build(scene, color=False, steel_angular_damping=None, balance_inertia=False, device=DEVICE):
+    """The Newton model of ``scene`` (``NewtonModel``) on Warp's ``device`` (``cpu``, ``cuda:0``). ``color``: the
+    body graph coloured (``ModelBuilder.color``), which VBD requires. ``steel_angular_damping`` (1/s, or None: not
+    for Steel): Steel's per-body angular damping of free bodies, a model attribute
+    (``steel:rigid_body_angular_damping``) that Steel otherwise takes as 0.05 (PhysX's default), registered and set
+    on every body. ``balance_inertia``: Newton's correction of inertias that violate the triangle inequality (its
+    default on; off here unless asked: a scene's inertia is as given, and ``check_mass_properties`` then says where
+    Newton changed one)."""
     wp, newton, _ = engine()
     start = spatial.initial_body_states(scene)
     b = newton.ModelBuilder(gravity=tuple(float(g) for g in scene.gravity))
@@ -135,17 +136,18 @@ def build(scene, color=False, steel_angular_damping=None, balance_inertia=False)
         b.add_articulation(ids, label=tree[0].name)
     if color:
         b.color()
-    model = b.finalize(device=DEVICE)
-    state = model.state()
-    bq, bqd = state.body_q.numpy(), state.body_qd.numpy()
-    for body in scene.bodies:
-        s, i = start[body.name], index[body.name]
-        bq[i, :3], bq[i, 3:] = s["p"], spatial.wxyz_to_xyzw(spatial.matrix_to_quat(s["R"]))
-        bqd[i, :3], bqd[i, 3:] = s["v"], s["w"]
-    state.body_q.assign(bq)
-    state.body_qd.assign(bqd)
-    newton.eval_ik(model, state, state.joint_q, state.joint_qd)
-    newton.eval_fk(model, state.joint_q, state.joint_qd, state)
+    model = b.finalize(device=device)
+    with wp.ScopedDevice(device):
+        state = model.state()
+        bq, bqd = state.body_q.numpy(), state.body_qd.numpy()  # host copies on a CUDA device: written back below
+        for body in scene.bodies:
+            s, i = start[body.name], index[body.name]
+            bq[i, :3], bq[i, 3:] = s["p"], spatial.wxyz_to_xyzw(spatial.matrix_to_quat(s["R"]))
+            bqd[i, :3], bqd[i, 3:] = s["v"], s["w"]
+        state.body_q.assign(bq)
+        state.body_qd.assign(bqd)
+        newton.eval_ik(model, state, state.joint_q, state.joint_qd)
+        newton.eval_fk(model, state.joint_q, state.joint_qd, state)
     return NewtonModel(model, index, joint_index, state.body_q.numpy().copy(), state.body_qd.numpy().copy(),
                        state.joint_q.numpy().copy(), state.joint_qd.numpy().copy())
 
@@ -169,7 +171,7 @@ def summary(nm):
     """Newton's model as text, read back from its arrays (``dalembert show-model``)."""
     newton, m = engine()[1], nm.model
     names = {i: n for n, i in nm.index.items()}
-    lines = [f"newton.Model on {DEVICE}: {m.body_count} bodies, {m.joint_count} joints, "
+    lines = [f"newton.Model on {m.device}: {m.body_count} bodies, {m.joint_count} joints, "
              f"{m.articulation_count} articulations, gravity {m.gravity.numpy()[0].tolist()} m/s^2 (float32)"]
     steel = getattr(getattr(m, "steel", None), "rigid_body_angular_damping", None)
     if steel is not None:

@@ -5,7 +5,8 @@ Loads: Newton takes an external wrench per body in ``State.body_f`` — force at
 axes — cleared by ``State.clear_forces`` and read by every solver's step. A load is applied before each step from
 the state the step starts at (the explicit evaluation the solvers make of every other force): a follower load
 turned into world axes by the body's attitude then, a force at a point adds its moment about the COM,
-``(R_WB r_B) x F_W``. The wrench is computed in numpy on the CPU arrays' host memory (Warp's CPU backend: no copy).
+``(R_WB r_B) x F_W``. The wrench is computed in numpy on the CPU arrays' host memory (Warp's CPU backend: no copy;
+on a CUDA device, on host copies, the wrench assigned back).
 
 A blow-up is data: the first sample with a non-finite coordinate ends the run, NaN from there on.
 """
@@ -17,7 +18,7 @@ import time
 import numpy as np
 
 from dalembert import spatial
-from dalembert.adapters.newton.engine import DEVICE, engine
+from dalembert.adapters.newton.engine import engine
 
 __all__ = ["load_plan", "fresh_states", "simulate"]
 
@@ -54,7 +55,8 @@ def fresh_states(nm):
 def simulate(p):
     """Run the prepared ``p`` (``NewtonPrepared``) from its initial state: ``(Q (n, nbody, 7), V (n, nbody, 6),
     wall s, sample where it diverged or None)``, float32 as Newton holds them, NaN from the first non-finite
-    sample on. The wall time is the stepping and the per-sample copies (host memory on the CPU backend)."""
+    sample on. The wall time is the stepping and the per-sample copies (host memory on the CPU backend), on the
+    model's device."""
     wp, _, _ = engine()
     nm, solver, dt = p.model, p.solver, float(p.settings.dt)
     control = nm.model.control()
@@ -64,13 +66,18 @@ def simulate(p):
     Q[0], V[0] = nm.body_q0, nm.body_qd0
     plan, step = p.loads, solver.step
     bad = None
-    with wp.ScopedDevice(DEVICE):
+    device = nm.model.device
+    with wp.ScopedDevice(device):
         start = time.perf_counter()
         for k, nstep in enumerate(p.steps, 1):
             for _ in range(int(nstep)):
                 s0.clear_forces()
-                if plan:
-                    _apply(plan, s0.body_q.numpy(), s0.body_f.numpy())
+                if plan and device.is_cpu:
+                    _apply(plan, s0.body_q.numpy(), s0.body_f.numpy())  # in place: host memory
+                elif plan:
+                    f = np.zeros((s0.body_f.shape[0], 6), np.float32)  # (nbody, 6): force, torque
+                    _apply(plan, s0.body_q.numpy(), f)
+                    s0.body_f.assign(f)
                 step(s0, s1, control, None, dt)
                 s0, s1 = s1, s0
             q, v = s0.body_q.numpy(), s0.body_qd.numpy()

@@ -179,7 +179,8 @@ def _execute(spec, timing, truth, concurrent):
             t_bad = traj.first_nonfinite_time()
             cost = Cost(build_s=build_s, wall_s_median=first.wall_s, wall_s_min=first.wall_s,
                         wall_s_max=first.wall_s, wall_s_repeats=(first.wall_s,), repeats=1, n_steps=first.n_steps, n_rhs=first.n_rhs,
-                        readback_s=readback_s, concurrent=concurrent, load_start=load_start, load_end=_load())
+                        readback_s=readback_s, concurrent=concurrent, load_start=load_start, load_end=_load(),
+                        device=str(first.info.get("device", "")))  # where it diverged (no batch share: no timing)
             why = first.info.get("message", "")  # the engine's own account, where it gives one
             return _record(spec, "diverged", f"non-finite state from t = {t_bad:.10g} s" + (f" ({why})" if why else ""),
                            t_diverged=t_bad, cost=cost,
