@@ -221,8 +221,8 @@ def _resumable(path):
                          "case; start a new matrix with --out")
     strays = sorted(store.done_keys() - {s.key for s in specs})
     if strays:
-        raise ValueError(f"--resume {path}: {len(strays)} stored run(s) are not in its manifest (e.g. rows/{strays[0]}"
-                         ".json): the rows and the manifest come from different matrices — start a new matrix")
+        raise ValueError(f"--resume {path}: {len(strays)} stored run(s) are not in its manifest (e.g. the run "
+                         f"{strays[0]}): the rows and the manifest come from different matrices — start a new matrix")
     return store, specs
 
 
