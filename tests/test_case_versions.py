@@ -18,7 +18,7 @@ import importlib.metadata
 
 import pytest
 
-from dalembert.case import CASES, load_cases
+from dalembert.case import CASES, load_cases, make_case
 
 load_cases()
 
@@ -83,3 +83,15 @@ def test_the_version_at_the_defaults_is_as_pinned(name):
     assert CASES[name]().version == VERSIONS[name], (
         f"{name}: its content changed, so its stored results are of another version — if that is meant, "
         "update VERSIONS (see the module docstring) and say why in the commit")
+
+
+def test_a_case_built_with_an_int_parameter_is_not_handed_out_for_the_same_value_as_a_float():
+    """500 == 500.0 and they hash alike, but the version hashes the parameters as given: the per-process cache of
+    built cases must not answer one with the other (a matrix then refused its own runs as another version)."""
+    from dalembert.harness.truths import built_case
+
+    params = {"t_final": 0.5, "sample_interval": 0.1}
+    as_int = built_case("free_top_fast_spin", {**params, "spin": 500})
+    as_float = built_case("free_top_fast_spin", {**params, "spin": 500.0})
+    assert as_float[1] == make_case("free_top_fast_spin", **params, spin=500.0).version
+    assert as_int[1] == make_case("free_top_fast_spin", **params, spin=500).version

@@ -34,12 +34,10 @@ def built_case(name, params=()):
 
     factory = load_cases()[name]  # KeyError with "did you mean" for an unknown name
     params = tuple(sorted(dict(params).items()))
-    key = (name, params)
-    try:
-        hit = _BUILT.get(key)
-    except TypeError:  # a value that cannot be a key (a list): built, not kept
-        case = factory(**dict(params))
-        return case, case.version
+    # keyed by each value's repr, not the value: 500 == 500.0 (and hash alike) but they make cases of different
+    # versions (the version hashes the parameters as given), so a cache keyed by value handed one for the other
+    key = (name, tuple((k, repr(v)) for k, v in params))
+    hit = _BUILT.get(key)
     if hit is not None and hit[0] is factory:
         _BUILT.move_to_end(key)
         return hit[1], hit[2]
