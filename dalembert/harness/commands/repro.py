@@ -22,6 +22,7 @@ error bit for bit (the maximum printed equal to the stored one), run where dalem
 
 from __future__ import annotations
 
+import inspect
 import math
 import re
 import sys
@@ -29,6 +30,7 @@ import textwrap
 
 import numpy as np
 
+from dalembert import rotations
 from dalembert.harness.commands.console import fail
 
 __all__ = ["REPRO_REL_TOL", "SPREAD", "write", "run", "main"]
@@ -49,58 +51,16 @@ _ERRORS = {
     """The largest |q - q_true| over the joints, per sample: as the harness measures joints."""
     return np.max([np.abs(values[name][:, 0] - np.asarray(truth[name])) for name in truth], axis=0)
 ''',
-    "orientation": '''def matrix_to_quat(R):
-    """Unit quaternion (w, x, y, z), w >= 0, of rotation matrices R (m, 3, 3): Shepperd's method, the
-    largest-diagonal branch, as the harness turns an engine's attitude matrices into quaternions."""
-    tr = np.trace(R, axis1=1, axis2=2)
-    diag = np.diagonal(R, axis1=1, axis2=2)
-    k = np.argmax(np.concatenate([tr[:, None], diag], axis=1), axis=1)
-    q = np.empty((R.shape[0], 4))
-    for branch in range(4):
-        sel = k == branch
-        if not np.any(sel):
-            continue
-        r = R[sel]
-        if branch == 0:
-            s = 2.0 * np.sqrt(1.0 + tr[sel])
-            q[sel] = np.stack([0.25 * s, (r[:, 2, 1] - r[:, 1, 2]) / s, (r[:, 0, 2] - r[:, 2, 0]) / s,
-                               (r[:, 1, 0] - r[:, 0, 1]) / s], -1)
-        else:
-            i = branch - 1
-            j, m = (i + 1) % 3, (i + 2) % 3
-            s = 2.0 * np.sqrt(1.0 + r[:, i, i] - r[:, j, j] - r[:, m, m])
-            out = np.empty((r.shape[0], 4))
-            out[:, 0] = (r[:, m, j] - r[:, j, m]) / s
-            out[:, 1 + i] = 0.25 * s
-            out[:, 1 + j] = (r[:, j, i] + r[:, i, j]) / s
-            out[:, 1 + m] = (r[:, m, i] + r[:, i, m]) / s
-            q[sel] = out
-    return np.where(q[:, :1] < 0.0, -q, q)
-
-
-def normalize(q):
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    return np.where(q[..., :1] < 0.0, -q, q)
-
-
-def angle(q1, q2):
-    """Geodesic angle between orientations, rad: 2 atan2(|vec(q1* q2)|, |scalar(q1* q2)|) of the normalized
-    quaternions (full relative precision for small angles, which 2 acos |<q1, q2>| has not)."""
-    q1, q2 = normalize(q1), normalize(q2)
-    w1, x1, y1, z1 = np.moveaxis(q1 * np.array([1.0, -1.0, -1.0, -1.0]), -1, 0)
-    w2, x2, y2, z2 = np.moveaxis(q2, -1, 0)
-    d = np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-                  w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                  w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-                  w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], -1)
-    return 2.0 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0]))
-
+    # the harness's own conversions, as source: the script measures exactly as the harness does
+    "orientation": "\n\n".join(inspect.getsource(f) for f in (
+        rotations.quat_multiply, rotations.quat_conjugate, rotations.quat_normalize, rotations.rotation_angle,
+        rotations.matrix_to_quat)) + '''
 
 def error(values, truth):
     """The largest geodesic angle over the bodies, per sample (rad): as the harness measures orientations (an
     attitude the engine gives as a matrix, (m, 3, 3), is turned into a quaternion first)."""
     quats = {name: matrix_to_quat(q) if q.shape[1:] == (3, 3) else q for name, q in values.items()}
-    return np.max([angle(quats[name], np.asarray(truth[name])) for name in truth], axis=0)
+    return np.max([rotation_angle(quats[name], np.asarray(truth[name])) for name in truth], axis=0)
 ''',
 }
 
