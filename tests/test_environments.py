@@ -137,6 +137,27 @@ def test_env_list_and_remove(tmp_path, capsys):
     assert environments() == []
 
 
+def test_an_environment_of_an_engine_this_dalembert_cannot_version_is_listed_and_removed(tmp_path, capsys):
+    """An environment another dalembert made (an engine this one has no distribution for at a version, e.g. a
+    newer release's) neither breaks ``env list`` nor is beyond ``env remove``: listed, saying why this one cannot
+    run it, and removed by the name it is listed under."""
+    fake("mujoco==3.6.0", "3.6.0", tmp_path)
+    other = os.path.join(os.path.dirname(environment("mujoco==3.6.0").path), "warpish_1.0-0000")
+    os.makedirs(other)
+    with open(os.path.join(other, INFO), "w") as f:
+        json.dump({"engine": "warpish==1.0", "requirement": "warpish==1.0", "engine_version": "1.0",
+                   "python": sys.version.split()[0], "installer": "pip", "created": "now"}, f)
+    assert [e[0] for e in environments()] == ["mujoco==3.6.0", "warpish==1.0"]
+    assert main(["env", "list"]) == 0
+    out = capsys.readouterr().out
+    assert "warpish==1.0" in out and "not runnable by this dalembert: 'warpish' is no engine" in out, out
+    assert "mujoco==3.6.0            3.6.0      python" in out
+    assert main(["env", "remove", "warpish==1.0"]) == 0
+    assert not os.path.exists(other) and [e[0] for e in environments()] == ["mujoco==3.6.0"]
+    assert main(["env", "remove", "warpish==2.0"]) == 2  # one not made: the engine's error, naming the fix
+    assert "'warpish' is no engine" in capsys.readouterr().err
+
+
 def test_a_stale_environment_is_refused_and_listed_naming_the_command_that_remakes_it(tmp_path, capsys):
     """An environment whose numpy differs from this process's (made before this one's numpy was upgraded) cannot
     serve its workers' arrays: ``run`` refuses it before anything runs, ``env list`` marks it, both naming
