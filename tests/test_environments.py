@@ -409,6 +409,29 @@ def test_a_dask_task_runs_a_versioned_engine_in_its_environment(tmp_path):
     assert record.provenance["pid"] in _pids(pids)
 
 
+def test_a_dask_group_task_runs_a_versioned_engine_in_its_environment(tmp_path, monkeypatch):
+    """``execute_group_isolated`` (the Dask task every chunk of runs is) starts the environment's interpreter on
+    this process's code, as ``execute_isolated`` does: an environment holds no dalembert (here a stale one)."""
+    from dataclasses import asdict
+
+    from dalembert.harness.dask import execute_group_isolated
+    from dalembert.harness.execute import QUICK
+    from dalembert.harness.matrix import expand
+    from dalembert.harness.truths import build
+    from dalembert.store import trajectory_to_npz
+
+    version = mujoco.__version__
+    name = f"mujoco=={version}"
+    pids = fake(name, version, tmp_path)
+    monkeypatch.chdir(tmp_path)  # (a checkout's root as the working directory would put its dalembert on the path)
+    specs, _ = expand(["free_top_intermediate"], engines=[name], integrators=["rk4"], dts=[5e-3, 1e-2],
+                      params={"t_final": 0.5})
+    truths = [(k, trajectory_to_npz(made)) for k, (_, made) in build(specs).items()]
+    results = execute_group_isolated([s.to_json() for s in specs], asdict(QUICK), truths, 120)
+    assert [(r.engine, r.status) for r, _ in results] == [(name, "ok")] * 2, [r.message for r, _ in results]
+    assert {r.provenance["pid"] for r, _ in results} <= _pids(pids)
+
+
 def test_mujoco_before_its_spring_and_damper_flags_disables_passive_forces_by_their_old_name(monkeypatch):
     """MuJoCo 3.2 and older have one ``passive`` flag where later releases have ``spring`` and ``damper``: the
     MJCF names the one the installed MuJoCo knows (3.2.7 refused ``spring`` as an unknown attribute)."""

@@ -15,9 +15,10 @@ points' case packages, and modules that registered cases when imported: ``case_r
 (``{name: [directories]}`` for a package, ``{name: file}`` for a module): a third party's cases run in an
 environment's worker as in a forked one, their own modules imported from where the starting process imports
 them, what they import in turn from the environment. ``ACTION``: ``serve`` (a pool's long-lived worker,
-``dalembert.harness.worker.serve``, its settings in ARGS) or ``run`` (one run on stdin,
-``dalembert.harness.worker.main``: a Dask task). Run as a script it imports nothing of dalembert before
-``SourceFinder`` is in place, and nothing beside the standard library at all.
+``dalembert.harness.worker.serve``, its settings in ARGS), ``run`` (one run on stdin,
+``dalembert.harness.worker.main``: a Dask task) or ``batches`` (a group of runs on stdin,
+``dalembert.harness.batches.main``: a Dask task of a chunk or a batch). Run as a script it imports nothing of
+dalembert before ``SourceFinder`` is in place, and nothing beside the standard library at all.
 """
 
 import json
@@ -31,7 +32,7 @@ __all__ = ["PACKAGES", "SourceFinder", "sources", "case_sources", "code", "comma
 # dalembert's packages whose directories are their own (pyproject.toml's ``package-dir``: ``dalembert.reference``
 # is the checkout's ``reference/``, not ``dalembert/reference/``); every other module is found under one of them.
 PACKAGES = ("dalembert", "dalembert.reference", "dalembert.adapters", "dalembert.cases", "dalembert.reports")
-ACTIONS = ("serve", "run")
+ACTIONS = ("serve", "run", "batches")
 
 
 def sources():
@@ -124,6 +125,10 @@ def _install(given):
 def _main():
     _install(json.loads(sys.argv[1]))
     action, sys.argv[1:] = sys.argv[2], sys.argv[3:]
+    if action == "batches":
+        from dalembert.harness import batches
+
+        return batches.main()
     from dalembert.harness import worker
 
     worker.serve() if action == "serve" else worker.main()
