@@ -201,8 +201,8 @@ def _import_for(name, module):
     except Exception as e:
         raise ImportError(f"{where} cannot be imported in this worker's interpreter ({sys.prefix}): "
                           f"{type(e).__name__}: {e} — install what it imports into that environment "
-                          f"({sys.executable} -m pip install ...), or run the case on an engine without a "
-                          "version") from e
+                          f"({sys.executable} -m pip install NAME; one uv made: uv pip install --python "
+                          f"{sys.executable} NAME), or run the case on an engine without a version") from e
     if name not in CASES:
         raise ImportError(f"{where} was imported in this worker but registered no case {name!r} — register it "
                           "with @case when the module is imported")
