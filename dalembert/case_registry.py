@@ -143,8 +143,7 @@ def case(tags=(), units=None, positive=(), counts=()):
             raise SceneError(f"case {func.__name__!r}", problems)
         CASES.register(func.__name__, CaseFactory(func.__name__, func, tuple(tags), dict(units or {}),
                                                   tuple(positive), tuple(counts)))
-        # the module whose import applied the decorator (the function may be defined in another)
-        _REGISTERED_IN[func.__name__] = sys._getframe(1).f_globals.get("__name__", func.__module__)
+        _REGISTERED_IN[func.__name__] = _importing_module(func)
         return func
 
     return register
@@ -169,6 +168,15 @@ def load_cases():
                               f"{type(e).__name__}: {e} — fix or uninstall the package that declares it") from e
     _LOADED = True
     return CASES
+
+
+def _importing_module(func):
+    """The module whose import registers ``func`` now: the innermost module body on the stack (the decorator may
+    be applied by a helper of another module, the function defined in a third)."""
+    frame = sys._getframe(2)
+    while frame is not None and frame.f_code.co_name != "<module>":
+        frame = frame.f_back
+    return frame.f_globals.get("__name__", func.__module__) if frame is not None else func.__module__
 
 
 def case_modules():

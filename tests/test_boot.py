@@ -26,23 +26,34 @@ from dalembert.harness import boot
 from dalembert.harness.cli import main
 from dalembert.store import Store
 
-# The case package: its __init__ imports the module that registers the case, which imports a helper of its own
-# package (a worker must find the whole package, not one file).
+# The case package: its __init__ imports the module that registers the case through a helper of its own package
+# (a worker must find the whole package, not one file, and import the module whose import registers the case,
+# not the helper's).
 PACKAGE = {
     "__init__.py": "from boot_cases import swing  # noqa: F401\n",
-    "helpers.py": "HORIZON = 0.5  # s: a short run\n",
+    "helpers.py": textwrap.dedent('''\
+        from dalembert.case import case
+
+        HORIZON = 0.5  # s: a short run
+
+
+        def register(factory):
+            """Register ``factory`` as a case of this package."""
+            return case(tags=("variant",), units={"t_final": "s"}, positive=("t_final",))(factory)
+        '''),
     "swing.py": textwrap.dedent('''\
         from dataclasses import replace
 
-        from boot_cases.helpers import HORIZON
-        from dalembert.case import case
+        from boot_cases.helpers import HORIZON, register
         from dalembert.cases.pendulum import pendulum
 
 
-        @case(tags=("variant",), units={"t_final": "s"}, positive=("t_final",))
         def boot_swing(t_final=HORIZON):
             """The built-in pendulum, registered by a package of its own."""
             return replace(pendulum(t_final=t_final), name="boot_swing")
+
+
+        register(boot_swing)
         '''),
 }
 RUN = ["run", "--case", "boot_swing", "--integrator", "rk4", "--dt", "5e-3", "--quick", "--jobs", "1"]
