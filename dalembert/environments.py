@@ -302,11 +302,20 @@ def _version_order(info):
     read after the others, by text)."""
     from packaging.version import InvalidVersion, Version
 
-    engine = engine_of(info["engine"])
+    engine = _engine_name(info["engine"])
     try:
         return (engine, 0, Version(info["engine_version"]), info["engine"])
     except InvalidVersion:
         return (engine, 1, info["engine_version"], info["engine"])
+
+
+def _engine_name(name):
+    """The engine name of a made environment's ``name``: ``engine_of``'s, or its text before the version for an
+    engine this dalembert does not know at a version (an environment another checkout or release made)."""
+    try:
+        return engine_of(name)
+    except ValueError:
+        return _OPERATORS.split(name, maxsplit=1)[0]
 
 
 def environments():
@@ -325,9 +334,17 @@ def environments():
 
 def remove(name):
     """Remove the environment of engine ``name``; ValueError naming the made ones when there is none."""
-    env = environment(name)
+    made = environments()
+    try:
+        env = environment(name)
+    except ValueError:  # an engine this dalembert cannot run at a version, made by another: removed by its listed name
+        path = next((p for listed, _, p in made if listed == name), None)
+        if path is None:
+            raise
+        shutil.rmtree(path)
+        return Environment(EngineSpec(name, _engine_name(name), "", ""), path)
     if not env.exists:
-        made = ", ".join(e[0] for e in environments()) or "none"
-        raise ValueError(f"env remove {name}: no environment for it (made: {made}) — see dalembert env list")
+        raise ValueError(f"env remove {name}: no environment for it (made: {', '.join(e[0] for e in made) or 'none'}) "
+                         "— see dalembert env list")
     shutil.rmtree(env.path)
     return env

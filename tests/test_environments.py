@@ -137,6 +137,27 @@ def test_env_list_and_remove(tmp_path, capsys):
     assert environments() == []
 
 
+def test_an_environment_of_an_engine_this_dalembert_cannot_version_is_listed_and_removed(tmp_path, capsys):
+    """An environment another dalembert made (an engine this one has no distribution for at a version, e.g. a
+    newer release's) neither breaks ``env list`` nor is beyond ``env remove``: listed, saying why this one cannot
+    run it, and removed by the name it is listed under."""
+    fake("mujoco==3.6.0", "3.6.0", tmp_path)
+    other = os.path.join(os.path.dirname(environment("mujoco==3.6.0").path), "warpish_1.0-0000")
+    os.makedirs(other)
+    with open(os.path.join(other, INFO), "w") as f:
+        json.dump({"engine": "warpish==1.0", "requirement": "warpish==1.0", "engine_version": "1.0",
+                   "python": sys.version.split()[0], "installer": "pip", "created": "now"}, f)
+    assert [e[0] for e in environments()] == ["mujoco==3.6.0", "warpish==1.0"]
+    assert main(["env", "list"]) == 0
+    out = capsys.readouterr().out
+    assert "warpish==1.0" in out and "not runnable by this dalembert: 'warpish' is no engine" in out, out
+    assert "mujoco==3.6.0            3.6.0      python" in out
+    assert main(["env", "remove", "warpish==1.0"]) == 0
+    assert not os.path.exists(other) and [e[0] for e in environments()] == ["mujoco==3.6.0"]
+    assert main(["env", "remove", "warpish==2.0"]) == 2  # one not made: the engine's error, naming the fix
+    assert "'warpish' is no engine" in capsys.readouterr().err
+
+
 def test_a_stale_environment_is_refused_and_listed_naming_the_command_that_remakes_it(tmp_path, capsys):
     """An environment whose numpy differs from this process's (made before this one's numpy was upgraded) cannot
     serve its workers' arrays: ``run`` refuses it before anything runs, ``env list`` marks it, both naming
@@ -386,6 +407,29 @@ def test_a_dask_task_runs_a_versioned_engine_in_its_environment(tmp_path):
     record, _ = execute_isolated(spec.to_json(), asdict(QUICK), trajectory_to_npz(made), 120)
     assert (record.engine, record.status) == (name, "ok"), record.message
     assert record.provenance["pid"] in _pids(pids)
+
+
+def test_a_dask_group_task_runs_a_versioned_engine_in_its_environment(tmp_path, monkeypatch):
+    """``execute_group_isolated`` (the Dask task every chunk of runs is) starts the environment's interpreter on
+    this process's code, as ``execute_isolated`` does: an environment holds no dalembert (here a stale one)."""
+    from dataclasses import asdict
+
+    from dalembert.harness.dask import execute_group_isolated
+    from dalembert.harness.execute import QUICK
+    from dalembert.harness.matrix import expand
+    from dalembert.harness.truths import build
+    from dalembert.store import trajectory_to_npz
+
+    version = mujoco.__version__
+    name = f"mujoco=={version}"
+    pids = fake(name, version, tmp_path)
+    monkeypatch.chdir(tmp_path)  # (a checkout's root as the working directory would put its dalembert on the path)
+    specs, _ = expand(["free_top_intermediate"], engines=[name], integrators=["rk4"], dts=[5e-3, 1e-2],
+                      params={"t_final": 0.5})
+    truths = [(k, trajectory_to_npz(made)) for k, (_, made) in build(specs).items()]
+    results = execute_group_isolated([s.to_json() for s in specs], asdict(QUICK), truths, 120)
+    assert [(r.engine, r.status) for r, _ in results] == [(name, "ok")] * 2, [r.message for r, _ in results]
+    assert {r.provenance["pid"] for r, _ in results} <= _pids(pids)
 
 
 def test_mujoco_before_its_spring_and_damper_flags_disables_passive_forces_by_their_old_name(monkeypatch):

@@ -92,18 +92,17 @@ def execute_group_isolated(specs_json, timing_json, truths_npz, timeout, hosts=N
     ``[(RunRecord, npz)]`` in their order. ``truths_npz``: ``[((case, version), npz)]`` of their cases; ``timeout``:
     the per-run limit, the group's being that times its runs. As ``execute_isolated`` otherwise."""
     specs = [RunSpec.from_json(s) for s in specs_json]
-    python, environment = sys.executable, None
-    if is_versioned(specs[0].engine):  # (a group is one engine's)
-        environment = require(specs[0].engine)
-        python, environment = environment.python, environment.path
+    command, environment = [sys.executable, "-m", "dalembert.harness.batches"], None
+    if is_versioned(specs[0].engine):  # (a group is one engine's) its environment's interpreter, on this code
+        made = require(specs[0].engine)
+        command, environment = boot.command(made.python, "batches"), made.path
     payload = pickle.dumps({"specs": specs_json, "timing": timing_json, "truths": truths_npz, "parent": os.getpid(),
                             "environment": environment, "batched": batched})
     n = _threads(hosts or {})
     env = None if n is None else {**os.environ, **{var: str(n) for var in threads.VARIABLES}}
     limit = timeout * len(specs)
     try:
-        proc = subprocess.run([python, "-m", "dalembert.harness.batches"], input=payload, capture_output=True,
-                              timeout=limit, env=env)
+        proc = subprocess.run(command, input=payload, capture_output=True, timeout=limit, env=env)
     except subprocess.TimeoutExpired:
         return [(unfinished(s, "timeout", f"stopped after its task's limit of {limit:g} s ({len(specs)} runs of "
                                           f"{timeout:g} s)"), None) for s in specs]

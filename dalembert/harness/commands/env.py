@@ -22,7 +22,12 @@ def run(action, engine=None, verbose=False, force=False):
         if not made:
             print("no engine environments (make one with: dalembert env create ENGINE==VERSION)")
         for name, info, path in made:
-            stale = environments.Environment(environments.parse_engine(name), path).stale()
+            try:
+                stale = environments.Environment(environments.parse_engine(name), path).stale()
+            except ValueError as e:  # made by another dalembert that runs this engine at a version; this one cannot
+                print(f"{name:<24} {info.get('engine_version', '?'):<10} not runnable by this dalembert: "
+                      f"{str(e).partition(': ')[2]}" + (f"\n    {path}" if verbose else ""))
+                continue
             print(f"{name:<24} {info['engine_version']:<10} python {info['python']}, {info['installer']}, "
                   f"{info['created']}" + (f"\n    {path}" if verbose else "")
                   + (f"\n    stale: {'; '.join(stale)} — remake it: dalembert env create --force {name}"
