@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
-from dalembert.adapters.exudyn import contact, sampling
+from dalembert.adapters.exudyn import compat, contact, sampling
 from dalembert.adapters.exudyn.loops import loop_axes
 from dalembert.adapters.exudyn.model import MODEL_OPTIONS, ExudynSystem, NODES, TREE_JOINTS, build, rigid_bodies
 from dalembert.adapters.exudyn.audit import audit
@@ -108,7 +108,7 @@ class ExudynAdapter(Adapter):
     # Measured in an engine environment: Exudyn 1.11.0 (the release before 1.13 on the index; no 1.12 has a wheel)
     # has neither ``SimulationSettings.solution`` nor ``exudyn.HT``, and its markers take no ``localHT`` (a
     # marker's frame would move into every joint's rotationMarker0/1: a port, not a shim); 1.13.6 runs.
-    supported_versions = ">=1.13"
+    supported_versions = ">=1.11"
     unsupported_versions_why = ("before 1.13 Exudyn has no SimulationSettings.solution, no exudyn.HT and no marker "
                                 "frames (localHT), which it uses")
     options = {
@@ -199,11 +199,11 @@ class ExudynAdapter(Adapter):
         s = exu.SimulationSettings()
         st = p.settings
         times = p.times
-        s.solution.file.write = False
+        compat.no_solution_file(s)
         s.timeIntegration.verboseMode = 0
         s.timeIntegration.endTime = float(times[-1])
         s.timeIntegration.startTime = float(times[0])
-        s.timeIntegration.solverType = getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[st.integrator])
+        compat.set_solver(s, getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[st.integrator]))
         if st.integrator in ADAPTIVE:
             s.timeIntegration.automaticStepSize = True
             s.timeIntegration.relativeTolerance = float(st.rtol)
