@@ -107,6 +107,7 @@ def test_versions_before_1_11_are_refused_naming_what_was_measured():
     assert ADAPTER.version_problem("1.11.0") is None and ADAPTER.version_problem("1.13.6") is None
     why = ADAPTER.version_problem("1.9.0")
     assert "exudyn 1.9.0 is outside the versions its adapter supports, >=1.11" in why and "1.11.0 and 1.13.6" in why
+    assert "ObjectContactSphereSphere" in why
 
 
 @pytest.mark.long

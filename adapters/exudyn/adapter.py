@@ -112,10 +112,12 @@ class ExudynAdapter(Adapter):
     # contact: sphere-sphere and sphere-plane connectors, implicit solvers only (``contact``, ``contact.why_not``)
     effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS | CONTACT_EFFECTS
     # Measured in engine environments: 1.13.6 (dalembert's), and 1.11.0 (the release before 1.13 with a CPython 3.11
-    # wheel; no 1.12 has one) through ``compat``'s shim, with one refusal (``BALL_TRAPEZOIDAL``). Not measured before
-    # 1.11.
+    # wheel; no 1.12 has one) through ``compat``'s shim, with one refusal (``BALL_TRAPEZOIDAL``). 1.9.0 fails every run
+    # on its import of ObjectContactSphereSphere, which it lacks (the contact connectors would be a port); 1.10.0 is
+    # not measured.
     supported_versions = ">=1.11"
-    unsupported_versions_why = "measured on 1.11.0 and 1.13.6 only (adapters/exudyn/compat.py: what differs)"
+    unsupported_versions_why = ("measured on 1.11.0 and 1.13.6 only (adapters/exudyn/compat.py: what differs); 1.9.0 "
+                                "has no ObjectContactSphereSphere, which the adapter imports")
     options = {
         **MODEL_OPTIONS,  # node, joints
         "spectral_radius": Option(minimum=0.0, maximum=1.0, only=("generalized-alpha",),
