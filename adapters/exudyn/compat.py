@@ -2,17 +2,24 @@
 
 The adapter is written against Exudyn 1.13 (the version installed with dalembert). Exudyn 1.11.0, the newest
 release before it with a CPython 3.11 wheel on the package index (no 1.12 has one), was run in an engine
-environment (``dalembert env create exudyn==1.11.0``) and differs in four items the adapter uses:
+environment (``dalembert env create exudyn==1.11.0``) and differs in these items the adapter uses:
 
 * a rigid marker's frame: 1.13's ``MarkerBodyRigid`` and ``MarkerKinematicTreeRigid`` take ``localHT`` (a
   point and a frame in the body's, made by ``exudyn.HT``); 1.11's take ``localPosition`` only, their frame is
   the body's, and a joint's frames are the ``ObjectJointGeneric``'s ``rotationMarker0``/``rotationMarker1``
-  (each the joint frame in its marker's axes; 1.13 keeps them, deprecated, as identities). ``Markers`` puts a
-  frame where the installed release takes it, and ``joint_frame`` reads it back from either;
+  (each the joint frame in its marker's axes; 1.13.6 keeps them as identities, "deprecated since 1.12.244" in its
+  own warning). ``Markers`` puts a frame where the installed release takes it, and ``joint_frame`` and
+  ``turned`` read it back from either;
 * ``exudyn.HT``: absent from 1.11 (only the markers' frames use it here);
-* ``SimulationSettings.solution.file.write`` (1.13) is ``solutionSettings.writeSolutionToFile`` in 1.11
-  (``no_solution_file``);
-* ``ObjectContactSphereTriangle``'s ``sphereRadius`` (1.13) is ``radiusSphere`` in 1.11 (``SPHERE_RADIUS``).
+* the solver: 1.13's ``timeIntegration.solverType``; 1.11 has none (``SolveDynamic`` is told the type, and its
+  explicit solvers read ``explicitIntegration.dynamicSolverType``): ``set_solver``, ``solver_of``;
+* ``SimulationSettings.solution.file.write`` and ``solution.sensors.writePeriod`` (1.13) are
+  ``solutionSettings.writeSolutionToFile`` and ``solutionSettings.sensorsWritePeriod`` in 1.11
+  (``no_solution_file``, ``set_sensors_write_period``);
+* ``ObjectContactSphereTriangle``'s ``sphereRadius`` (1.13) is ``radiusSphere`` in 1.11 (``SPHERE_RADIUS``;
+  "deprecated since 1.12.258" in 1.13.6's warning).
+
+Not shimmed: ``repro`` writes 1.13's calls (``localHT``), so a script made from a 1.11.0 run needs 1.13.
 
 Which API the installed Exudyn has is asked of Exudyn itself (the parameters its item classes take, the
 attributes of its settings), not read off its version number, so a release between the two is served by what it
