@@ -19,7 +19,7 @@ environment (``dalembert env create exudyn==1.11.0``) and differs in these items
 * ``ObjectContactSphereTriangle``'s ``sphereRadius`` (1.13) is ``radiusSphere`` in 1.11 (``SPHERE_RADIUS``;
   "deprecated since 1.12.258" in 1.13.6's warning).
 
-Not shimmed: ``repro`` writes 1.13's calls (``localHT``), so a script made from a 1.11.0 run needs 1.13.
+Not shimmed: ``repro`` writes 1.13's calls (``localHT``, ``solution``) only.
 
 Which API the installed Exudyn has is asked of Exudyn itself (the parameters its item classes take, the
 attributes of its settings), not read off its version number, so a release between the two is served by what it
