@@ -49,6 +49,8 @@ FLAGS = ["-O2", "-std=c++17", "-shared", "-fPIC"]
 _ERR_LEN = 512
 # A failed compile's marker beside the library it would have been (same key): what failed, remembered.
 FAILED = ".failed"
+# How many of a failed compile's error lines its reason quotes (the first name the cause; the rest follow from it).
+ERROR_LINES = 5
 _cached = {}
 
 
@@ -97,7 +99,7 @@ def library():
                 tmp = f"{path}.{os.getpid()}.tmp"
                 proc = subprocess.run(_command(prefix, tmp), capture_output=True, text=True)
                 if proc.returncode != 0:
-                    error = f"building {os.path.basename(SOURCE)} failed: {proc.stderr.strip()[-1500:]}"
+                    error = _compile_error(proc.returncode, proc.stderr)
                     _remember(path, version, key, error)
                     raise RuntimeError(error)
                 os.replace(tmp, path)
@@ -114,6 +116,16 @@ def library():
     lib.dalembert_pin_acc.argtypes = [ctypes.c_char_p, D, D, *forces, D, ctypes.c_char_p, ctypes.c_int]
     _cached["lib"] = lib
     return lib
+
+
+def _compile_error(returncode, stderr):
+    """Why a compile failed, in a few lines: the compiler's error lines (its warnings can fill the rest: Pinocchio
+    4.0's headers warn at every deprecated container), else the end of what it wrote, and how it ended."""
+    errors = [line.strip() for line in stderr.splitlines() if ": error:" in line or ": fatal error:" in line
+              or "undefined reference" in line or line.startswith("collect2")]
+    how = f"killed by signal {-returncode}" if returncode < 0 else f"exit status {returncode}"
+    said = "\n".join(errors[:ERROR_LINES]) if errors else stderr.strip()[-1500:]
+    return f"building {os.path.basename(SOURCE)} failed ({how}): {said}"
 
 
 def _remember(path, version, key, error):
