@@ -27,9 +27,10 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from packaging.specifiers import SpecifierSet
 
 from dalembert.adapters.base import Adapter, IntegratorSpec, Option, Outcome, Prepared
-from dalembert.adapters.exudyn import contact, sampling
+from dalembert.adapters.exudyn import compat, contact, sampling
 from dalembert.adapters.exudyn.loops import loop_axes
 from dalembert.adapters.exudyn.model import MODEL_OPTIONS, ExudynSystem, NODES, TREE_JOINTS, build, rigid_bodies
 from dalembert.adapters.exudyn.audit import audit
@@ -59,6 +60,11 @@ NEWTON_ATOL = 1e-14
 # ~1e6 N/m times the penetration.
 CONTACT_NEWTON_RTOL = 1e-8
 CONTACT_NEWTON_ATOL = 1e-10
+# The Exudyn versions whose TrapezoidalIndex2 runs a ball joint in redundant coordinates. Measured on 1.11.0
+# (heavy_top, joints=redundant, either node): Newton stalls at t = 0 (relative error 0.89 at every step Exudyn
+# tries, down to its minimum) on a solve that is not its process's first — a repeat of one system or a fresh one
+# alike, whatever the current configuration is reset to — so a run's timed repeats fail; 1.13.6 runs it.
+BALL_TRAPEZOIDAL = ">=1.13"
 
 
 def newton_tolerances(scene, settings):
@@ -105,12 +111,13 @@ class ExudynAdapter(Adapter):
     # ball joints and welds only with joints=redundant, loops only with implicit solvers (see ``unsupported``)
     # contact: sphere-sphere and sphere-plane connectors, implicit solvers only (``contact``, ``contact.why_not``)
     effects = EFFECTS | LOOP_EFFECTS | SPRING_EFFECTS | CONTACT_EFFECTS
-    # Measured in an engine environment: Exudyn 1.11.0 (the release before 1.13 on the index; no 1.12 has a wheel)
-    # has neither ``SimulationSettings.solution`` nor ``exudyn.HT``, and its markers take no ``localHT`` (a
-    # marker's frame would move into every joint's rotationMarker0/1: a port, not a shim); 1.13.6 runs.
-    supported_versions = ">=1.13"
-    unsupported_versions_why = ("before 1.13 Exudyn has no SimulationSettings.solution, no exudyn.HT and no marker "
-                                "frames (localHT), which it uses")
+    # Measured in engine environments: 1.13.6 (dalembert's), and 1.11.0 (the release before 1.13 with a CPython 3.11
+    # wheel; no 1.12 has one) through ``compat``'s shim, with one refusal (``BALL_TRAPEZOIDAL``). 1.9.0 fails every run
+    # on its import of ObjectContactSphereSphere, which it lacks (the contact connectors would be a port); 1.10.0 is
+    # not measured.
+    supported_versions = ">=1.11"
+    unsupported_versions_why = ("measured on 1.11.0 and 1.13.6 only (adapters/exudyn/compat.py: what differs); 1.9.0 "
+                                "has no ObjectContactSphereSphere, which the adapter imports")
     options = {
         **MODEL_OPTIONS,  # node, joints
         "spectral_radius": Option(minimum=0.0, maximum=1.0, only=("generalized-alpha",),
@@ -153,6 +160,11 @@ class ExudynAdapter(Adapter):
             if rows.axes == (0,):
                 return (f"loop {name!r}: a distance loop whose one row is redundant at the initial state — Exudyn's "
                         "Newton solver needs independent constraint rows (exudyn.loops)")
+        if (redundant and settings.integrator == "trapezoidal-index2" and any(j.kind == "ball" for j in scene.joints)
+                and not SpecifierSet(BALL_TRAPEZOIDAL).contains(self.version(), prereleases=True)):
+            return (f"exudyn {self.version()}: trapezoidal-index2 on a ball joint in redundant coordinates stalls "
+                    f"Newton at t = 0 on every solve but its process's first (exudyn{BALL_TRAPEZOIDAL} runs it) — "
+                    "use generalized-alpha")
         if node == "ep" and explicit and rigid_bodies(scene, redundant):
             return ("Exudyn: explicit integrator detected node which contains algebraic variables — "
                     "Euler-parameter nodes need an implicit solver")
@@ -199,11 +211,11 @@ class ExudynAdapter(Adapter):
         s = exu.SimulationSettings()
         st = p.settings
         times = p.times
-        s.solution.file.write = False
+        compat.no_solution_file(s)
         s.timeIntegration.verboseMode = 0
         s.timeIntegration.endTime = float(times[-1])
         s.timeIntegration.startTime = float(times[0])
-        s.timeIntegration.solverType = getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[st.integrator])
+        compat.set_solver(s, getattr(exu.DynamicSolverType, {**IMPLICIT, **EXPLICIT}[st.integrator]))
         if st.integrator in ADAPTIVE:
             s.timeIntegration.automaticStepSize = True
             s.timeIntegration.relativeTolerance = float(st.rtol)

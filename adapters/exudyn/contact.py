@@ -38,6 +38,7 @@ import numpy as np
 from dalembert import contact as geometry
 from dalembert import spatial
 from dalembert.adapters.base import Option, typed_options
+from dalembert.adapters.exudyn.compat import sphere_radius_field
 
 __all__ = ["OPTIONS", "CONTACT_OPTIONS", "STIFFNESS_DEFAULT", "FRICTION_ZONE_DEFAULT", "PLANE_EXTENT", "ELEMENTS",
            "LOADED_FRICTION_DT_MAX", "contact_options", "why_not", "add_contacts", "audit"]
@@ -150,7 +151,7 @@ def add_contacts(mbs, scene, settings, markers, sensors):
                        for a in (0.0, 2.0 * math.pi / 3.0, 4.0 * math.pi / 3.0)]
             obj = mbs.AddObject(ObjectContactSphereTriangle(
                 name=pair.name, markerNumbers=[m0, markers[WORLD]([0.0, 0.0, 0.0])],
-                sphereRadius=float(spheres[0].size[0]), trianglePoints=exu.Vector3DList([list(c) for c in corners]),
+                **{sphere_radius_field(): float(spheres[0].size[0])}, trianglePoints=exu.Vector3DList([list(c) for c in corners]),
                 includeEdges=0, **common))
             lines.append(f"ObjectContactSphereTriangle {pair.name}: sphere {spheres[0].name} on plane {plane.name}")
         else:
@@ -186,7 +187,7 @@ def audit(mbs, scene):
         if not triangle:
             row["radii"] = [float(r) for r in obj["spheresRadii"]]
         else:
-            row["radius"] = float(obj["sphereRadius"])
+            row["radius"] = float(obj[sphere_radius_field()])
             points = obj["trianglePoints"]  # (indexed: iterating Exudyn's list runs past its end)
             row["triangle"] = [[float(v) for v in np.asarray(points[i])] for i in range(len(points))]
             row["includeEdges"] = int(obj["includeEdges"])

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import spatial
+from dalembert.adapters.exudyn.compat import joint_frame, turned
 from dalembert.adapters.exudyn.springs import POINT_TOL
 from dalembert.scene import WORLD
 
@@ -96,14 +97,14 @@ def _generic_joint(mbs, j, number):
     axes = tuple(int(a) for a in obj["constrainedAxes"])
     kind = _GENERIC_KINDS.get(axes, f"unknown {list(axes)}")
     m0, m1 = obj["markerNumbers"]
-    HT0 = np.asarray(mbs.GetMarker(m0)["localHT"], dtype=float)  # marker 0's frame in the parent's body frame
+    HT0 = joint_frame(mbs, obj, 0)  # the joint's frame on marker 0 in the parent's body frame
 
     def pose(m):  # a marker's world position (m), velocity (m/s), rotation, angular velocity (rad/s)
         return [np.asarray(mbs.GetMarkerOutput(m, ov, configuration=current), dtype=float)
                 for ov in (OV.Position, OV.Velocity, OV.RotationMatrix, OV.AngularVelocity)]
 
     (p0, v0, R0, w0), (p1, v1, R1, w1) = pose(m0), pose(m1)
-    R0, R1 = R0.reshape(3, 3), R1.reshape(3, 3)  # row-major
+    R0, R1 = turned(R0.reshape(3, 3), obj, 0), turned(R1.reshape(3, 3), obj, 1)  # row-major; the joint frames
     q, rate, axis = None, None, None
     if kind in TREE_JOINTS:  # single-axis: z of the marker frames (model.build)
         a_W = R0[:, 2]

@@ -59,6 +59,7 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.base import Option, option_value
+from dalembert.adapters.exudyn.compat import Markers
 from dalembert.adapters.exudyn.contact import add_contacts
 from dalembert.adapters.exudyn.joints import CONSTRAINED_AXES, TREE_JOINTS, read_joints
 from dalembert.adapters.exudyn.loops import joint_frame, loop_axes
@@ -155,6 +156,7 @@ def build(scene, settings, assemble=True):
     redundant = option_value(MODEL_OPTIONS, settings, "joints") == "redundant"
     OV = exu.OutputVariableType
     summary, sensors, markers, bodies = [], {}, {}, {}
+    framed = Markers(mbs)  # markers with frames, and the joints between them, in the installed release's terms
     owners = {}  # rigid body or ground object number -> scene body name (WORLD for a ground)
     # --- rigid bodies: free bodies, and every body with joints=redundant
     rigid = rigid_bodies(scene, redundant)
@@ -170,8 +172,7 @@ def build(scene, settings, assemble=True):
         obj = mbs.CreateRigidBody(**kwargs)["bodyNumber"]
         bodies[name] = obj
         owners[int(obj)] = name
-        markers[name] = lambda p, R=np.eye(3), obj=obj: mbs.AddMarker(MarkerBodyRigid(
-            bodyNumber=obj, localHT=exu.HT(rotation=R, translation=list(p))))
+        markers[name] = lambda p, R=np.eye(3), obj=obj: framed.add(MarkerBodyRigid, p, R, bodyNumber=obj)
         sensors[name] = {k: mbs.AddSensor(SensorBody(bodyNumber=obj, outputVariableType=v))
                          for k, v in (("p", OV.Position), ("R", OV.RotationMatrix), ("v", OV.Velocity),
                                       ("w", OV.AngularVelocity))}
@@ -189,13 +190,11 @@ def build(scene, settings, assemble=True):
             R0 = spatial.quat_to_matrix(j.parent_quat) @ R_A  # joint frame in the parent's frame
             R1 = spatial.quat_to_matrix(j.child_quat) @ R_A
             parent = ground if j.parent == WORLD else bodies[j.parent]
-            # the marker frames are the joint frames (rotationMarker0/1 are deprecated since 1.12)
-            m0 = mbs.AddMarker(MarkerBodyRigid(bodyNumber=parent,
-                                               localHT=exu.HT(rotation=R0, translation=list(j.parent_point))))
-            m1 = mbs.AddMarker(MarkerBodyRigid(bodyNumber=bodies[j.child],
-                                               localHT=exu.HT(rotation=R1, translation=list(j.child_point))))
-            joint = mbs.AddObject(ObjectJointGeneric(markerNumbers=[m0, m1],
-                                                     constrainedAxes=CONSTRAINED_AXES[j.kind]))
+            # the marker frames are the joint frames (rotationMarker0/1 are deprecated since 1.12; before, they
+            # carry the frames: ``compat.Markers``)
+            m0 = framed.add(MarkerBodyRigid, j.parent_point, R0, bodyNumber=parent)
+            m1 = framed.add(MarkerBodyRigid, j.child_point, R1, bodyNumber=bodies[j.child])
+            joint = framed.generic_joint(ObjectJointGeneric, m0, m1, constrainedAxes=CONSTRAINED_AXES[j.kind])
             sensors[f"__joint:{j.child}"] = {"f": mbs.AddSensor(SensorObject(
                 objectNumber=joint, outputVariableType=OV.ForceLocal))}
             redundant_joints[j.child] = R0
@@ -244,9 +243,9 @@ def build(scene, settings, assemble=True):
             i, (p_EB, R_EB) = index[b.name], X_EB[b.name]
             # a marker at scene point p of the body, its frame R in the body's scene frame B (loops), or
             # the link frame E's axes (loads, whose vectors are turned into E)
-            markers[b.name] = lambda p, R=None, i=i, p_EB=p_EB, R_EB=R_EB: mbs.AddMarker(
-                MarkerKinematicTreeRigid(objectNumber=tree, linkNumber=i, localHT=exu.HT(
-                    rotation=np.eye(3) if R is None else R_EB @ R, translation=list(p_EB + R_EB @ np.array(p)))))
+            markers[b.name] = lambda p, R=None, i=i, p_EB=p_EB, R_EB=R_EB: framed.add(
+                MarkerKinematicTreeRigid, p_EB + R_EB @ np.array(p), np.eye(3) if R is None else R_EB @ R,
+                objectNumber=tree, linkNumber=i)
             sensors[b.name] = {k: mbs.AddSensor(SensorKinematicTree(
                 objectNumber=tree, linkNumber=i, localPosition=list(p_EB), outputVariableType=v))
                 for k, v in outputs}
@@ -260,8 +259,7 @@ def build(scene, settings, assemble=True):
     if scene.loops or scene.springs or scene.planes:  # their ends on the world (a plane is): markers on a ground
         ground = mbs.AddObject(ObjectGround())
         owners[int(ground)] = WORLD
-        markers[WORLD] = lambda p, R=np.eye(3): mbs.AddMarker(MarkerBodyRigid(
-            bodyNumber=ground, localHT=exu.HT(rotation=R, translation=list(p))))
+        markers[WORLD] = lambda p, R=np.eye(3): framed.add(MarkerBodyRigid, p, R, bodyNumber=ground)
     loops, rows = {}, {}
     if scene.loops:
         rows = loop_axes(scene)
@@ -274,7 +272,7 @@ def build(scene, settings, assemble=True):
                 summary.append(f"ObjectConnectorDistance {lp.body_a} -> {lp.body_b} (loop {lp.name!r}), "
                                f"distance {lp.length:g} m")
             else:
-                obj = mbs.AddObject(ObjectJointGeneric(markerNumbers=[m0, m1], constrainedAxes=list(rows[lp.name].axes)))
+                obj = framed.generic_joint(ObjectJointGeneric, m0, m1, constrainedAxes=list(rows[lp.name].axes))
                 summary.append(f"ObjectJointGeneric {lp.body_a} -> {lp.body_b} (loop {lp.name!r}, {lp.kind}), "
                                f"constrainedAxes {list(rows[lp.name].axes)}{dropped}")
             sensors[f"__loop:{lp.name}"] = {"f": mbs.AddSensor(SensorObject(

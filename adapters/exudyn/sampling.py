@@ -30,6 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dalembert.adapters.exudyn import compat
+
 __all__ = ["Solved", "solve", "solve_per_sample", "stored_samples", "steps_taken", "MIN_STEP_FRACTION",
            "MAX_REJECTIONS_IN_A_ROW", "SCHEDULE_LEAD", "ON_TIME"]
 
@@ -106,7 +108,7 @@ def solve(mbs, sensors, settings, times, dt=None, stored=True):
     ----------
     mbs : exudyn.MainSystem, assembled
     sensors : dict — body (or ``__q``, ``__v``, ``__joint:<child>``) -> quantity -> sensor number
-    settings : exudyn.SimulationSettings — the solver's (``timeIntegration.solverType`` set)
+    settings : exudyn.SimulationSettings — the solver's (named by ``compat.set_solver``)
     times : ndarray (n,) — sample times, s
     dt : float or None — the fixed step, s; None for an adaptive (explicit) solver
     stored : bool — Exudyn's stored sensors, or ``_Sampler``
@@ -126,8 +128,8 @@ def solve(mbs, sensors, settings, times, dt=None, stored=True):
     for _, _, sid in flat:  # (set either way: the system may have been solved the other way before)
         mbs.SetSensorParameter(sid, "storeInternal", stored)
     if stored:
-        settings.solution.sensors.writePeriod = (
-            2.0 * horizon if adaptive else interval * (1.0 - SCHEDULE_LEAD * dt / horizon))
+        compat.set_sensors_write_period(
+            settings, 2.0 * horizon if adaptive else interval * (1.0 - SCHEDULE_LEAD * dt / horizon))
     else:
         sampler = _Sampler(mbs, flat, times, None if adaptive else tol)
     guard = _Guard(mbs, min_step) if adaptive else None
@@ -138,7 +140,7 @@ def solve(mbs, sensors, settings, times, dt=None, stored=True):
         if adaptive:
             solve_per_sample(solver, mbs, settings, times, tol, sampler)
         else:
-            mbs.SolveDynamic(settings, solverType=settings.timeIntegration.solverType)
+            mbs.SolveDynamic(settings, solverType=compat.solver_of(settings))
     except Exception as e:  # Exudyn raises on solver failure; what was sampled so far is kept
         error = e
     wall = time.perf_counter() - start

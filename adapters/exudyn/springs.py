@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from dalembert import springs as spring_forces
+from dalembert.adapters.exudyn.compat import marker_point
 from dalembert.adapters.exudyn.contact import ELEMENTS as CONTACT_ELEMENTS
 from dalembert.scene import WORLD
 
@@ -196,7 +197,7 @@ def unexpected_passive(passive, scene, rigid_bodies):
 def _marker_end(mbs, number, built):
     """The scene body a marker sits on and its point in that body's scene frame (m, (3,))."""
     marker = mbs.GetMarker(number)
-    p_E = np.asarray(marker["localHT"], dtype=float)[:3, 3]
+    p_E = marker_point(marker)
     if marker["markerType"] == "KinematicTreeRigid":
         name = built.links[marker["linkNumber"]]
         p_EB, R_EB = built.X_EB[name]  # x_E = p_EB + R_EB x_B

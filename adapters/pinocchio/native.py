@@ -10,7 +10,10 @@ Python call per step.
 Built on first use (``make`` builds it at setup: ``python -m dalembert.adapters.pinocchio.native``)
 with the system's C++ compiler into a cache keyed by the source, the compiler
 flags and the Pinocchio version; where it cannot be built the adapter falls back
-to its Python loop and says why in the run's audit.
+to its Python loop and says why in the run's audit. A compile that failed is remembered
+under the same key (``<library>.failed``: the compiler's error), so that every later worker
+falls back at once, naming the error and the file to delete to try again, instead of
+compiling for minutes to fail again (as against Pinocchio 4.0.0's headers).
 
     python -m dalembert.adapters.pinocchio.native     # build (or find) the library; print where, or why not
 """
@@ -20,6 +23,7 @@ from __future__ import annotations
 import ctypes
 import fcntl
 import hashlib
+import json
 import os
 import shutil
 import subprocess
@@ -30,7 +34,7 @@ import numpy as np
 from dalembert.adapters.pinocchio import springs
 from dalembert.cache import cache_dir
 
-__all__ = ["library", "NativeModel", "METHODS"]
+__all__ = ["library", "NativeModel", "METHODS", "FAILED"]
 
 SOURCE = os.path.join(os.path.dirname(__file__), "stepper.cpp")
 METHODS = {"euler": 0, "rk4": 1, "rk4-naive": 2}
@@ -43,6 +47,10 @@ DEFINES = ["BOOST_MPL_LIMIT_LIST_SIZE=30", "BOOST_MPL_LIMIT_VECTOR_SIZE=30", "BO
 # compiled and the Python loops agree to roundoff.
 FLAGS = ["-O2", "-std=c++17", "-shared", "-fPIC"]
 _ERR_LEN = 512
+# A failed compile's marker beside the library it would have been (same key): what failed, remembered.
+FAILED = ".failed"
+# How many of a failed compile's error lines its reason quotes (the first name the cause; the rest follow from it).
+ERROR_LINES = 5
 _cached = {}
 
 
@@ -83,13 +91,17 @@ def library():
         path = os.path.join(cache, f"pinocchio_stepper-{key}.so")
         # one lock per build: worker processes wait for one build of this library instead of racing,
         # and never for another venv's build of another one
+        _remembered(path)  # a compile that failed before fails at once, without the lock (the compile holds it)
         with open(f"{path}.lock", "w") as lock:
             fcntl.flock(lock, fcntl.LOCK_EX)
             if not os.path.exists(path):
+                _remembered(path)  # another worker's compile failed while this one waited
                 tmp = f"{path}.{os.getpid()}.tmp"
                 proc = subprocess.run(_command(prefix, tmp), capture_output=True, text=True)
                 if proc.returncode != 0:
-                    raise RuntimeError(f"building {os.path.basename(SOURCE)} failed: {proc.stderr.strip()[-1500:]}")
+                    error = _compile_error(proc.returncode, proc.stderr)
+                    _remember(path, version, key, error)
+                    raise RuntimeError(error)
                 os.replace(tmp, path)
         lib = ctypes.CDLL(path)
     except Exception as e:  # noqa: BLE001 - every reason is reported, and the Python loop runs instead
@@ -104,6 +116,34 @@ def library():
     lib.dalembert_pin_acc.argtypes = [ctypes.c_char_p, D, D, *forces, D, ctypes.c_char_p, ctypes.c_int]
     _cached["lib"] = lib
     return lib
+
+
+def _compile_error(returncode, stderr):
+    """Why a compile failed, in a few lines: the compiler's error lines (its warnings can fill the rest: Pinocchio
+    4.0's headers warn at every deprecated container), else the end of what it wrote, and how it ended."""
+    errors = [line.strip() for line in stderr.splitlines() if ": error:" in line or ": fatal error:" in line
+              or "undefined reference" in line or line.startswith("collect2")]
+    how = f"killed by signal {-returncode}" if returncode < 0 else f"exit status {returncode}"
+    said = "\n".join(errors[:ERROR_LINES]) if errors else stderr.strip()[-1500:]
+    return f"building {os.path.basename(SOURCE)} failed ({how}): {said}"
+
+
+def _remember(path, version, key, error):
+    """Write the marker of a failed compile of the library at ``path`` (atomically: a reader sees all or none)."""
+    tmp = f"{path}{FAILED}.{os.getpid()}.tmp"
+    with open(tmp, "w") as f:
+        json.dump({"pinocchio": version, "key": key, "source": os.path.basename(SOURCE), "error": error}, f)
+    os.replace(tmp, path + FAILED)
+
+
+def _remembered(path):
+    """Raise RuntimeError with the remembered error where the compile of the library at ``path`` failed before."""
+    if not os.path.exists(path + FAILED):
+        return
+    with open(path + FAILED) as f:
+        failed = json.load(f)
+    raise RuntimeError(f"{failed['source']} did not compile against Pinocchio {failed['pinocchio']} (remembered in "
+                       f"{path + FAILED}: delete it to try again): {failed['error']}")
 
 
 class NativeModel:
