@@ -7,9 +7,10 @@ parameter: ``--param spin=log:5,500,16``), on an engine that has batches
 record per world, judged against its own case's truth as any run is. A batched record's cost says it is
 a batch's (``dalembert.record.Cost``): ``batch_size``, the batch's wall time and throughput, the device;
 its ``wall_s_*``, ``build_s``, ``overhead_s``, ``stepping_total_s`` and ``worker_s`` are the world's share
-(the batch's over its size), never a single world's latency. A group an engine cannot batch (its
-models differ: ``batch_problem``) runs world by world through ``execute``, its records those of
-ordinary runs.
+(the batch's over its size), never a single world's latency. The worlds may differ in model parameters where the engine
+holds them per world (``adapters.batch``'s ``world_fields``: a swept mass or inertia on MuJoCo Warp). A
+group an engine cannot batch (its models differ in structure or in a field it shares: ``batch_problem``)
+runs world by world through ``execute``, its records those of ordinary runs.
 
 ``groups`` makes the groups: batches where ``batched`` and the engine has batches, else chunks of at
 most ``chunk`` runs of one case, engine, integrator and options (``chunk_key``: a search round's probes
