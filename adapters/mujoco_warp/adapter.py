@@ -47,7 +47,8 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from dalembert.adapters.base import IntegratorSpec, Option, Outcome
-from dalembert.adapters.batch import BatchOutcome, BatchPrepared, differing, same_model, world_fields_problem
+from dalembert.adapters.batch import (MAX_BATCH, BatchOutcome, BatchPrepared, differing, same_model,
+                                     world_fields_problem)
 from dalembert.adapters.mujoco import MujocoAdapter
 from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.adapter import MujocoPrepared
@@ -214,7 +215,7 @@ class MujocoWarpAdapter(MujocoAdapter):
             return ("options.worlds: a batch's worlds are its scenes, not copies of one — drop --option worlds, or "
                     "run without --batch")
         xmls = [mjcf(s, settings) for s in scenes]
-        if same_model(xmls, self.name) is None or not 0 < len(xmls) <= MAX_WORLDS:
+        if same_model(xmls, self.name) is None or not 0 < len(xmls) <= MAX_BATCH:
             return same_model(xmls, self.name)  # one MJCF (no device model needed), or a wrong size
         return world_fields_problem([_fields(x) for x in xmls], self.world_fields(), self.name)
 
