@@ -153,3 +153,25 @@ def test_mjx_worlds_of_swept_masses_are_each_mass_alone_to_float32_roundoff():
         alone = adapter.run(adapter.prepare(case.scene, case.times, settings)).trajectory
         assert _largest_difference(world.trajectory, alone) <= WORLD_TOL
     assert _largest_difference(out.worlds[0].trajectory, out.worlds[-1].trajectory) > 100 * WORLD_TOL
+
+
+@warp
+@pytest.mark.long
+def test_the_runs_table_marks_a_batched_run_s_costs_per_world(tmp_path):
+    """``dalembert run --batch`` over swept masses, then ``report``: the case's runs table shows each run's batch and
+    its world-steps/s (``BATCH_COLUMNS``) and says its cost is per world; the same runs one by one show neither."""
+    from dalembert.harness.cli import main
+    from dalembert.reports.render import build_report
+    from dalembert.reports.sections.runs import BATCH_COLUMNS
+    from dalembert.store import Store
+
+    common = ["run", "--case", "heavy_top", "--param", "mass=5,40", "--engine", "mujoco_warp", "--integrator", "rk4",
+              "--dt", "1e-2", "--quick", "--jobs", "1"]
+    for name, batched in (("one", False), ("batch", True)):
+        out = tmp_path / name
+        assert main([*common, *(["--batch"] if batched else []), "--out", str(out)]) == 0
+        build_report(Store(str(out)))
+        details = open(out / "report_details.md").read()
+        runs = details[details.index("### Every run"):]
+        assert all((column in runs) == batched for column in BATCH_COLUMNS)
+        assert (" per world |" in runs) == batched
