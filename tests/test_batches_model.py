@@ -113,6 +113,7 @@ def test_mujoco_warp_refuses_a_structural_parameter_and_a_shared_field_from_a_ba
                       params={"n": [2, 3], "t_final": 0.2, "sample_interval": 0.1})
     records = [r for r, _ in execute_batch(specs, QUICK)]
     assert [r.status for r in records] == ["ok", "ok"] and {r.cost.batch_size for r in records} == {1}
+    assert all("in nq (its structure" in r.audit["batch_refused"] for r in records)
 
 
 @warp

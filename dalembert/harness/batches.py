@@ -10,7 +10,8 @@ its ``wall_s_*``, ``build_s``, ``overhead_s``, ``stepping_total_s`` and ``worker
 (the batch's over its size), never a single world's latency. The worlds may differ in model parameters where the engine
 holds them per world (``adapters.batch``'s ``world_fields``: a swept mass or inertia on MuJoCo Warp). A
 group an engine cannot batch (its models differ in structure or in a field it shares: ``batch_problem``)
-runs world by world through ``execute``, its records those of ordinary runs.
+runs world by world through ``execute``, its records those of ordinary runs but for the reason, in each
+one's audit (``batch_refused``).
 
 ``groups`` makes the groups: batches where ``batched`` and the engine has batches, else chunks of at
 most ``chunk`` runs of one case, engine, integrator and options (``chunk_key``: a search round's probes
@@ -38,6 +39,7 @@ from __future__ import annotations
 
 import pickle
 import sys
+from dataclasses import replace
 import time
 import traceback
 
@@ -132,9 +134,10 @@ def execute_batch(specs, timing=Timing(), truths=None, concurrent=1):
         problem = worlds and (adapter.batch_problem([cases[i].scene for i in worlds], times, settings)
                               or next((f"world {k}'s sample times differ from world 0's" for k, i in enumerate(worlds)
                                        if not np.array_equal(cases[i].times, times)), None))
-        if problem:  # not one model: each world run alone, as ordinary runs
+        if problem:  # not one model: each world run alone, as ordinary runs, its audit saying why
             for i in worlds:
-                out[i] = execute(specs[i], timing, truths.get((specs[i].case, specs[i].case_version)), concurrent)
+                record, npz = execute(specs[i], timing, truths.get((specs[i].case, specs[i].case_version)), concurrent)
+                out[i] = replace(record, audit={**record.audit, "batch_refused": problem}), npz
         elif worlds:
             _run_batch(adapter, [specs[i] for i in worlds], [cases[i] for i in worlds], timing, truths, concurrent,
                        found, started, load_start, out, worlds)
@@ -217,8 +220,6 @@ def per_world(cost, info):
     device (``device``) and of the worlds it stepped beside its own (``batch_size``: MuJoCo Warp's option ``worlds``,
     copies of the run whose wall time is the batch's): then its stepping times are per world, the batch's
     median, size and throughput beside them."""
-    from dataclasses import replace
-
     n, device = int(info.get("batch_size", 1)), str(info.get("device", cost.device))
     if n == 1:
         return replace(cost, device=device)
