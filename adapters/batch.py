@@ -7,8 +7,9 @@ holds some of its model's fields per world, the worlds may also differ in those:
 or length (``heavy_top``'s ``mass``) changes numbers of the model, not its structure, and MuJoCo Warp
 (batched ``Model`` arrays) and MJX (``jax.vmap`` over the ``Model``'s leaves) step such worlds in one
 call. A parameter that changes the model's structure (``chain``'s ``n``: the number of bodies) or a
-field the engine shares across worlds is refused from a batch with the reason. Engines written for accelerators (MuJoCo Warp's ``nworld``, MJX under ``jax.vmap``) step
-such a batch in about the calls of one world, so timing them one world at a time is unfair to them.
+field the engine shares across worlds is refused from a batch with the reason. Engines written for
+accelerators (MuJoCo Warp's ``nworld``, MJX under ``jax.vmap``) step such a batch in about the calls of
+one world, so timing them one world at a time is unfair to them.
 
 An adapter that has batches (``has_batches``) defines, beside the contract's methods
 (``dalembert.adapters``, items 5-8):
@@ -117,7 +118,7 @@ def world_fields(adapter):
     return frozenset(fields()) if callable(fields) else frozenset()
 
 
-def world_fields_problem(models, per_world, engine, same=None):
+def world_fields_problem(models, per_world, engine):
     """Why worlds whose engine models are ``models`` cannot share one engine call when the fields ``per_world``
     may differ between them, or None; with None, the fields that do differ (``differing``) are the caller's to
     hold per world.
@@ -128,7 +129,6 @@ def world_fields_problem(models, per_world, engine, same=None):
         tuples, strings), every world's with the same names (a world with other names differs in structure)
     per_world : collection of str — the fields the engine holds per world
     engine : str — names the engine in the reason
-    same : callable (a, b) -> bool, optional — whether two values of a field are equal (default ``same_value``)
 
     Returns
     -------
@@ -136,14 +136,13 @@ def world_fields_problem(models, per_world, engine, same=None):
     """
     if not models or len(models) > MAX_BATCH:
         return same_model(models, engine)
-    same = same or same_value
     first = models[0]
     for k, model in enumerate(models[1:], 1):
         if set(model) != set(first):
             return (f"{engine}: world {k}'s model has other fields than world 0's (another structure) — run "
                     "without --batch")
         for name, value in model.items():
-            if name not in per_world and not same(value, first[name]):
+            if name not in per_world and not same_value(value, first[name]):
                 why = ("its structure: the bodies, joints, sizes a parameter changes"
                        if _structural(value) else f"a field {engine} shares across the worlds of a batch")
                 return (f"{engine}: world {k}'s model differs from world 0's in {name} ({why}) — sweep a parameter "
