@@ -28,7 +28,9 @@ at a load of ~15. MJX gains nothing there: one world's RK4 step costs ~0.03 ms, 
 building and reading back, not stepping (116 s batched with JAX's cache warm, 205 s cold, against
 112 s probe by probe), and its vmapped worlds differ from the runs alone by float32 round-off, which
 moved one verdict near its bound (spin 199 rad/s at dt 1e-3: angular-momentum drift 1.1e-3 against
-5.0e-4 alone, bound 1e-3).
+5.0e-4 alone, bound 1e-3). The same map over a model parameter, six inertias of the top
+(``benchmarks.batches --map``): 29 probes either way, the same boundaries, 154 s batched against 458 s
+probe by probe at a load of ~17.
 
 ``python -m dalembert.harness.batches``: run one group read (pickled: specs, timing, truths by case,
 parent pid, the engine environment) from stdin; write the pickled ``[(RunRecord, npz)]`` to stdout (a
