@@ -29,9 +29,11 @@ geometry pair MJX has no collision function for (``mjx.put_model``). Contact for
 own (``mjx.contact``): ``mjx.forward`` at each sampled state, its ``efc_force`` decoded per
 contact as ``mj_contactForce`` does (MuJoCo C's solver on MJX's states would be another solver's).
 
-Batches (``dalembert.adapters.batch``): the scenes of one model (the same MJCF: they differ in their
-initial state only) are stepped as one ``jax.vmap`` of the rollout over their stacked initial states;
-each world's read-back, contact forces and audit are its own scene's.
+Batches (``dalembert.adapters.batch``): the scenes of one model structure are stepped as one ``jax.vmap``
+of the rollout over their stacked initial states and, where their models differ (a swept mass or inertia),
+over the model's JAX arrays they differ in (``world_fields``: every array leaf of ``mjx.Model``; its static
+fields, the structure, must agree, else the batch is refused with the field's name); each world's
+read-back, contact forces and audit are its own scene's.
 """
 
 from __future__ import annotations
@@ -43,14 +45,16 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from dalembert.adapters.base import IntegratorSpec, Option, Outcome
-from dalembert.adapters.batch import BatchOutcome, BatchPrepared, same_model
+from dalembert.adapters.batch import (MAX_BATCH, BatchOutcome, BatchPrepared, differing, same_model,
+                                     world_fields_problem)
 from dalembert.adapters.mujoco import MujocoAdapter
 from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.adapter import MujocoPrepared
 from dalembert.adapters.mujoco.readback import read_back
 from dalembert.adapters.mjx.contact import read_forces
 from dalembert.adapters.mjx.stepping import (DEVICES, PRECISIONS, chunks, compile_rollout, device_name,
-                                             device_problem, jax_device, mjx, precision, run_rollout, stack, to_host)
+                                             device_problem, jax_device, model_fields, mjx, precision, run_rollout,
+                                             stack, to_host, traced_fields, varying)
 
 __all__ = ["MjxAdapter", "MjxPrepared", "MjxBatch"]
 
@@ -97,10 +101,15 @@ class MjxBatch(BatchPrepared):
     mx : mjx.Model — the model on the device, every world's
     dx0 : mjx.Data — the worlds' initial states, stacked on a leading axis (``stepping.stack``), padded to a power of
         two with copies of the last (``_padded``; their samples are dropped)
+    world_fields : tuple of str — the ``mjx.Model`` fields whose values differ between the worlds (empty: the
+        worlds differ in their initial state only)
+    rows : tuple — those fields' per-world values, padded as ``dx0`` (``stepping.varying``; empty without any)
     """
 
     mx: object
     dx0: object
+    world_fields: tuple = ()
+    rows: tuple = ()
 
 
 class MjxAdapter(MujocoAdapter):
@@ -171,38 +180,57 @@ class MjxAdapter(MujocoAdapter):
                            steps_device=steps_device, compile_s=compile_s, backend=device_name(on))
 
     # ------------------------------------------------------------- batches
+    def world_fields(self):
+        """The ``mjx.Model`` fields a batch may hold per world: its JAX arrays (``stepping.traced_fields``), which
+        the vmapped rollout maps over like the state."""
+        return traced_fields()
+
     def batch_problem(self, scenes, times, settings):
-        """Why ``scenes`` cannot be the worlds of one vmapped rollout: their MJCF differs (``batch.same_model``);
-        None when they can."""
+        """Why ``scenes`` cannot be the worlds of one vmapped rollout: their device models differ in structure (a
+        static field of ``mjx.Model``: ``batch.world_fields_problem``); None when they can."""
         from dalembert.adapters.mujoco.mjcf import mjcf
 
-        return same_model([mjcf(s, settings) for s in scenes], self.name)
+        xmls = [mjcf(s, settings) for s in scenes]
+        if same_model(xmls, self.name) is None or not 0 < len(xmls) <= MAX_BATCH:
+            return same_model(xmls, self.name)  # one MJCF (no device model needed), or a wrong size
+        chosen = self.option(settings, "precision")
+        return world_fields_problem([_fields(x, chosen) for x in xmls], self.world_fields(), self.name)
 
     def prepare_batch(self, scenes, times, settings):
         """Each scene's MuJoCo model and initial state (``MujocoAdapter.prepare``), one device model (world 0's:
         they are one MJCF), the initial states stacked, the vmapped rollout compiled for the batch's size."""
         import jax
 
+        from dalembert.adapters.mujoco.mjcf import mjcf
+
         ps = [MujocoAdapter.prepare(self, s, times, settings) for s in scenes]
         chosen, on = self.option(settings, "precision"), jax_device(self.option(settings, "device"))
+        xmls = [mjcf(s, settings) for s in scenes]
         with precision(chosen):
-            mx = mjx().put_model(ps[0].model, device=on, impl=IMPL)
+            names = () if same_model(xmls, self.name) is None else differing([_fields(x, chosen) for x in xmls],
+                                                                             self.world_fields())
+            # world k's own device model where the worlds differ (its float32 values those of the world alone)
+            mxs = [mjx().put_model(p.model, device=on, impl=IMPL) for p in (ps if names else ps[:1])]
+            mx = mxs[0]
             starts = [_initial(p, on) for p in ps]
             # padded with copies of the last world to a power of two: one compilation serves every size up to it
-            dx0 = stack(starts + starts[-1:] * (_padded(len(starts)) - len(starts)))
+            pad = _padded(len(starts)) - len(starts)
+            dx0 = stack(starts + starts[-1:] * pad)
+            rows = varying(mxs + mxs[-1:] * pad, names)
             steps_device = [jax.device_put(c, on) for c in chunks(ps[0].steps)]
-            compile_s = compile_rollout(mx, dx0, batched=True)
+            compile_s = compile_rollout(mx, dx0, batched=True, rows=rows)
         backend = device_name(on)
-        worlds = tuple(MjxPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, precision=chosen, mx=mx, dx0=d,
-                                   steps_device=steps_device, compile_s=compile_s, backend=backend)
-                       for p, d in zip(ps, starts))
-        return MjxBatch(worlds=worlds, device=backend, mx=mx, dx0=dx0)
+        worlds = tuple(MjxPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, precision=chosen,
+                                   mx=mxs[k] if names else mx, dx0=d, steps_device=steps_device, compile_s=compile_s,
+                                   backend=backend)
+                       for k, (p, d) in enumerate(zip(ps, starts)))
+        return MjxBatch(worlds=worlds, device=backend, mx=mx, dx0=dx0, world_fields=names, rows=rows)
 
     def run_batch(self, prepared):
         """Every world stepped at once (one vmapped rollout from the stacked initial states)."""
         p0 = prepared.worlds[0]
         with precision(p0.precision):
-            Q, V, wall = run_rollout(prepared.mx, prepared.dx0, p0.steps_device, batched=True)
+            Q, V, wall = run_rollout(prepared.mx, prepared.dx0, p0.steps_device, batched=True, rows=prepared.rows)
         return BatchOutcome(wall, tuple(self._outcome(p, [q[k] for q in Q], [v[k] for v in V], wall)
                                         for k, p in enumerate(prepared.worlds)))
 
@@ -287,6 +315,16 @@ def _initial(p, device):
     if p.load_path == "actuator":
         data.ctrl[:] = 1.0
     return mjx().put_data(p.model, data, device=device, impl=IMPL)
+
+
+@functools.lru_cache(maxsize=64)
+def _fields(xml, chosen):
+    """The fields of MJX's device model of the MJCF ``xml`` in precision ``chosen`` as host values
+    (``stepping.model_fields``), to compare a batch's worlds' models; once per model and precision in a worker."""
+    import mujoco
+
+    with precision(chosen):
+        return model_fields(mjx().put_model(mujoco.MjModel.from_xml_string(xml), impl=IMPL))
 
 
 @functools.lru_cache(maxsize=64)

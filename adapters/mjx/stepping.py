@@ -10,7 +10,9 @@ types and the integrator) serves every horizon, sample interval and dt. The
 jitted function is built once per process and JAX caches its compilations, so
 a prepared model of a structure already seen in this process compiles
 nothing. A batch of worlds (``dalembert.adapters.batch``) runs the same rollout under ``jax.vmap``
-over the state (the model shared), compiled once per structure and batch size. ``compile_rollout`` compiles it by calling it once with zero steps
+over the state (the model shared), compiled once per structure and batch size; where the worlds' models
+differ in some of the model's JAX arrays (``traced_fields``: a swept mass changes ``body_mass`` and what
+MuJoCo derives from it), those leaves are vmapped too, one row per world (``varying``), the rest shared. ``compile_rollout`` compiles it by calling it once with zero steps
 (nothing is stepped); ``run_rollout`` times the calls through
 ``block_until_ready``.
 
@@ -44,7 +46,8 @@ import time
 import numpy as np
 
 __all__ = ["mjx", "precision", "device_problem", "jax_device", "device_name", "chunks", "compile_rollout",
-           "run_rollout", "stack", "to_host", "PRECISIONS", "DEVICES", "CHUNK"]
+           "run_rollout", "stack", "to_host", "traced_fields", "model_fields", "varying", "PRECISIONS", "DEVICES",
+           "CHUNK"]
 
 PRECISIONS = ("float32", "float64")
 # Option ``device``: JAX's CPU backend (the default: every stored MJX number is from it) or its first GPU.
@@ -124,6 +127,91 @@ def _batch_rollout():
     return jax.jit(jax.vmap(_rollout_fn(), in_axes=(None, 0, None)))
 
 
+@functools.lru_cache(maxsize=16)
+def _varying_rollout(positions):
+    """The rollout over a batch of worlds whose models differ in the leaves at ``positions`` (indices into
+    ``jax.tree.flatten`` of the model, ``varying``): ``jax.vmap`` over those leaves' rows and the state, the rest
+    of the model shared, jitted; called as ``(rows, m, d, steps)``."""
+    import jax
+
+    rollout = _rollout_fn()
+
+    def world(rows, m, d, steps):
+        leaves, treedef = jax.tree.flatten(m)
+        for i, row in zip(positions, rows):
+            leaves[i] = row
+        return rollout(jax.tree.unflatten(treedef, leaves), d, steps)
+
+    return jax.jit(jax.vmap(world, in_axes=(0, None, 0, None)))
+
+
+def _batched(rows):
+    """The batch rollout, as ``(m, d, steps)``: over the state alone, or with the per-world leaves ``rows``
+    (``varying``'s ``(positions, arrays)``)."""
+    if not rows:
+        return _batch_rollout()
+    return functools.partial(_varying_rollout(rows[0]), rows[1])
+
+
+@functools.cache
+def traced_fields():
+    """The ``mjx.Model`` fields that are JAX arrays (the model's pytree leaves, which a vmap can give a row per
+    world), nested ones as ``opt.timestep``, ``stat.meaninertia``: a frozenset of names (from ``mjx.Model``'s
+    annotations: its NumPy arrays and numbers are static, its structure)."""
+    import dataclasses
+    import typing
+
+    import jax
+
+    mjx()
+    from mujoco.mjx._src import types
+
+    def walk(cls, prefix):
+        for f in dataclasses.fields(cls):
+            kinds = typing.get_args(f.type) if typing.get_origin(f.type) is typing.Union else (f.type,)
+            for t in kinds:
+                if t is jax.Array:
+                    yield prefix + f.name
+                elif dataclasses.is_dataclass(t):
+                    yield from walk(t, f"{prefix}{f.name}.")
+
+    return frozenset(walk(types.Model, ""))
+
+
+def model_fields(mx):
+    """The fields of the device model ``mx`` as host values, for comparing worlds' models
+    (``adapters.batch.world_fields_problem``): name -> NumPy array (a JAX array's copy), array, number, enum or
+    bytes; a nested dataclass's fields as ``opt.timestep`` and so on."""
+    import dataclasses
+
+    import jax
+
+    out = {}
+    for f in dataclasses.fields(mx):
+        v = getattr(mx, f.name)
+        if dataclasses.is_dataclass(v) and not isinstance(v, type):
+            out.update({f"{f.name}.{k}": x for k, x in model_fields(v).items()})
+        else:
+            out[f.name] = np.asarray(v) if isinstance(v, jax.Array) else v
+    return out
+
+
+def varying(models, names):
+    """The per-world leaves of a batch whose device models are ``models`` (one per world, one structure), the
+    fields ``names`` (``traced_fields``) differing between them: ``(positions, arrays)``, positions the leaves'
+    indices in ``jax.tree.flatten`` of a model, each array the worlds' values stacked on a leading axis; ``()``
+    without ``names``."""
+    import jax
+    import jax.numpy as jnp
+
+    if not names:
+        return ()
+    paths = [".".join(k.name for k in path) for path, _ in jax.tree_util.tree_flatten_with_path(models[0])[0]]
+    positions = tuple(paths.index(n) for n in names)
+    per_world = [jax.tree.leaves(m) for m in models]
+    return positions, tuple(jnp.stack([leaves[i] for leaves in per_world]) for i in positions)
+
+
 @functools.cache
 def _rollout_fn():
     import jax
@@ -160,22 +248,23 @@ def chunks(steps):
     return [padded[i:i + CHUNK] for i in range(0, len(padded), CHUNK)]
 
 
-def compile_rollout(m, d, batched=False):
+def compile_rollout(m, d, batched=False, rows=()):
     """Compile the rollout for ``m`` and ``d`` (JAX's cache keeps it): one call with zero steps per
-    interval, so nothing is stepped. ``batched``: ``d`` is a batch of worlds (``stack``). Returns the compile
-    wall time, s."""
+    interval, so nothing is stepped. ``batched``: ``d`` is a batch of worlds (``stack``), ``rows`` the model's
+    per-world leaves (``varying``). Returns the compile wall time, s."""
     start = time.perf_counter()
-    _, Q, V = (_batch_rollout() if batched else _rollout())(m, d, np.zeros(CHUNK, dtype=np.int32))
+    _, Q, V = (_batched(rows) if batched else _rollout())(m, d, np.zeros(CHUNK, dtype=np.int32))
     Q.block_until_ready()
     return time.perf_counter() - start
 
 
-def run_rollout(m, d, steps, batched=False):
+def run_rollout(m, d, steps, batched=False, rows=()):
     """Step from ``d`` through the intervals, ``steps`` from ``chunks``: ``(Q, V, wall s)``, ``Q`` and ``V``
     lists of ``(CHUNK, nq)`` and ``(CHUNK, nv)`` device arrays, one per chunk (``batched``: ``d`` a batch of
-    worlds, the arrays ``(nworld, CHUNK, nq)``); the wall time of the compiled calls alone (each call waits for
-    the state of the one before it; ``block_until_ready`` on the last)."""
-    rollout, Q, V = _batch_rollout() if batched else _rollout(), [], []
+    worlds, the arrays ``(nworld, CHUNK, nq)``, ``rows`` the model's per-world leaves: ``varying``); the wall
+    time of the compiled calls alone (each call waits for the state of the one before it;
+    ``block_until_ready`` on the last)."""
+    rollout, Q, V = _batched(rows) if batched else _rollout(), [], []
     start = time.perf_counter()
     for chunk in steps:
         d, q, v = rollout(m, d, chunk)

@@ -29,10 +29,14 @@ step, is not offered. What MuJoCo Warp refuses (``mjw.put_model``: a geometry
 type, a solver, a flag, an integrator it lacks) is refused with its reason
 before anything runs.
 
-Batches (``dalembert.adapters.batch``): ``prepare_batch`` and ``run_batch`` step the scenes of one model (the
-same MJCF: they differ in their initial state only) as the worlds of one ``mjw.Data``, each world's arithmetic
-that of the scene run alone (MuJoCo Warp's kernels compute every world by the same code); each world's
-read-back and audit are its own scene's.
+Batches (``dalembert.adapters.batch``): ``prepare_batch`` and ``run_batch`` step the scenes of one model
+structure as the worlds of one ``mjw.Data``, each world's arithmetic that of the scene run alone (MuJoCo Warp's
+kernels compute every world by the same code); each world's read-back and audit are its own scene's. The
+scenes may differ in their initial state and in the ``mjw.Model`` fields MuJoCo Warp holds per world
+(``world_fields``: ``body_mass``, ``body_inertia``, ``body_ipos``, ``geom_size``, ... — a swept mass, inertia
+or length); one model holds each such field with a row per world (``stepping.worlds_model``). A scene whose
+model differs elsewhere (another number of bodies, a field MuJoCo Warp shares across worlds) is refused from
+the batch with the reason (``batch_problem``).
 """
 
 from __future__ import annotations
@@ -43,13 +47,15 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from dalembert.adapters.base import IntegratorSpec, Option, Outcome
-from dalembert.adapters.batch import BatchOutcome, BatchPrepared, same_model
+from dalembert.adapters.batch import (MAX_BATCH, BatchOutcome, BatchPrepared, differing, same_model,
+                                     world_fields_problem)
 from dalembert.adapters.mujoco import MujocoAdapter
 from dalembert.adapters.mujoco import contact
 from dalembert.adapters.mujoco.adapter import MujocoPrepared
 from dalembert.adapters.mujoco.readback import read_back
-from dalembert.adapters.mujoco_warp.stepping import (compile_step, device_model, put_state, put_worlds, step_samples,
-                                                     step_worlds, warp)
+from dalembert.adapters.mujoco_warp.stepping import (batched_fields, compile_step, device_model, model_fields,
+                                                     put_state, put_worlds, step_samples, step_worlds, warp,
+                                                     worlds_model)
 from dalembert.adapters.warp_runtime import DEVICE_OPTION, device, device_problem
 
 __all__ = ["MujocoWarpAdapter", "MujocoWarpPrepared", "MujocoWarpBatch"]
@@ -99,10 +105,14 @@ class MujocoWarpBatch(BatchPrepared):
 
     Attributes
     ----------
-    mx : mujoco_warp.Model — the model on the device, every world's
+    mx : mujoco_warp.Model — the model on the device, every world's; the fields ``world_fields`` with a row per
+        world
+    world_fields : tuple of str — the ``mjw.Model`` fields whose values differ between the worlds (empty: the
+        worlds differ in their initial state only)
     """
 
     mx: object
+    world_fields: tuple = ()
 
 
 class MujocoWarpAdapter(MujocoAdapter):
@@ -190,46 +200,64 @@ class MujocoWarpAdapter(MujocoAdapter):
         return Outcome(read, wall, n_steps, n_steps * STAGES[p.settings.integrator], info)
 
     # ------------------------------------------------------------- batches
+    def world_fields(self):
+        """The ``mjw.Model`` fields MuJoCo Warp holds per world (``stepping.batched_fields``: ``body_mass``,
+        ``body_inertia``, ``body_ipos``, ``geom_size``, ``opt``'s none: the step and gravity are every world's)."""
+        return batched_fields()
+
     def batch_problem(self, scenes, times, settings):
-        """Why ``scenes`` cannot be the worlds of one ``mjw.Data``: their MJCF differs (``batch.same_model``), or
-        option ``worlds`` is given (a batch's worlds are its scenes); None when they can."""
+        """Why ``scenes`` cannot be the worlds of one ``mjw.Data``: their device models differ in a field MuJoCo Warp
+        shares across worlds or in structure (``batch.world_fields_problem``), or option ``worlds`` is given (a
+        batch's worlds are its scenes); None when they can."""
         from dalembert.adapters.mujoco.mjcf import mjcf
 
         if int(self.option(settings, "worlds")) != 1:
             return ("options.worlds: a batch's worlds are its scenes, not copies of one — drop --option worlds, or "
                     "run without --batch")
-        return same_model([mjcf(s, settings) for s in scenes], self.name)
+        xmls = [mjcf(s, settings) for s in scenes]
+        if same_model(xmls, self.name) is None or not 0 < len(xmls) <= MAX_BATCH:
+            return same_model(xmls, self.name)  # one MJCF (no device model needed), or a wrong size
+        return world_fields_problem([_fields(x) for x in xmls], self.world_fields(), self.name)
 
     def prepare_batch(self, scenes, times, settings):
-        """Each scene's MuJoCo model and initial state (``MujocoAdapter.prepare``), one device model (world 0's:
-        they are one MJCF), and the step's kernels compiled for the batch's size."""
+        """Each scene's MuJoCo model and initial state (``MujocoAdapter.prepare``), one device model (world 0's, with a
+        row per world of each field the worlds' models differ in: ``stepping.worlds_model``), and the step's kernels
+        compiled for the batch's size."""
+        from dalembert.adapters.mujoco.mjcf import mjcf
+
         ps = [MujocoAdapter.prepare(self, s, times, settings) for s in scenes]
         ctrl = 1.0 if ps[0].load_path == "actuator" and ps[0].model.nu else None
         on = device(self.option(settings, "device"))
-        mx = device_model(ps[0].model, on)
+        xmls = [mjcf(s, settings) for s in scenes]
+        names = () if same_model(xmls, self.name) is None else differing([_fields(x) for x in xmls],
+                                                                         self.world_fields())
+        mx = worlds_model([p.model for p in ps], names, on)
         compile_s = compile_step(mx, ps[0].model, ps[0].qpos0, ps[0].qvel0, ctrl, len(ps), on)
         worlds = tuple(MujocoWarpPrepared(**{f.name: getattr(p, f.name) for f in fields(p)}, mx=mx, ctrl=ctrl,
                                           worlds=1, compile_s=compile_s, device=on) for p in ps)
-        return MujocoWarpBatch(worlds=worlds, device=on, mx=mx)
+        return MujocoWarpBatch(worlds=worlds, device=on, mx=mx, world_fields=names)
 
     def run_batch(self, prepared):
         """Every world stepped at once from its own initial state (a fresh ``mjw.Data`` each call, not timed)."""
         ps = prepared.worlds
         Q0, V0 = np.array([p.qpos0 for p in ps]), np.array([p.qvel0 for p in ps])
-        d = put_worlds(ps[0].model, Q0, V0, ps[0].ctrl, prepared.device)
+        d = put_worlds([p.model for p in ps], Q0, V0, ps[0].ctrl, prepared.device)
         Q, V, wall, bad = step_worlds(prepared.mx, d, ps[0].steps, Q0, V0)
-        return BatchOutcome(wall, tuple(self._world(p, Q[:, k], V[:, k], int(bad[k]) or None, wall)
-                                        for k, p in enumerate(ps)))
+        return BatchOutcome(wall, tuple(self._world(p, Q[:, k], V[:, k], int(bad[k]) or None, wall,
+                                                    prepared.world_fields) for k, p in enumerate(ps)))
 
-    def _world(self, p, Q, V, bad, wall):
+    def _world(self, p, Q, V, bad, wall, world_fields=()):
         """World ``p``'s ``Outcome`` of a batch: its samples ``Q (n, nq)``, ``V (n, nv)``, first bad sample ``bad``
-        (None: none), the batch's ``wall``; as ``run`` makes one."""
+        (None: none), the batch's ``wall``, the model fields the batch holds per world ``world_fields`` (in the audit
+        where any); as ``run`` makes one."""
         n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())  # interval `bad` was stepped whole
         info = {"message": f"MuJoCo Warp: non-finite state at t = {p.times[bad]:g} s" if bad else "",
                 "device": p.device}
 
         def read():
             traj, info["audit"] = read_back(p, Q, V)
+            if world_fields:
+                info["audit"]["batch_world_fields"] = ", ".join(world_fields)
             return traj
 
         return Outcome(read, wall, n_steps, n_steps * STAGES[p.settings.integrator], info)
@@ -272,6 +300,15 @@ def _refusal(xml):
     except (NotImplementedError, ValueError) as e:
         return f"MuJoCo Warp cannot put this model on the device (mjw.put_model: {type(e).__name__}: {e})"
     return None
+
+
+@functools.lru_cache(maxsize=64)
+def _fields(xml):
+    """The fields of the device model of the MJCF ``xml`` as host values (``stepping.model_fields``, on Warp's CPU),
+    to compare a batch's worlds' models; once per model in a worker (~15 ms each)."""
+    import mujoco
+
+    return model_fields(device_model(mujoco.MjModel.from_xml_string(xml)))
 
 
 @functools.cache  # (installed packages do not change under a process)

@@ -19,7 +19,10 @@ counters and no auto-reset: a blow-up runs on as inf and NaN, so the loop
 checks each sample and stops at the first non-finite one.
 
 A ``mjw.Data`` holds ``nworld`` worlds; each kernel launch covers them all, so a batch costs about the launches
-of one world plus the arithmetic of each (``benchmarks.mujoco_warp worlds``).
+of one world plus the arithmetic of each (``benchmarks.mujoco_warp worlds``). The worlds may differ in the
+``mjw.Model`` fields MuJoCo Warp batches (``batched_fields``: those whose spec's leading axis is ``*``, e.g.
+``body_mass`` and ``body_inertia``): ``mjw.put_model`` gives such a field a leading axis of ``nworld`` instead of
+1 (its ``batch_sizes``), and every kernel reads world w's row (``worlds_model``).
 
 The number type is float32: MuJoCo Warp's kernels are written in it (``wp.float32``
 fields throughout ``mujoco_warp._src.types``); there is no float64 build.
@@ -33,8 +36,8 @@ import time
 
 import numpy as np
 
-__all__ = ["warp", "device_model", "sizes", "put_state", "put_worlds", "compile_step", "step_samples", "step_worlds",
-           "DEVICE", "NCONMAX"]
+__all__ = ["warp", "device_model", "batched_fields", "model_fields", "worlds_model", "sizes", "put_state", "put_worlds",
+           "compile_step", "step_samples", "step_worlds", "DEVICE", "NCONMAX"]
 
 DEVICE = "cpu"  # Warp's CPU backend, the default (option ``device``: ``warp_runtime.DEVICES``)
 # Contacts allocated per world: MuJoCo Warp's own default for a model without height fields, flexes or SDFs (45,
@@ -55,18 +58,72 @@ def warp():
     return wp, mjw, message
 
 
-def device_model(model, device=DEVICE):
+def device_model(model, device=DEVICE, batch_sizes=None):
     """``mjw.put_model`` of a copy of MuJoCo C's ``model`` with the auto-reset flag cleared: the MJCF disables
     MuJoCo C's auto-reset (a bad state must show, not restart), MuJoCo Warp has none to disable and refuses the
     flag; the copy keeps the compiled model the read-back and audit read unchanged. ``device``: Warp's device
-    name (``cpu``, ``cuda:0``)."""
+    name (``cpu``, ``cuda:0``); ``batch_sizes``: field name -> the leading size of that batched field
+    (``mjw.put_model``'s; ``worlds_model``)."""
     import mujoco
 
     wp, mjw, _ = warp()
     m = copy.copy(model)
     m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
     with wp.ScopedDevice(device):
-        return mjw.put_model(m)
+        return mjw.put_model(m, batch_sizes=batch_sizes)
+
+
+@functools.cache
+def batched_fields():
+    """The ``mjw.Model`` fields MuJoCo Warp can hold per world: its array fields whose spec's leading axis is
+    ``*`` (``mjw.put_model``'s ``batch_sizes`` accepts those alone), a frozenset of names."""
+    import dataclasses
+
+    warp()
+    from mujoco_warp._src import types, warp_util
+
+    return frozenset(f.name for f in dataclasses.fields(types.Model)
+                     if warp_util.is_array_spec(f.type) and tuple(getattr(f.type, "shape", ()))[:1] == ("*",))
+
+
+def model_fields(mx):
+    """The fields of the device model ``mx`` as host values, for comparing worlds' models
+    (``adapters.batch.world_fields_problem``): field name -> numpy array (a Warp array's copy), tuple, number or
+    text; a nested dataclass's fields (``opt``, ``stat``) as ``opt.timestep`` and so on."""
+    import dataclasses
+
+    wp, _, _ = warp()
+
+    def host(v):
+        if isinstance(v, wp.array):
+            return v.numpy()
+        if isinstance(v, (tuple, list)):
+            return tuple(host(x) for x in v)
+        return v
+
+    out = {}
+    for f in dataclasses.fields(mx):
+        v = getattr(mx, f.name)
+        if dataclasses.is_dataclass(v) and not isinstance(v, type):
+            out.update({f"{f.name}.{k}": x for k, x in model_fields(v).items()})
+        else:
+            out[f.name] = host(v)
+    return out
+
+
+def worlds_model(models, names, device=DEVICE):
+    """One device model of the worlds whose MuJoCo C models are ``models`` (one per world, every one the same
+    structure: ``adapters.batch.world_fields_problem``), the batched fields ``names`` (``batched_fields``) given a
+    leading axis of one row per world, each row that world's own ``mjw.put_model`` value (the same float32
+    conversion as the world run alone); every other field world 0's."""
+    wp, _, _ = warp()
+    mx = device_model(models[0], device, {n: len(models) for n in names})
+    if names:
+        alone = [model_fields(device_model(m, DEVICE)) for m in models]
+        with wp.ScopedDevice(device):
+            for n in names:
+                getattr(mx, n).assign(np.concatenate([a[n] for a in alone]))
+    return mx
 
 
 def sizes(model, data):
@@ -104,23 +161,25 @@ def put_state(model, qpos, qvel, ctrl, nworld=1, dv=0.0, device=DEVICE):
         return d
 
 
-def put_worlds(model, qpos, qvel, ctrl, device=DEVICE):
+def put_worlds(models, qpos, qvel, ctrl, device=DEVICE):
     """A device ``mjw.Data`` of one world per row of ``qpos (nworld, nq)`` and ``qvel (nworld, nv)`` (a batch's
-    initial states), with ``ctrl`` (None, or the actuators' constant control); its contact and constraint arrays
-    sized by ``sizes`` for the world that needs the most rows at its initial state. ``device``: Warp's device name."""
+    initial states), world w's MuJoCo C model ``models[w]`` (one structure), with ``ctrl`` (None, or the actuators'
+    constant control); its contact and constraint arrays sized by ``sizes`` for the world that needs the most rows at
+    its initial state. ``device``: Warp's device name."""
     import mujoco
 
     wp, mjw, _ = warp()
     qpos, qvel = np.atleast_2d(qpos), np.atleast_2d(qvel)
-    data, most = mujoco.MjData(model), (NCONMAX, 1)
-    if ctrl is not None:
-        data.ctrl[:] = ctrl
-    for q, v in zip(qpos, qvel):
+    most = (NCONMAX, 1)
+    for model, q, v in zip(models, qpos, qvel):
+        data = mujoco.MjData(model)
+        if ctrl is not None:
+            data.ctrl[:] = ctrl
         data.qpos[:], data.qvel[:] = q, v
         mujoco.mj_forward(model, data)
         most = max(most, sizes(model, data), key=lambda s: s[1])
-    with wp.ScopedDevice(device):
-        d = mjw.put_data(model, data, nworld=len(qpos), nconmax=most[0], njmax=most[1])
+    with wp.ScopedDevice(device):  # (the last world's data: every row of qpos and qvel is set below)
+        d = mjw.put_data(models[-1], data, nworld=len(qpos), nconmax=most[0], njmax=most[1])
         d.qpos.assign(qpos.astype(np.float32))
         d.qvel.assign(qvel.astype(np.float32))
         return d

@@ -7,9 +7,11 @@ parameter: ``--param spin=log:5,500,16``), on an engine that has batches
 record per world, judged against its own case's truth as any run is. A batched record's cost says it is
 a batch's (``dalembert.record.Cost``): ``batch_size``, the batch's wall time and throughput, the device;
 its ``wall_s_*``, ``build_s``, ``overhead_s``, ``stepping_total_s`` and ``worker_s`` are the world's share
-(the batch's over its size), never a single world's latency. A group an engine cannot batch (its
-models differ: ``batch_problem``) runs world by world through ``execute``, its records those of
-ordinary runs.
+(the batch's over its size), never a single world's latency. The worlds may differ in model parameters where the engine
+holds them per world (``adapters.batch``'s ``world_fields``: a swept mass or inertia on MuJoCo Warp). A
+group an engine cannot batch (its models differ in structure or in a field it shares: ``batch_problem``)
+runs world by world through ``execute``, its records those of ordinary runs but for the reason, in each
+one's audit (``batch_refused``).
 
 ``groups`` makes the groups: batches where ``batched`` and the engine has batches, else chunks of at
 most ``chunk`` runs of one case, engine, integrator and options (``chunk_key``: a search round's probes
@@ -26,7 +28,9 @@ at a load of ~15. MJX gains nothing there: one world's RK4 step costs ~0.03 ms, 
 building and reading back, not stepping (116 s batched with JAX's cache warm, 205 s cold, against
 112 s probe by probe), and its vmapped worlds differ from the runs alone by float32 round-off, which
 moved one verdict near its bound (spin 199 rad/s at dt 1e-3: angular-momentum drift 1.1e-3 against
-5.0e-4 alone, bound 1e-3).
+5.0e-4 alone, bound 1e-3). The same map over a model parameter, six inertias of the top
+(``benchmarks.batches --map``): 29 probes either way, the same boundaries, 154 s batched against 458 s
+probe by probe at a load of ~17.
 
 ``python -m dalembert.harness.batches``: run one group read (pickled: specs, timing, truths by case,
 parent pid, the engine environment) from stdin; write the pickled ``[(RunRecord, npz)]`` to stdout (a
@@ -37,6 +41,7 @@ from __future__ import annotations
 
 import pickle
 import sys
+from dataclasses import replace
 import time
 import traceback
 
@@ -131,9 +136,10 @@ def execute_batch(specs, timing=Timing(), truths=None, concurrent=1):
         problem = worlds and (adapter.batch_problem([cases[i].scene for i in worlds], times, settings)
                               or next((f"world {k}'s sample times differ from world 0's" for k, i in enumerate(worlds)
                                        if not np.array_equal(cases[i].times, times)), None))
-        if problem:  # not one model: each world run alone, as ordinary runs
+        if problem:  # not one model: each world run alone, as ordinary runs, its audit saying why
             for i in worlds:
-                out[i] = execute(specs[i], timing, truths.get((specs[i].case, specs[i].case_version)), concurrent)
+                record, npz = execute(specs[i], timing, truths.get((specs[i].case, specs[i].case_version)), concurrent)
+                out[i] = replace(record, audit={**record.audit, "batch_refused": problem}), npz
         elif worlds:
             _run_batch(adapter, [specs[i] for i in worlds], [cases[i] for i in worlds], timing, truths, concurrent,
                        found, started, load_start, out, worlds)
@@ -216,8 +222,6 @@ def per_world(cost, info):
     device (``device``) and of the worlds it stepped beside its own (``batch_size``: MuJoCo Warp's option ``worlds``,
     copies of the run whose wall time is the batch's): then its stepping times are per world, the batch's
     median, size and throughput beside them."""
-    from dataclasses import replace
-
     n, device = int(info.get("batch_size", 1)), str(info.get("device", cost.device))
     if n == 1:
         return replace(cost, device=device)
