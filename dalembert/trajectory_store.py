@@ -1,0 +1,227 @@
+"""The trajectories a store keeps: which (``KEEPS``), and how (a file per run, or packs).
+
+Which: the manifest's ``trajectories`` (``dalembert run --trajectories``; ``"all"`` when absent, as every
+store written before the choice kept all): ``all`` keeps every run's trajectory; ``drawn`` keeps those the
+report draws (``dalembert.reports.drawn``; every one is written while the matrix runs and the others are
+dropped when it ends complete, ``Trajectories.keep_only``); ``none`` keeps none, and the rows say so (an
+empty ``trajectory``). A matrix of up to ``dalembert.store.FILES_UP_TO`` runs keeps ``all`` unless told,
+a larger one ``drawn`` (``default_keep``).
+
+How: a store of layout 1 keeps a file per run, ``trajectories/<key>.npz``
+(``dalembert.trajectory_files``). A store of layout 2 appends them to a pack per writing process,
+``trajectories/<name>.trajpack`` (named as ``dalembert.segments`` names a segment): one entry per
+run, ``MAGIC``, the key's and the ``.npz``'s lengths (``_HEAD``, little-endian), the key (UTF-8),
+the ``.npz`` bytes, handed to the kernel in one ``O_APPEND`` write. An entry is committed when all of
+it is in the file; a crash at any point leaves whole entries and at most one torn last entry, which
+readers ignore (the run's row, written after it, is not stored either, and ``--resume`` redoes the
+run in a new pack). A run stored twice (redone after a crash between its entry and its row) reads as
+the last written: packs sort as written. Entries are never rewritten; ``keep_only`` writes a pack's
+kept entries to a new pack (atomically) before it deletes the old one, so a crash meanwhile leaves both
+(the same entries twice), never neither. A store of layout 2 written before packs keeps its
+``.npz`` files, and reads them still.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import struct
+
+from dalembert.segments import new_name
+
+__all__ = ["KEEPS", "ALL", "DRAWN", "NONE", "PACK_SUFFIX", "MAGIC", "TrajectoryNotKept", "Trajectories",
+           "check_keep", "default_keep", "pack_entries"]
+
+ALL, DRAWN, NONE = "all", "drawn", "none"
+KEEPS = (ALL, DRAWN, NONE)
+PACK_SUFFIX = ".trajpack"
+MAGIC = b"DTJ1"  # each entry starts so: a pack read from the wrong offset, or damaged, is caught at once
+_HEAD = struct.Struct("<4sIQ")  # magic, key length, .npz length (bytes)
+
+
+class TrajectoryNotKept(LookupError, ValueError):
+    """A run's trajectory the store did not keep (its ``trajectories`` choice); the message says which and the fix."""
+
+
+def check_keep(value, where="run.trajectories"):
+    """``value`` when it is one of ``KEEPS`` (or None: by the matrix's size), else ValueError naming ``where``."""
+    if value is None or value in KEEPS:
+        return value
+    raise ValueError(f"{where}: {value!r} is not a choice — use all (every run's trajectory), drawn (only those "
+                     "the report draws) or none")
+
+
+def default_keep(n_runs, files_up_to):
+    """``all`` for a matrix of up to ``files_up_to`` runs (every store before the choice kept all), else
+    ``drawn``: a map's trajectories (1e5 probes of ~10-100 kB each) are gigabytes the report never draws."""
+    return ALL if n_runs <= files_up_to else DRAWN
+
+
+def _pack_names(directory):
+    try:
+        names = os.listdir(directory)
+    except FileNotFoundError:
+        return []
+    return sorted(n for n in names if n.endswith(PACK_SUFFIX) and not n.startswith("."))
+
+
+def pack_entries(path):
+    """``[(key, offset of its .npz, length)]`` of the whole entries of the pack at ``path``, in order; a torn last
+    entry is left out. ValueError ``<path> offset <n>: ...`` where an entry does not start with ``MAGIC``."""
+    out = []
+    with open(path, "rb") as fh:
+        size = fh.seek(0, os.SEEK_END)
+        pos = 0
+        while pos + _HEAD.size <= size:
+            fh.seek(pos)
+            magic, n_key, n_data = _HEAD.unpack(fh.read(_HEAD.size))
+            if magic != MAGIC:
+                raise ValueError(f"{path} offset {pos}: not a trajectory entry dalembert wrote")
+            end = pos + _HEAD.size + n_key + n_data
+            if end > size:
+                break  # a torn last entry: its run was not stored
+            key = fh.read(n_key).decode("utf-8", "replace")
+            out.append((key, pos + _HEAD.size + n_key, n_data))
+            pos = end
+    return out
+
+
+def _entry(key, npz):
+    k = key.encode()
+    return _HEAD.pack(MAGIC, len(k), len(npz)) + k + npz
+
+
+class _PackWriter:
+    """This process's pack, opened on its first entry and only appended to (as ``segments.SegmentWriter``)."""
+
+    def __init__(self, directory):
+        self.directory, self.name, self._fd, self._pid = directory, None, None, None
+
+    def append(self, key, npz):
+        if self._fd is None or self._pid != os.getpid():  # a forked child never writes its parent's pack
+            os.makedirs(self.directory, exist_ok=True)
+            self.name = new_name().rsplit(".", 1)[0] + PACK_SUFFIX
+            self._fd = os.open(os.path.join(self.directory, self.name),
+                               os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_APPEND | os.O_CLOEXEC, 0o666)
+            self._pid = os.getpid()
+        view = memoryview(_entry(key, npz))
+        try:
+            while view:
+                view = view[os.write(self._fd, view):]
+        except OSError:  # the entry may be torn: nothing may follow it in this pack
+            fd, self._fd = self._fd, None
+            os.close(fd)
+            raise
+        return self.name
+
+    def sync(self):
+        if self._fd is not None and self._pid == os.getpid():
+            os.fsync(self._fd)
+
+
+class Trajectories:
+    """A store's ``trajectories/`` directory, as its choice (``keep``) and layout (``packed``) keep it.
+
+    Parameters
+    ----------
+    directory : str
+        The store's ``trajectories/``.
+    packed : bool
+        True for a store of layout 2: new trajectories go to this process's pack.
+    keep : str
+        One of ``KEEPS``.
+    """
+
+    def __init__(self, directory, packed, keep):
+        self.directory, self.packed, self.keep = directory, packed, keep
+        self._writer = _PackWriter(directory)
+        self._index = {}  # key -> (pack path, offset, length): every pack entry read so far
+        self._scanned = {}  # pack name -> bytes indexed
+
+    def write(self, key, npz, atomic_write):
+        """Keep run ``key``'s trajectory (``.npz`` bytes); returns the path to put in its row (relative to the
+        store), "" when the store keeps none."""
+        if self.keep == NONE:
+            return ""
+        if self.packed:
+            name = self._writer.append(key, npz)
+            self._index.pop(key, None)
+            return f"trajectories/{name}"
+        atomic_write(os.path.join(self.directory, f"{key}.npz"), npz)
+        return f"trajectories/{key}.npz"
+
+    def sync(self):
+        """Flush this process's pack to the disk (the end of a batch)."""
+        self._writer.sync()
+
+    def _rescan(self):
+        """Index the entries appended since the last scan (every pack, in the order written)."""
+        for name in _pack_names(self.directory):
+            path = os.path.join(self.directory, name)
+            size = os.path.getsize(path)
+            if self._scanned.get(name) == size:
+                continue
+            for key, offset, length in pack_entries(path):
+                self._index[key] = (path, offset, length)
+            self._scanned[name] = size
+
+    def source(self, key):
+        """Run ``key``'s ``.npz``: bytes (from a pack) or a path (its file). ``FileNotFoundError`` when the
+        store has none (``TrajectoryNotKept`` when its choice left it out); ValueError for a damaged pack."""
+        if key not in self._index:
+            self._rescan()
+        if key in self._index:
+            path, offset, length = self._index[key]
+            with open(path, "rb") as fh:
+                fh.seek(offset)
+                data = fh.read(length)
+            if len(data) != length:
+                raise ValueError(f"{path}: shorter than its index says (offset {offset}, {length} bytes)")
+            return data
+        path = os.path.join(self.directory, f"{key}.npz")
+        if os.path.exists(path) or self.keep == ALL:
+            return path
+        raise TrajectoryNotKept(self.not_kept(key))
+
+    def has(self, key):
+        """Whether run ``key``'s trajectory is kept (without reading it)."""
+        if key not in self._index:
+            self._rescan()
+        return key in self._index or os.path.exists(os.path.join(self.directory, f"{key}.npz"))
+
+    def not_kept(self, key):
+        """The message for run ``key``'s trajectory, not kept by the store's choice."""
+        why = ("the store keeps no trajectory" if self.keep == NONE else
+               "the store keeps only the trajectories its report draws")
+        return (f"run {key}: its trajectory was not kept ({why}: run.trajectories = {self.keep}) — rerun it into a "
+                "new store with `dalembert run --trajectories all` (its key's case, engine and settings)")
+
+    def keep_only(self, keys, atomic_write):
+        """Drop every kept trajectory whose run is not in ``keys`` (the matrix ended with ``drawn``): a file per
+        run is deleted; a pack is rewritten with its kept entries (a new pack, then the old one deleted).
+        Returns how many were dropped."""
+        keys, dropped = set(keys), 0
+        names = sorted(os.listdir(self.directory)) if os.path.isdir(self.directory) else []
+        for name in names:
+            if name.endswith(".npz") and not name.startswith(".") and name[:-4] not in keys:
+                os.unlink(os.path.join(self.directory, name))
+                dropped += 1
+        packs = [os.path.join(self.directory, n) for n in _pack_names(self.directory)]
+        entries = {path: pack_entries(path) for path in packs}
+        last = {key: (path, offset) for path in packs for key, offset, _ in entries[path]}  # a key's last written
+        for path in packs:
+            kept = [(k, o, n) for k, o, n in entries[path] if k in keys and last[k] == (path, o)]
+            dropped += len(entries[path]) - len(kept)
+            if len(kept) == len(entries[path]):
+                continue
+            if kept:
+                buf = io.BytesIO()
+                with open(path, "rb") as fh:
+                    for key, offset, length in kept:
+                        fh.seek(offset)
+                        buf.write(_entry(key, fh.read(length)))
+                atomic_write(os.path.join(self.directory, new_name().rsplit(".", 1)[0] + PACK_SUFFIX), buf.getvalue())
+            os.unlink(path)
+        self._index.clear()
+        self._scanned.clear()
+        return dropped
