@@ -118,6 +118,16 @@ class _PackWriter:
         if self._fd is not None and self._pid == os.getpid():
             os.fsync(self._fd)
 
+    def close(self):
+        """Sync and close; the next ``append`` starts a new pack."""
+        if self._fd is not None:
+            fd, self._fd = self._fd, None
+            try:
+                if self._pid == os.getpid():
+                    os.fsync(fd)
+            finally:
+                os.close(fd)
+
 
 class Trajectories:
     """A store's ``trajectories/`` directory, as its choice (``keep``) and layout (``packed``) keep it.
@@ -200,6 +210,7 @@ class Trajectories:
         """Drop every kept trajectory whose run is not in ``keys`` (the matrix ended with ``drawn``): a file per
         run is deleted; a pack is rewritten with its kept entries (a new pack, then the old one deleted).
         Returns how many were dropped."""
+        self._writer.close()  # (its pack may be rewritten: a later entry goes to a new one)
         keys, dropped = set(keys), 0
         names = sorted(os.listdir(self.directory)) if os.path.isdir(self.directory) else []
         for name in names:
