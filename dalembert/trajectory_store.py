@@ -178,8 +178,11 @@ class Trajectories:
     def source(self, key):
         """Run ``key``'s ``.npz``: bytes (from a pack) or a path (its file). ``FileNotFoundError`` when the
         store has none (``TrajectoryNotKept`` when its choice left it out); ValueError for a damaged pack."""
-        if key not in self._index:
-            self._rescan()
+        path = os.path.join(self.directory, f"{key}.npz")
+        if key not in self._index and os.path.exists(path):  # a file per run (a store of layout 1, or 2 before packs)
+            return path
+        if key not in self._index and self.packed:
+            self._rescan()  # (only packs' heads: a store of layout 1 never lists its files)
         if key in self._index:
             path, offset, length = self._index[key]
             with open(path, "rb") as fh:
@@ -188,16 +191,17 @@ class Trajectories:
             if len(data) != length:
                 raise ValueError(f"{path}: shorter than its index says (offset {offset}, {length} bytes)")
             return data
-        path = os.path.join(self.directory, f"{key}.npz")
-        if os.path.exists(path) or self.keep == ALL:
-            return path
+        if self.keep == ALL:
+            return path  # (missing: the reader says so)
         raise TrajectoryNotKept(self.not_kept(key))
 
     def has(self, key):
         """Whether run ``key``'s trajectory is kept (without reading it)."""
-        if key not in self._index:
+        if os.path.exists(os.path.join(self.directory, f"{key}.npz")):
+            return True
+        if key not in self._index and self.packed:
             self._rescan()
-        return key in self._index or os.path.exists(os.path.join(self.directory, f"{key}.npz"))
+        return key in self._index
 
     def not_kept(self, key):
         """The message for run ``key``'s trajectory, not kept by the store's choice."""
