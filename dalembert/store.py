@@ -305,7 +305,7 @@ class Store:
         file_name(record.key, "run key", self.rows_dir, "a run spec named outside the store; nothing was written")
         if trajectory_npz is not None:
             self._trajectories.pop(record.key, None)
-            record = record.with_trajectory(self.kept().write(record.key, trajectory_npz, atomic_write))
+            record = record.with_trajectory(self.kept().write(record.key, trajectory_npz, atomic_write, record))
         if self.layout() == SEGMENTS:
             self._segment.append(record.to_row())
         else:

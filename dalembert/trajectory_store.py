@@ -145,13 +145,17 @@ class Trajectories:
     def __init__(self, directory, packed, keep):
         self.directory, self.packed, self.keep = directory, packed, keep
         self._writer = _PackWriter(directory)
+        # ``drawable(record) -> bool``: False for a run whose trajectory is never drawn (``reports.drawn.may_be_drawn``,
+        # set by the matrix of a ``drawn`` store): not written at all
+        self.drawable = None
         self._index = {}  # key -> (pack path, offset, length): every pack entry read so far
         self._scanned = {}  # pack name -> bytes indexed
 
-    def write(self, key, npz, atomic_write):
-        """Keep run ``key``'s trajectory (``.npz`` bytes); returns the path to put in its row (relative to the
-        store), "" when the store keeps none."""
-        if self.keep == NONE:
+    def write(self, key, npz, atomic_write, record=None):
+        """Keep run ``key``'s trajectory (``.npz`` bytes; ``record``: its ``RunRecord``, for ``drawable``); returns
+        the path to put in its row (relative to the store), "" when the store does not keep it."""
+        if self.keep == NONE or (self.keep == DRAWN and self.drawable is not None and record is not None
+                                 and not self.drawable(record)):
             return ""
         if self.packed:
             name = self._writer.append(key, npz)

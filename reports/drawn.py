@@ -17,6 +17,11 @@ A case version's sections are shown in full unless its case is mapped (``maps.st
 more than ``render.DETAILED_VERSIONS`` versions (``render._case_sections``). Every choice above is the report's own
 function or predicate, so ``drawn_keys`` follows it; ``tests/test_trajectory_store.py`` builds the report of
 stores holding every kind and checks that every trajectory it reads is here.
+
+Which runs are drawn is known when the matrix ends; which can never be is known as each run ends
+(``may_be_drawn``): a run of a case swept over more than ``DETAILED_VERSIONS`` versions (a map's probes), of
+an engine without a port or an original, whose loop closure (if any) stays within its bounds. A matrix that
+keeps ``drawn`` does not write those at all, so a large map's disk never holds its probes' trajectories.
 """
 
 from __future__ import annotations
@@ -24,11 +29,41 @@ from __future__ import annotations
 from dalembert.case import LOOP_RESIDUALS
 from dalembert.reports import time_series
 from dalembert.reports.maps import stability_maps
-from dalembert.reports.parity import pairs
+from dalembert.reports.parity import PORTS, pairs
 from dalembert.reports.trend import beyond_conserved
 from dalembert.reports.work_precision import headline_quantity
 
-__all__ = ["drawn_keys"]
+__all__ = ["drawn_keys", "may_be_drawn"]
+
+
+def _closure_read(r, case):
+    """Whether the loop-closure hazard reads finished run ``r`` of ``case`` (``hazards._closure``)."""
+    return bool(case.scene.loops) and r.ok and r.judgement.verdict != "diverged" and any(
+        n in case.tolerances and r.drifts.get(n, 0.0) > case.tolerances[n].value for n in LOOP_RESIDUALS.values())
+
+
+def may_be_drawn(specs, case_of):
+    """``test(record) -> bool``, False for a finished run whose trajectory the report never draws, whatever the
+    matrix's other runs (the module docstring).
+
+    Parameters
+    ----------
+    specs : list of dict
+        The manifest's run specs (``case`` and ``case_version`` read): the versions each case is run at.
+    case_of : callable(name, version) -> CaseRecord
+        The store's case records (``Store.case``).
+    """
+    from dalembert.reports.render import DETAILED_VERSIONS
+
+    versions = {}
+    for s in specs:
+        versions.setdefault(s["case"], set()).add(s["case_version"])
+    ports = set(PORTS) | set(PORTS.values())
+
+    def test(r):
+        return (r.engine in ports or len(versions.get(r.case, ())) <= DETAILED_VERSIONS
+                or _closure_read(r, case_of(r.case, r.case_version)))
+    return test
 
 
 def drawn_keys(store, records=None):
@@ -50,9 +85,7 @@ def drawn_keys(store, records=None):
     for (name, version), runs in groups.items():
         case = store.case(name, version)
         kept = [r for r in runs if r.trajectory]
-        if case.scene.loops:  # the loop-closure hazard
-            keys |= {r.key for r in kept if r.ok and r.judgement.verdict != "diverged" and any(
-                n in case.tolerances and r.drifts.get(n, 0.0) > case.tolerances[n].value for n in LOOP_RESIDUALS.values())}
+        keys |= {r.key for r in kept if _closure_read(r, case)}  # the loop-closure hazard
         if name in mapped or versions[name] > DETAILED_VERSIONS:
             continue  # its sections are one note: nothing drawn
         quantity = headline_quantity(runs)

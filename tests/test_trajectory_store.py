@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from dalembert.harness.cli import main
-from dalembert.reports.drawn import drawn_keys
+from dalembert.reports.drawn import drawn_keys, may_be_drawn
 from dalembert.reports.render import build_report
 from dalembert.store import Store, StoreError, TrajectoryNotKept
 from dalembert.trajectory_store import MAGIC, PACK_SUFFIX, check_keep, default_keep, pack_entries
@@ -193,3 +193,22 @@ def test_a_matrix_that_keeps_drawn_drops_the_rest_when_it_ends_and_reports_the_s
     dropped = sorted(store.done_keys() - kept)[0]
     assert main(["export", str(drawn), "--key", dropped, "--csv", str(tmp_path / "x.csv")]) == 2
     assert f"run {dropped}: its trajectory was not kept" in capsys.readouterr().err
+
+
+SWEEP = ["--case", "pivoted_rod", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2", "--param",
+         "t_final=0.2", "--param", "force=1,2,3,4,5", "--quick", "--jobs", "1"]  # 5 versions: one note in the report
+
+
+def test_a_sweep_past_the_detailed_versions_writes_none_of_its_trajectories(tmp_path, capsys):
+    everything, drawn = tmp_path / "all", tmp_path / "drawn"
+    assert main(["run", *SWEEP, "--out", str(everything)]) == 0
+    assert main(["run", *SWEEP, "--trajectories", "drawn", "--out", str(drawn)]) == 0
+    store = Store.open(drawn)
+    assert len(store.done_keys()) == 5 and all(r.ok and r.trajectory == "" for r in store.records())
+    assert os.listdir(store.traj_dir) == []
+    assert "dropped" not in capsys.readouterr().err  # nothing written, nothing to drop
+    # what the report of the same sweep reads, kept all, is nothing may_be_drawn refuses
+    source = Store.open(everything)
+    test = may_be_drawn(source.manifest()["specs"], source.case)
+    assert not any(test(r) for r in source.records())
+    assert _reads(source, tmp_path / "report") == set()

@@ -354,8 +354,8 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     from dalembert.harness.pool import run_matrix
     from dalembert.harness.selection import select
     from dalembert.harness.truths import build
-
-    from dalembert.trajectory_store import check_keep
+    from dalembert.reports.drawn import may_be_drawn
+    from dalembert.trajectory_store import DRAWN, check_keep
 
     strict = strict_level(strict)
     check_keep(trajectories)
@@ -415,6 +415,9 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
             note(f"the last writer of {store.path} ended without releasing it ({printable(lock.stale)}); what it stored is kept")
         print(f"dalembert: {len(specs)} runs, {len(specs) - len(store.done_keys())} to do -> {store.path}",
               file=sys.stderr)
+
+        if store.kept().keep == DRAWN:  # a run never drawn (a map's probe) is not written at all
+            store.kept().drawable = may_be_drawn(store.manifest()["specs"], store.case)
 
         def run_batch(runs):
             if client is not None:
