@@ -212,3 +212,15 @@ def test_a_sweep_past_the_detailed_versions_writes_none_of_its_trajectories(tmp_
     test = may_be_drawn(source.manifest()["specs"], source.case)
     assert not any(test(r) for r in source.records())
     assert _reads(source, tmp_path / "report") == set()
+
+
+def test_export_all_leaves_out_the_runs_not_kept_and_counts_them(source, tmp_path, capsys):
+    store, _ = _copy(source, tmp_path / "s", 2, keep="drawn")
+    keep = sorted(store.done_keys())[:3]
+    store.keep_trajectories(keep)
+    assert main(["export", str(store.path), "--all", "--csv", str(tmp_path / "x.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "wrote" in out and ": 3 run(s)" in out
+    assert "(5 matching run(s) whose trajectory the store did not keep: run.trajectories = drawn)" in out
+    with open(tmp_path / "x.csv") as fh:
+        assert {line.split(",")[0] for line in fh.readlines()[1:]} == set(keep)
