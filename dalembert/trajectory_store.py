@@ -2,8 +2,9 @@
 
 Which: the manifest's ``trajectories`` (``dalembert run --trajectories``; ``"all"`` when absent, as every
 store written before the choice kept all): ``all`` keeps every run's trajectory; ``drawn`` keeps those the
-report draws (``dalembert.reports.drawn``; every one is written while the matrix runs and the others are
-dropped when it ends complete, ``Trajectories.keep_only``); ``none`` keeps none, and the rows say so (an
+report draws (``dalembert.reports.drawn``: a run that can never be drawn, ``Trajectories.drawable``, is not
+written; the others are, and those not drawn are dropped when the matrix ends complete,
+``Trajectories.keep_only``); ``none`` keeps none, and the rows say so (an
 empty ``trajectory``). A matrix of up to ``dalembert.store.FILES_UP_TO`` runs keeps ``all`` unless told,
 a larger one ``drawn`` (``default_keep``).
 
@@ -53,7 +54,8 @@ def check_keep(value, where="run.trajectories"):
 
 def default_keep(n_runs, files_up_to):
     """``all`` for a matrix of up to ``files_up_to`` runs (every store before the choice kept all), else
-    ``drawn``: a map's trajectories (1e5 probes of ~10-100 kB each) are gigabytes the report never draws."""
+    ``drawn``: a map's trajectories (1e5 probes of 4 kB to 100 kB each: 0.4 to 10 GB) are what the report never
+    draws."""
     return ALL if n_runs <= files_up_to else DRAWN
 
 
