@@ -1,6 +1,6 @@
 """Benchmark of a large map's trajectories in a store: a file per run against a pack per writing process.
 
-    python -m benchmarks.trajectories [--runs 10000,100000] [--sample-interval 0.1] [--json FILE]
+    python -m benchmarks.trajectories [--runs 10000,100000] [--ways files,packs] [--sample-interval 0.1] [--json FILE]
 
 The trajectory is a real one: a probe of ``benchmarks/map.py``'s map (the reference's RK4 on
 ``free_top_fast_spin`` at spin 50 rad/s, dt = 1e-3 s, a 1-s horizon sampled every ``--sample-interval`` s),
@@ -8,7 +8,8 @@ run once through ``dalembert.harness.api.run``. Each size writes it under that m
 parent does (``dalembert.trajectory_store.Trajectories.write``), in two ways:
 
 - ``files``: a ``.npz`` per run, written atomically (layout 1, and layout 2 before packs);
-- ``packs``: appended to this process's pack (layout 2 now), synced once at the end as at a batch's end.
+- ``packs``: appended to this process's pack (layout 2 now), synced (and its index written) once at the end, as
+  at a batch's end.
 
 For each: the files and bytes per run (apparent, and on the disk: a small file takes a whole block), the write
 time per 1000 runs, the time to read 1000 runs' trajectories picked at random from a fresh reader (as a report
@@ -67,7 +68,7 @@ def figures(npz, directory, n, packed):
     t0, c0 = time.perf_counter(), time.process_time()
     for key in keys:
         kept.write(key, npz, atomic_write)
-    kept.sync()
+    kept.sync(atomic_write)
     write_s, write_cpu_s = time.perf_counter() - t0, time.process_time() - c0
     files, size, disk = _usage(directory)
     picks = random.Random(0).sample(keys, min(READS, n))
@@ -87,6 +88,7 @@ def figures(npz, directory, n, packed):
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--runs", default=",".join(map(str, SIZES)), help="numbers of runs, comma-separated")
+    p.add_argument("--ways", default="files,packs", help="which of files and packs to measure, comma-separated")
     p.add_argument("--sample-interval", type=float, default=0.1, help="the probe's sample interval, s (1-s horizon)")
     p.add_argument("--json", metavar="FILE", help="write the figures to FILE as JSON")
     args = p.parse_args(argv)
@@ -101,7 +103,7 @@ def main(argv=None):
               "read/1000)")
         for n in (int(x) for x in args.runs.split(",")):
             results[str(n)] = {}
-            for how in ("files", "packs"):
+            for how in args.ways.split(","):
                 directory = os.path.join(tmp, f"{how}{n}")
                 f = figures(npz, directory, n, how == "packs")
                 shutil.rmtree(directory)

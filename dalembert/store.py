@@ -403,7 +403,7 @@ class Store:
         the segment lines added since, this process's segment synced to the disk first (layout 2)."""
         import pandas as pd
 
-        self.kept().sync()
+        self.kept().sync(atomic_write)
         if self.layout() == FILES:
             df = self.table()
             buf = io.BytesIO()

@@ -20,6 +20,12 @@ the last written: packs sort as written. Entries are never rewritten; ``keep_onl
 kept entries to a new pack (atomically) before it deletes the old one, so a crash meanwhile leaves both
 (the same entries twice), never neither. A store of layout 2 written before packs keeps its
 ``.npz`` files, and reads them still.
+
+A reader finds a run's entry through an index of each pack (``<name>.trajidx``: the keys, offsets and lengths
+of its entries up to the bytes it covers), written atomically beside the pack when its writer syncs it (the
+end of each batch) and when a drop rewrites it; the entries after what the index covers (or of a pack without
+one, or whose index does not read) are found by scanning their heads. The index is a cache: the pack is the
+record, and a pack of a million entries is not read through to find one.
 """
 
 from __future__ import annotations
@@ -27,15 +33,19 @@ from __future__ import annotations
 import io
 import os
 import struct
+from array import array
+
+import numpy as np
 
 from dalembert.segments import new_name
 
-__all__ = ["KEEPS", "ALL", "DRAWN", "NONE", "PACK_SUFFIX", "MAGIC", "TrajectoryNotKept", "Trajectories",
-           "check_keep", "default_keep", "pack_entries"]
+__all__ = ["KEEPS", "ALL", "DRAWN", "NONE", "PACK_SUFFIX", "INDEX_SUFFIX", "MAGIC", "TrajectoryNotKept", "Trajectories",
+           "check_keep", "default_keep", "pack_entries", "read_index", "write_index"]
 
 ALL, DRAWN, NONE = "all", "drawn", "none"
 KEEPS = (ALL, DRAWN, NONE)
 PACK_SUFFIX = ".trajpack"
+INDEX_SUFFIX = ".trajidx"
 MAGIC = b"DTJ1"  # each entry starts so: a pack read from the wrong offset, or damaged, is caught at once
 _HEAD = struct.Struct("<4sIQ")  # magic, key length, .npz length (bytes)
 
@@ -67,13 +77,14 @@ def _pack_names(directory):
     return sorted(n for n in names if n.endswith(PACK_SUFFIX) and not n.startswith("."))
 
 
-def pack_entries(path):
-    """``[(key, offset of its .npz, length)]`` of the whole entries of the pack at ``path``, in order; a torn last
-    entry is left out. ValueError ``<path> offset <n>: ...`` where an entry does not start with ``MAGIC``."""
+def pack_entries(path, start=0):
+    """``[(key, offset of its .npz, length)]`` of the whole entries of the pack at ``path`` from byte ``start`` (an
+    entry's start), in order; a torn last entry is left out. ValueError ``<path> offset <n>: ...`` where an entry
+    does not start with ``MAGIC``."""
     out = []
     with open(path, "rb") as fh:
         size = fh.seek(0, os.SEEK_END)
-        pos = 0
+        pos = start
         while pos + _HEAD.size <= size:
             fh.seek(pos)
             magic, n_key, n_data = _HEAD.unpack(fh.read(_HEAD.size))
@@ -88,6 +99,33 @@ def pack_entries(path):
     return out
 
 
+def _index_path(pack):
+    return pack[:-len(PACK_SUFFIX)] + INDEX_SUFFIX
+
+
+def write_index(pack, keys, offsets, lengths, covers, atomic_write):
+    """Write the index of the pack at ``pack``: its entries' ``keys``, ``offsets`` and ``lengths`` (sequences), which
+    end at byte ``covers``."""
+    buf = io.BytesIO()
+    np.savez(buf, keys=np.array(list(keys), dtype=str), offsets=np.asarray(offsets, np.int64),
+             lengths=np.asarray(lengths, np.int64), covers=np.int64(covers))
+    atomic_write(_index_path(pack), buf.getvalue())
+
+
+def read_index(pack, size):
+    """``(entries, covers)``: the entries the index of the pack at ``pack`` (of ``size`` bytes) lists and the bytes it
+    covers; ``([], 0)`` when it has none, or one that does not read or covers more than the pack holds (damage:
+    the pack is scanned instead)."""
+    try:
+        with np.load(_index_path(pack)) as z:
+            keys, offsets, lengths, covers = z["keys"], z["offsets"], z["lengths"], int(z["covers"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return [], 0
+    if covers > size or not len(keys) == len(offsets) == len(lengths):
+        return [], 0
+    return list(zip(keys.tolist(), offsets.tolist(), lengths.tolist())), covers
+
+
 def _entry(key, npz):
     k = key.encode()
     return _HEAD.pack(MAGIC, len(k), len(npz)) + k + npz
@@ -98,6 +136,7 @@ class _PackWriter:
 
     def __init__(self, directory):
         self.directory, self.name, self._fd, self._pid = directory, None, None, None
+        self._keys, self._offsets, self._lengths, self._size = [], array("q"), array("q"), 0  # (its index)
 
     def append(self, key, npz):
         if self._fd is None or self._pid != os.getpid():  # a forked child never writes its parent's pack
@@ -106,7 +145,9 @@ class _PackWriter:
             self._fd = os.open(os.path.join(self.directory, self.name),
                                os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_APPEND | os.O_CLOEXEC, 0o666)
             self._pid = os.getpid()
-        view = memoryview(_entry(key, npz))
+            self._keys, self._offsets, self._lengths, self._size = [], array("q"), array("q"), 0
+        entry = _entry(key, npz)
+        view = memoryview(entry)
         try:
             while view:
                 view = view[os.write(self._fd, view):]
@@ -114,11 +155,18 @@ class _PackWriter:
             fd, self._fd = self._fd, None
             os.close(fd)
             raise
+        self._keys.append(key)
+        self._offsets.append(self._size + len(entry) - len(npz))
+        self._lengths.append(len(npz))
+        self._size += len(entry)
         return self.name
 
-    def sync(self):
+    def sync(self, atomic_write):
+        """Flush the pack to the disk, then write its index."""
         if self._fd is not None and self._pid == os.getpid():
             os.fsync(self._fd)
+            write_index(os.path.join(self.directory, self.name), self._keys, self._offsets, self._lengths, self._size,
+                        atomic_write)
 
     def close(self):
         """Sync and close; the next ``append`` starts a new pack."""
@@ -166,20 +214,26 @@ class Trajectories:
         atomic_write(os.path.join(self.directory, f"{key}.npz"), npz)
         return f"trajectories/{key}.npz"
 
-    def sync(self):
-        """Flush this process's pack to the disk (the end of a batch)."""
-        self._writer.sync()
+    def sync(self, atomic_write):
+        """Flush this process's pack to the disk and write its index (the end of a batch)."""
+        self._writer.sync(atomic_write)
 
     def _rescan(self):
-        """Index the entries appended since the last scan (every pack, in the order written)."""
+        """Index the entries appended since the last scan (every pack, in the order written): from its index file
+        the first time a pack is seen, then by scanning the heads after what is known."""
         for name in _pack_names(self.directory):
             path = os.path.join(self.directory, name)
             size = os.path.getsize(path)
-            if self._scanned.get(name) == size:
-                continue
-            for key, offset, length in pack_entries(path):
-                self._index[key] = (path, offset, length)
-            self._scanned[name] = size
+            known = self._scanned.get(name)
+            if known is None:
+                entries, known = read_index(path, size)
+                for key, offset, length in entries:
+                    self._index[key] = (path, offset, length)
+            if known < size:
+                for key, offset, length in pack_entries(path, known):
+                    self._index[key] = (path, offset, length)
+                    known = offset + length
+            self._scanned[name] = known
 
     def source(self, key):
         """Run ``key``'s ``.npz``: bytes (from a pack) or a path (its file). ``FileNotFoundError`` when the
@@ -236,13 +290,19 @@ class Trajectories:
             if len(kept) == len(entries[path]):
                 continue
             if kept:
-                buf = io.BytesIO()
+                buf, offsets = io.BytesIO(), []
                 with open(path, "rb") as fh:
                     for key, offset, length in kept:
                         fh.seek(offset)
-                        buf.write(_entry(key, fh.read(length)))
-                atomic_write(os.path.join(self.directory, new_name().rsplit(".", 1)[0] + PACK_SUFFIX), buf.getvalue())
+                        npz = fh.read(length)
+                        buf.write(_entry(key, npz))
+                        offsets.append(buf.tell() - length)
+                new = os.path.join(self.directory, new_name().rsplit(".", 1)[0] + PACK_SUFFIX)
+                atomic_write(new, buf.getvalue())
+                write_index(new, [k for k, _, _ in kept], offsets, [n for _, _, n in kept], buf.tell(), atomic_write)
             os.unlink(path)
+            if os.path.exists(_index_path(path)):
+                os.unlink(_index_path(path))
         self._index.clear()
         self._scanned.clear()
         return dropped

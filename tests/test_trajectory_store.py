@@ -9,6 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+import dalembert.trajectory_store as trajectory_store
 from dalembert.harness.cli import main
 from dalembert.reports.drawn import drawn_keys, may_be_drawn
 from dalembert.reports.render import build_report
@@ -109,7 +110,7 @@ def test_keeping_some_drops_the_rest_and_says_so_where_one_is_read(source, tmp_p
                                                 "the trajectories its report draws: run.trajectories = drawn\\) — "
                                                 "rerun it into a new store with `dalembert run --trajectories all`"):
         fresh.trajectory("run0002")
-    assert len(os.listdir(store.traj_dir)) == (2 if layout == 1 else 1)
+    assert len([n for n in os.listdir(store.traj_dir) if n.endswith((".npz", PACK_SUFFIX))]) == (2 if layout == 1 else 1)
 
 
 def test_the_choice_is_checked_and_defaults_by_the_matrix_size():
@@ -224,3 +225,23 @@ def test_export_all_leaves_out_the_runs_not_kept_and_counts_them(source, tmp_pat
     assert "(5 matching run(s) whose trajectory the store did not keep: run.trajectories = drawn)" in out
     with open(tmp_path / "x.csv") as fh:
         assert {line.split(",")[0] for line in fh.readlines()[1:]} == set(keep)
+
+
+def test_a_reader_finds_entries_through_the_packs_index_and_scans_only_what_it_does_not_cover(source, tmp_path,
+                                                                                              monkeypatch):
+    store, written = _copy(source, tmp_path / "s", 2, n=3)
+    store.write_table()  # the end of a batch: the pack synced, its index written
+    index = _pack(store)[:-len(PACK_SUFFIX)] + ".trajidx"
+    assert os.path.exists(index)
+    first = store.records()[0]
+    store.write_record(replace(first, key="later"), written["run0000"])  # after the index: found by a scan
+    scanned = []
+    real = trajectory_store.pack_entries
+    monkeypatch.setattr(trajectory_store, "pack_entries", lambda path, start=0: scanned.append(start) or real(path, start))
+    fresh = Store.open(store.path)
+    assert [fresh.kept().source(k) for k in ("run0001", "later")] == [written["run0001"], written["run0000"]]
+    assert scanned == [os.path.getsize(_pack(store)) - len(written["run0000"]) - len("later") - 16]
+    with open(index, "wb") as fh:  # an index that does not read: the pack is scanned whole
+        fh.write(b"not an index")
+    scanned.clear()
+    assert Store.open(store.path).kept().source("run0002") == written["run0002"] and scanned == [0]
