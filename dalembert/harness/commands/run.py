@@ -354,7 +354,6 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     from dalembert.harness.pool import run_matrix
     from dalembert.harness.selection import select
     from dalembert.harness.truths import build
-    from dalembert.reports.drawn import may_be_drawn
     from dalembert.trajectory_store import DRAWN, check_keep
 
     strict = strict_level(strict)
@@ -417,6 +416,8 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
               file=sys.stderr)
 
         if store.kept().keep == DRAWN:  # a run never drawn (a map's probe) is not written at all
+            from dalembert.reports.drawn import may_be_drawn
+
             store.kept().drawable = may_be_drawn(store.manifest()["specs"], store.case)
 
         def run_batch(runs):
