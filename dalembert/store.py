@@ -9,7 +9,9 @@ Layout of a run directory::
                            segment of its own (``dalembert.segments``)
     runs.parquet           all rows as a table (rebuilt after every batch; in layout 2 from the lines
                            added since, ``dalembert.runs_table``)
-    trajectories/<key>.npz one trajectory per run that produced one (``dalembert.trajectory_files``)
+    trajectories/<key>.npz layout 1: one trajectory per run that produced one (``dalembert.trajectory_files``)
+    trajectories/<name>.trajpack  layout 2: the trajectories, appended by each writing process to a pack of its
+                           own; which runs' are kept is the manifest's ``trajectories`` (``dalembert.trajectory_store``)
     cases/<case>__<version>.json  each case as it was run (``CaseRecord``: scene, parameters,
                            tolerances with reasons, conserved quantities, floor)
     truth/<case>__<version>.npz   each case's truth at its sample times
@@ -56,9 +58,11 @@ from dalembert.provenance import harness_commit, library_versions, machine_info,
 from dalembert.record import SCHEMA_VERSION, RunRecord, SchemaError
 from dalembert.segments import SegmentWriter, segment_keys, segment_names, segment_rows
 from dalembert.trajectory_files import read_only, trajectory_from_npz, trajectory_to_npz
+from dalembert.trajectory_store import ALL, Trajectories, TrajectoryNotKept, check_keep, default_keep
 
 __all__ = ["Store", "StoreError", "StoreLock", "atomic_write", "file_name", "trajectory_to_npz", "trajectory_from_npz",
-           "machine_info", "library_versions", "harness_commit", "now", "LAYOUTS", "FILES_UP_TO"]
+           "machine_info", "library_versions", "harness_commit", "now", "LAYOUTS", "FILES_UP_TO",
+           "TrajectoryNotKept"]
 
 # Store layouts: 1, a JSON file per run under rows/; 2, rows appended to segments/ (the module docstring).
 FILES, SEGMENTS = 1, 2
@@ -180,24 +184,27 @@ class Store:
         self._segment = SegmentWriter(self.segments_dir)  # this process's segment (layout 2), opened on its first row
         self._cases = {}  # (name, version) -> CaseRecord, read once (``case``)
         self._trajectories = {}  # key -> Trajectory, the TRAJECTORY_CACHE last read (``trajectory``)
+        self._kept = None  # the trajectories/ directory as the manifest keeps it (``kept``), made on first use
 
     # -------------------------------------------------------------- create, open
     def create(self, manifest, layout=None):
         """Make the directories and write ``manifest`` (with the schema version and the store layout).
 
         ``layout``: one of ``LAYOUTS``; None: 1 for a matrix of up to ``FILES_UP_TO`` runs (the manifest's
-        ``specs``), else 2.
+        ``specs``), else 2. The manifest's ``trajectories`` (``dalembert.trajectory_store.KEEPS``) likewise: when
+        absent or None, ``all`` up to ``FILES_UP_TO`` runs, else ``drawn``.
         """
+        n_runs = len(manifest["specs"]) if isinstance(manifest.get("specs"), list) else 0
         if layout is None:
-            specs = manifest.get("specs")
-            layout = SEGMENTS if isinstance(specs, list) and len(specs) > FILES_UP_TO else FILES
+            layout = SEGMENTS if n_runs > FILES_UP_TO else FILES
+        keep = check_keep(manifest.get("trajectories")) or default_keep(n_runs, FILES_UP_TO)
         if layout not in LAYOUTS:
             raise ValueError(f"layout: unknown store layout {layout!r} — use one of {LAYOUTS} (or None: by the runs)")
         for d in (self.rows_dir if layout == FILES else self.segments_dir, self.traj_dir, self.cases_dir,
                   self.truth_dir):
             os.makedirs(d, exist_ok=True)
-        self.write_manifest({**manifest, "schema_version": SCHEMA_VERSION, "store_layout": layout})
-        self._layout = layout
+        self.write_manifest({**manifest, "schema_version": SCHEMA_VERSION, "store_layout": layout, "trajectories": keep})
+        self._layout, self._kept = layout, None
         return self
 
     @classmethod
@@ -297,9 +304,8 @@ class Store:
         layout 1, its whole line in this process's segment in layout 2)."""
         file_name(record.key, "run key", self.rows_dir, "a run spec named outside the store; nothing was written")
         if trajectory_npz is not None:
-            atomic_write(os.path.join(self.traj_dir, f"{record.key}.npz"), trajectory_npz)
             self._trajectories.pop(record.key, None)
-            record = record.with_trajectory(f"trajectories/{record.key}.npz")
+            record = record.with_trajectory(self.kept().write(record.key, trajectory_npz, atomic_write, record))
         if self.layout() == SEGMENTS:
             self._segment.append(record.to_row())
         else:
@@ -397,6 +403,7 @@ class Store:
         the segment lines added since, this process's segment synced to the disk first (layout 2)."""
         import pandas as pd
 
+        self.kept().sync(atomic_write)
         if self.layout() == FILES:
             df = self.table()
             buf = io.BytesIO()
@@ -420,10 +427,28 @@ class Store:
             del self._trajectories[next(iter(self._trajectories))]  # the least recently read
         return traj
 
+    def kept(self):
+        """``trajectory_store.Trajectories``: the manifest's ``trajectories`` (all when absent), packed in layout 2."""
+        if self._kept is None:
+            keep = self.manifest().get("trajectories", ALL) if self.exists() else ALL
+            self._kept = Trajectories(self.traj_dir, self.layout() == SEGMENTS, keep)
+        return self._kept
+
+    def has_trajectory(self, key):
+        """Whether run ``key``'s trajectory is kept (``trajectory`` reads it), without reading it."""
+        return key in self._trajectories or self.kept().has(file_name(key, "run key", self.traj_dir))
+
+    def keep_trajectories(self, keys):
+        """Drop every stored trajectory but those of ``keys`` (the end of a ``drawn`` matrix); returns how many."""
+        self._trajectories.clear()
+        return self.kept().keep_only(keys, atomic_write)
+
     def _read_trajectory(self, key):
         path = os.path.join(self.traj_dir, f"{file_name(key, 'run key', self.traj_dir)}.npz")
         try:
-            return read_only(trajectory_from_npz(path))
+            return read_only(trajectory_from_npz(self.kept().source(key)))
+        except TrajectoryNotKept:
+            raise
         except FileNotFoundError:
             raise StoreError(f"{path}: missing — {self._redo(key, self._row_name(key))}") from None
         except (OSError, ValueError, KeyError, TypeError) as e:

@@ -79,10 +79,12 @@ def trajectory_frame(traj):
 
 
 def frame(store, records):
-    """Every one of ``records`` that left a trajectory, as one long-format frame (the columns above)."""
+    """Every one of ``records`` that left a trajectory the store kept (``Store.has_trajectory``: a store that keeps
+    only the drawn ones, or none, leaves the others out), as one long-format frame (the columns above)."""
     frames = []
+    keeps_all = store.kept().keep == "all"
     for r in records:
-        if not r.trajectory:
+        if not r.trajectory or not (keeps_all or store.has_trajectory(r.key)):
             continue
         f = trajectory_frame(store.trajectory(r.key))
         identity = dict(key=r.key, case=r.case, case_version=r.case_version,

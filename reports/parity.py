@@ -19,7 +19,7 @@ import numpy as np
 
 from dalembert import spatial
 
-__all__ = ["PORTS", "PORT_NAMES", "Parity", "parities"]
+__all__ = ["PORTS", "PORT_NAMES", "Parity", "pairs", "parities"]
 
 # port -> the engine it ports
 PORTS = {"mjx": "mujoco", "mujoco_warp": "mujoco"}
@@ -64,10 +64,11 @@ def _finite(x):
     return float(x) if x is not None and math.isfinite(float(x)) else math.nan
 
 
-def parities(records, trajectory_of, floor_of):
-    """Every ``Parity`` a store holds. ``trajectory_of(key) -> Trajectory``; ``floor_of(case, version) ->
-    {quantity: floor}``. Only runs that finished (status ok) are compared."""
-    done = [r for r in records if r.status == "ok"]
+def pairs(records):
+    """``[(port run, original run)]``: each finished run of a port (``PORTS``) and its original engine's finished
+    run of the same case version, integrator, step or tolerance and options (its port-only options aside), both
+    with a stored trajectory (a store that keeps none has no pairs)."""
+    done = [r for r in records if r.status == "ok" and r.trajectory]
     originals = {}
     for r in done:
         if r.engine in PORTS.values():
@@ -81,8 +82,17 @@ def parities(records, trajectory_of, floor_of):
         s = r.settings
         options = tuple(sorted((k, v) for k, v in s.options.items() if k not in PORT_ONLY_OPTIONS.get(r.engine, ())))
         o = originals.get((original, r.case, r.case_version, s.integrator, s.dt, s.rtol, options))
-        if o is None:
-            continue
+        if o is not None:
+            out.append((r, o))
+    return out
+
+
+def parities(records, trajectory_of, floor_of):
+    """Every ``Parity`` a store holds. ``trajectory_of(key) -> Trajectory``; ``floor_of(case, version) ->
+    {quantity: floor}``. Only runs that finished (status ok) are compared (``pairs``)."""
+    out = []
+    for r, o in pairs(records):
+        original = o.engine
         a, b = trajectory_of(r.key), trajectory_of(o.key)
         with np.errstate(invalid="ignore"):
             orientation = max(float(np.max(spatial.rotation_angle(a.bodies[n].quaternion, b.bodies[n].quaternion)))

@@ -55,7 +55,8 @@ class MatrixError(RuntimeError):
 
 def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=None, params=None, options=None,
         jobs=None, timeout=None, quick=False, scheduler=None, out=None, resume=None, search=None, resolution=None,
-        no_maps=False, force=False, strict=False, timing=None, progress=None, debug=False, batch=False):
+        no_maps=False, force=False, strict=False, timing=None, progress=None, debug=False, batch=False,
+        trajectories=None):
     """Run a selection of the matrix into a new store (or finish one: ``resume``) and return its
     records as a DataFrame: ``dalembert run``, a keyword per flag (``dalembert.harness.commands.run.run``
     documents each; a repeatable flag's keyword is its plural, ``--no-maps`` is ``no_maps``).
@@ -84,6 +85,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     progress : callable or None — ``progress(done, total, failures, record)`` after each run
     debug : bool — keep Dask's own log
     batch : bool — as ``--batch``: runs that differ only in the case's parameters stepped as one batch of worlds
+    trajectories : "all", "drawn", "none" or None — as ``--trajectories``: which runs' trajectories the store keeps
 
     Returns
     -------
@@ -100,7 +102,8 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     outcome = run_command.run(cases, tags, engines, integrators, dts, rtols, params, options, jobs, timeout, quick,
                               scheduler, out, resume, search, resolution, no_maps, force, strict, timing, progress,
                               debug, command="dalembert.harness.api.run("
-                              + ", ".join(f"{k}={v!r}" for k, v in given.items()) + ")", batch=batch)
+                              + ", ".join(f"{k}={v!r}" for k, v in given.items()) + ")", batch=batch,
+                              trajectories=trajectories)
     if outcome.interrupted:
         raise KeyboardInterrupt(f"interrupted; finish with api.run(resume={outcome.store.path!r})")
     if outcome.lost:
@@ -161,7 +164,9 @@ def compare(before, after, threshold=2.0, cost_threshold=None, across_versions=F
 
 def trajectories(store, keys=(), case=None, engine=None, integrator=None, dt=None, rtol=None, options=None):
     """The stored trajectories of the runs that match (all by default) as one long-format DataFrame
-    (``dalembert.reports.export``: a row per run, sample time and body, joint or reaction force)."""
+    (``dalembert.reports.export``: a row per run, sample time and body, joint or reaction force); the runs whose
+    trajectory the store did not keep (``--trajectories drawn`` or ``none``) are left out, and ``Store.trajectory``
+    of one raises ``TrajectoryNotKept`` saying so."""
     from dalembert.reports.export import frame, select
 
     s = _store(store)

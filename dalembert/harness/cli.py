@@ -118,6 +118,10 @@ def _parser():
                    help="step the runs that differ only in the case's parameters (--param sweeps, a map's swept "
                         "parameter) as the worlds of one engine call, on engines that have batches (mujoco_warp, "
                         "mjx); their costs are then per world, the batch's beside them")
+    r.add_argument("--trajectories", metavar="all|drawn|none", default=None,
+                   help="which runs' trajectories the store keeps: all, drawn (only those the report draws; the "
+                        "rest are dropped when the matrix ends) or none (default: all up to 2000 runs, else drawn); "
+                        "--resume keeps the store's")
     r.add_argument("--no-maps", action="store_true",
                    help="leave out the default stability maps of the selected tags (e.g. --tag hard runs them)")
     r.add_argument("--force", action="store_true",

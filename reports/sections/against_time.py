@@ -28,6 +28,11 @@ def against_time(rep, f, name):
     reps = time_series.representatives(f.runs, f.quantity)
     divs = time_series.diverged(f.runs)
     if not reps and not divs:
+        keep = rep.store.kept().keep
+        if keep != "all" and any(r.ok for r in f.runs):  # drawn keeps these runs' (``reports.drawn``): none, then
+            part.heading("Against time", 3)
+            part.para(f"No figure against time: the store kept no run's trajectory (run.trajectories = {keep}; "
+                      "dalembert run --trajectories all keeps them).")
         return part
     part.heading("Against time", 3)
     if reps:

@@ -46,12 +46,19 @@ def main(args):
                      f"--all for every match). {'Matching' if chosen else 'Stored'}: "
                      + "; ".join(f"{r.key} ({r.case} {run_name(r)}, {r.status})" for r in listed[:40])
                      + (f"; and {len(listed) - 40} more" if len(listed) > 40 else ""))
+    kept = [r for r in chosen if r.trajectory and store.has_trajectory(r.key)]
+    not_kept = [r for r in chosen if r.status == "ok" and r not in kept and store.kept().keep != "all"]
+    if not args.all and not_kept:
+        return _fail(store.kept().not_kept(chosen[0].key))
     if not args.all and not chosen[0].trajectory:
         return _fail(f"that run has no trajectory (status {chosen[0].status}: {chosen[0].message})")
-    df = frame(store, chosen)
+    df = frame(store, kept)
     write(df, path, fmt)
-    with_traj = sum(1 for r in chosen if r.trajectory)
+    with_traj = len(kept)
     print(f"wrote {printable(output.shown(path))}: {with_traj} run(s), {len(df)} rows"
-          + (f" ({len(chosen) - with_traj} matching run(s) left no trajectory)" if with_traj < len(chosen) else ""),
+          + (f" ({len(chosen) - with_traj - len(not_kept)} matching run(s) left no trajectory)"
+             if with_traj + len(not_kept) < len(chosen) else "")
+          + (f" ({len(not_kept)} matching run(s) whose trajectory the store did not keep: run.trajectories = "
+             f"{store.kept().keep})" if not_kept else ""),
           file=sys.stderr if path == output.STDOUT else sys.stdout)
     return 0

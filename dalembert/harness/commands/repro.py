@@ -98,6 +98,8 @@ def write(store, key):
     r = records[key]
     quantity = headline_quantity([r])
     stored = r.max_error(quantity) if quantity else math.nan
+    if r.status == "ok" and not (r.trajectory and store.has_trajectory(key)) and store.kept().keep != "all":
+        raise ValueError(f"--key: {store.kept().not_kept(key)}")  # (a repro compares with the stored trajectory)
     if r.status != "ok" or not r.trajectory or not math.isfinite(stored):
         raise ValueError(f"--key: run {key} is {r.status} with no finite stored error "
                          f"({r.message or 'nothing measured'}) — reproduce a run that finished")

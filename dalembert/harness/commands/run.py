@@ -256,6 +256,22 @@ def _search(store, plan, run_batch):
     return search([RunSpec.from_json(s) for s in plan["first"]], store, run_round, plan["resolution"], said)
 
 
+def _keep_drawn(store, lost):
+    """A store that keeps ``drawn``, its matrix complete: drop every trajectory its report does not draw
+    (``dalembert.reports.drawn``). Not before: a run still to come may change which are drawn."""
+    from dalembert.harness.matrix import RunSpec
+    from dalembert.reports.drawn import drawn_keys
+    from dalembert.trajectory_store import DRAWN
+
+    if store.kept().keep != DRAWN or lost:
+        return
+    if {RunSpec.from_json(s).key for s in store.manifest()["specs"]} - store.done_keys():
+        return
+    dropped = store.keep_trajectories(drawn_keys(store))
+    if dropped:
+        note(f"kept only the trajectories the report draws (--trajectories drawn): {dropped} dropped")
+
+
 def _resume(path, given_flags, jobs, scheduler, debug):
     """The store of ``--resume path`` with its writer's lock, specs, timeout, timing and client."""
     from dalembert.harness.execute import Timing
@@ -283,7 +299,8 @@ def _resume(path, given_flags, jobs, scheduler, debug):
 
 def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=None, params=None, options=None,
         jobs=None, timeout=None, quick=False, scheduler=None, out=None, resume=None, search=None, resolution=None,
-        no_maps=False, force=False, strict=False, timing=None, progress=None, debug=False, command=None, batch=False):
+        no_maps=False, force=False, strict=False, timing=None, progress=None, debug=False, command=None, batch=False,
+        trajectories=None):
     """Run a matrix into a new store (or finish one, ``resume``); every input checked first.
 
     Each keyword is a flag of ``dalembert run`` (``KEYWORDS`` names those that differ; see
@@ -321,6 +338,9 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     command : str or None — the command line to record in the manifest
     batch : bool — step the runs that differ only in the case's parameters as one batch of worlds, where the
         engine has batches (``dalembert.harness.batches``; kept in the manifest for ``--resume``)
+    trajectories : "all", "drawn", "none" or None — which runs' trajectories the store keeps
+        (``dalembert.trajectory_store``; None: all up to ``store.FILES_UP_TO`` runs, else drawn; kept in the
+        manifest: ``--resume`` keeps it, and refuses another)
 
     Returns
     -------
@@ -334,8 +354,10 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     from dalembert.harness.pool import run_matrix
     from dalembert.harness.selection import select
     from dalembert.harness.truths import build
+    from dalembert.trajectory_store import DRAWN, check_keep
 
     strict = strict_level(strict)
+    check_keep(trajectories)
     for keyword, value in (("out", out), ("resume", resume), ("scheduler", scheduler), ("search", search)):
         if value is not None:
             given(_flag(keyword), value)
@@ -352,6 +374,13 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
                        if keywords[k] is not None and keywords[k] is not False and keywords[k] != []]
         store, lock, specs, timeout, timing, jobs, client = _resume(resume, given_flags, jobs, scheduler, debug)
         batch = bool(store.manifest().get("batch", False))
+        kept = store.kept().keep
+        if trajectories is not None and trajectories != kept:
+            lock.release()
+            if client is not None:
+                client.close()
+            raise ValueError(f"run.trajectories: {trajectories!r}, and the store {resume} keeps {kept!r} — drop "
+                             "--trajectories (--resume keeps the store's choice), or start a new matrix with --out")
     else:
         args = SimpleNamespace(case=cases, tag=tags, engine=engines, integrator=integrators, dt=_groups(dts),
                                rtol=_groups(rtols), param=_texts("--param", params, _param_text),
@@ -370,6 +399,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
         manifest = session.manifest(specs, command, timeout, timing, jobs, scheduler)
         manifest["refused"] = [r.to_json() for r in chosen.refused]  # once each, not runs: a report reads them here
         manifest["batch"] = bool(batch)
+        manifest["trajectories"] = trajectories  # None: by the matrix's size (``Store.create``)
         if chosen.searches:
             manifest["searches"] = [{"parameter": "dt", "resolution": res, "first": [s.to_json() for s in first]}
                                     for first, res in chosen.searches]
@@ -384,6 +414,11 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
             note(f"the last writer of {store.path} ended without releasing it ({printable(lock.stale)}); what it stored is kept")
         print(f"dalembert: {len(specs)} runs, {len(specs) - len(store.done_keys())} to do -> {store.path}",
               file=sys.stderr)
+
+        if store.kept().keep == DRAWN:  # a run never drawn (a map's probe) is not written at all
+            from dalembert.reports.drawn import may_be_drawn
+
+            store.kept().drawable = may_be_drawn(store.manifest()["specs"], store.case)
 
         def run_batch(runs):
             if client is not None:
@@ -404,6 +439,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
             if client is not None:
                 client.close()
         session.end(store)
+        _keep_drawn(store, lost)
         return Outcome(store, store.records(), lost, strict=strict)
 
 
