@@ -53,8 +53,8 @@ import tempfile
 from dalembert import runs_table
 from dalembert.case import CaseRecord
 from dalembert.provenance import harness_commit, library_versions, machine_info, now
-from dalembert.record import SCHEMA_VERSION, RunRecord, SchemaError
-from dalembert.segments import SegmentWriter, segment_keys, segment_names, segment_rows
+from dalembert.record import SCHEMA_VERSION, RunRecord, SchemaError, records_from_table
+from dalembert.segments import SegmentWriter, segment_names, segment_rows
 from dalembert.trajectory_files import read_only, trajectory_from_npz, trajectory_to_npz
 
 __all__ = ["Store", "StoreError", "StoreLock", "atomic_write", "file_name", "trajectory_to_npz", "trajectory_from_npz",
@@ -308,9 +308,8 @@ class Store:
 
     def done_keys(self):
         """The keys of the runs stored (a row file, or a complete segment line whose key reads)."""
-        if self.layout() == SEGMENTS:
-            return {k for name in segment_names(self.segments_dir)
-                    for k in segment_keys(os.path.join(self.segments_dir, name)) if k is not None}
+        if self.layout() == SEGMENTS:  # the table's keys and the lines added since (``runs_table.keys``)
+            return runs_table.keys(self.path, self.segments_dir)
         if not os.path.isdir(self.rows_dir):
             return set()
         return {f[:-5] for f in os.listdir(self.rows_dir) if f.endswith(".json") and not f.startswith(".tmp-")}
@@ -376,6 +375,31 @@ class Store:
                                  f"{self._redo(key)}") from None
         return out
 
+    def table_records(self):
+        """Every stored run as a ``RunRecord``, sorted by key, read in bulk: layout 2 from its table
+        (``runs.parquet`` and the segment lines since, column by column: ``record.records_from_table``, which says
+        how a null metric reads), linearly to a million runs; layout 1 as ``records``. What a report or a
+        summary reads; ``records`` reads each row as written, and names a damaged one's line."""
+        if self.layout() == FILES:
+            return self.records()
+        table = self._read_table(runs_table.read)
+        if table is None:
+            return []
+        for name in ROW_NAMES:  # what becomes a path, checked once per distinct value
+            if name in table.column_names:
+                for value in table.column(name).unique().to_pylist():
+                    if not _is_file_name(value):
+                        file_name(value, name, self.segments_dir, "the store was edited or damaged; delete its line "
+                                  f"and run `dalembert run --resume {self.path}` to redo that run")
+        try:
+            return records_from_table(table)
+        except SchemaError:
+            raise
+        except (KeyError, TypeError, ValueError) as e:
+            raise StoreError(f"{self.segments_dir}: a row is not a run dalembert wrote ({type(e).__name__}: {e}) — "
+                             "the store was edited or damaged; `Store.records()` names the row's segment and line: delete "
+                             f"it and run `dalembert run --resume {self.path}` to redo that run") from None
+
     def table(self):
         """All rows as a pandas DataFrame sorted by key (one column per row field; ``RunRecord`` names them).
         Layout 2 reads it as columns: ``runs.parquet`` and the segment lines added since (``runs_table``)."""
@@ -398,9 +422,16 @@ class Store:
         import pandas as pd
 
         if self.layout() == FILES:
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
             df = self.table()
             buf = io.BytesIO()
-            df.to_parquet(buf, index=False)
+            try:
+                df.to_parquet(buf, index=False)
+            except (pa.ArrowInvalid, pa.ArrowTypeError):  # a column of two types: each in its widest (runs_table)
+                buf = io.BytesIO()
+                pq.write_table(runs_table.rows_table(self.rows()), buf)
             atomic_write(os.path.join(self.path, runs_table.TABLE_FILE), buf.getvalue())
             return df
         self._segment.sync()
