@@ -28,7 +28,7 @@ import os
 
 from dalembert.segments import line_key, parse_lines, segment_names, segment_rows
 
-__all__ = ["COVERS", "TABLE_FILE", "complete_size", "consolidate", "keys", "read", "rows_table", "widest"]
+__all__ = ["COVERS", "TABLE_FILE", "complete_size", "consolidate", "frame_parquet", "keys", "read", "rows_table", "widest"]
 
 TABLE_FILE = "runs.parquet"
 COVERS = b"dalembert.covers"  # the schema metadata: {"segments": {name: bytes read}}
@@ -58,6 +58,21 @@ def rows_table(rows):
         for name in row:
             columns.setdefault(name, None)
     return pa.table({name: widest([row.get(name) for row in rows]) for name in columns})
+
+
+def frame_parquet(frame, rows):
+    """The Parquet bytes of ``frame`` (a layout-1 store's rows as pandas reads them); where a column's values differ
+    in type (pandas cannot write it), of ``rows()``'s table, each column in its ``widest`` type."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    buf = io.BytesIO()
+    try:
+        frame.to_parquet(buf, index=False)
+    except (pa.ArrowInvalid, pa.ArrowTypeError):
+        buf = io.BytesIO()
+        pq.write_table(rows_table(rows()), buf)
+    return buf.getvalue()
 
 
 def _unify(tables):

@@ -44,7 +44,6 @@ outside it.
 from __future__ import annotations
 
 import fcntl
-import io
 import json
 import os
 import socket
@@ -53,7 +52,8 @@ import tempfile
 from dalembert import runs_table
 from dalembert.case import CaseRecord
 from dalembert.provenance import harness_commit, library_versions, machine_info, now
-from dalembert.record import SCHEMA_VERSION, RunRecord, SchemaError, records_from_table
+from dalembert.bulk_records import records_from_table
+from dalembert.record import SCHEMA_VERSION, RunRecord, SchemaError
 from dalembert.segments import SegmentWriter, segment_names, segment_rows
 from dalembert.trajectory_files import read_only, trajectory_from_npz, trajectory_to_npz
 
@@ -376,29 +376,32 @@ class Store:
         return out
 
     def table_records(self):
-        """Every stored run as a ``RunRecord``, sorted by key, read in bulk: layout 2 from its table
-        (``runs.parquet`` and the segment lines since, column by column: ``record.records_from_table``, which says
-        how a null metric reads), linearly to a million runs; layout 1 as ``records``. What a report or a
-        summary reads; ``records`` reads each row as written, and names a damaged one's line."""
+        """Every stored run as a ``RunRecord``, sorted by key, read in bulk (``records_of``): what a report reads,
+        linearly to a million runs. Layout 1 reads as ``records`` (which reads and names each row as written)."""
+        return self.records() if self.layout() == FILES else self.records_of(self.arrow_table())
+
+    def arrow_table(self):
+        """All rows as an Arrow table sorted by key (None: no row): layout 2's ``runs.parquet`` and the lines
+        since (``runs_table.read``), layout 1's row files (``runs_table.rows_table``)."""
         if self.layout() == FILES:
-            return self.records()
-        table = self._read_table(runs_table.read)
-        if table is None:
-            return []
-        for name in ROW_NAMES:  # what becomes a path, checked once per distinct value
-            if name in table.column_names:
-                for value in table.column(name).unique().to_pylist():
-                    if not _is_file_name(value):
-                        file_name(value, name, self.segments_dir, "the store was edited or damaged; delete its line "
-                                  f"and run `dalembert run --resume {self.path}` to redo that run")
+            return runs_table.rows_table(self.rows()) if self.done_keys() else None
+        return self._read_table(runs_table.read)
+
+    def records_of(self, table):
+        """The ``RunRecord`` of each row of ``table`` (``arrow_table`` or rows of it; None: none), column by column
+        (``record.records_from_table``, which says how a null metric reads); the names that become paths checked."""
+        fix = f"the store was edited or damaged; delete its row and run `dalembert run --resume {self.path}`"
+        for name in ROW_NAMES if table is not None else ():  # each distinct value once
+            for value in table.column(name).unique().to_pylist() if name in table.column_names else ():
+                if not _is_file_name(value):
+                    file_name(value, name, self.path, fix)
         try:
-            return records_from_table(table)
+            return [] if table is None else records_from_table(table)
         except SchemaError:
             raise
         except (KeyError, TypeError, ValueError) as e:
-            raise StoreError(f"{self.segments_dir}: a row is not a run dalembert wrote ({type(e).__name__}: {e}) — "
-                             "the store was edited or damaged; `Store.records()` names the row's segment and line: delete "
-                             f"it and run `dalembert run --resume {self.path}` to redo that run") from None
+            raise StoreError(f"{self.path}: a row is not a run dalembert wrote ({type(e).__name__}: {e}) — {fix} "
+                             "(`Store.records()` names its file and line)") from None
 
     def table(self):
         """All rows as a pandas DataFrame sorted by key (one column per row field; ``RunRecord`` names them).
@@ -422,17 +425,8 @@ class Store:
         import pandas as pd
 
         if self.layout() == FILES:
-            import pyarrow as pa
-            import pyarrow.parquet as pq
-
             df = self.table()
-            buf = io.BytesIO()
-            try:
-                df.to_parquet(buf, index=False)
-            except (pa.ArrowInvalid, pa.ArrowTypeError):  # a column of two types: each in its widest (runs_table)
-                buf = io.BytesIO()
-                pq.write_table(runs_table.rows_table(self.rows()), buf)
-            atomic_write(os.path.join(self.path, runs_table.TABLE_FILE), buf.getvalue())
+            atomic_write(os.path.join(self.path, runs_table.TABLE_FILE), runs_table.frame_parquet(df, self.rows))
             return df
         self._segment.sync()
         table = self._read_table(runs_table.consolidate, atomic_write)

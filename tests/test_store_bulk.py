@@ -174,3 +174,28 @@ def test_widest_types():
     assert runs_table.widest([1, None, 2]) == [1, None, 2]
     assert runs_table.widest([1, None, 2.5]) == [1.0, None, 2.5]
     assert runs_table.widest([1, "[1, 2]", True, None]) == ["1", "[1, 2]", "true", None]
+
+
+def test_a_matrix_outcome_reads_its_counts_and_failing_runs_from_the_table(files, tmp_path):
+    from dalembert.harness.commands.run import Outcome
+    from dalembert.judge import Judgement
+    from dalembert.stored_runs import StoredRuns
+
+    records = files.records()
+    beyond = Judgement(beyond=("orientation",), verdict="stable", reason="", within_tolerance=False)
+    unmeasured = Judgement(beyond=(), verdict="stable", reason="", within_tolerance=None,
+                           not_measured=("reaction_force",))
+    a, b, c = [r for r in records if r.ok][:3]
+    changes = {a.key: dict(judgement=beyond), b.key: dict(judgement=unmeasured),
+               c.key: dict(status="failed", message="an error")}
+    records = [replace(r, **changes.get(r.key, {})) for r in records]
+    seg = _segmented(files, tmp_path / "seg", records)
+    runs = StoredRuns(Store(seg.path))
+    lazy, listed = (Outcome(seg, rs, [], strict="tolerance") for rs in (runs, Store(seg.path).table_records()))
+    assert runs._records is None  # nothing read as records yet
+    assert lazy.statuses == listed.statuses and (lazy.statuses["failed"], lazy.statuses["diverged"]) == (1, 1)
+    for kind in ("bad", "beyond", "not_measured", "failing"):
+        got, want = getattr(lazy, kind), getattr(listed, kind)
+        assert [r.key for r in got] == [r.key for r in want] and want, kind
+    assert runs._records is None and lazy.exit_status == listed.exit_status == 1
+    assert len(runs) == len(records) and [r.key for r in runs] == sorted(r.key for r in records)
