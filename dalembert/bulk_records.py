@@ -102,65 +102,66 @@ def records_from_table(table):
         elif col.startswith("drift_"):
             metric["drift"].append((col[len("drift_"):], col))
     errors = dicts(metric["err"])
-    for q, _ in metric["err"]:  # (max, final) pairs: the final NaN where null
+    for q, col in metric["err"]:  # (max, final) pairs: the final NaN where null
         finals = floats(f"err_{q}_final")
-        for i, row in enumerate(errors):
-            if q in row:
-                row[q] = (row[q], finals[i])
+        for i in table.column(col).is_valid().to_numpy(zero_copy_only=False).nonzero()[0].tolist():
+            errors[i][q] = (errors[i][q], finals[i])
     drifts, rates, growths = (dicts(metric[kind]) for kind in ("drift", "drift_rate", "growth"))
     checks = dicts([(c, c) for c in CHECKS if c in names])
 
-    settings_memo, judgement_memo = {}, {}
-    integrators, options = objects("integrator"), objects("options")
-    dts, rtols, atols = ([_opt(v) for v in floats(name)] for name in ("dt", "rtol", "atol"))
-    beyond, verdicts, reasons = objects("beyond_tolerance"), objects("verdict"), objects("verdict_reason")
-    withins, not_measured = objects("within_tolerance"), objects("not_measured")
-    params = parsed("params", {}, lambda p: {k: tuple(v) if isinstance(v, list) else v for k, v in p.items()})
-    audits, provenances = parsed("audit", {}), parsed("provenance", {})
-    repeats = parsed("wall_s_repeats", (), lambda ws: tuple(_num(w) for w in ws))
-    cost_cols = []
-    for f in fields(Cost):
-        if f.name not in names:
-            continue
-        if f.name == "wall_s_repeats":
-            cost_cols.append((f.name, repeats))
-        elif f.name in _TEXTS:
-            cost_cols.append((f.name, [_text(v) for v in objects(f.name)]))
-        elif f.name in _COUNTS:
-            cost_cols.append((f.name, [_cost_field(f.name, v) for v in objects(f.name)]))
-        else:
-            cost_cols.append((f.name, floats(f.name)))
-    orders = [None if v != v else int(v) for v in floats("integrator_order")]
-    keys, cases, versions, engines = objects("key"), objects("case"), objects("case_version"), objects("engine")
-    statuses, messages, engine_versions = objects("status"), objects("message"), objects("engine_version")
-    dists, adapters = objects("adapter_distribution"), objects("adapter_version")
-    t_finals, t_divs = floats("t_final"), floats("t_diverged")
-    models, trajectories, tracebacks = objects("model"), objects("trajectory"), objects("traceback")
+    def settings_of(integrator, dt, rtol, atol, options):
+        return Settings(integrator, dt, rtol, atol, json.loads(options or "{}"))
 
+    def judgement_of(beyond, verdict, reason, within, not_measured):
+        return Judgement(beyond=tuple((beyond or "").split()), verdict=verdict or "", reason=reason or "",
+                         within_tolerance=None if within is None or within != within else bool(within),
+                         not_measured=tuple(_text(not_measured).split()))
+
+    defaults = {f.name: f.default for f in fields(Cost)}
+    cost = {"wall_s_repeats": parsed("wall_s_repeats", (), lambda ws: tuple(_num(w) for w in ws))}
+    for name in defaults:
+        if name == "wall_s_repeats":
+            continue
+        if name not in names:
+            cost[name] = [defaults[name]] * n
+        elif name in _TEXTS:
+            cost[name] = [_text(v) for v in objects(name)]
+        elif name in _COUNTS:
+            cost[name] = [_cost_field(name, v) for v in objects(name)]
+        else:
+            cost[name] = floats(name)
+    column = {
+        "key": objects("key"), "case": objects("case"), "case_version": objects("case_version"),
+        "engine": objects("engine"),
+        "settings": made(settings_of, objects("integrator"), *([_opt(v) for v in floats(name)]
+                                                               for name in ("dt", "rtol", "atol")), objects("options")),
+        "params": [dict(p) for p in parsed("params", {}, lambda p: {k: tuple(v) if isinstance(v, list) else v
+                                                                    for k, v in p.items()})],
+        "status": objects("status"), "message": [v or "" for v in objects("message")],
+        "engine_version": [v or "" for v in objects("engine_version")],
+        "adapter_distribution": [_text(v) for v in objects("adapter_distribution")],
+        "adapter_version": [_text(v) for v in objects("adapter_version")],
+        "integrator_order": [None if v != v else int(v) for v in floats("integrator_order")],
+        "t_final": floats("t_final"), "t_diverged": [_opt(v) for v in floats("t_diverged")],
+        "cost": list(map(Cost, *(cost[name] for name in defaults))),
+        "errors": errors, "drifts": drifts, "drift_rates": rates, "growths": growths, "checks": checks,
+        "judgement": made(judgement_of, objects("beyond_tolerance"), objects("verdict"), objects("verdict_reason"),
+                          objects("within_tolerance"), objects("not_measured")),
+        "audit": parsed("audit", {}), "model": [_text(v) for v in objects("model")],
+        "provenance": parsed("provenance", {}), "trajectory": [_text(v) for v in objects("trajectory")],
+        "traceback": [_text(v) for v in objects("traceback")],
+        "schema_version": [1 if v is None else v for v in schemas]}
+    return list(map(RunRecord, *(column[f.name] for f in fields(RunRecord))))
+
+
+def made(factory, *columns):
+    """``factory(*values)`` per row of ``columns`` (lists of one length), made once per distinct row of values:
+    the objects are frozen, so rows alike share one."""
+    memo = {}
     out = []
-    for i in range(n):
-        s_key = (integrators[i], dts[i], rtols[i], atols[i], options[i])
-        settings = settings_memo.get(s_key)
-        if settings is None:
-            settings = settings_memo[s_key] = Settings(
-                integrators[i], dts[i], rtols[i], atols[i], json.loads(options[i] or "{}"))
-        within = withins[i]
-        j_key = (beyond[i], verdicts[i], reasons[i], within, not_measured[i])
-        judgement = judgement_memo.get(j_key)
-        if judgement is None:
-            judgement = judgement_memo[j_key] = Judgement(
-                beyond=tuple((beyond[i] or "").split()), verdict=verdicts[i] or "", reason=reasons[i] or "",
-                within_tolerance=None if within is None or within != within else bool(within),
-                not_measured=tuple(_text(not_measured[i]).split()))
-        out.append(RunRecord(
-            key=keys[i], case=cases[i], case_version=versions[i], engine=engines[i], settings=settings,
-            params=dict(params[i]), status=statuses[i], message=messages[i] or "",
-            engine_version=engine_versions[i] or "", adapter_distribution=_text(dists[i]),
-            adapter_version=_text(adapters[i]), integrator_order=orders[i], t_final=t_finals[i],
-            t_diverged=_opt(t_divs[i]), cost=Cost(**{name: col[i] for name, col in cost_cols}),
-            errors=errors[i], drifts=drifts[i], drift_rates=rates[i], growths=growths[i], checks=checks[i],
-            judgement=judgement,
-            audit=audits[i], model=_text(models[i]), provenance=provenances[i],
-            trajectory=_text(trajectories[i]), traceback=_text(tracebacks[i]),
-            schema_version=1 if schemas[i] is None else schemas[i]))
+    for values in zip(*columns):
+        obj = memo.get(values)
+        if obj is None:
+            obj = memo[values] = factory(*values)
+        out.append(obj)
     return out
