@@ -213,7 +213,7 @@ def keys(store_dir, segments_dir):
     if os.path.exists(table_path):
         try:
             covers, _ = _covers(table_path)
-            found = set(pq.read_table(table_path, columns=["key"]).column("key").to_pylist())
+            found = set(pq.ParquetFile(table_path).read(columns=["key"]).column("key").to_pylist())
         except (OSError, ValueError, KeyError, TypeError, pa.ArrowException):
             covers, found = {}, set()
     if set(covers) - set(names) or any(complete_size(os.path.join(segments_dir, name)) < size
