@@ -357,8 +357,7 @@ class Store:
         """The fix for a damaged file (or segment line) of run ``key``: redo the run."""
         return f"delete {delete} and run `dalembert run --resume {self.path}` to redo that run"
 
-    def _row_name(self, key):
-        """Where run ``key``'s row is, for a message: its file, or the segments."""
+    def _row_name(self, key):  # where run ``key``'s row is, for a message
         return f"rows/{key}.json" if self.layout() == FILES else "its line in segments/"
 
     def records(self):
@@ -376,25 +375,27 @@ class Store:
         return out
 
     def table_records(self):
-        """Every stored run as a ``RunRecord``, sorted by key, read in bulk (``records_of``): what a report reads,
-        linearly to a million runs. Layout 1 reads as ``records`` (which reads and names each row as written)."""
-        return self.records() if self.layout() == FILES else self.records_of(self.arrow_table())
+        """Every stored run as a ``RunRecord``, sorted by key, read in bulk (``records_of``; layout 1: ``records``)."""
+        if self.layout() == FILES:
+            return self.records()
+        table = self.arrow_table()
+        if table is not None and len(table.column("key").unique()) < table.num_rows:
+            self._found()  # a run stored twice: named there, with both lines
+        return self.records_of(table)
 
     def arrow_table(self):
-        """All rows as an Arrow table sorted by key (None: no row): layout 2's ``runs.parquet`` and the lines
-        since (``runs_table.read``), layout 1's row files (``runs_table.rows_table``)."""
+        """All rows as an Arrow table sorted by key (None: no row; layout 2: ``runs_table.read``)."""
         if self.layout() == FILES:
             return runs_table.rows_table(self.rows()) if self.done_keys() else None
         return self._read_table(runs_table.read)
 
     def records_of(self, table):
         """The ``RunRecord`` of each row of ``table`` (``arrow_table`` or rows of it; None: none), column by column
-        (``record.records_from_table``, which says how a null metric reads); the names that become paths checked."""
+        (``bulk_records.records_from_table``: how a null metric reads); the names that become paths checked."""
         fix = f"the store was edited or damaged; delete its row and run `dalembert run --resume {self.path}`"
         for name in ROW_NAMES if table is not None else ():  # each distinct value once
             for value in table.column(name).unique().to_pylist() if name in table.column_names else ():
-                if not _is_file_name(value):
-                    file_name(value, name, self.path, fix)
+                file_name(value, name, self.path, fix)
         try:
             return [] if table is None else records_from_table(table)
         except SchemaError:
@@ -404,13 +405,12 @@ class Store:
                              "(`Store.records()` names its file and line)") from None
 
     def table(self):
-        """All rows as a pandas DataFrame sorted by key (one column per row field; ``RunRecord`` names them).
-        Layout 2 reads it as columns: ``runs.parquet`` and the segment lines added since (``runs_table``)."""
+        """All rows as a pandas DataFrame sorted by key, a column per row field (layout 2: ``arrow_table``)."""
         import pandas as pd
 
         if self.layout() == FILES:
             return pd.DataFrame(self.rows())
-        table = self._read_table(runs_table.read)
+        table = self.arrow_table()
         return pd.DataFrame() if table is None else table.to_pandas()
 
     def _read_table(self, read, *args):
@@ -420,8 +420,8 @@ class Store:
             raise StoreError(str(e)) from None
 
     def write_table(self):
-        """Rebuild ``runs.parquet`` (atomically): from the row files (layout 1), or from the table it holds and
-        the segment lines added since, this process's segment synced to the disk first (layout 2)."""
+        """Rebuild ``runs.parquet`` atomically from the row files (layout 1), or its table and the lines since
+        (layout 2: this process's segment synced first); a column of two types in its widest (``runs_table``)."""
         import pandas as pd
 
         if self.layout() == FILES:
