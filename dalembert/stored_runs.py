@@ -26,43 +26,50 @@ class StoredRuns(Sequence):
     store : dalembert.store.Store
     """
 
-    def __init__(self, store):
+    def __init__(self, store, table=None):
         self.store = store
-        self._table = store.arrow_table()
+        self._table = store.arrow_table() if table is None else table
         self._records = None
 
     def __len__(self):
         return 0 if self._table is None else self._table.num_rows
 
     def __getitem__(self, i):
+        if self._records is None and isinstance(i, int):  # one run (the first of the failing ones): its row only
+            i = range(len(self))[i]
+            return self.store.records_of(self._table.slice(i, 1))[0]
+        return self._all()[i]
+
+    def __iter__(self):
+        return iter(self._all())
+
+    def _all(self):
         if self._records is None:
             self._records = self.store.records_of(self._table)
-        return self._records[i]
+        return self._records
 
     def statuses(self):
         """``Counter`` of the runs' statuses."""
         return Counter() if self._table is None else Counter(self._table.column("status").to_pylist())
 
     def where(self, bad=False, beyond=False, not_measured=False):
-        """The records that failed, diverged or timed out (``bad``), the finished ones beyond a tolerance
-        (``beyond``: ``within_tolerance`` false) or with a bound they did not measure, none beyond
-        (``not_measured``), read from the rows that are."""
+        """The runs, as a ``StoredRuns`` of the rows that are (in key order), that failed, diverged or timed out
+        (``bad``), or finished beyond a tolerance (``beyond``: ``within_tolerance`` false), or finished with a bound
+        they did not measure, none beyond (``not_measured``): any of those asked."""
         import pyarrow as pa
         import pyarrow.compute as pc
 
         t = self._table
         if t is None:
             return []
-        status = t.column("status")
-        if bad:
-            mask = pc.is_in(status, pa.array(BAD_STATUSES))
-        else:
-            n = t.num_rows
-            within = t.column("within_tolerance") if "within_tolerance" in t.column_names else pa.nulls(n, pa.bool_())
-            ok = pc.equal(status, "ok")
-            if beyond:
-                mask = pc.and_(ok, pc.equal(within, False))
-            else:
-                names = (t.column("not_measured") if "not_measured" in t.column_names else pa.nulls(n, pa.string()))
-                mask = pc.and_(pc.and_(ok, pc.is_null(within)), pc.greater(pc.utf8_length(names), 0))
-        return self.store.records_of(t.filter(pc.fill_null(mask, False)))
+        n, status = t.num_rows, t.column("status")
+        within = t.column("within_tolerance") if "within_tolerance" in t.column_names else pa.nulls(n, pa.bool_())
+        names = t.column("not_measured") if "not_measured" in t.column_names else pa.nulls(n, pa.string())
+        ok = pc.equal(status, "ok")
+        masks = [pc.is_in(status, pa.array(BAD_STATUSES))] if bad else []
+        masks += [pc.and_(ok, pc.equal(within, False))] if beyond else []
+        masks += [pc.and_(pc.and_(ok, pc.is_null(within)), pc.greater(pc.utf8_length(names), 0))] if not_measured else []
+        mask = pa.array([False] * n)
+        for m in masks:
+            mask = pc.or_(mask, pc.fill_null(m, False))
+        return StoredRuns(self.store, t.filter(mask))

@@ -87,6 +87,8 @@ class Outcome:
         """What fails the matrix under ``strict``: the bad records, and with ``"tolerance"`` those beyond too."""
         if not self.strict:
             return []
+        if isinstance(self.records, StoredRuns):  # (in key order)
+            return self.records.where(bad=True, beyond=self.strict == "tolerance")
         return self.bad + (self.beyond if self.strict == "tolerance" else [])
 
     @property
