@@ -14,7 +14,7 @@ the report grow with the number of rows.
    the rows (``Store.write_record`` one by one, as the matrix's parent does), to rebuild
    ``runs.parquet`` (``write_table``, as at the end of a matrix), to read the rows back as a table
    (``Store.table``: what aggregates read), to read them back as ``RunRecord`` objects
-   (``Store.records``) and to build the report (``build_report``, which reads the records) — each
+   in bulk (``Store.table_records``, what the report reads) and to build the report (``build_report``) — each
    per 1000 rows, so that growth worse than linear shows. ``--json FILE`` writes the totals, s:
    ``{"rows": {"10000": {"write_s": .., "table_s": .., "read_s": .., "records_s": .., "report_s": ..}}}``,
    each step's CPU time beside (``write_cpu_s``, ...: on a loaded machine the wall time is mostly waiting)
@@ -101,7 +101,7 @@ def store_figures(source, path, size, layout, report=True):
     store, figures["write_s"] = _synthetic(source, path, size, layout)
     figures["write_cpu_s"] = _cpu() - c0
     for name, step in (("table_s", store.write_table), ("read_s", store.table),
-                       *((("records_s", store.records), ("report_s", lambda: build_report(store))) if report else ())):
+                       *((("records_s", store.table_records), ("report_s", lambda: build_report(store))) if report else ())):
         t0, c0 = time.perf_counter(), _cpu()
         step()
         figures[name], figures[name.replace("_s", "_cpu_s")] = time.perf_counter() - t0, _cpu() - c0

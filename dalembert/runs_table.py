@@ -10,9 +10,14 @@ of its rows (``dalembert.segments``); the table is made from them, and a table t
 covers more than its segments hold is refused as damage.
 
 New lines are parsed by Arrow's JSON reader (columns in C++, no Python object per
-value); where a segment's columns do not parse as one type (a case parameter given as a
-vector in one row and a number in another), its rows are read line by line as
-``Store.rows`` reads them and converted as pandas converts a list of rows.
+value); where a segment's columns do not parse as one type, its rows are read line by
+line as ``Store.rows`` reads them.
+
+A column is one type in the table. Where its values differ in type between rows (a case
+parameter a number in one row and a vector, stored as JSON text, in another; a column a
+later version made text), the column takes the widest (``widest``): integers and floats
+read as floats, and any other mix as text — a text value as it is, any other as its JSON
+text (``5``, ``true``, ``[1, 2]``); null stays null. Both layouts' ``runs.parquet`` follow it.
 """
 
 from __future__ import annotations
@@ -21,9 +26,9 @@ import io
 import json
 import os
 
-from dalembert.segments import parse_lines, segment_names, segment_rows
+from dalembert.segments import line_key, parse_lines, segment_names, segment_rows
 
-__all__ = ["COVERS", "TABLE_FILE", "complete_size", "consolidate", "read"]
+__all__ = ["COVERS", "TABLE_FILE", "complete_size", "consolidate", "frame_parquet", "keys", "read", "rows_table", "widest"]
 
 TABLE_FILE = "runs.parquet"
 COVERS = b"dalembert.covers"  # the schema metadata: {"segments": {name: bytes read}}
@@ -32,6 +37,70 @@ COVERS = b"dalembert.covers"  # the schema metadata: {"segments": {name: bytes r
 # line by line instead (``_parse``), slower but the same rows.
 JSON_BLOCK_BYTES = 16 << 20
 _TAIL_CHUNK = 1 << 16
+
+
+def widest(values):
+    """``values`` (one column's, Python, None for null) in the column's widest type (the module docstring): as
+    they are when of one type, integers with floats as floats, any other mix as text."""
+    kinds = {type(v) for v in values if v is not None}
+    if len(kinds) <= 1 or kinds <= {int, float}:
+        return values if kinds != {int, float} else [None if v is None else float(v) for v in values]
+    return [v if v is None or isinstance(v, str) else json.dumps(v) for v in values]
+
+
+def rows_table(rows):
+    """``rows`` (dicts of columns, as written) as one Arrow table: a column per name any row has (null where a row
+    has none), each in its ``widest`` type."""
+    import pyarrow as pa
+
+    columns = {}
+    for row in rows:
+        for name in row:
+            columns.setdefault(name, None)
+    return pa.table({name: widest([row.get(name) for row in rows]) for name in columns})
+
+
+def frame_parquet(frame, rows):
+    """The Parquet bytes of ``frame`` (a layout-1 store's rows as pandas reads them); where a column's values differ
+    in type (pandas cannot write it), of ``rows()``'s table, each column in its ``widest`` type."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    buf = io.BytesIO()
+    try:
+        frame.to_parquet(buf, index=False)
+    except (pa.ArrowInvalid, pa.ArrowTypeError):
+        buf = io.BytesIO()
+        pq.write_table(rows_table(rows()), buf)
+    return buf.getvalue()
+
+
+def _unify(tables):
+    """``tables`` (Arrow) with each column that differs in type between them made ``widest``: numbers as float64,
+    any other mix as text, so that they concatenate."""
+    import pyarrow as pa
+
+    types = {}
+    for t in tables:
+        for field in t.schema:
+            if not pa.types.is_null(field.type):
+                types.setdefault(field.name, set()).add(field.type)
+    mixed = {name for name, kinds in types.items() if len(kinds) > 1}
+    if not mixed:
+        return tables
+    numeric = {name for name in mixed if all(pa.types.is_integer(k) or pa.types.is_floating(k) for k in types[name])}
+    out = []
+    for t in tables:
+        for name in mixed & set(t.column_names):
+            i = t.column_names.index(name)
+            if name in numeric:
+                col = t.column(name).cast(pa.float64())
+            else:
+                col = pa.array([v if v is None or isinstance(v, str) else json.dumps(v)
+                                for v in t.column(name).to_pylist()], pa.string())
+            t = t.set_column(i, name, col)
+        out.append(t)
+    return out
 
 
 def complete_size(path):
@@ -74,9 +143,7 @@ def _parse(path, start, end, fix):
             except ValueError:  # a damaged line: named with its number in the whole segment
                 segment_rows(path, fix)
                 raise
-    import pandas as pd
-
-    return pa.Table.from_pandas(pd.DataFrame(rows), preserve_index=False)
+    return rows_table(rows)
 
 
 def read(store_dir, segments_dir, fix, with_covers=False):
@@ -127,9 +194,37 @@ def read(store_dir, segments_dir, fix, with_covers=False):
         if end > start:
             tables.append(_parse(path, start, end, fix))
         covers[name] = end
-    tables = [t.replace_schema_metadata(None) for t in tables if t.num_rows]
+    tables = _unify([t.replace_schema_metadata(None) for t in tables if t.num_rows])
     table = pa.concat_tables(tables, promote_options="permissive").sort_by("key") if tables else None
     return (table, covers) if with_covers else table
+
+
+def keys(store_dir, segments_dir):
+    """The run keys of the segments in ``segments_dir`` (a set; a complete line whose key does not read is left
+    out, as ``segments.segment_keys`` reads it): the table's ``key`` column, and the lines appended since read from
+    their start only (``segments.line_key``). A table that cannot be read, or covers more than the segments hold,
+    is passed over: the keys are then read from the segments alone (``read`` names the damage)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    names = segment_names(segments_dir)
+    table_path = os.path.join(store_dir, TABLE_FILE)
+    covers, found = {}, set()
+    if os.path.exists(table_path):
+        try:
+            covers, _ = _covers(table_path)
+            found = set(pq.ParquetFile(table_path).read(columns=["key"]).column("key").to_pylist())
+        except (OSError, ValueError, KeyError, TypeError, pa.ArrowException):
+            covers, found = {}, set()
+    if set(covers) - set(names) or any(complete_size(os.path.join(segments_dir, name)) < size
+                                       for name, size in covers.items()):
+        covers, found = {}, set()
+    for name in names:
+        with open(os.path.join(segments_dir, name), "rb") as fh:
+            fh.seek(covers.get(name, 0))
+            found.update(line_key(line) for line in fh if line.endswith(b"\n"))
+    found.discard(None)
+    return found
 
 
 def consolidate(store_dir, segments_dir, fix, write):

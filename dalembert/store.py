@@ -46,17 +46,17 @@ outside it.
 from __future__ import annotations
 
 import fcntl
-import io
 import json
 import os
 import socket
-import tempfile
 
 from dalembert import runs_table
+from dalembert.atomic import atomic_write
 from dalembert.case import CaseRecord
 from dalembert.provenance import harness_commit, library_versions, machine_info, now
+from dalembert.bulk_records import records_from_table
 from dalembert.record import SCHEMA_VERSION, RunRecord, SchemaError
-from dalembert.segments import SegmentWriter, segment_keys, segment_names, segment_rows
+from dalembert.segments import SegmentWriter, segment_names, segment_rows
 from dalembert.trajectory_files import read_only, trajectory_from_npz, trajectory_to_npz
 from dalembert.trajectory_store import ALL, Trajectories, TrajectoryNotKept, check_keep, default_keep
 
@@ -71,38 +71,6 @@ LAYOUTS = (FILES, SEGMENTS)
 # directory is small (0.11 s per 1000 rows at 1e4, benchmarks/map.py) and 5-14x worse per row at 1e5, while
 # 2000 files still read in well under a second; below it, rows stay files a user can edit by hand.
 FILES_UP_TO = 2000
-
-
-def _umask():
-    """The process umask, read without changing it where the OS tells it (Linux's
-    /proc/self/status): setting and restoring it would race with other threads' files."""
-    try:
-        with open("/proc/self/status") as fh:
-            for line in fh:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except (OSError, ValueError):
-        pass
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-def atomic_write(path, data):
-    """Write ``data`` (bytes or str) to ``path`` atomically, with the mode ``open()`` would give it
-    (0o666 less the umask: ``mkstemp`` makes 0600 files, which a report served or shared cannot be)."""
-    mode = "wb" if isinstance(data, bytes) else "w"
-    directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp-", suffix=os.path.basename(path))
-    try:
-        os.fchmod(fd, 0o666 & ~_umask())
-        with os.fdopen(fd, mode) as fh:
-            fh.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 # The names a store holds that become path components: of a run spec in the manifest, of a row.
@@ -314,9 +282,8 @@ class Store:
 
     def done_keys(self):
         """The keys of the runs stored (a row file, or a complete segment line whose key reads)."""
-        if self.layout() == SEGMENTS:
-            return {k for name in segment_names(self.segments_dir)
-                    for k in segment_keys(os.path.join(self.segments_dir, name)) if k is not None}
+        if self.layout() == SEGMENTS:  # the table's keys and the lines added since (``runs_table.keys``)
+            return runs_table.keys(self.path, self.segments_dir)
         if not os.path.isdir(self.rows_dir):
             return set()
         return {f[:-5] for f in os.listdir(self.rows_dir) if f.endswith(".json") and not f.startswith(".tmp-")}
@@ -364,8 +331,7 @@ class Store:
         """The fix for a damaged file (or segment line) of run ``key``: redo the run."""
         return f"delete {delete} and run `dalembert run --resume {self.path}` to redo that run"
 
-    def _row_name(self, key):
-        """Where run ``key``'s row is, for a message: its file, or the segments."""
+    def _row_name(self, key):  # where run ``key``'s row is, for a message
         return f"rows/{key}.json" if self.layout() == FILES else "its line in segments/"
 
     def records(self):
@@ -382,14 +348,43 @@ class Store:
                                  f"{self._redo(key)}") from None
         return out
 
+    def table_records(self):
+        """Every stored run as a ``RunRecord``, sorted by key, read in bulk (``records_of``; layout 1: ``records``)."""
+        if self.layout() == FILES:
+            return self.records()
+        table = self.arrow_table()
+        if table is not None and len(table.column("key").unique()) < table.num_rows:
+            self._found()  # a run stored twice: named there, with both lines
+        return self.records_of(table)
+
+    def arrow_table(self):
+        """All rows as an Arrow table sorted by key (None: no row; layout 2: ``runs_table.read``)."""
+        if self.layout() == FILES:
+            return runs_table.rows_table(self.rows()) if self.done_keys() else None
+        return self._read_table(runs_table.read)
+
+    def records_of(self, table):
+        """The ``RunRecord`` of each row of ``table`` (``arrow_table`` or rows of it; None: none), column by column
+        (``bulk_records.records_from_table``: how a null metric reads); the names that become paths checked."""
+        fix = f"the store was edited or damaged; delete its row and run `dalembert run --resume {self.path}`"
+        for name in ROW_NAMES if table is not None else ():  # each distinct value once
+            for value in table.column(name).unique().to_pylist() if name in table.column_names else ():
+                file_name(value, name, self.path, fix)
+        try:
+            return [] if table is None else records_from_table(table)
+        except SchemaError:
+            raise
+        except (KeyError, TypeError, ValueError) as e:
+            raise StoreError(f"{self.path}: a row is not a run dalembert wrote ({type(e).__name__}: {e}) — {fix} "
+                             "(`Store.records()` names its file and line)") from None
+
     def table(self):
-        """All rows as a pandas DataFrame sorted by key (one column per row field; ``RunRecord`` names them).
-        Layout 2 reads it as columns: ``runs.parquet`` and the segment lines added since (``runs_table``)."""
+        """All rows as a pandas DataFrame sorted by key, a column per row field (layout 2: ``arrow_table``)."""
         import pandas as pd
 
         if self.layout() == FILES:
             return pd.DataFrame(self.rows())
-        table = self._read_table(runs_table.read)
+        table = self.arrow_table()
         return pd.DataFrame() if table is None else table.to_pandas()
 
     def _read_table(self, read, *args):
@@ -399,16 +394,14 @@ class Store:
             raise StoreError(str(e)) from None
 
     def write_table(self):
-        """Rebuild ``runs.parquet`` (atomically): from the row files (layout 1), or from the table it holds and
-        the segment lines added since, this process's segment synced to the disk first (layout 2)."""
+        """Rebuild ``runs.parquet`` atomically from the row files (layout 1), or its table and the lines since
+        (layout 2: this process's segment synced first); a column of two types in its widest (``runs_table``)."""
         import pandas as pd
 
         self.kept().sync(atomic_write)
         if self.layout() == FILES:
             df = self.table()
-            buf = io.BytesIO()
-            df.to_parquet(buf, index=False)
-            atomic_write(os.path.join(self.path, runs_table.TABLE_FILE), buf.getvalue())
+            atomic_write(os.path.join(self.path, runs_table.TABLE_FILE), runs_table.frame_parquet(df, self.rows))
             return df
         self._segment.sync()
         table = self._read_table(runs_table.consolidate, atomic_write)

@@ -73,7 +73,7 @@ def drawn_keys(store, records=None):
     from dalembert.reports.sections.common import has_contact
     from dalembert.reports.sections.contact import FIGURES
 
-    records = store.records() if records is None else records
+    records = store.table_records() if records is None else records
     groups = {}
     for r in records:
         groups.setdefault((r.case, r.case_version), []).append(r)

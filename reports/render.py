@@ -98,7 +98,7 @@ def _case_sections(rep, f, names, mapped):
 def build_report(store, out_dir=None):
     """Write ``report.html``, ``report.md`` (+ ``report_files/``) and ``summary.csv``; returns their paths."""
     out_dir = out_dir or store.path
-    records = store.records()
+    records = store.table_records()
     found = in_page_order(find(store, records))
     names = [f.case.name for f in found]
     rep = Report(store=store, records=records, manifest=store.manifest(), found=found,

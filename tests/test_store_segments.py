@@ -190,7 +190,7 @@ def test_a_damaged_line_is_named_with_its_file_and_line(files, tmp_path):
                         (lines[0], "is stored twice")):
         with open(path, "wb") as fh:
             fh.write(b"".join([lines[0], bad, *lines[2:]]))
-        for read in (Store(seg.path).rows, Store(seg.path).records):
+        for read in (Store(seg.path).rows, Store(seg.path).records, Store(seg.path).table_records):
             with pytest.raises(StoreError, match=rf"{path} line 2: .*{phrase}"):
                 read()
     with open(path, "wb") as fh:

@@ -18,6 +18,20 @@ HAZARD_TITLES = {"diverged": "Diverged", "failed": "Stopped early", "energy": "E
                  "closure": "Loops still opening", "reactions": "Motion right, reactions wrong",
                  "tolerance": "Finite but beyond the tolerance", "inert": "A tolerance changed nothing",
                  "disagreement": "Engines disagree", "unsupported": "Not supported (not run, not drawn)"}
+# A hazard of more runs than this lists the first ones by key and counts the rest: a map of a million probes
+# would otherwise list most of them (a 60 MB page at 1e6 rows, benchmarks/map.py); the default matrix's hazards
+# name far fewer (it runs 1,754), and every run is in the store (``dalembert export --all``).
+LISTED_RUNS = 1000
+
+
+def _listed(details):
+    """The runs a hazard lists: all of ``details``, or the first ``LISTED_RUNS`` and a line counting the rest."""
+    if len(details) <= LISTED_RUNS:
+        return list(details)
+    return list(details[:LISTED_RUNS]) + [f"… and {len(details) - LISTED_RUNS} more runs (every run is in the store: "
+                                          "dalembert export --all)"]
+
+
 def _block(mine_by_kind):
     """HTML and Markdown of hazards grouped by kind (``[(kind, [Hazard])]``)."""
     html, md = [], []
@@ -28,13 +42,14 @@ def _block(mine_by_kind):
         for h in mine:
             text = h.text + (" Cause: " + "; ".join(h.causes) + "." if h.causes else "")
             many = len(h.details) > NAMED  # the sentence names only a few: every run in a list beside it
+            shown = _listed(h.details) if many else []
             runs = (f"<details><summary>the {len(h.details)} runs</summary><ul>"
-                    + "".join(f"<li>{escape_html(d)}</li>" for d in h.details) + "</ul></details>") if many else ""
+                    + "".join(f"<li>{escape_html(d)}</li>" for d in shown) + "</ul></details>") if many else ""
             html.append(f"<li>{escape_html(text)}{runs}</li>")
             md.append(f"- {escape_md(text)}")
             if many:
                 md += [f"  <details><summary>the {len(h.details)} runs</summary>", ""]
-                md += [f"  - {escape_md(d)}" for d in h.details] + ["", "  </details>"]
+                md += [f"  - {escape_md(d)}" for d in shown] + ["", "  </details>"]
         html.append("</ul>")
         md.append("")
     return html, md

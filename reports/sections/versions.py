@@ -56,12 +56,13 @@ def _value(record, where, key):
 def version_groups(records):
     """``{(engine, case, case_version, params, settings label): [record, ...]}`` for each engine run under two
     or more names (versions), each group's records in version order; a group of one version left out."""
+    engine_of = {name: _engine(name) for name in {r.engine for r in records}}  # (once per name: a map has 1e6 runs)
     names = defaultdict(set)
-    for r in records:
-        names[_engine(r.engine)].add(r.engine)
+    for name, engine in engine_of.items():
+        names[engine].add(name)
     groups = defaultdict(list)
     for r in records:
-        engine = _engine(r.engine)
+        engine = engine_of[r.engine]
         if len(names[engine]) > 1:
             groups[(engine, r.case, r.case_version, tuple(sorted(r.params.items())), settings_text(r))].append(r)
     return {k: sorted(v, key=_version_key) for k, v in groups.items() if len({r.engine for r in v}) > 1}

@@ -14,6 +14,8 @@ import json
 import numbers
 import os
 import sys
+from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass
 from types import SimpleNamespace
 
@@ -21,6 +23,7 @@ from dalembert.harness import session
 from dalembert.harness.commands.console import command_line, note, progress_printer
 from dalembert.harness.selection import given
 from dalembert.record import BAD_STATUSES
+from dalembert.stored_runs import StoredRuns
 from dalembert.terminal import printable
 
 __all__ = ["run", "main", "Outcome", "KEYWORDS", "SCHEDULER_CONNECT_S"]
@@ -46,24 +49,37 @@ class Outcome:
     """What a matrix left: its store, every stored record, and how it ended."""
 
     store: object  # dalembert.store.Store
-    records: list  # RunRecord per stored run
+    records: Sequence  # RunRecord per stored run: a list, or ``StoredRuns`` (read from the table when asked)
     lost: list  # [(key, reason)]: runs lost to the infrastructure, not stored (--resume runs them)
     interrupted: bool = False  # Ctrl-C or SIGTERM: every finished run stored, the rest not run
     strict: bool | str = False  # ``STRICT``: False, True (= "status") or "tolerance"
 
     @property
+    def statuses(self):
+        """``Counter`` of the stored runs' statuses."""
+        if isinstance(self.records, StoredRuns):
+            return self.records.statuses()
+        return Counter(r.status for r in self.records)
+
+    @property
     def bad(self):
         """The records that failed, diverged or timed out."""
+        if isinstance(self.records, StoredRuns):
+            return self.records.where(bad=True)
         return [r for r in self.records if r.status in BAD_STATUSES]
 
     @property
     def beyond(self):
         """The finished records beyond one of their case's tolerances (``Judgement.within_tolerance`` False)."""
+        if isinstance(self.records, StoredRuns):
+            return self.records.where(beyond=True)
         return [r for r in self.records if r.ok and r.judgement.within_tolerance is False]
 
     @property
     def not_measured(self):
         """The finished records with a bounded quantity they did not report, none beyond (within not established)."""
+        if isinstance(self.records, StoredRuns):
+            return self.records.where(not_measured=True)
         return [r for r in self.records if r.ok and r.judgement.within_tolerance is None and r.judgement.not_measured]
 
     @property
@@ -71,6 +87,8 @@ class Outcome:
         """What fails the matrix under ``strict``: the bad records, and with ``"tolerance"`` those beyond too."""
         if not self.strict:
             return []
+        if isinstance(self.records, StoredRuns):  # (in key order)
+            return self.records.where(bad=True, beyond=self.strict == "tolerance")
         return self.bad + (self.beyond if self.strict == "tolerance" else [])
 
     @property
@@ -434,13 +452,18 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
         except KeyboardInterrupt:  # every finished run is stored; the workers are gone
             print(f"\ndalembert: interrupted; {len(store.done_keys())} of {len(specs)} runs stored in {store.path} — "
                   f"finish with: dalembert run --resume {store.path}", file=sys.stderr)
-            return Outcome(store, store.records(), [], interrupted=True, strict=strict)
+            return Outcome(store, _stored(store), [], interrupted=True, strict=strict)
         finally:
             if client is not None:
                 client.close()
         session.end(store)
         _keep_drawn(store, lost)
-        return Outcome(store, store.records(), lost, strict=strict)
+        return Outcome(store, _stored(store), lost, strict=strict)
+
+
+def _stored(store):
+    """The store's records for ``Outcome``: as written (layout 1, a few thousand at most), or ``StoredRuns``."""
+    return store.records() if store.layout() == 1 else StoredRuns(store)
 
 
 def main(args):
@@ -452,9 +475,7 @@ def main(args):
     outcome = run(**flags, progress=progress_printer(), command=command_line())
     if outcome.interrupted:
         return outcome.exit_status
-    by_status = {}
-    for r in outcome.records:
-        by_status[r.status] = by_status.get(r.status, 0) + 1
+    by_status = outcome.statuses
     print(f"dalembert: {len(outcome.records)} runs stored in {outcome.store.path}: "
           + ", ".join(f"{n} {s}" for s, n in sorted(by_status.items())), file=sys.stderr)
     if outcome.beyond:

@@ -1,0 +1,167 @@
+"""A store's table read as ``RunRecord`` objects in bulk: what ``RunRecord.from_row`` does one row at a time,
+done column by column, so that a report of a million runs reads them in seconds (``Store.table_records``).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import fields
+
+from dalembert.judge import Judgement
+from dalembert.record import (_COUNTS, _NAN, _TEXTS, CHECKS, READABLE_SCHEMAS, Cost, RunRecord, SchemaError,
+                              _cost_field, _num, _opt, _text)
+from dalembert.settings import Settings
+
+__all__ = ["records_from_table"]
+
+
+def records_from_table(table):
+    """Every row of a store's table as a ``RunRecord``, in the table's order, read column by column.
+
+    What ``from_row`` does one row at a time, done per column: numbers converted as whole columns, and each
+    distinct JSON text (``params``, ``options``, ``audit``, ``provenance``, ``wall_s_repeats``) and each distinct
+    settings and judgement parsed or made once — a map's rows repeat them. Records read together share their
+    ``audit`` and ``provenance`` dicts (read-only, like the frozen record; ``params`` is each record's own).
+
+    Parameters
+    ----------
+    table : pyarrow.Table
+        One row per run, the columns of ``RunRecord.to_row`` (``dalembert.runs_table``).
+
+    Returns
+    -------
+    list of RunRecord
+
+    Notes
+    -----
+    A table holds every column in every row, so a metric a row does not have (``err_*``, ``drift_*``,
+    ``drift_rate_*``, ``growth_*``, a check) and one stored as null (a run not finite) read alike: absent from the
+    record's dicts, as ``from_row`` reads a null check. ``max_error`` and ``drifts.get`` read both as NaN.
+
+    Raises
+    ------
+    SchemaError
+        A row of a schema not in ``READABLE_SCHEMAS`` (the first one named).
+    """
+    import pyarrow as pa
+
+    n = table.num_rows
+    names = set(table.column_names)
+
+    def objects(name, default=None):
+        """Column ``name`` as Python values (None for null), or ``default`` in every row when absent."""
+        return table.column(name).to_pylist() if name in names else [default] * n
+
+    def floats(name):
+        """Column ``name`` as Python floats, null (and absent) as NaN."""
+        if name not in names:
+            return [_NAN] * n
+        col = table.column(name)
+        if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type) or pa.types.is_null(col.type)):
+            return [_num(v) for v in col.to_pylist()]  # (a text column: float() names the bad value)
+        return col.cast(pa.float64()).to_numpy(zero_copy_only=False).astype(float, copy=False).tolist()
+
+    def dicts(columns):
+        """Per row, ``{name: value}`` of ``columns`` (``[(name, column name)]``) where the row's value is not null;
+        the values as ``floats``, made column by column over the non-null cells only."""
+        out = [{} for _ in range(n)]
+        for name, col in columns:
+            values = floats(col)
+            for i in table.column(col).is_valid().to_numpy(zero_copy_only=False).nonzero()[0].tolist():
+                out[i][name] = values[i]
+        return out
+
+    def parsed(name, empty, convert=lambda v: v):
+        """Column ``name``'s JSON texts parsed, each distinct text once (``empty`` for null or absent)."""
+        memo = {}
+        out = []
+        for text in objects(name):
+            if not isinstance(text, str):
+                out.append(empty)
+                continue
+            value = memo.get(text)
+            if value is None:
+                value = memo[text] = convert(json.loads(text))
+            out.append(value)
+        return out
+
+    schemas = objects("schema_version", 1)
+    bad = next((i for i, s in enumerate(schemas) if (1 if s is None else s) not in READABLE_SCHEMAS), None)
+    if bad is not None:
+        raise SchemaError(f"row {objects('key')[bad]!r}: schema {schemas[bad]!r}, this dalembert reads "
+                          f"{list(READABLE_SCHEMAS)} — read it with the dalembert version that wrote it")
+
+    metric = {"err": [], "drift": [], "drift_rate": [], "growth": []}
+    for col in sorted(names):
+        if col.startswith("err_") and col.endswith("_max"):
+            metric["err"].append((col[len("err_"):-len("_max")], col))
+        elif col.startswith("growth_"):
+            metric["growth"].append((col[len("growth_"):], col))
+        elif col.startswith("drift_rate_"):
+            metric["drift_rate"].append((col[len("drift_rate_"):], col))
+        elif col.startswith("drift_"):
+            metric["drift"].append((col[len("drift_"):], col))
+    errors = dicts(metric["err"])
+    for q, col in metric["err"]:  # (max, final) pairs: the final NaN where null
+        finals = floats(f"err_{q}_final")
+        for i in table.column(col).is_valid().to_numpy(zero_copy_only=False).nonzero()[0].tolist():
+            errors[i][q] = (errors[i][q], finals[i])
+    drifts, rates, growths = (dicts(metric[kind]) for kind in ("drift", "drift_rate", "growth"))
+    checks = dicts([(c, c) for c in CHECKS if c in names])
+
+    def settings_of(integrator, dt, rtol, atol, options):
+        return Settings(integrator, dt, rtol, atol, json.loads(options or "{}"))
+
+    def judgement_of(beyond, verdict, reason, within, not_measured):
+        return Judgement(beyond=tuple((beyond or "").split()), verdict=verdict or "", reason=reason or "",
+                         within_tolerance=None if within is None or within != within else bool(within),
+                         not_measured=tuple(_text(not_measured).split()))
+
+    defaults = {f.name: f.default for f in fields(Cost)}
+    cost = {"wall_s_repeats": parsed("wall_s_repeats", (), lambda ws: tuple(_num(w) for w in ws))}
+    for name in defaults:
+        if name == "wall_s_repeats":
+            continue
+        if name not in names:
+            cost[name] = [defaults[name]] * n
+        elif name in _TEXTS:
+            cost[name] = [_text(v) for v in objects(name)]
+        elif name in _COUNTS:
+            cost[name] = [_cost_field(name, v) for v in objects(name)]
+        else:
+            cost[name] = floats(name)
+    column = {
+        "key": objects("key"), "case": objects("case"), "case_version": objects("case_version"),
+        "engine": objects("engine"),
+        "settings": made(settings_of, objects("integrator"), *([_opt(v) for v in floats(name)]
+                                                               for name in ("dt", "rtol", "atol")), objects("options")),
+        "params": [dict(p) for p in parsed("params", {}, lambda p: {k: tuple(v) if isinstance(v, list) else v
+                                                                    for k, v in p.items()})],
+        "status": objects("status"), "message": [v or "" for v in objects("message")],
+        "engine_version": [v or "" for v in objects("engine_version")],
+        "adapter_distribution": [_text(v) for v in objects("adapter_distribution")],
+        "adapter_version": [_text(v) for v in objects("adapter_version")],
+        "integrator_order": [None if v != v else int(v) for v in floats("integrator_order")],
+        "t_final": floats("t_final"), "t_diverged": [_opt(v) for v in floats("t_diverged")],
+        "cost": list(map(Cost, *(cost[name] for name in defaults))),
+        "errors": errors, "drifts": drifts, "drift_rates": rates, "growths": growths, "checks": checks,
+        "judgement": made(judgement_of, objects("beyond_tolerance"), objects("verdict"), objects("verdict_reason"),
+                          objects("within_tolerance"), objects("not_measured")),
+        "audit": parsed("audit", {}), "model": [_text(v) for v in objects("model")],
+        "provenance": parsed("provenance", {}), "trajectory": [_text(v) for v in objects("trajectory")],
+        "traceback": [_text(v) for v in objects("traceback")],
+        "schema_version": [1 if v is None else v for v in schemas]}
+    return list(map(RunRecord, *(column[f.name] for f in fields(RunRecord))))
+
+
+def made(factory, *columns):
+    """``factory(*values)`` per row of ``columns`` (lists of one length), made once per distinct row of values:
+    the objects are frozen, so rows alike share one."""
+    memo = {}
+    out = []
+    for values in zip(*columns):
+        obj = memo.get(values)
+        if obj is None:
+            obj = memo[values] = factory(*values)
+        out.append(obj)
+    return out
