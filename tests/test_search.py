@@ -117,7 +117,8 @@ REPLAYED_PROBES = sorted([
     (100.0, "rk4", 0.03333333333333333, "drifts"), (100.0, "rk4", 0.05, "diverged"), (100.0, "rk4", 0.1, "diverged"),
     (500.0, "euler", 0.001, "diverged"), (500.0, "euler", 0.1, "diverged"), (500.0, "rk4", 0.001, "drifts"),
     (500.0, "rk4", 0.003125, "drifts"), (500.0, "rk4", 0.004166666666666667, "drifts"),
-    (500.0, "rk4", 0.005555555555555556, "diverged"), (500.0, "rk4", 0.01, "diverged"), (500.0, "rk4", 0.1, "diverged")])
+    (500.0, "rk4", 0.005555555555555556, "diverged"), (500.0, "rk4", 0.01, "diverged"),
+    (500.0, "rk4", 0.1, "diverged")])
 # Its boundaries, (spin, integrator, stable passed, stable failed, finite passed, finite failed, probes), from that run.
 REPLAYED_BOUNDARIES = sorted([
     (20.0, "euler", 0.1, None, 0.1, None, 2), (20.0, "rk4", 0.1, None, 0.1, None, 2),

@@ -6,8 +6,8 @@ step); otherwise a chunk of at most ``chunk`` runs of one engine, integrator and
 another, so a task's process start, the engine's import and its compilation are paid once per chunk,
 not per probe (``chunk=1``: a task per run). By default a chunk grows past ``DEFAULT_CHUNK`` runs where a
 batch of runs would otherwise make more than ``TASKS_PER_THREAD`` tasks per worker thread (``chunk_for``):
-a 1e4-probe map's rounds of ~700 probes on 2 workers are ~8 tasks each, not ~45. Progress and an estimate of the time left are told per
-run as each task's runs are stored (``progress``). A task's process stopped from outside (SIGTERM,
+a map's round of 1000 probes on 2 workers is ~8 tasks, not ~63. Progress and an estimate of the time left are
+told per run as each task's runs are stored (``progress``). A task's process stopped from outside (SIGTERM,
 SIGKILL: ``pool.STOPPED_FROM_OUTSIDE``) ends its runs without failing them, as a local worker's: the
 task raises ``WorkerStopped``, its runs are not stored, ``--resume`` runs them.
 """

@@ -69,7 +69,7 @@ def _libraries():
     from importlib import metadata
 
     global _DISTRIBUTIONS, _LAST
-    loaded = frozenset(sys.modules)  # the modules the last run saw: its answer (~0.15 s a run, most of a MuJoCo probe's)
+    loaded = frozenset(sys.modules)  # the modules the last run saw: its answer (~0.15 s a run: most of a MuJoCo probe)
     if _LAST[0] == loaded:
         return dict(_LAST[1])
     if _DISTRIBUTIONS is None:  # (reads every installed distribution's file list: once per process)
