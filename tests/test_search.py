@@ -170,3 +170,25 @@ def test_the_search_reads_each_probe_once_and_finds_what_it_found(tmp_path, monk
     assert sorted(p.name for p in (out / ("rows" if layout == 1 else "segments")).iterdir()) == rows  # none rerun
     assert sorted(parsed) == sorted(store.done_keys())
     assert _probes_and_boundaries(Store(out)) == (REPLAYED_PROBES, REPLAYED_BOUNDARIES)
+
+
+def test_a_probe_the_infrastructure_lost_stops_its_curve(tmp_path, monkeypatch):
+    """A probe lost to the infrastructure (not stored, returned as lost) stops its curve where it was: the search
+    does not ask for it again round after round, and the other curves are bisected as before."""
+    import dalembert.harness.pool as pool
+
+    run_matrix, calls = pool.run_matrix, []
+
+    def losing(runs, store, *args, **kwargs):  # loses the 100-rad/s RK4 curve's first bisection probe
+        calls.append(len(runs))
+        assert len(calls) < 30, "the search asks for a lost probe again and again"
+        dropped = [s for s in runs if dict(s.params)["spin"] == 100.0 and s.settings.integrator == "rk4"
+                   and s.settings.dt not in (1e-3, 1e-1)]
+        kept = [s for s in runs if s not in dropped]
+        return run_matrix(kept, store, *args, **kwargs) + [(s.key, "the cluster lost its task") for s in dropped]
+
+    monkeypatch.setattr(pool, "run_matrix", losing)
+    out = tmp_path / "r"
+    assert main([*REPLAYED_MAP, "--out", str(out)]) == 4  # runs lost
+    probes, _ = _probes_and_boundaries(Store(out))
+    assert probes == [p for p in REPLAYED_PROBES if p[:2] != (100.0, "rk4") or p[2] in (1e-3, 1e-1)]

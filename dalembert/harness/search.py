@@ -162,25 +162,29 @@ def search(specs, store, run, resolution=RESOLUTION, progress=None):
     """
     from dalembert.harness.truths import built_case
 
+    def curve(s):
+        return (s.case, s.case_version, s.engine, s.settings.integrator,
+                " ".join(f"{k}={v}" for k, v in sorted(s.settings.options.items())))
+
     by_curve, intervals = {}, {}
     for s in specs:
-        key = (s.case, s.case_version, s.engine, s.settings.integrator,
-               " ".join(f"{k}={v}" for k, v in sorted(s.settings.options.items())))
+        key = curve(s)
         by_curve.setdefault(key, s)
         if key not in intervals:
             times = built_case(s.case, s.params)[0].times
             intervals[key] = float(times[1] - times[0])
     stored = _StoredProbes(store)
-    lost = list(run(specs))
-    mine, asked = [], [s.key for s in specs]
-    rnd = 0
+    lost, probes, rnd, mine = [], specs, 0, []
     while True:
-        mine += stored.records(asked)  # this round's probes only: the earlier rounds' are in ``mine``
+        lost_now = list(run(probes))
+        lost += lost_now
+        by_key = {p.key: curve(p) for p in probes}
+        for key, _ in lost_now:  # a probe the infrastructure lost stops its curve (asked again, it could loop)
+            by_curve.pop(by_key.get(key), None)
+        mine += stored.records(list(by_key))  # this round's probes only: the earlier rounds' are in ``mine``
         probes = next_probes(by_curve, mine, intervals, resolution)
         if not probes:
             return lost
         rnd += 1
         if progress:
             progress(rnd, probes)
-        asked = [p.key for p in probes]
-        lost += run(probes)
