@@ -81,10 +81,11 @@ PROBE_SPINS = (30.0, 500.0)  # rad/s: the swept range, log-spaced
 PROBES_PER_CURVE = 10
 
 
-def probe_map(tmp, probes, jobs=None):
+def probe_map(tmp, probes, jobs=None, log=None):
     """The ``--probes`` map of ~``probes`` probes on a 2-worker ``LocalCluster`` (or on ``jobs`` local workers, no
     Dask): ``{"probes", "wall_s", "probes_per_s", "workers", "tasks", "rounds", "load_start", "load_end"}`` (tasks
-    None without Dask), its store at ``tmp/probes``."""
+    None without Dask), its store at ``tmp/probes``; ``log``: a file for what ``dalembert run`` told (its rounds and
+    each probe's progress)."""
     from distributed import LocalCluster
     from distributed.diagnostics.plugin import SchedulerPlugin
 
@@ -112,6 +113,9 @@ def probe_map(tmp, probes, jobs=None):
             proc = subprocess.run([*command, "--scheduler", cluster.scheduler_address], capture_output=True,
                                   text=True)
             wall, tasks = time.perf_counter() - t0, plugin.ran
+    if log:
+        with open(log, "w") as fh:
+            fh.write(proc.stderr)
     if proc.returncode != 0:
         raise SystemExit(proc.stderr[-2000:])
     from dalembert.store import Store
@@ -182,6 +186,7 @@ def main(argv=None):
     p.add_argument("--probes", type=int, default=None, metavar="N", help="run a map of ~N probes (probe_map)")
     p.add_argument("--jobs", type=int, default=None, metavar="J",
                    help="with --probes: run the map on J local worker processes, without Dask")
+    p.add_argument("--log", metavar="FILE", help="with --probes: write what the map's `dalembert run` told to FILE")
     args = p.parse_args(argv)
     if args.probes is not None and args.probes < 1:
         p.error(f"--probes: {args.probes} probes — give at least 1")
@@ -196,7 +201,7 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as tmp:
         if args.probes:
             where = "local" if args.jobs else "cluster"
-            head[where] = m = probe_map(tmp, args.probes, args.jobs)
+            head[where] = m = probe_map(tmp, args.probes, args.jobs, args.log)
             on = (f"{args.jobs} local workers (no Dask)" if args.jobs
                   else f"a 2-worker LocalCluster ({m['tasks']} Dask tasks)")
             print(f"map of {m['spins']} spins on {on}: {m['probes']} probes in {m['wall_s']:.1f} s = "
