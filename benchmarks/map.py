@@ -2,7 +2,7 @@
 the report grow with the number of rows.
 
     python -m benchmarks.map [--rows 10000,100000,1000000] [--json FILE] [--layout 2] [--source STORE]
-    python -m benchmarks.map --probes 10000 [--jobs 2] [--json FILE]
+    python -m benchmarks.map --probes 10000 [--jobs 2] [--json FILE] [--log FILE]
 
 1. A small map on a ``LocalCluster`` of 2 worker processes (1 thread each): the reference's RK4
    and RKMK4 on ``free_top_fast_spin`` swept over 4 spins from 5 to 500 rad/s, each curve
@@ -15,6 +15,13 @@ the report grow with the number of rows.
    per second, the search's rounds, the Dask tasks and the load average; the store's figures follow
    only with ``--rows``. ``--json FILE`` writes the map as ``{"cluster": {"probes", "wall_s",
    "probes_per_s", "workers", "tasks", "rounds", "load_start", "load_end"}}`` (``"local"`` with ``--jobs``).
+   Measured on 2 cores shared with other work: ``--probes 10000``, 10433 probes in 852 s (14.2 min, 12.2
+   probes/s, load average 10.6 to 11.8; 102 Dask tasks; the 2000 first probes, then 12 rounds of 1000 to 86)
+   and in 192 s with ``--jobs 2`` (54.4 probes/s, load 7.8 to 4.8); 377 CPU s against 179 for the whole
+   command. ``--probes 1000``: 1042 probes in 605 s on the cluster (67 tasks, load 14 to 16), 199 s with
+   ``--jobs 2`` (load 13 to 16). A Dask task is a fresh process (~1.2 CPU s to start: dalembert, MuJoCo, the
+   installed distributions' metadata) and the cluster's own processes take their share, so on one small host
+   the local pool is the faster; the cluster pays where it has more hosts than one.
 2. The store and the report fed synthetic rows (copies of that map's runs under new keys, each
    a new probe of its curve) in the store layout ``--layout`` (``dalembert.store.LAYOUTS``; 2, the
    segments a map past ``FILES_UP_TO`` runs takes, by default): for each size, the time to write
@@ -77,7 +84,7 @@ PROBE_MAP = ["--case", "free_top_fast_spin", "--param", "t_final=0.5", "--param"
 PROBE_SPINS = (30.0, 500.0)  # rad/s: the swept range, log-spaced
 # Probes a curve of PROBE_MAP takes: 2 at the bracket's ends, then bisections on both sides to the resolution
 # (log2(ln(100) / ln(1.05)) = 6.6 per side at most; fewer where a snapped step repeats one already probed).
-# Measured: 10 spins from 38.7 to 500 rad/s took 6 to 13 probes, 10 on average.
+# Measured (--probes 1000 and 10000): 100 spins from 30 to 500 rad/s took 1042 probes, 1000 spins 10433.
 PROBES_PER_CURVE = 10
 
 
