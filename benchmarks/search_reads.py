@@ -8,7 +8,7 @@ probes written, and read back two ways — as the search did before (every recor
 round's) and as it does now (``dalembert.harness.search._StoredProbes``: only the round's rows). Prints the wall
 and CPU time of each. Measured (2 shared cores, load ~5-7, the rows of a 205-probe MuJoCo map): with 1e4 rows
 stored, 1.31 CPU s before against 0.087 now (layout 1; 1.34 against 0.085 in layout 2); with 1e5, 14.7 against
-0.084 (layout 1) — a round's read grew with the store, and now costs its probes.
+0.084 (layout 1; 14.2 against 0.166 in layout 2) — a round's read grew with the store, and now costs its probes.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ stored: the probes already run are not redone.
 A round reads back only the rows of the probes it ran (``_StoredProbes``): their row files (store
 layout 1), or the segment lines written since the last round (layout 2), never the whole store, so
 a map's rounds cost what their probes cost, not the store's size: a round of 1000 probes reads back
-in 0.085 CPU s with 1e4 or 1e5 rows stored, where rereading the store took 1.3 and 14.7
+in 0.08 to 0.17 CPU s with 1e4 or 1e5 rows stored, where rereading the store took 1.3 and 14-15
 (``benchmarks/search_reads.py``).
 
 Batches (``--batch``, ``dalembert.harness.batches``): a round's probes that share everything but the
