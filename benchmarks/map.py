@@ -2,12 +2,26 @@
 the report grow with the number of rows.
 
     python -m benchmarks.map [--rows 10000,100000,1000000] [--json FILE] [--layout 2] [--source STORE]
+    python -m benchmarks.map --probes 10000 [--jobs 2] [--json FILE] [--log FILE]
 
 1. A small map on a ``LocalCluster`` of 2 worker processes (1 thread each): the reference's RK4
    and RKMK4 on ``free_top_fast_spin`` swept over 4 spins from 5 to 500 rad/s, each curve
    searched for its stability boundary (``--search dt``, bracket 1e-3..1e-1 s, resolution 1.5,
    1-s horizon sampled every 0.1 s), through the command line as a user runs it. Prints the
-   runs and the wall time: runs per second.
+   runs and the wall time: runs per second. ``--probes N`` runs instead a map sized to ~N probes
+   (``probe_map``: MuJoCo's RK4 on ``free_top_fast_spin`` over N / ``PROBES_PER_CURVE`` spins, each
+   curve bisected to a resolution of 1.05), on the cluster or, with ``--jobs J``, on J local worker
+   processes without Dask (the same map, for the ratio), and prints the probes, the wall time, probes
+   per second, the search's rounds, the Dask tasks and the load average; the store's figures follow
+   only with ``--rows``. ``--json FILE`` writes the map as ``{"cluster": {"probes", "wall_s",
+   "probes_per_s", "workers", "tasks", "rounds", "load_start", "load_end"}}`` (``"local"`` with ``--jobs``).
+   Measured on 2 cores shared with other work: ``--probes 10000``, 10433 probes in 852 s (14.2 min, 12.2
+   probes/s, load average 10.6 to 11.8; 102 Dask tasks; the 2000 first probes, then 12 rounds of 1000 to 86)
+   and in 192 s with ``--jobs 2`` (54.4 probes/s, load 7.8 to 4.8); 377 CPU s against 179 for the whole
+   command. ``--probes 1000``: 1042 probes in 605 s on the cluster (67 tasks, load 14 to 16), 199 s with
+   ``--jobs 2`` (load 13 to 16). A Dask task is a fresh process (~1.2 CPU s to start: dalembert, MuJoCo, the
+   installed distributions' metadata) and the cluster's own processes take their share, so on one small host
+   the local pool is the faster; the cluster pays where it has more hosts than one.
 2. The store and the report fed synthetic rows (copies of that map's runs under new keys, each
    a new probe of its curve) in the store layout ``--layout`` (``dalembert.store.LAYOUTS``; 2, the
    segments a map past ``FILES_UP_TO`` runs takes, by default): for each size, the time to write
@@ -60,6 +74,65 @@ def _cluster_map(tmp, engine="reference", integrators=("rk4", "rkmk4"), spins=4,
     return out, wall
 
 
+# The --probes map (``probe_map``). MuJoCo (C): a probe's stepping is microseconds, so the map measures what the
+# harness and the cluster cost per probe (building the model, judging, storing), not an integrator; its RK4 on the
+# free top has both boundaries inside the bracket from 30 to 500 rad/s (below ~30 rad/s the largest step stays
+# stable: two probes and no bisection). A 0.5-s horizon sampled every 0.1 s keeps a probe at <= 500 steps.
+PROBE_MAP = ["--case", "free_top_fast_spin", "--param", "t_final=0.5", "--param", "sample_interval=0.1",
+             "--engine", "mujoco", "--integrator", "rk4", "--search", "dt", "--dt", "1e-3,1e-1", "--resolution", "1.05",
+             "--quick"]
+PROBE_SPINS = (30.0, 500.0)  # rad/s: the swept range, log-spaced
+# Probes a curve of PROBE_MAP takes: 2 at the bracket's ends, then bisections on both sides to the resolution
+# (log2(ln(100) / ln(1.05)) = 6.6 per side at most; fewer where a snapped step repeats one already probed).
+# Measured (--probes 1000 and 10000): 100 spins from 30 to 500 rad/s took 1042 probes, 1000 spins 10433.
+PROBES_PER_CURVE = 10
+
+
+def probe_map(tmp, probes, jobs=None, log=None):
+    """The ``--probes`` map of ~``probes`` probes on a 2-worker ``LocalCluster`` (or on ``jobs`` local workers, no
+    Dask): ``{"probes", "wall_s", "probes_per_s", "workers", "tasks", "rounds", "load_start", "load_end"}`` (tasks
+    None without Dask), its store at ``tmp/probes``; ``log``: a file for what ``dalembert run`` told (its rounds and
+    each probe's progress)."""
+    from distributed import LocalCluster
+    from distributed.diagnostics.plugin import SchedulerPlugin
+
+    class Tasks(SchedulerPlugin):  # the tasks the cluster ran (each a chunk of probes, ``dalembert.harness.dask``)
+        ran = 0
+
+        def transition(self, key, start, finish, *args, **kwargs):
+            self.ran += start == "processing" and finish in ("memory", "erred")
+
+    spins = max(1, round(probes / PROBES_PER_CURVE))
+    out = os.path.join(tmp, "probes")
+    command = [sys.executable, "-m", "dalembert.harness.cli", "run", *PROBE_MAP, "--param",
+               f"spin=log:{PROBE_SPINS[0]:g},{PROBE_SPINS[1]:g},{spins}", "--out", out]
+    load = os.getloadavg()[0]
+    if jobs:
+        t0 = time.perf_counter()
+        proc = subprocess.run([*command, "--jobs", str(jobs)], capture_output=True, text=True)
+        wall, tasks, workers = time.perf_counter() - t0, None, jobs
+    else:
+        workers, plugin = 2, Tasks()
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                          dashboard_address=None) as cluster:
+            cluster.scheduler.add_plugin(plugin)
+            t0 = time.perf_counter()
+            proc = subprocess.run([*command, "--scheduler", cluster.scheduler_address], capture_output=True,
+                                  text=True)
+            wall, tasks = time.perf_counter() - t0, plugin.ran
+    if log:
+        with open(log, "w") as fh:
+            fh.write(proc.stderr)
+    if proc.returncode != 0:
+        raise SystemExit(proc.stderr[-2000:])
+    from dalembert.store import Store
+
+    n = len(Store(out).done_keys())
+    rounds = sum(line.startswith("dalembert: search round") for line in proc.stderr.splitlines())
+    return {"probes": n, "wall_s": wall, "probes_per_s": n / wall, "workers": workers, "tasks": tasks,
+            "rounds": rounds, "spins": spins, "load_start": load, "load_end": os.getloadavg()[0]}
+
+
 def _synthetic(source, path, n, layout):
     """A store at ``path`` of ``layout`` holding ``n`` rows made from ``source``'s runs and its case records."""
     import shutil
@@ -110,17 +183,44 @@ def store_figures(source, path, size, layout, report=True):
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--rows", default=",".join(map(str, SIZES)), help="store sizes to feed, comma-separated")
+    p.add_argument("--rows", default=None, help="store sizes to feed, comma-separated (default: "
+                   f"{','.join(map(str, SIZES))}; none with --probes)")
     p.add_argument("--json", metavar="FILE", help="write the store's figures to FILE as JSON")
     p.add_argument("--layout", type=int, default=2, help="the store layout of the synthetic stores (1 or 2)")
     p.add_argument("--report-up-to", type=int, default=None, metavar="N",
                    help="read the records and build the report only for stores of up to N rows")
     p.add_argument("--source", metavar="STORE", help="take the rows' models from this store (no cluster map)")
+    p.add_argument("--probes", type=int, default=None, metavar="N", help="run a map of ~N probes (probe_map)")
+    p.add_argument("--jobs", type=int, default=None, metavar="J",
+                   help="with --probes: run the map on J local worker processes, without Dask")
+    p.add_argument("--log", metavar="FILE", help="with --probes: write what the map's `dalembert run` told to FILE")
     args = p.parse_args(argv)
+    if args.probes is not None and args.probes < 1:
+        p.error(f"--probes: {args.probes} probes — give at least 1")
+    if args.jobs is not None and (args.probes is None or args.jobs < 1):
+        p.error("--jobs: runs the --probes map locally — give --probes N and at least 1 job")
+    if args.probes is not None and args.source:
+        p.error("--probes and --source: --source skips the cluster map — give one")
+    rows = args.rows if args.rows is not None else ("" if args.probes else ",".join(map(str, SIZES)))
     from dalembert.store import Store
 
+    head = {}  # what the JSON holds beside the store's figures: the map
     with tempfile.TemporaryDirectory() as tmp:
-        if args.source:
+        if args.probes:
+            where = "local" if args.jobs else "cluster"
+            head[where] = m = probe_map(tmp, args.probes, args.jobs, args.log)
+            on = (f"{args.jobs} local workers (no Dask)" if args.jobs
+                  else f"a 2-worker LocalCluster ({m['tasks']} Dask tasks)")
+            print(f"map of {m['spins']} spins on {on}: {m['probes']} probes in {m['wall_s']:.1f} s = "
+                  f"{m['probes_per_s']:.2f} probes/s, {m['rounds']} search rounds ({os.cpu_count()} cores, load "
+                  f"{m['load_start']:.2f} at the start, {m['load_end']:.2f} at the end)", flush=True)
+            if args.json:
+                with open(args.json, "w") as fh:
+                    json.dump({**head, "cores": os.cpu_count()}, fh, indent=1)
+            if not rows:
+                return
+            source = Store(os.path.join(tmp, "probes"))
+        elif args.source:
             source = Store.open(args.source)
         else:
             out, wall = _cluster_map(tmp)
@@ -128,10 +228,11 @@ def main(argv=None):
             n = len(source.done_keys())
             print(f"map on a 2-worker LocalCluster: {n} runs in {wall:.1f} s = {n / wall:.2f} runs/s "
                   f"(4 spins x 2 integrators, boundary search; {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f})")
+            head["cluster"] = {"probes": n, "wall_s": wall, "probes_per_s": n / wall, "workers": 2}
         print(f"\nstore layout {args.layout}; s per 1000 rows (totals in s after them)\n"
               f"{'rows':>8} {'write':>8} {'parquet':>8} {'table':>8} {'records':>8} {'report':>8}")
         results = {}
-        for size in (int(x) for x in args.rows.split(",")):
+        for size in (int(x) for x in rows.split(",")):
             report = args.report_up_to is None or size <= args.report_up_to
             f = store_figures(source, os.path.join(tmp, f"rows{size}"), size, args.layout, report)
             results[str(size)] = f
@@ -142,7 +243,7 @@ def main(argv=None):
             shutil_rm(os.path.join(tmp, f"rows{size}"))
             if args.json:  # after each size: a long run stopped later keeps what it measured
                 with open(args.json, "w") as fh:
-                    json.dump({"rows": results, "layout": args.layout, "cores": os.cpu_count()}, fh, indent=1)
+                    json.dump({**head, "rows": results, "layout": args.layout, "cores": os.cpu_count()}, fh, indent=1)
 
 
 def shutil_rm(path):

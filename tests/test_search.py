@@ -100,3 +100,95 @@ def test_the_hard_suite_carries_its_stability_maps():
         assert {s.settings.dt for s in first} == set(plan.bracket)
         assert len({dict(s.params)[plan.parameter] for s in first}) == int(plan.values.rsplit(",", 1)[1])
     assert set(without.specs) < set(with_maps.specs)
+
+
+# The map the search's tests replay: three spins of the fast-spinning free top, the reference's RK4 (both
+# boundaries bracketed at 100 and 500 rad/s) and Euler (nothing to bisect), in the bracket 1e-3..1e-1 s.
+REPLAYED_MAP = ["run", "--case", "free_top_fast_spin", "--param", "spin=log:20,500,3", "--param", "t_final=0.5",
+                "--param", "sample_interval=0.1", "--engine", "reference", "--integrator", "rk4", "--integrator",
+                "euler", "--search", "dt", "--dt", "1e-3,1e-1", "--resolution", "1.5", "--quick", "--jobs", "1"]
+# What the search probed on REPLAYED_MAP, (spin, integrator, dt, verdict), written down from a run of the search
+# that reread the whole store every round (commit ec194c5), before it read only each round's probes.
+REPLAYED_PROBES = sorted([
+    (20.0, "euler", 0.001, "stable"), (20.0, "euler", 0.1, "stable"), (20.0, "rk4", 0.001, "stable"),
+    (20.0, "rk4", 0.1, "stable"), (100.0, "euler", 0.001, "drifts"), (100.0, "euler", 0.1, "drifts"),
+    (100.0, "rk4", 0.001, "stable"), (100.0, "rk4", 0.003125, "stable"), (100.0, "rk4", 0.005555555555555556, "stable"),
+    (100.0, "rk4", 0.007692307692307693, "drifts"), (100.0, "rk4", 0.01, "drifts"),
+    (100.0, "rk4", 0.03333333333333333, "drifts"), (100.0, "rk4", 0.05, "diverged"), (100.0, "rk4", 0.1, "diverged"),
+    (500.0, "euler", 0.001, "diverged"), (500.0, "euler", 0.1, "diverged"), (500.0, "rk4", 0.001, "drifts"),
+    (500.0, "rk4", 0.003125, "drifts"), (500.0, "rk4", 0.004166666666666667, "drifts"),
+    (500.0, "rk4", 0.005555555555555556, "diverged"), (500.0, "rk4", 0.01, "diverged"),
+    (500.0, "rk4", 0.1, "diverged")])
+# Its boundaries, (spin, integrator, stable passed, stable failed, finite passed, finite failed, probes), from that run.
+REPLAYED_BOUNDARIES = sorted([
+    (20.0, "euler", 0.1, None, 0.1, None, 2), (20.0, "rk4", 0.1, None, 0.1, None, 2),
+    (500.0, "euler", None, 0.001, None, 0.001, 2), (500.0, "rk4", None, 0.001, 0.004166666666666667,
+                                                     0.005555555555555556, 6),
+    (100.0, "euler", None, 0.001, 0.1, None, 2),
+    (100.0, "rk4", 0.005555555555555556, 0.007692307692307693, 0.03333333333333333, 0.05, 8)])
+
+
+def _probes_and_boundaries(store):
+    from dalembert.boundary import boundaries
+
+    records = store.records()
+    probes = sorted((r.params["spin"], r.settings.integrator, r.settings.dt, r.judgement.verdict) for r in records)
+    found = sorted((b.params["spin"], b.integrator, b.stable.passed, b.stable.failed, b.finite.passed, b.finite.failed,
+                    b.probes) for b in boundaries(records))
+    return probes, found
+
+
+@pytest.mark.parametrize("layout", [1, 2])
+def test_the_search_reads_each_probe_once_and_finds_what_it_found(tmp_path, monkeypatch, layout):
+    """In either store layout (2: the segments a map of more than FILES_UP_TO first probes takes) the search
+    probes the same steps, with the same verdicts, and finds the same boundaries as the search that reread the
+    whole store every round, while reading each probe's row once: a round costs its own probes. ``--resume`` of
+    the finished map finds every probe stored on its first read (layout 2 keeps the later rounds' lines until
+    their round asks for them) and runs none again."""
+    import dalembert.harness.search as search_module
+    import dalembert.store
+
+    monkeypatch.setattr(dalembert.store, "FILES_UP_TO", 2000 if layout == 1 else 0)
+    parsed, from_row = [], search_module.RunRecord.from_row
+
+    class Counted:
+        @staticmethod
+        def from_row(row):
+            parsed.append(row["key"])
+            return from_row(row)
+
+    monkeypatch.setattr(search_module, "RunRecord", Counted)
+    out = tmp_path / "r"
+    assert main([*REPLAYED_MAP, "--out", str(out)]) == 0
+    store = Store(out)
+    assert store.layout() == layout
+    assert _probes_and_boundaries(store) == (REPLAYED_PROBES, REPLAYED_BOUNDARIES)
+    assert sorted(parsed) == sorted(store.done_keys())  # every probe read back once, none twice
+    rows = sorted(p.name for p in (out / ("rows" if layout == 1 else "segments")).iterdir())
+    parsed.clear()
+    assert main(["run", "--resume", str(out)]) == 0
+    assert sorted(p.name for p in (out / ("rows" if layout == 1 else "segments")).iterdir()) == rows  # none rerun
+    assert sorted(parsed) == sorted(store.done_keys())
+    assert _probes_and_boundaries(Store(out)) == (REPLAYED_PROBES, REPLAYED_BOUNDARIES)
+
+
+def test_a_probe_the_infrastructure_lost_stops_its_curve(tmp_path, monkeypatch):
+    """A probe lost to the infrastructure (not stored, returned as lost) stops its curve where it was: the search
+    does not ask for it again round after round, and the other curves are bisected as before."""
+    import dalembert.harness.pool as pool
+
+    run_matrix, calls = pool.run_matrix, []
+
+    def losing(runs, store, *args, **kwargs):  # loses the 100-rad/s RK4 curve's first bisection probe
+        calls.append(len(runs))
+        assert len(calls) < 30, "the search asks for a lost probe again and again"
+        dropped = [s for s in runs if dict(s.params)["spin"] == 100.0 and s.settings.integrator == "rk4"
+                   and s.settings.dt not in (1e-3, 1e-1)]
+        kept = [s for s in runs if s not in dropped]
+        return run_matrix(kept, store, *args, **kwargs) + [(s.key, "the cluster lost its task") for s in dropped]
+
+    monkeypatch.setattr(pool, "run_matrix", losing)
+    out = tmp_path / "r"
+    assert main([*REPLAYED_MAP, "--out", str(out)]) == 4  # runs lost
+    probes, _ = _probes_and_boundaries(Store(out))
+    assert probes == [p for p in REPLAYED_PROBES if p[:2] != (100.0, "rk4") or p[2] in (1e-3, 1e-1)]

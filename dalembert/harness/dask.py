@@ -4,14 +4,17 @@ Each task runs a group of runs in a fresh Python process (``harness.batches.grou
 ``batched``, the runs an engine steps as one batch of worlds (a map's row: the swept parameter at one
 step); otherwise a chunk of at most ``chunk`` runs of one engine, integrator and options, one after
 another, so a task's process start, the engine's import and its compilation are paid once per chunk,
-not per probe (``chunk=1``: a task per run). Progress and an estimate of the time left are told per
-run as each task's runs are stored (``progress``). A task's process stopped from outside (SIGTERM,
+not per probe (``chunk=1``: a task per run). By default a chunk grows past ``DEFAULT_CHUNK`` runs where a
+batch of runs would otherwise make more than ``TASKS_PER_THREAD`` tasks per worker thread (``chunk_for``):
+a map's round of 1000 probes on 2 workers is ~8 tasks, not ~63. Progress and an estimate of the time left are
+told per run as each task's runs are stored (``progress``). A task's process stopped from outside (SIGTERM,
 SIGKILL: ``pool.STOPPED_FROM_OUTSIDE``) ends its runs without failing them, as a local worker's: the
 task raises ``WorkerStopped``, its runs are not stored, ``--resume`` runs them.
 """
 
 from __future__ import annotations
 
+import math
 import os
 import pickle
 import subprocess
@@ -26,7 +29,20 @@ from dalembert.harness.matrix import RunSpec
 from dalembert.harness.pool import DEFAULT_TIMEOUT_S, finish, stopped_from_outside, write_table
 from dalembert.harness.truths import prepare_cases
 
-__all__ = ["run_matrix_dask", "execute_isolated", "execute_group_isolated", "tasks_per_host", "WorkerStopped"]
+__all__ = ["run_matrix_dask", "execute_isolated", "execute_group_isolated", "tasks_per_host", "chunk_for",
+           "TASKS_PER_THREAD", "WorkerStopped"]
+
+# Tasks per worker thread a batch of runs is cut into, at the least: enough that a slow task (a loaded host, a
+# long probe) leaves the other threads little to wait for at the end of a round, few enough that a task's process
+# start (~1 CPU s: importing dalembert and the engine, against ~0.014 CPU s a MuJoCo probe of benchmarks/map.py
+# --probes) is paid over many runs.
+TASKS_PER_THREAD = 4
+
+
+def chunk_for(runs, threads, chunk=DEFAULT_CHUNK):
+    """Runs per task for a batch of ``runs`` runs on a cluster of ``threads`` worker threads: ``chunk``, or more
+    where ``runs`` would make more than ``TASKS_PER_THREAD`` tasks per thread."""
+    return max(chunk, math.ceil(runs / (TASKS_PER_THREAD * max(1, threads))))
 
 
 class WorkerStopped(RuntimeError):
@@ -116,11 +132,11 @@ def execute_group_isolated(specs_json, timing_json, truths_npz, timeout, hosts=N
 
 
 def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None,
-                    batched=False, chunk=DEFAULT_CHUNK):
+                    batched=False, chunk=None):
     """Like ``dalembert.harness.pool.run_matrix`` on the Dask cluster at ``scheduler`` (address or Client).
 
     ``batched``: a task per batch of worlds where the engine has batches; the other runs in tasks of at most
-    ``chunk`` runs (module docstring).
+    ``chunk`` runs (None: ``chunk_for`` the runs to do and the cluster's threads; module docstring).
 
     A run whose task the cluster lost (the scheduler gone, a worker lost) is the infrastructure's
     failure: it is not stored, and is returned in ``[(key, reason)]`` for ``--resume`` to run again.
@@ -136,6 +152,7 @@ def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=T
     todo = [s for s in specs if s.key not in store.done_keys()]
     counts = {"done": 0, "bad": 0, "total": len(todo)}
     hosts = tasks_per_host(client)  # (workers that join later share by their own threads)
+    chunk = chunk or chunk_for(len(todo), sum(hosts.values()))
     futures = {}
     for group, batch in groups(todo, batched, chunk):
         cases = sorted({(s.case, s.case_version) for s in group})
