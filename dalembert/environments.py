@@ -42,7 +42,7 @@ __all__ = ["DISTRIBUTIONS", "EngineSpec", "Environment", "parse_engine", "is_ver
 # The distribution on the package index of each built-in adapter's engine (``importlib.metadata``'s
 # names of the installed wheels: ``pin`` is Pinocchio's, ``mujoco-mjx`` MJX's, ``dartpy`` DART's).
 DISTRIBUTIONS = {"mujoco": "mujoco", "pinocchio": "pin", "exudyn": "exudyn", "drake": "drake", "mjx": "mujoco-mjx",
-                 "pybullet": "pybullet", "dart": "dartpy"}
+                 "pybullet": "pybullet", "dart": "dartpy", "newton": "newton"}
 # What the worker side imports besides the engine, installed at this environment's versions: numpy and
 # scipy (arrays and the truths' integrators; a pickled array must read the same), threadpoolctl (each
 # worker's thread pools, ``dalembert.harness.threads``), packaging (an engine's name read as a requirement).
@@ -86,6 +86,16 @@ class EngineSpec:
     def requirement(self):
         """What pip installs: the distribution with the specifier (``pin==2.6.0`` for ``pinocchio==2.6.0``)."""
         return self.distribution + self.specifier
+
+    @property
+    def install(self):
+        """What an environment installs: ``requirement`` with the extras the engine's adapter declares for it
+        (``Adapter.environment_extras``: ``newton[sim]==1.8.0``, whose ``sim`` brings the MuJoCo that Newton's MuJoCo
+        solver pins)."""
+        from dalembert.adapters import get_adapter
+
+        extras = tuple(getattr(get_adapter(self.engine), "environment_extras", ()))
+        return self.distribution + (f"[{','.join(extras)}]" if extras else "") + self.specifier
 
     @property
     def directory(self):
@@ -275,7 +285,7 @@ def create(name, log=lambda line: None, tool=None, problem=None, force=False):
             _call([sys.executable, "-m", "venv", partial], "venv", log)
             pip = [python, "-m", "pip", "install", "--quiet", "--disable-pip-version-check"]
         pinned = _pinned() + _pinned(ENGINE_LIBRARIES.get(env.spec.engine, ()))
-        _call(pip + pinned + [env.spec.requirement], f"installing {env.spec.requirement} beside {' '.join(pinned)} "
+        _call(pip + pinned + [env.spec.install], f"installing {env.spec.install} beside {' '.join(pinned)} "
               "(this environment's versions: the worker's arrays must read as the parent's; an engine release that "
               "needs others cannot run beside this dalembert)", log)
         version = _call([python, "-c", "import importlib.metadata as m, sys; "
