@@ -46,16 +46,11 @@ def _site(path, **versions):
     return path
 
 
-def test_an_environment_of_newton_installs_its_sim_extra():
-    """What ``env create newton==1.8.0`` installs is Newton with the extra its adapter declares; other engines
-    as named."""
-    assert environment(SPEC).spec.install == "newton[sim]==1.8.0"
-    assert environment("mujoco==3.6.0").spec.install == "mujoco==3.6.0"
-
-
-def test_create_hands_the_installer_newton_with_its_extra(tmp_path, monkeypatch):
-    """``environments.create`` (the installer faked: no network) asks pip for ``newton[sim]==1.8.0``."""
+def test_env_create_hands_the_installer_newton_with_its_extra(tmp_path, monkeypatch, capsys):
+    """``dalembert env create newton==1.8.0`` (the installer faked: no network) asks pip for the extra Newton's
+    adapter declares, ``newton[sim]==1.8.0``, and the environment says so; another engine's as named."""
     from dalembert import environments
+    from dalembert.harness.cli import main
 
     monkeypatch.setenv("DALEMBERT_CACHE", str(tmp_path / "cache"))
     asked = []
@@ -68,8 +63,10 @@ def test_create_hands_the_installer_newton_with_its_extra(tmp_path, monkeypatch)
         return "1.8.0\n"
 
     monkeypatch.setattr(environments, "_call", call)
-    environments.create(SPEC, tool="pip")
-    assert asked == ["newton[sim]==1.8.0"]
+    monkeypatch.setattr(environments, "installer", lambda: "pip")
+    assert main(["env", "create", SPEC]) == 0
+    assert asked == ["newton[sim]==1.8.0"] and environment(SPEC).info()["requirement"] == "newton[sim]==1.8.0"
+    assert environment("mujoco==3.6.0").spec.install() == "mujoco==3.6.0"
 
 
 def test_the_families_are_refused_here_naming_the_command(capsys, tmp_path):
