@@ -7,6 +7,11 @@ nothing the scene does not call for; mass properties checked), the solver of the
 cache) before any timed run; ``run`` steps (``stepping.simulate``) and reads the bodies' states back; ``audit``
 reads what Newton simulated back from its model and the solver object.
 
+Batches (``dalembert.adapters.batch``): ``prepare_batch`` builds one Newton model of N worlds
+(``model.build_worlds``: ``ModelBuilder.replicate`` of the first scene, each world's initial state its own scene's)
+and one solver on it; ``run_batch`` steps them all with one ``solver.step`` a step (``stepping.simulate_worlds``).
+A single run is the batch of one world, through the same code.
+
 Number type: float32 only (Newton's arrays are ``wp.float32``; there is no float64 build). The float32 attitude
 floor of a torque-free top (``mjx.parity.float32_floor``: RK4 in float32 against the same RK4 in double) is in
 every run's audit, so a reader sees whether an error is the method's or the number type's.
