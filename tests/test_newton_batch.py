@@ -102,3 +102,19 @@ def test_dalembert_run_batch_stores_one_record_per_world(tmp_path):
     for key, r in batch.items():
         assert r.cost.batch_size == 3 and one[key].cost.batch_size == 1
         assert r.status == one[key].status and r.errors == one[key].errors, key
+
+
+def test_a_collapsed_quaternion_ends_a_world():
+    """``free_top_fast_spin`` at dt 0.1 s: Featherstone's quaternion collapses to zero (at ~1e26 rad/s) a sample
+    before it turns NaN, a state with finite bodies and no attitude. It ends the world there (its joints NaN from
+    then on), so a world whose last sample is such a state is never finite bodies with NaN joints; as the run alone."""
+    spins = (199.05358527674863, 270.58476327323183, 500.0)
+    cases = [make_case("free_top_fast_spin", spin=s, t_final=1.0, sample_interval=0.1) for s in spins]
+    settings = Settings("featherstone", dt=0.1)
+    out = ADAPTER.run_batch(ADAPTER.prepare_batch([c.scene for c in cases], cases[0].times, settings))
+    for case, world in zip(cases, out.worlds):
+        traj = world.trajectory
+        assert traj.is_finite() or traj.first_nonfinite_time() is not None, case.params
+        alone = ADAPTER.run(ADAPTER.prepare(case.scene, case.times, settings)).trajectory
+        assert np.array_equal(traj.joints["top"].v, alone.joints["top"].v, equal_nan=True)
+    assert not out.worlds[2].trajectory.is_finite()

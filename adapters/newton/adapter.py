@@ -261,7 +261,7 @@ def _outcome(p, Q, V, bad, wall):
     """World ``p``'s ``Outcome``: its samples ``Q (n, nbody, 7)``, ``V (n, nbody, 6)``, first bad sample ``bad``
     (None: none), the stepping's ``wall`` (a batch's: every world's)."""
     n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())
-    info = {"message": f"Newton: non-finite state at t = {p.times[bad]:g} s" if bad else "",
+    info = {"message": f"Newton: non-finite state (or a zero quaternion) at t = {p.times[bad]:g} s" if bad else "",
             "device": str(p.model.model.device)}
     return Outcome(lambda: _read_back(p, Q, V), wall, n_steps, n_steps, info)
 

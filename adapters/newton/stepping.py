@@ -8,7 +8,8 @@ turned into world axes by the body's attitude then, a force at a point adds its 
 ``(R_WB r_B) x F_W``. The wrench is computed in numpy on the CPU arrays' host memory (Warp's CPU backend: no copy;
 on a CUDA device, on host copies, the wrench assigned back).
 
-A blow-up is data: the first sample with a non-finite coordinate ends the run, NaN from there on.
+A blow-up is data: the first sample with a non-finite coordinate (or a quaternion collapsed to zero) ends the
+run, NaN from there on.
 """
 
 from __future__ import annotations
@@ -98,6 +99,8 @@ def simulate_worlds(ps):
                 s0, s1 = s1, s0
             q, v = s0.body_q.numpy().reshape(worlds, nb, 7), s0.body_qd.numpy().reshape(worlds, nb, 6)
             finite = np.isfinite(q).all(axis=(1, 2)) & np.isfinite(v).all(axis=(1, 2))
+            # a quaternion that collapsed to zero (Featherstone's at 1e26 rad/s, the step before NaN) is no attitude
+            finite &= (np.abs(q[..., 3:]).max(axis=2) > 0.0).all(axis=1)
             bad[(bad == 0) & ~finite] = k
             good = bad == 0
             Q[k, good], V[k, good] = q[good], v[good]
