@@ -42,7 +42,7 @@ __all__ = ["DISTRIBUTIONS", "EngineSpec", "Environment", "parse_engine", "is_ver
 # The distribution on the package index of each built-in adapter's engine (``importlib.metadata``'s
 # names of the installed wheels: ``pin`` is Pinocchio's, ``mujoco-mjx`` MJX's, ``dartpy`` DART's).
 DISTRIBUTIONS = {"mujoco": "mujoco", "pinocchio": "pin", "exudyn": "exudyn", "drake": "drake", "mjx": "mujoco-mjx",
-                 "pybullet": "pybullet", "dart": "dartpy"}
+                 "pybullet": "pybullet", "dart": "dartpy", "newton": "newton"}
 # What the worker side imports besides the engine, installed at this environment's versions: numpy and
 # scipy (arrays and the truths' integrators; a pickled array must read the same), threadpoolctl (each
 # worker's thread pools, ``dalembert.harness.threads``), packaging (an engine's name read as a requirement).
@@ -86,6 +86,12 @@ class EngineSpec:
     def requirement(self):
         """What pip installs: the distribution with the specifier (``pin==2.6.0`` for ``pinocchio==2.6.0``)."""
         return self.distribution + self.specifier
+
+    def install(self, extras=()):
+        """What an environment installs: ``requirement`` with ``extras`` (the ones its adapter declares,
+        ``Adapter.environment_extras``: ``newton[sim]==1.8.0``, whose ``sim`` brings the MuJoCo that Newton's MuJoCo
+        solver pins)."""
+        return self.distribution + (f"[{','.join(extras)}]" if extras else "") + self.specifier
 
     @property
     def directory(self):
@@ -250,12 +256,13 @@ def _call(command, what, log):
     return done.stdout
 
 
-def create(name, log=lambda line: None, tool=None, problem=None, force=False):
+def create(name, log=lambda line: None, tool=None, problem=None, force=False, extras=()):
     """Make the environment of engine ``name`` (``mujoco==3.6.0``; reaches the package index) and return it.
 
     ``log``: told each command; ``tool``: ``"uv"`` or ``"pip"`` (default: ``installer()``); ``problem``: why
     an installed engine version cannot run (the adapter's ``version_problem``), or None; ``force``: make it
-    again when it exists (a stale one), replacing it once the new one is made. ValueError when it exists
+    again when it exists (a stale one), replacing it once the new one is made; ``extras``: the distribution's extras
+    to install with it (the adapter's ``environment_extras``). ValueError when it exists
     already (without ``force``), or ``problem`` names one (nothing is then left behind); RuntimeError with the
     installer's output when an install fails (nor then, and a forced environment's old one stays).
     """
@@ -275,7 +282,8 @@ def create(name, log=lambda line: None, tool=None, problem=None, force=False):
             _call([sys.executable, "-m", "venv", partial], "venv", log)
             pip = [python, "-m", "pip", "install", "--quiet", "--disable-pip-version-check"]
         pinned = _pinned() + _pinned(ENGINE_LIBRARIES.get(env.spec.engine, ()))
-        _call(pip + pinned + [env.spec.requirement], f"installing {env.spec.requirement} beside {' '.join(pinned)} "
+        requirement = env.spec.install(extras)
+        _call(pip + pinned + [requirement], f"installing {requirement} beside {' '.join(pinned)} "
               "(this environment's versions: the worker's arrays must read as the parent's; an engine release that "
               "needs others cannot run beside this dalembert)", log)
         version = _call([python, "-c", "import importlib.metadata as m, sys; "
@@ -283,7 +291,7 @@ def create(name, log=lambda line: None, tool=None, problem=None, force=False):
         why = problem(version) if problem else None
         if why:
             raise ValueError(f"env create {name}: {why} — ask for a supported version")
-        info = {"engine": env.spec.name, "requirement": env.spec.requirement, "engine_version": version,
+        info = {"engine": env.spec.name, "requirement": requirement, "engine_version": version,
                 "python": sys.version.split()[0], "installer": tool,
                 "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
         with open(os.path.join(partial, INFO), "w") as f:

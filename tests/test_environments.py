@@ -88,7 +88,7 @@ def test_each_engine_names_its_installed_distribution():
     import importlib
 
     modules = {"mujoco": "mujoco", "pinocchio": "pinocchio", "exudyn": "exudyn", "drake": "pydrake",
-               "mjx": "mujoco.mjx", "pybullet": "pybullet", "dart": "dartpy"}
+               "mjx": "mujoco.mjx", "pybullet": "pybullet", "dart": "dartpy", "newton": "newton"}
     checked = 0
     for engine, dist in DISTRIBUTIONS.items():
         try:

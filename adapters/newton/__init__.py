@@ -2,10 +2,11 @@
 backend, each rigid-body solver an integrator family.
 
 Modules by job: ``engine`` (Warp initialized quietly on its kernel cache, Newton imported; the version),
-``model`` (the scene as Newton's ``Model``: bodies, joints, the initial state; what it cannot hold), ``solvers``
-(the families, their options and defaults, the settings read back), ``stepping`` (loads into ``body_f``, the
-step loop, the samples), ``adapter`` (``NewtonAdapter``: the contract). Warp and Newton are imported only inside
-functions.
+``model`` (the scene as Newton's ``Model``: bodies, joints, the initial state, one world or a batch's; what it
+cannot hold), ``solvers`` (the families, their options and defaults, the settings read back), ``mujoco_solver``
+(Newton's MuJoCo solver's families, run in an engine environment of their own, and why they cannot run
+elsewhere), ``stepping`` (loads into ``body_f``, the step loop, the samples), ``adapter`` (``NewtonAdapter``: the
+contract and batches). Warp and Newton are imported only inside functions.
 """
 
 from dalembert.adapters.newton.adapter import NewtonAdapter

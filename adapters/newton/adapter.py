@@ -7,6 +7,11 @@ nothing the scene does not call for; mass properties checked), the solver of the
 cache) before any timed run; ``run`` steps (``stepping.simulate``) and reads the bodies' states back; ``audit``
 reads what Newton simulated back from its model and the solver object.
 
+Batches (``dalembert.adapters.batch``): ``prepare_batch`` builds one Newton model of N worlds
+(``model.build_worlds``: ``ModelBuilder.replicate`` of the first scene, each world's initial state its own scene's)
+and one solver on it; ``run_batch`` steps them all with one ``solver.step`` a step (``stepping.simulate_worlds``).
+A single run is the batch of one world, through the same code.
+
 Number type: float32 only (Newton's arrays are ``wp.float32``; there is no float64 build). The float32 attitude
 floor of a torque-free top (``mjx.parity.float32_floor``: RK4 in float32 against the same RK4 in double) is in
 every run's audit, so a reader sees whether an error is the method's or the number type's.
@@ -27,15 +32,16 @@ import numpy as np
 
 from dalembert import spatial
 from dalembert.adapters.base import Adapter, IntegratorSpec, Outcome, Prepared, typed_options
-from dalembert.adapters.newton import solvers
+from dalembert.adapters.batch import BatchOutcome, BatchPrepared, same_model
+from dalembert.adapters.newton import mujoco_solver, solvers
 from dalembert.adapters.newton.engine import engine, version
-from dalembert.adapters.newton.model import build, check_mass_properties, summary, why_not
-from dalembert.adapters.newton.stepping import fresh_states, load_plan, simulate
+from dalembert.adapters.newton.model import build_worlds, check_mass_properties, model_text, summary, why_not
+from dalembert.adapters.newton.stepping import fresh_states, load_plan, simulate_worlds
 from dalembert.adapters.warp_runtime import DEVICE_OPTION, device, device_problem
 from dalembert.scene import EFFECTS, SPRING_EFFECT, WORLD
 from dalembert.settings import steps_per_interval
 
-__all__ = ["NewtonAdapter", "NewtonPrepared"]
+__all__ = ["NewtonAdapter", "NewtonPrepared", "NewtonBatch"]
 
 # The solvers' options (``solvers.OPTIONS``) and the Warp device it steps on
 OPTIONS = {**solvers.OPTIONS, "device": DEVICE_OPTION}
@@ -73,6 +79,12 @@ class NewtonPrepared(Prepared):
     compile_s: float
 
 
+@dataclass(frozen=True, eq=False)
+class NewtonBatch(BatchPrepared):
+    """A batch on Newton (``BatchPrepared``: ``worlds``, one ``NewtonPrepared`` per scene, all on one Newton model
+    of ``len(worlds)`` worlds and one solver; ``device``)."""
+
+
 class NewtonAdapter(Adapter):
     """Newton (``newton`` 1.8, NVIDIA, Google DeepMind and Disney Research) on Warp's CPU backend or a CUDA device
     (option ``device``), float32: each rigid-body solver an integrator family (``solvers.FAMILIES``), its settings
@@ -84,6 +96,9 @@ class NewtonAdapter(Adapter):
     effects = EFFECTS
     options = OPTIONS
     refusal_notes = NOT_MAPPED
+    # What an engine environment (``dalembert env create newton==1.8.0``) installs with Newton: its ``sim`` extra,
+    # the MuJoCo and MuJoCo Warp its MuJoCo solver pins (``mujoco_solver.problem`` reads the same extra back)
+    environment_extras = (mujoco_solver.EXTRA,)
     # every family names every option; ``Option.only`` says which families take it (``check`` refuses the others)
     integrators = {family: IntegratorSpec(True, tuple(OPTIONS), description, order=order)
                    for family, (_, description, order, _) in solvers.FAMILIES.items()}
@@ -97,15 +112,24 @@ class NewtonAdapter(Adapter):
         engine()
 
     def unsupported(self, scene, settings):
-        """The base check, what the adapter does not map (``model.why_not``), then option ``device`` where Warp
+        """The base check, what the adapter does not map (``model.why_not``), a MuJoCo-solver family where Newton's
+        MuJoCo is not installed (``mujoco_solver.problem``), then option ``device`` where Warp
         finds no such device here (``warp_runtime.device_problem``: it imports Warp, so the harness's main process,
         which asks ``unsupported_before_build``, never does)."""
-        return (super().unsupported(scene, settings) or why_not(scene)
-                or device_problem(self.option(settings, "device")))
+        return self.unsupported_before_build(scene, settings) or device_problem(self.option(settings, "device"))
 
     def unsupported_before_build(self, scene, settings):
         """``unsupported`` but for the device check (which imports Warp)."""
-        return super().unsupported(scene, settings) or why_not(scene)
+        return super().unsupported(scene, settings) or why_not(scene) or self._mujoco_problem(settings)
+
+    def _mujoco_problem(self, settings):
+        """Why a MuJoCo-solver family cannot run where this adapter's runs go (``mujoco_solver.problem``), or None:
+        a versioned engine's adapter outside its environment (``adapters.registry``: its ``version`` is the
+        environment's) asks of the environment's packages, any other of this process's."""
+        if settings.integrator not in mujoco_solver.FAMILIES:
+            return None
+        env = getattr(self.version, "__self__", None)
+        return mujoco_solver.problem(getattr(env, "path", None) if env is not self else None)
 
     def describe(self, scene, settings):
         """Newton's model, read back from its arrays, and the solver settings it is stepped with, for reports and
@@ -113,7 +137,7 @@ class NewtonAdapter(Adapter):
         options = typed_options(self.options, settings)
         family = settings.integrator
         damping = solvers.angular_damping(options)
-        nm = _build(scene, family, options)
+        nm = _build([scene], family, options)[0]
         names = solvers.FAMILIES[family][3]
         given = {n: options[n] for n in names if n != "angular_damping" and options[n] is not None}
         return (summary(nm) + f"\nsolver: Newton {solvers.FAMILIES[family][0]}, defaults={options['defaults']}, "
@@ -122,40 +146,65 @@ class NewtonAdapter(Adapter):
 
     # ------------------------------------------------------------- build
     def prepare(self, scene, times, settings):
+        return self._prepare([scene], times, settings)[0]
+
+    def _prepare(self, scenes, times, settings):
+        """One ``NewtonPrepared`` per scene, the scenes the worlds of one Newton model (``build_worlds``) stepped
+        by one solver, its kernels compiled by a scratch step."""
         wp, newton, _ = engine()
         family = settings.integrator
         options = typed_options(self.options, settings)
-        nm = _build(scene, family, options)
-        check_mass_properties(nm, scene)
-        with wp.ScopedDevice(nm.model.device):
-            solver = solvers.make(newton, nm.model, family, options)
-            compile_s = _scratch_step(nm, solver, settings.dt)
+        nms = _build(scenes, family, options)
+        for nm, scene in zip(nms, scenes):
+            check_mass_properties(nm, scene)
+        with wp.ScopedDevice(nms[0].model.device):
+            solver = solvers.make(newton, nms[0].model, family, options)
+            compile_s = _scratch_step(nms[0], solver, settings.dt)
         times = np.asarray(times, dtype=float)
-        return NewtonPrepared(scene, times, settings, model=nm, solver=solver, family=family,
-                              steps=steps_per_interval(times, settings.dt), loads=load_plan(nm, scene),
-                              compile_s=compile_s)
+        steps = steps_per_interval(times, settings.dt)
+        return [NewtonPrepared(scene, times, settings, model=nm, solver=solver, family=family, steps=steps,
+                               loads=load_plan(nm, scene), compile_s=compile_s) for nm, scene in zip(nms, scenes)]
 
     # ------------------------------------------------------------- run
     def run(self, prepared):
-        p = prepared
-        if p.family in ("vbd", "steel"):
+        wall, (outcome,) = self._step([prepared])
+        return outcome
+
+    def _step(self, ps):
+        """Step the worlds ``ps`` (every world of one model) at once: ``(wall s, one Outcome per world)``."""
+        if ps[0].family in ("vbd", "steel"):
             # their warm starts (VBD's persisted multipliers, Steel's impulses) live on the solver: a fresh one per
             # run, so every run starts from the same solver state (not timed)
             wp, newton, _ = engine()
-            with wp.ScopedDevice(p.model.model.device):
-                p = _replace_solver(p, solvers.make(newton, p.model.model, p.family,
-                                                    typed_options(self.options, p.settings)))
-        Q, V, wall, bad = simulate(p)
-        n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())
-        info = {"message": f"Newton: non-finite state at t = {p.times[bad]:g} s" if bad else "",
-                "device": str(p.model.model.device)}
-        return Outcome(lambda: _read_back(p, Q, V), wall, n_steps, n_steps, info)
+            with wp.ScopedDevice(ps[0].model.model.device):
+                solver = solvers.make(newton, ps[0].model.model, ps[0].family,
+                                      typed_options(self.options, ps[0].settings))
+            ps = [_replace_solver(p, solver) for p in ps]
+        Q, V, wall, bad = simulate_worlds(ps)
+        return wall, tuple(_outcome(p, Q[:, k], V[:, k], int(bad[k]) or None, wall) for k, p in enumerate(ps))
+
+    # ------------------------------------------------------------- batches
+    def batch_problem(self, scenes, times, settings):
+        """Why ``scenes`` cannot be the worlds of one Newton model: their models differ (``model.model_text``: the
+        scene but its joints' initial coordinates; ``batch.same_model``), or None."""
+        return same_model([model_text(s) for s in scenes], self.name)
+
+    def prepare_batch(self, scenes, times, settings):
+        """One Newton model of ``len(scenes)`` worlds (``ModelBuilder.replicate``), each started from its own
+        scene's initial state, one solver on it, its kernels compiled for the batch (not timed)."""
+        worlds = tuple(self._prepare(scenes, times, settings))
+        return NewtonBatch(worlds=worlds, device=str(worlds[0].model.model.device))
+
+    def run_batch(self, prepared):
+        """Every world stepped at once from its initial state (``stepping.simulate_worlds``)."""
+        wall, outcomes = self._step(prepared.worlds)
+        return BatchOutcome(wall, outcomes)
 
     # ------------------------------------------------------------- audit
     def audit(self, prepared, outcome):
         wp, newton, init_message = engine()
         p, m = prepared, prepared.model.model
-        dofs = m.joint_dof_count
+        dofs, n = m.joint_dof_count, prepared.model.worlds
         out = {
             # Newton holds gravity in float32 only: each component as the shortest decimal that float32 value reads
             # back as (numpy's float32 repr: -9.81 for the float32 nearest -9.81), and the float32 value widened
@@ -169,8 +218,9 @@ class NewtonAdapter(Adapter):
             "number_type": str(m.body_mass.numpy().dtype),
             "device": str(m.device), "warp_version": wp.__version__, "newton_version": self.version(),
             "warp_init": init_message, "kernel_compile_s": p.compile_s,
-            "bodies": m.body_count, "joints": m.joint_count, "articulations": m.articulation_count,
-            "joint_dofs": dofs,
+            # one world's (a batch's model holds ``worlds`` copies)
+            "bodies": m.body_count // n, "joints": m.joint_count // n, "articulations": m.articulation_count // n,
+            "joint_dofs": dofs // n,
             # what Newton adds to the joints by default, as stored in the model the run stepped with
             "joint_armature_max": float(np.abs(m.joint_armature.numpy()).max(initial=0.0)),
             "joint_damping_max": float(np.abs(m.joint_target_kd.numpy()).max(initial=0.0)),
@@ -183,6 +233,8 @@ class NewtonAdapter(Adapter):
                       for ld in p.scene.loads],
             "reactions": "not read back",
         }
+        if n > 1:
+            out["worlds"] = n
         if p.settings.dt is not None:
             from dalembert.adapters.mjx.parity import float32_floor
 
@@ -190,11 +242,12 @@ class NewtonAdapter(Adapter):
         return out
 
 
-def _build(scene, family, options):
-    """The Newton model for a run of ``family`` with ``options``: coloured for VBD; Steel's angular damping set on
-    the model (unless Newton's own is asked for); Newton's inertia balancing only with ``defaults=engine``."""
+def _build(scenes, family, options):
+    """The Newton model of ``scenes`` (one world each) for a run of ``family`` with ``options``: coloured for VBD;
+    Steel's angular damping set on the model (unless Newton's own is asked for); Newton's inertia balancing only with
+    ``defaults=engine``. One ``NewtonModel`` per world."""
     damping = solvers.angular_damping(options)
-    return build(scene, color=family == "vbd", steel_angular_damping=damping if family == "steel" else None,
+    return build_worlds(scenes, color=family == "vbd", steel_angular_damping=damping if family == "steel" else None,
                  balance_inertia=options["defaults"] == "engine", device=device(options["device"]))
 
 
@@ -202,6 +255,15 @@ def _max_of(model, name):
     """The largest magnitude of the model's per-dof array ``name`` (0 where the model has none)."""
     a = getattr(model, name, None)
     return float(np.abs(a.numpy()).max(initial=0.0)) if a is not None else 0.0
+
+
+def _outcome(p, Q, V, bad, wall):
+    """World ``p``'s ``Outcome``: its samples ``Q (n, nbody, 7)``, ``V (n, nbody, 6)``, first bad sample ``bad``
+    (None: none), the stepping's ``wall`` (a batch's: every world's)."""
+    n_steps = int(p.steps[:bad].sum()) if bad else int(p.steps.sum())
+    info = {"message": f"Newton: non-finite state (or a zero quaternion) at t = {p.times[bad]:g} s" if bad else "",
+            "device": str(p.model.model.device)}
+    return Outcome(lambda: _read_back(p, Q, V), wall, n_steps, n_steps, info)
 
 
 def _replace_solver(p, solver):
@@ -226,7 +288,7 @@ def _read_back(p, Q, V):
     stay NaN), widened to double; joint coordinates from the bodies' motion."""
     from dalembert.trajectory import BodyStates, JointStates, Trajectory
 
-    scene, index = p.scene, p.model.index
+    scene, index = p.scene, p.model.local
     Q, V = Q.astype(float), V.astype(float)
     bodies, joints, R = {}, {}, {}
     for b in scene.bodies:

@@ -29,7 +29,8 @@ from dalembert import spatial
 from dalembert.adapters.newton.engine import DEVICE, engine
 from dalembert.scene import WORLD
 
-__all__ = ["STEEL_DAMPING", "NewtonModel", "build", "why_not", "check_mass_properties", "summary"]
+__all__ = ["STEEL_DAMPING", "NewtonModel", "build", "build_worlds", "model_text", "why_not", "check_mass_properties",
+           "summary"]
 
 # Compiled mass properties must be the scene's to float32's rounding: Newton stores mass and inertia in float32
 # (relative error 2^-24 = 6e-8 each), so 4x that.
@@ -47,10 +48,13 @@ class NewtonModel:
     model : newton.Model — on a Warp device (``model.device``: the CPU unless option ``device`` says), float32
     index : dict body name -> int — the body's index in Newton's arrays
     joint_index : dict joint name -> int
-    body_q0 : ndarray (nbody, 7) float32 — the initial ``body_q``, ``(p_WB, q_WB x y z w)``, m
+    body_q0 : ndarray (nbody, 7) float32 — the initial ``body_q``, ``(p_WB, q_WB x y z w)``, m, of every body of
+        every world of ``model`` (world k's rows at its ``index``)
     body_qd0 : ndarray (nbody, 6) float32 — the initial ``body_qd``, ``(v_WB_W, w_WB_W)``, m/s, rad/s
     joint_q0 : ndarray (ncoord,) float32 — the initial joint coordinates (``eval_ik`` of the body states)
     joint_qd0 : ndarray (ndof,) float32
+    world : int — this world's index in ``model`` (0 for a single run)
+    worlds : int — how many worlds ``model`` holds (1 for a single run; a batch's size)
     """
 
     model: object
@@ -60,6 +64,14 @@ class NewtonModel:
     body_qd0: np.ndarray
     joint_q0: np.ndarray
     joint_qd0: np.ndarray
+    world: int = 0
+    worlds: int = 1
+
+    @property
+    def local(self):
+        """dict body name -> int: the body's index within its world (its row in a world's samples)."""
+        per_world = len(self.index)
+        return {n: i - self.world * per_world for n, i in self.index.items()}
 
 
 def why_not(scene):
@@ -69,6 +81,17 @@ def why_not(scene):
         return (f"Newton's free joint here joins a body to the world only: {', '.join(floating)} float on another "
                 "body (not mapped)")
     return None
+
+
+def model_text(scene):
+    """What Newton's model of ``scene`` is built from, as text: the scene but its joints' initial coordinates
+    (``q0``, ``v0``), which only the initial state takes; scenes of equal text share one model (``build_worlds``)."""
+    from dataclasses import fields
+
+    joints = tuple(tuple((f.name, getattr(j, f.name)) for f in fields(j) if f.name not in ("q0", "v0"))
+                   for j in scene.joints)
+    rest = tuple((f.name, getattr(scene, f.name)) for f in fields(scene) if f.name not in ("name", "joints"))
+    return repr((joints, rest))
 
 
 def _transform(wp, p, q_wxyz):
@@ -89,15 +112,9 @@ def _trees(scene):
     return list(trees.values())
 
 
-def build(scene, color=False, steel_angular_damping=None, balance_inertia=False, device=DEVICE):
-    """The Newton model of ``scene`` (``NewtonModel``) on Warp's ``device`` (``cpu``, ``cuda:0``). ``color``: the
-    body graph coloured (``ModelBuilder.color``), which VBD requires. ``steel_angular_damping`` (1/s, or None: not
-    for Steel): Steel's per-body angular damping of free bodies, a model attribute
-    (``steel:rigid_body_angular_damping``) that Steel otherwise takes as 0.05 (PhysX's default), registered and set
-    on every body. ``balance_inertia``: Newton's correction of inertias that violate the triangle inequality (its
-    default on; off here unless asked: a scene's inertia is as given, and ``check_mass_properties`` then says where
-    Newton changed one)."""
-    wp, newton, _ = engine()
+def _builder(newton, wp, scene, steel_angular_damping, balance_inertia):
+    """A ``ModelBuilder`` holding ``scene`` (its bodies at their initial poses) and the bodies' and joints' indices in
+    it: ``(builder, {body: index}, {joint: index})``."""
     start = spatial.initial_body_states(scene)
     b = newton.ModelBuilder(gravity=tuple(float(g) for g in scene.gravity))
     b.balance_inertia = bool(balance_inertia)
@@ -134,22 +151,56 @@ def build(scene, color=False, steel_angular_damping=None, balance_inertia=False,
             joint_index[j.name] = jid
             ids.append(jid)
         b.add_articulation(ids, label=tree[0].name)
+    return b, index, joint_index
+
+
+def build(scene, color=False, steel_angular_damping=None, balance_inertia=False, device=DEVICE):
+    """The Newton model of ``scene`` (``NewtonModel``) on Warp's ``device`` (``cpu``, ``cuda:0``). ``color``: the
+    body graph coloured (``ModelBuilder.color``), which VBD requires. ``steel_angular_damping`` (1/s, or None: not
+    for Steel): Steel's per-body angular damping of free bodies, a model attribute
+    (``steel:rigid_body_angular_damping``) that Steel otherwise takes as 0.05 (PhysX's default), registered and set
+    on every body. ``balance_inertia``: Newton's correction of inertias that violate the triangle inequality (its
+    default on; off here unless asked: a scene's inertia is as given, and ``check_mass_properties`` then says where
+    Newton changed one)."""
+    return build_worlds([scene], color, steel_angular_damping, balance_inertia, device)[0]
+
+
+def build_worlds(scenes, color=False, steel_angular_damping=None, balance_inertia=False, device=DEVICE):
+    """One Newton model of ``len(scenes)`` worlds, each a copy of ``scenes[0]``'s bodies and joints
+    (``ModelBuilder.replicate``: the scenes share one model, ``batch.same_model``) started from its own scene's
+    initial state: one ``NewtonModel`` per world, all on the one ``model`` (arguments as ``build``'s). A single
+    scene is built as one world without replication."""
+    wp, newton, _ = engine()
+    one, index, joint_index = _builder(newton, wp, scenes[0], steel_angular_damping, balance_inertia)
+    if len(scenes) == 1:
+        b = one
+    else:
+        b = newton.ModelBuilder(gravity=tuple(float(g) for g in scenes[0].gravity))
+        if steel_angular_damping is not None:
+            newton.solvers.SolverSteel.register_custom_attributes(b)
+        b.replicate(one, len(scenes))
     if color:
         b.color()
     model = b.finalize(device=device)
+    nb, nj = len(index), len(joint_index)
     with wp.ScopedDevice(device):
         state = model.state()
         bq, bqd = state.body_q.numpy(), state.body_qd.numpy()  # host copies on a CUDA device: written back below
-        for body in scene.bodies:
-            s, i = start[body.name], index[body.name]
-            bq[i, :3], bq[i, 3:] = s["p"], spatial.wxyz_to_xyzw(spatial.matrix_to_quat(s["R"]))
-            bqd[i, :3], bqd[i, 3:] = s["v"], s["w"]
+        for k, scene in enumerate(scenes):
+            start = spatial.initial_body_states(scene)
+            for body in scene.bodies:
+                s, i = start[body.name], k * nb + index[body.name]
+                bq[i, :3], bq[i, 3:] = s["p"], spatial.wxyz_to_xyzw(spatial.matrix_to_quat(s["R"]))
+                bqd[i, :3], bqd[i, 3:] = s["v"], s["w"]
         state.body_q.assign(bq)
         state.body_qd.assign(bqd)
         newton.eval_ik(model, state, state.joint_q, state.joint_qd)
         newton.eval_fk(model, state.joint_q, state.joint_qd, state)
-    return NewtonModel(model, index, joint_index, state.body_q.numpy().copy(), state.body_qd.numpy().copy(),
-                       state.joint_q.numpy().copy(), state.joint_qd.numpy().copy())
+    body_q, body_qd = state.body_q.numpy().copy(), state.body_qd.numpy().copy()
+    joint_q, joint_qd = state.joint_q.numpy().copy(), state.joint_qd.numpy().copy()
+    return [NewtonModel(model, {n: k * nb + i for n, i in index.items()},
+                        {n: k * nj + i for n, i in joint_index.items()}, body_q, body_qd, joint_q, joint_qd,
+                        world=k, worlds=len(scenes)) for k in range(len(scenes))]
 
 
 def check_mass_properties(nm, scene):

@@ -11,11 +11,12 @@ Each family is one ``newton.solvers`` class that steps rigid bodies on joints, a
 * ``vbd`` — ``SolverVBD``: maximal coordinates, augmented vertex block descent (AVBD: implicit Euler solved by
   block coordinate descent, joints as stiffening penalties), ``iterations`` sweeps a step;
 * ``steel`` — ``SolverSteel``: reduced coordinates, joints and constraints as velocity rows solved by projected
-  Gauss-Seidel (``iterations``), Baumgarte stabilization (``baumgarte``), ``cfm`` regularization.
+  Gauss-Seidel (``iterations``), Baumgarte stabilization (``baumgarte``), ``cfm`` regularization;
+* ``mujoco_euler``, ``mujoco_implicitfast``, ``mujoco_rk4`` — ``SolverMuJoCo``: MuJoCo Warp on Newton's model with
+  each MuJoCo integrator, in an engine environment of its own (``mujoco_solver``: Newton pins mujoco ~= 3.17).
 
 Left out, with the reason (``NOT_FAMILIES``): Kamino (measured 0.21 s a step on the pendulum on Warp's CPU
-backend: 1000 times Featherstone's, hours for one case's horizon), the MuJoCo solver (it needs mujoco ~= 3.17;
-this environment runs MuJoCo 4.0), and the solvers of particles and deformables (implicit MPM, Style3D).
+backend: 1000 times Featherstone's, hours for one case's horizon) and the solvers of particles and deformables (implicit MPM, Style3D).
 
 What ``dalembert check-engine newton`` finds (Newton 1.8.0, the defaults here): Featherstone passes every probe;
 the body-coordinate solvers' joints are not rigid (XPBD at its 2 iterations starts the hinge at 1.6 times gravity's
@@ -37,6 +38,7 @@ The audit reads every setting back from the solver object the run stepped with (
 from __future__ import annotations
 
 from dalembert.adapters.base import Option
+from dalembert.adapters.newton import mujoco_solver
 
 __all__ = ["FAMILIES", "NOT_FAMILIES", "OPTIONS", "angular_damping", "make", "settings"]
 
@@ -53,11 +55,11 @@ FAMILIES = {
             ("iterations", "rigid_avbd_gamma")),
     "steel": ("SolverSteel", "Newton Steel: joint coordinates, constraint rows by projected Gauss-Seidel", 1,
               ("angular_damping", "iterations", "baumgarte", "cfm", "relaxation", "update_mass_matrix_interval")),
+    **mujoco_solver.FAMILIES,
 }
 NOT_FAMILIES = {
     "kamino": "SolverKamino: 0.21 s a step on the pendulum on Warp's CPU backend (measured, kernels cached), "
               "1000 times Featherstone's",
-    "mujoco": "SolverMuJoCo: needs mujoco ~= 3.17 (newton[sim]); dalembert runs MuJoCo 4.0",
     "implicit_mpm": "SolverImplicitMPM: particles (material point method), no rigid joints",
     "style3d": "SolverStyle3D: cloth, no rigid joints",
 }
@@ -118,6 +120,8 @@ def make(newton, model, family, options):
     """The solver of ``family`` on ``model``, built with ``options`` (name -> typed value, ``typed_options``):
     only the family's own, and ``iterations`` only when given (None: the solver's own default)."""
     cls, _, _, names = FAMILIES[family]
+    if family in mujoco_solver.FAMILIES:
+        return getattr(newton.solvers, cls)(model, **mujoco_solver.make_kwargs(family))
     options = {**options, "angular_damping": angular_damping(options)}
     kwargs = {n: options[n] for n in names if options.get(n) is not None and (family, n) not in _MODEL_SETTINGS}
     return getattr(newton.solvers, cls)(model, **kwargs)
@@ -133,7 +137,10 @@ _ATTRIBUTES = {"iterations": ("iterations", "_iterations"), "cfm": ("cfm", "_cfm
 
 def settings(solver, family, model):
     """Every option of ``family`` as the solver object (or, for a model setting, ``model``) holds it (read back,
-    not the request): name -> value; a per-body model setting as its largest value."""
+    not the request): name -> value; a per-body model setting as its largest value. The MuJoCo solver's: what its
+    MuJoCo model holds (``mujoco_solver.settings``)."""
+    if family in mujoco_solver.FAMILIES:
+        return mujoco_solver.settings(solver)
     out = {}
     for name in FAMILIES[family][3]:
         if (family, name) in _MODEL_SETTINGS:

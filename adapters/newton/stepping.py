@@ -8,7 +8,8 @@ turned into world axes by the body's attitude then, a force at a point adds its 
 ``(R_WB r_B) x F_W``. The wrench is computed in numpy on the CPU arrays' host memory (Warp's CPU backend: no copy;
 on a CUDA device, on host copies, the wrench assigned back).
 
-A blow-up is data: the first sample with a non-finite coordinate ends the run, NaN from there on.
+A blow-up is data: the first sample with a non-finite coordinate (or a quaternion collapsed to zero) ends the
+run, NaN from there on.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import numpy as np
 from dalembert import spatial
 from dalembert.adapters.newton.engine import engine
 
-__all__ = ["load_plan", "fresh_states", "simulate"]
+__all__ = ["load_plan", "fresh_states", "simulate", "simulate_worlds"]
 
 
 def load_plan(nm, scene):
@@ -57,15 +58,31 @@ def simulate(p):
     wall s, sample where it diverged or None)``, float32 as Newton holds them, NaN from the first non-finite
     sample on. The wall time is the stepping and the per-sample copies (host memory on the CPU backend), on the
     model's device."""
+    Q, V, wall, bad = simulate_worlds([p])
+    return Q[:, 0], V[:, 0], wall, int(bad[0]) or None
+
+
+def simulate_worlds(ps):
+    """Run the worlds ``ps`` (one ``NewtonPrepared`` per world of one model, in world order: every world of it) at
+    once from their initial states: ``(Q (n, worlds, nbody, 7), V (n, worlds, nbody, 6), wall s, bad (worlds,) int)``
+    with each world's bodies in its own order (``NewtonModel.local``), float32 as Newton holds them; ``bad[k]`` the
+    first sample where world k had a non-finite coordinate (0: none), its rows NaN from there on while the others go
+    on (Newton's worlds share no data); the stepping ends when every world has diverged. The wall time as
+    ``simulate``'s, for all the worlds."""
     wp, _, _ = engine()
+    p = ps[0]
     nm, solver, dt = p.model, p.solver, float(p.settings.dt)
+    worlds = len(ps)
+    if nm.worlds != worlds:
+        raise ValueError(f"simulate_worlds: {worlds} worlds given of a model of {nm.worlds} — pass every world")
     control = nm.model.control()
     s0, s1 = fresh_states(nm)
-    nb = nm.model.body_count
-    Q, V = np.full((len(p.times), nb, 7), np.nan, np.float32), np.full((len(p.times), nb, 6), np.nan, np.float32)
-    Q[0], V[0] = nm.body_q0, nm.body_qd0
-    plan, step = p.loads, solver.step
-    bad = None
+    nb = nm.model.body_count // worlds
+    Q = np.full((len(p.times), worlds, nb, 7), np.nan, np.float32)
+    V = np.full((len(p.times), worlds, nb, 6), np.nan, np.float32)
+    Q[0], V[0] = nm.body_q0.reshape(worlds, nb, 7), nm.body_qd0.reshape(worlds, nb, 6)
+    plan, step = [load for w in ps for load in w.loads], solver.step
+    bad = np.zeros(worlds, dtype=int)
     device = nm.model.device
     with wp.ScopedDevice(device):
         start = time.perf_counter()
@@ -80,10 +97,14 @@ def simulate(p):
                     s0.body_f.assign(f)
                 step(s0, s1, control, None, dt)
                 s0, s1 = s1, s0
-            q, v = s0.body_q.numpy(), s0.body_qd.numpy()
-            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-                bad = k
+            q, v = s0.body_q.numpy().reshape(worlds, nb, 7), s0.body_qd.numpy().reshape(worlds, nb, 6)
+            finite = np.isfinite(q).all(axis=(1, 2)) & np.isfinite(v).all(axis=(1, 2))
+            # a quaternion that collapsed to zero (Featherstone's at 1e26 rad/s, the step before NaN) is no attitude
+            finite &= (np.abs(q[..., 3:]).max(axis=2) > 0.0).all(axis=1)
+            bad[(bad == 0) & ~finite] = k
+            good = bad == 0
+            Q[k, good], V[k, good] = q[good], v[good]
+            if not good.any():
                 break
-            Q[k], V[k] = q, v
         wall = time.perf_counter() - start
     return Q, V, wall, bad

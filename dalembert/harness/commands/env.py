@@ -47,7 +47,8 @@ def run(action, engine=None, verbose=False, force=False):
     try:
         env = environments.create(engine, log=(lambda line: print(f"  {line}", file=sys.stderr)) if verbose
                                   else (lambda line: None), tool=tool,
-                                  problem=get_adapter(env.spec.engine).version_problem, force=force)
+                                  problem=get_adapter(env.spec.engine).version_problem, force=force,
+                                  extras=getattr(get_adapter(env.spec.engine), "environment_extras", ()))
     except RuntimeError as e:  # the installer's own failure (no such version, no network): its output said
         return fail(str(e))
     print(f"made {env.spec.name}: {env.spec.distribution} {env.engine_version} at {env.path}")
