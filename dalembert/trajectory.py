@@ -121,11 +121,16 @@ class Trajectory:
         return all(np.array_equal(a, np.broadcast_to(a[:1], a.shape)) for a in arrays)
 
     def first_nonfinite_time(self):
-        """Earliest sample time with a NaN/inf in any body state, or None."""
-        bad = np.zeros(len(self.t), dtype=bool)
-        for b in self.bodies.values():
-            for a in (b.position, b.quaternion, b.velocity, b.angular_velocity):
-                bad |= ~np.all(np.isfinite(a), axis=1)
+        """Earliest sample time with a NaN/inf in any body state, joint coordinate or extra sampled at
+        ``t``, or None (every array ``is_finite`` reads: a joint can blow up while the bodies stay finite)."""
+        n = len(self.t)
+        arrays = [a for b in self.bodies.values() for a in
+                  (b.position, b.quaternion, b.velocity, b.angular_velocity)]
+        arrays += [a for j in self.joints.values() for a in (j.q, j.v)]
+        arrays += [a for a in map(np.asarray, self.extras.values()) if a.ndim and a.shape[0] == n]
+        bad = np.zeros(n, dtype=bool)
+        for a in arrays:
+            bad |= ~np.all(np.isfinite(np.reshape(a, (n, -1))), axis=1)
         return float(self.t[np.argmax(bad)]) if bad.any() else None
 
 
