@@ -155,14 +155,15 @@ class Store:
         self._kept = None  # the trajectories/ directory as the manifest keeps it (``kept``), made on first use
 
     # -------------------------------------------------------------- create, open
-    def create(self, manifest, layout=None):
+    def create(self, manifest, layout=None, runs=None):
         """Make the directories and write ``manifest`` (with the schema version and the store layout).
 
-        ``layout``: one of ``LAYOUTS``; None: 1 for a matrix of up to ``FILES_UP_TO`` runs (the manifest's
-        ``specs``), else 2. The manifest's ``trajectories`` (``dalembert.trajectory_store.KEEPS``) likewise: when
-        absent or None, ``all`` up to ``FILES_UP_TO`` runs, else ``drawn``.
+        ``layout``: one of ``LAYOUTS``; None: 1 for a matrix of up to ``FILES_UP_TO`` runs (``runs``, the most it
+        will store; None: the manifest's ``specs``), else 2. The manifest's ``trajectories``
+        (``dalembert.trajectory_store.KEEPS``) likewise: when absent or None, ``all`` up to ``FILES_UP_TO`` runs,
+        else ``drawn``.
         """
-        n_runs = len(manifest["specs"]) if isinstance(manifest.get("specs"), list) else 0
+        n_runs = runs if runs is not None else len(manifest["specs"]) if isinstance(manifest.get("specs"), list) else 0
         if layout is None:
             layout = SEGMENTS if n_runs > FILES_UP_TO else FILES
         keep = check_keep(manifest.get("trajectories")) or default_keep(n_runs, FILES_UP_TO)

@@ -5,7 +5,7 @@ import pytest
 
 from dalembert.boundary import Bracket, bracket
 from dalembert.harness.cli import main
-from dalembert.harness.matrix import expand
+from dalembert.harness.matrix import RunSpec, expand
 from dalembert.store import Store
 
 
@@ -148,7 +148,9 @@ def test_the_search_reads_each_probe_once_and_finds_what_it_found(tmp_path, monk
     import dalembert.harness.search as search_module
     import dalembert.store
 
-    monkeypatch.setattr(dalembert.store, "FILES_UP_TO", 2000 if layout == 1 else 0)
+    # 20 lies between the map's 12 first probes and the most it can store (``probes_at_most``: 60): the store is
+    # sized by the whole search, not by its first round.
+    monkeypatch.setattr(dalembert.store, "FILES_UP_TO", 2000 if layout == 1 else 20)
     parsed, from_row = [], search_module.RunRecord.from_row
 
     class Counted:
@@ -163,6 +165,8 @@ def test_the_search_reads_each_probe_once_and_finds_what_it_found(tmp_path, monk
     store = Store(out)
     assert store.layout() == layout
     assert _probes_and_boundaries(store) == (REPLAYED_PROBES, REPLAYED_BOUNDARIES)
+    first = [RunSpec.from_json(s) for s in store.manifest()["searches"][0]["first"]]
+    assert len(first) == 12 and len(REPLAYED_PROBES) <= search_module.probes_at_most(first, 1.5) == 60
     assert sorted(parsed) == sorted(store.done_keys())  # every probe read back once, none twice
     rows = sorted(p.name for p in (out / ("rows" if layout == 1 else "segments")).iterdir())
     parsed.clear()

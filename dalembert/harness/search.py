@@ -37,7 +37,7 @@ from dalembert.record import RunRecord, SchemaError
 from dalembert.segments import complete_length, line_key, parse_lines, segment_names
 from dalembert.store import SEGMENTS, StoreError
 
-__all__ = ["RESOLUTION", "search", "next_probes"]
+__all__ = ["RESOLUTION", "search", "next_probes", "probes_at_most"]
 
 # The boundary is known when the failing step is within this factor of the passing one: finer
 # than the spread of the verdict itself near a boundary (a drift bound crossed by a factor
@@ -70,6 +70,23 @@ def next_probes(specs_by_curve, records, intervals, resolution):
                 probes.append(replace(specs_by_curve[key], settings=replace(specs_by_curve[key].settings, dt=dt)))
                 break  # one probe per curve per round: the stable side first
     return probes
+
+
+def probes_at_most(first, resolution=RESOLUTION):
+    """How many runs a search from ``first`` (its curves' probes at the bracket's ends) stores at most:
+    each curve's first probes, then one bisection in log step per round for each of its two boundaries
+    (stable, finite) until the bracket is within ``resolution`` — what sizes the store before it exists
+    (``Store.create``: a map of 1000 curves starts with 2000 probes but stores ~10,000)."""
+    curves = {}
+    for s in first:
+        curves.setdefault((s.case, s.case_version, s.engine, s.settings.integrator,
+                           tuple(sorted(s.settings.options.items()))), []).append(s.settings.dt)
+    total = 0
+    for dts in curves.values():
+        lo, hi = min(dts), max(dts)
+        ratio = math.log(hi / lo) / math.log(resolution) if lo > 0 and hi > lo else 1.0
+        total += len(dts) + 2 * max(0, math.ceil(math.log2(ratio)))
+    return total
 
 
 class _StoredProbes:

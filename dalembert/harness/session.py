@@ -46,11 +46,11 @@ def manifest(specs, command, timeout, timing, jobs, scheduler=None):
     }
 
 
-def start(out, manifest, cases=None):
+def start(out, manifest, cases=None, runs=None):
     """A new store at ``out`` (created) and its one-writer lock, taken before the check that no
     run is there yet (two runs into one directory cannot both pass it); ValueError naming
     ``--out`` when it cannot be. ``cases``: what ``truths.build`` made for the matrix, written
-    into the new store."""
+    into the new store; ``runs``: the most runs it will hold (None: its specs; ``Store.create``)."""
     from dalembert.harness.truths import store_cases
     from dalembert.store import Store
 
@@ -66,7 +66,7 @@ def start(out, manifest, cases=None):
         lock.release()
         raise ValueError(f"--out: {out!r} already holds a run — use --resume {out} or another directory")
     try:
-        store = store.create(manifest)
+        store = store.create(manifest, runs=runs)
         store_cases(store, cases or {})
     except BaseException:
         lock.release()

@@ -422,7 +422,7 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
             manifest["searches"] = [{"parameter": "dt", "resolution": res, "first": [s.to_json() for s in first]}
                                     for first, res in chosen.searches]
         try:
-            store, lock = session.start(out or session.default_out(), manifest, built)
+            store, lock = session.start(out or session.default_out(), manifest, built, runs=_runs_at_most(specs, chosen))
         except BaseException:
             if client is not None:
                 client.close()
@@ -459,6 +459,13 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
         session.end(store)
         _keep_drawn(store, lost)
         return Outcome(store, _stored(store), lost, strict=strict)
+
+
+def _runs_at_most(specs, chosen):
+    """The most runs the matrix stores: its specs, and each search's probes beyond its first (``probes_at_most``)."""
+    from dalembert.harness.search import probes_at_most
+
+    return len(specs) + sum(probes_at_most(first, res) - len(first) for first, res in chosen.searches)
 
 
 def _stored(store):
