@@ -48,11 +48,13 @@ swept parameter at one step (``dalembert.harness.search``).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 __all__ = ["BatchPrepared", "BatchOutcome", "has_batches", "same_model", "world_fields", "world_fields_problem",
+           "model_fields",
            "differing", "same_value", "MAX_BATCH"]
 
 # The most worlds one batch may hold: MuJoCo Warp's and MJX's per-world arrays are ~MBs per thousand worlds for
@@ -178,3 +180,17 @@ def _structural(value):
     if isinstance(value, (tuple, list)):
         return all(_structural(v) for v in value)
     return np.asarray(value).dtype.kind in "iub"
+
+
+def model_fields(model, host):
+    """The fields of an engine's device model (a dataclass) as host values, for ``world_fields_problem``:
+    field name -> ``host(value)``; a nested dataclass's fields (``opt``, ``stat``) as ``opt.timestep`` and so on.
+    ``host``: the engine's copy of one of its arrays to the host (a number, tuple or text as it is)."""
+    out = {}
+    for f in dataclasses.fields(model):
+        v = getattr(model, f.name)
+        if dataclasses.is_dataclass(v) and not isinstance(v, type):
+            out.update({f"{f.name}.{k}": x for k, x in model_fields(v, host).items()})
+        else:
+            out[f.name] = host(v)
+    return out

@@ -28,7 +28,7 @@ import os
 import secrets
 import time
 
-__all__ = ["SEGMENT_SUFFIX", "SegmentWriter", "complete_length", "complete_lines", "line_key", "new_name",
+__all__ = ["SEGMENT_SUFFIX", "SegmentWriter", "close_synced", "complete_length", "complete_lines", "line_key", "new_name",
            "parse_lines", "row_line", "segment_keys", "segment_names", "segment_rows"]
 
 SEGMENT_SUFFIX = ".jsonl"
@@ -172,8 +172,14 @@ class SegmentWriter:
         """Sync and close; the next ``append`` starts a new segment."""
         if self._fd is not None:
             fd, self._fd = self._fd, None
-            try:
-                if self._pid == os.getpid():
-                    os.fsync(fd)
-            finally:
-                os.close(fd)
+            close_synced(fd, self._pid)
+
+
+def close_synced(fd, pid):
+    """Close an appending writer's file ``fd``, flushed to the disk first when this process (``pid``) opened it
+    (a forked child's copy is closed unsynced: the parent owns the file)."""
+    try:
+        if pid == os.getpid():
+            os.fsync(fd)
+    finally:
+        os.close(fd)

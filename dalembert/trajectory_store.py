@@ -37,7 +37,7 @@ from array import array
 
 import numpy as np
 
-from dalembert.segments import new_name
+from dalembert.segments import close_synced, new_name
 
 __all__ = ["KEEPS", "ALL", "DRAWN", "NONE", "PACK_SUFFIX", "INDEX_SUFFIX", "MAGIC", "TrajectoryNotKept", "Trajectories",
            "check_keep", "default_keep", "pack_entries", "read_index", "write_index"]
@@ -172,11 +172,7 @@ class _PackWriter:
         """Sync and close; the next ``append`` starts a new pack."""
         if self._fd is not None:
             fd, self._fd = self._fd, None
-            try:
-                if self._pid == os.getpid():
-                    os.fsync(fd)
-            finally:
-                os.close(fd)
+            close_synced(fd, self._pid)
 
 
 class Trajectories:

@@ -179,21 +179,13 @@ def traced_fields():
 
 
 def model_fields(mx):
-    """The fields of the device model ``mx`` as host values, for comparing worlds' models
-    (``adapters.batch.world_fields_problem``): name -> NumPy array (a JAX array's copy), array, number, enum or
-    bytes; a nested dataclass's fields as ``opt.timestep`` and so on."""
-    import dataclasses
-
+    """The fields of the device model ``mx`` as host values (``adapters.batch.model_fields``): NumPy arrays (a
+    JAX array's copy), arrays, numbers, enums or bytes."""
     import jax
 
-    out = {}
-    for f in dataclasses.fields(mx):
-        v = getattr(mx, f.name)
-        if dataclasses.is_dataclass(v) and not isinstance(v, type):
-            out.update({f"{f.name}.{k}": x for k, x in model_fields(v).items()})
-        else:
-            out[f.name] = np.asarray(v) if isinstance(v, jax.Array) else v
-    return out
+    from dalembert.adapters.batch import model_fields as fields
+
+    return fields(mx, lambda v: np.asarray(v) if isinstance(v, jax.Array) else v)
 
 
 def varying(models, names):

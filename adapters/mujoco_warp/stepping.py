@@ -87,10 +87,9 @@ def batched_fields():
 
 
 def model_fields(mx):
-    """The fields of the device model ``mx`` as host values, for comparing worlds' models
-    (``adapters.batch.world_fields_problem``): field name -> numpy array (a Warp array's copy), tuple, number or
-    text; a nested dataclass's fields (``opt``, ``stat``) as ``opt.timestep`` and so on."""
-    import dataclasses
+    """The fields of the device model ``mx`` as host values (``adapters.batch.model_fields``): numpy arrays
+    (a Warp array's copy), tuples, numbers or text."""
+    from dalembert.adapters.batch import model_fields as fields
 
     wp, _, _ = warp()
 
@@ -101,14 +100,7 @@ def model_fields(mx):
             return tuple(host(x) for x in v)
         return v
 
-    out = {}
-    for f in dataclasses.fields(mx):
-        v = getattr(mx, f.name)
-        if dataclasses.is_dataclass(v) and not isinstance(v, type):
-            out.update({f"{f.name}.{k}": x for k, x in model_fields(v).items()})
-        else:
-            out[f.name] = host(v)
-    return out
+    return fields(mx, host)
 
 
 def worlds_model(models, names, device=DEVICE):
