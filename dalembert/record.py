@@ -60,6 +60,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import asdict, dataclass, field, fields, replace
+from functools import cached_property
 
 from dalembert.judge import Judgement
 from dalembert.settings import Settings, option_text
@@ -232,7 +233,7 @@ class RunRecord:
         s = self.settings
         return f"dt={s.dt:g}" if s.dt is not None else f"tol={s.rtol:g}"
 
-    @property
+    @cached_property  # (a report asks it of every run several times: 5e5 calls for 1e5 runs)
     def options_label(self):
         """Engine options as ``key=value`` words ("" for the defaults), values exactly as given: a run's identity."""
         return " ".join(f"{k}={v}" for k, v in sorted(self.settings.options.items()))
