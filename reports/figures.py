@@ -19,10 +19,12 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
+from dalembert.reports import tick_labels  # noqa: E402
 from dalembert.reports.formatting import value_text  # noqa: E402
 
 plt.rcParams.update({"svg.fonttype": "none", "font.size": 9, "axes.grid": True, "grid.alpha": 0.3,
                      "legend.fontsize": 7, "axes.titlesize": 10})
+tick_labels.register()  # log axes labelled "10⁻³", not mathtext (its parsing was a third of a report's build)
 
 __all__ = ["engine_colours", "pareto_summary", "work_precision", "stability", "time_grid", "diverged_runs",
            "diverged_figure", "stability_map", "map_costs", "scaling", "MAX_POINTS", "svg", "grid", "thin"]
@@ -52,6 +54,7 @@ DIVERGED_LOW_PERCENTILE = 5.0
 
 
 def svg(fig):
+    tick_labels.plain_figure(fig)  # a colour bar's own log formatter too
     buf = io.StringIO()
     fig.savefig(buf, format="svg", bbox_inches="tight")
     plt.close(fig)

@@ -225,6 +225,35 @@ def test_output_from_c_and_python_is_captured():
     assert "from C" in printed.text and "from Python" in printed.text
 
 
+COUNTED_ADAPTER = """
+with open({log!r}, "a") as log:
+    log.write("imported\\n")
+print({says!r})
+
+
+class Counted:
+    def load(self):
+        pass
+"""
+
+
+def test_the_import_probe_asks_a_fresh_interpreter_once_per_adapter_until_its_file_changes(tmp_path, monkeypatch):
+    """``capture.import_output`` starts one interpreter per adapter, ``sys.path`` and module file: asked again, the
+    same answer without a second start; the module rewritten (a new modification time), asked anew."""
+    from dalembert.engine_check.capture import import_output
+
+    log, module = tmp_path / "imports.log", tmp_path / "counted_adapter.py"
+    module.write_text(COUNTED_ADAPTER.format(log=str(log), says="first"))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert import_output("counted_adapter:Counted") == import_output("counted_adapter:Counted") == ("first", "")
+    assert log.read_text().splitlines() == ["imported"]
+    module.write_text(COUNTED_ADAPTER.format(log=str(log), says="second"))
+    stat = module.stat()
+    os.utime(module, ns=(stat.st_atime_ns, stat.st_mtime_ns + 10**9))  # a later time, on any file system's clock
+    assert import_output("counted_adapter:Counted") == ("second", "")
+    assert log.read_text().splitlines() == ["imported", "imported"]
+
+
 def test_the_cli_prints_every_problem_and_exits_1(register, capsys):
     from dalembert.harness.cli import main
 

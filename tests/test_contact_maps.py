@@ -6,8 +6,9 @@ import os
 
 import numpy as np
 import pytest
+from installed import needs
 
-pytest.importorskip("mujoco")
+pytestmark = needs("mujoco")
 
 from dalembert.harness import api  # noqa: E402
 from dalembert.reports import contact_figures  # noqa: E402

@@ -6,8 +6,9 @@ import json
 import os
 
 import pytest
+from installed import needs
 
-pytest.importorskip("mujoco")
+pytestmark = needs("mujoco")
 
 from dalembert.reports.findings import CREEP_METRIC, find, speed_text  # noqa: E402
 from dalembert.reports.render import build_report  # noqa: E402

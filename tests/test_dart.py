@@ -20,8 +20,9 @@ from dalembert.reference import simulate
 from dalembert.scene import Body, Joint, Scene
 from bounds import ORDER_SLACK
 from scenes import cart_pendulum, chain_case, free_body_world_loads_case
+from installed import needs
 
-pytest.importorskip("dartpy")  # the optional extra dalembert[dart]
+pytestmark = needs("dartpy")  # the optional extra dalembert[dart]
 
 ADAPTER = get_adapter("dart")
 

@@ -9,8 +9,9 @@ from dalembert import Settings, make_case
 from dalembert.adapters import get_adapter
 from dalembert.errors import trajectory_errors
 from dalembert.scene import ContactPair, Plane
+from installed import needs
 
-pytest.importorskip("dartpy")
+pytestmark = needs("dartpy")
 
 ADAPTER = get_adapter("dart")
 

@@ -7,8 +7,9 @@ from dalembert import Settings, make_case, spatial
 from dalembert.adapters import get_adapter
 from dalembert.errors import trajectory_errors
 from dalembert.scene import Body, Joint, Loop, Scene
+from installed import needs
 
-pytest.importorskip("dartpy")
+pytestmark = needs("dartpy")
 
 ADAPTER = get_adapter("dart")
 

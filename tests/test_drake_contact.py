@@ -6,8 +6,9 @@ are in its comment)."""
 
 import numpy as np
 import pytest
+from installed import needs
 
-pytest.importorskip("pydrake")
+pytestmark = needs("pydrake")
 
 from scipy.integrate import solve_ivp  # noqa: E402
 

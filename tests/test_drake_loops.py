@@ -12,8 +12,9 @@ from dalembert.reference import simulate
 from dalembert.reference.closed_form import RigidPendulum
 from dalembert.scene import Body, Joint, Load, Loop, Scene
 from dalembert.settings import Settings
+from installed import needs
 
-pytest.importorskip("pydrake")
+pytestmark = needs("pydrake")
 
 ADAPTER = get_adapter("drake")
 

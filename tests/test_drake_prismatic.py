@@ -22,8 +22,9 @@ from dalembert.settings import Settings
 from test_drake_springs import LEADING_TERM_RTOL, THIRD_ORDER_RATIO
 from test_prismatic import CRANK, ROD, TIGHT, _slider_crank, _slider_on_a_swinging_rod
 from test_springs import MASS, REST, STEPS, STIFFNESS, STRETCH, TIMES, _damped_stretch
+from installed import needs
 
-pytest.importorskip("pydrake")
+pytestmark = needs("pydrake")
 
 ADAPTER = get_adapter("drake")
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, world

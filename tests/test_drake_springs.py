@@ -17,8 +17,9 @@ from dalembert.scene import Body, Joint, Scene, Spring
 from dalembert.settings import Settings
 from test_andrews_squeezer import INITIAL_ACCELERATIONS, INITIAL_MULTIPLIERS
 from test_springs import MASS, REST, STEPS, STIFFNESS, STRETCH, TIMES, _damped_stretch, _oscillator
+from installed import needs
 
-pytest.importorskip("pydrake")
+pytestmark = needs("pydrake")
 
 ADAPTER = get_adapter("drake")
 OMEGA = np.sqrt(STIFFNESS / MASS)  # rad/s, the oscillators' undamped frequency

@@ -6,8 +6,9 @@ are in its comment, measured at the default options: contact_stiffness 1e6 N/m, 
 
 import numpy as np
 import pytest
+from installed import needs
 
-pytest.importorskip("exudyn")
+pytestmark = needs("exudyn")
 
 from dalembert.adapters import get_adapter  # noqa: E402
 from dalembert.adapters.exudyn import contact  # noqa: E402

@@ -13,10 +13,11 @@ from dalembert import Settings
 from dalembert.adapters import file_model, get_adapter
 from dalembert.models import read_mjcf, read_urdf
 
-from engine_runs import installed
+from installed import found
 from test_models_urdf import ARM, _write
 
-ENGINES = [e for e in ("mujoco", "pinocchio", "drake") if installed(e)]
+# the engines whose package is found (by its spec: not imported while pytest collects)
+ENGINES = [e for e, module in (("mujoco", "mujoco"), ("pinocchio", "pinocchio"), ("drake", "pydrake")) if found(module)]
 # Each engine's fixed-step method of order four or more (Drake has no fixed-step RK4: its RK5).
 INTEGRATOR = {"mujoco": "rk4", "pinocchio": "rk4", "drake": "rk5"}
 DT = 1e-3

@@ -17,9 +17,9 @@ from dalembert.errors import trajectory_errors
 from dalembert.reference import simulate
 from bounds import ORDER_SLACK, ROD_ANGLE_TOL, ROD_REACTION_TOL
 from scenes import chain_case
+from installed import needs
 
-pytest.importorskip("mujoco.mjx")  # CI installs it (dalembert[mjx]): this never skips there
-pytestmark = pytest.mark.long  # every test here compiles an MJX rollout (seconds each)
+pytestmark = [needs("mujoco.mjx", "jax"), pytest.mark.long]  # every test here compiles an MJX rollout (seconds each)
 
 ADAPTER = get_adapter("mjx")
 F64 = {"precision": "float64"}

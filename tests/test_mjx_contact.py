@@ -6,8 +6,9 @@ MJX 3.17 on JAX's CPU backend, semi-implicit Euler at dt = 1e-3 (the numbers eac
 comment; MuJoCo C 4.0 gives the same figures at these settings)."""
 
 import pytest
+from installed import needs
 
-pytest.importorskip("mujoco.mjx")
+pytestmark = needs("mujoco.mjx", "jax")
 
 from dalembert.adapters import get_adapter  # noqa: E402
 from dalembert.case import make_case  # noqa: E402

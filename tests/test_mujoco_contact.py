@@ -6,8 +6,9 @@ import math
 
 import numpy as np
 import pytest
+from installed import needs
 
-pytest.importorskip("mujoco")
+pytestmark = needs("mujoco")
 
 from dalembert.adapters import get_adapter  # noqa: E402
 from dalembert.adapters.mujoco import contact  # noqa: E402

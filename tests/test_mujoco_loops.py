@@ -4,8 +4,9 @@ in the audit, and MJX running the same constraints (one compile)."""
 
 import numpy as np
 import pytest
+from installed import needs
 
-pytest.importorskip("mujoco")
+pytestmark = needs("mujoco")
 
 from dalembert import Settings, invariants  # noqa: E402
 from dalembert.adapters import get_adapter  # noqa: E402

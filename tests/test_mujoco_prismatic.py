@@ -16,8 +16,9 @@
 
 import numpy as np
 import pytest
+from installed import needs
 
-pytest.importorskip("mujoco")
+pytestmark = needs("mujoco")
 
 from dalembert import Settings, invariants, spatial  # noqa: E402
 from dalembert.adapters import get_adapter  # noqa: E402

@@ -6,8 +6,9 @@ compile)."""
 
 import numpy as np
 import pytest
+from installed import needs
 
-pytest.importorskip("mujoco")
+pytestmark = needs("mujoco")
 
 from dalembert import Settings, invariants, make_case  # noqa: E402
 from dalembert.cases.andrews_squeezer import ANGLES, REFERENCE_ANGLES, REFERENCE_T, energy_with_motor_work  # noqa: E402

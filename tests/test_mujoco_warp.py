@@ -11,9 +11,10 @@ import pytest
 
 from dalembert import Settings, make_case
 from dalembert.adapters import get_adapter
+from installed import needs
 
-pytest.importorskip("mujoco_warp")  # dalembert[mujoco-warp]; not in dalembert[all] (its cold compile)
-pytestmark = pytest.mark.long  # the first test compiles Warp's kernels (tens of seconds from a fresh clone)
+# long: the first test compiles Warp's kernels (tens of seconds from a fresh clone)
+pytestmark = [needs("mujoco_warp", "warp"), pytest.mark.long]
 
 ADAPTER = get_adapter("mujoco_warp")
 EPS32 = float(np.finfo(np.float32).eps)  # 1.19e-7: MuJoCo Warp computes in float32

@@ -8,9 +8,10 @@ kernels from that cache. Each test steps at most 1 s of model time.
 
 import numpy as np
 import pytest
+from installed import needs
 
-pytest.importorskip("newton", reason="Newton is not installed: pip install dalembert[newton]")
-pytestmark = pytest.mark.long  # the first model compiles Newton's kernels (tens of seconds from a fresh clone)
+# long: the first model compiles Newton's kernels (tens of seconds from a fresh clone)
+pytestmark = [needs("newton", "warp", reason="Newton is not installed: pip install dalembert[newton]"), pytest.mark.long]
 
 from dalembert import Settings, make_case, spatial  # noqa: E402
 from dalembert.adapters import get_adapter  # noqa: E402

@@ -10,8 +10,9 @@ from dalembert import Settings, make_case
 from dalembert.harness.cli import main
 from dalembert.reports.parity import parities
 from dalembert.store import Store
+from installed import needs
 
-pytest.importorskip("mujoco.mjx")  # CI installs it (dalembert[mjx]): this never skips there
+pytestmark = needs("mujoco.mjx", "jax")  # CI installs it (dalembert[mjx]): this never skips there
 
 # MJX's semi-implicit Euler is MuJoCo C's, operation for operation, so the two differ by roundoff alone:
 # in float64 below the case's double-precision floor (measured 1.3e-15 rad against a floor of 1.0e-14 over

@@ -6,8 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from installed import needs
 
-pytest.importorskip("pinocchio")
+pytestmark = needs("pinocchio")
 
 from dalembert import invariants, spatial  # noqa: E402
 from dalembert.adapters.registry import get_adapter  # noqa: E402

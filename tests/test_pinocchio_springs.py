@@ -10,8 +10,9 @@ import dataclasses
 
 import numpy as np
 import pytest
+from installed import needs
 
-pytest.importorskip("pinocchio")
+pytestmark = needs("pinocchio")
 
 import andrews_test_set as test_set  # noqa: E402
 from dalembert import spatial  # noqa: E402

@@ -8,8 +8,9 @@ import sys
 
 import numpy as np
 import pytest
+from installed import needs
 
-pytest.importorskip("pybullet")  # dalembert[pybullet]
+pytestmark = needs("pybullet")  # dalembert[pybullet]
 
 from dalembert import Settings, invariants, make_case  # noqa: E402
 from dalembert.adapters import get_adapter  # noqa: E402

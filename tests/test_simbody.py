@@ -17,8 +17,9 @@ from dalembert.errors import trajectory_errors
 from dalembert.reference import simulate
 from bounds import ORDER_SLACK
 from scenes import cart_pendulum, chain_case, free_body_world_loads_case
+from installed import needs
 
-pytest.importorskip("opensim")  # the optional extra dalembert[simbody]
+pytestmark = needs("opensim")  # the optional extra dalembert[simbody]
 
 ADAPTER = get_adapter("simbody")
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
+import importlib.util
 import io
 import os
 import subprocess
@@ -71,12 +73,28 @@ def printed_problem(where, text):
 
 def import_output(path):
     """What importing the adapter ``path`` (``"module:Class"``), making one and calling its ``load()`` prints in a
-    fresh interpreter that sees this one's ``sys.path``: ``(text, error)``, error a line or ``""``."""
+    fresh interpreter that sees this one's ``sys.path``: ``(text, error)``, error a line or ``""``.
+
+    Asked once per process for the same adapter, ``sys.path`` and module file (its path and modification time): a
+    fresh interpreter's import is the same then, and costs a second or more (Drake, JAX: several).
+    """
+    module = path.partition(":")[0]
+    try:
+        spec = importlib.util.find_spec(module)
+    except (ImportError, ValueError):  # (its parent package fails to import: the fresh interpreter says how)
+        spec = None
+    origin = spec.origin if spec is not None and spec.origin and os.path.exists(spec.origin) else None
+    return _import_output(path, tuple(sys.path), origin, os.stat(origin).st_mtime_ns if origin else None)
+
+
+@functools.lru_cache(maxsize=None)
+def _import_output(path, sys_path, origin, mtime_ns):
+    """``import_output`` of ``path`` with this ``sys.path`` (``origin`` and ``mtime_ns``: the cache's key only)."""
     code = ("import importlib, sys\n"
             "module, name = sys.argv[1].split(':')\n"
             "adapter = getattr(importlib.import_module(module), name)()\n"
             "try:\n    adapter.load()\nexcept ImportError:\n    pass\n")
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys_path if p))
     with tempfile.TemporaryDirectory() as empty:  # run from an empty folder: nothing there shadows a module
         done = subprocess.run([sys.executable, "-c", code, path], capture_output=True, text=True, env=env, cwd=empty,
                               timeout=IMPORT_TIMEOUT_S)
