@@ -10,12 +10,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-pytest.importorskip("newton", reason="Newton is not installed: pip install dalembert[newton]")
-pytestmark = pytest.mark.long  # Newton's kernels: loaded from Warp's cache, compiled from a fresh clone
+from dalembert import Settings, make_case
+from dalembert.adapters import get_adapter
+from dalembert.adapters.batch import has_batches
+from installed import needs
 
-from dalembert import Settings, make_case  # noqa: E402
-from dalembert.adapters import get_adapter  # noqa: E402
-from dalembert.adapters.batch import has_batches  # noqa: E402
+# Newton's kernels: loaded from Warp's cache, compiled from a fresh clone
+pytestmark = [needs("newton", reason="Newton is not installed: pip install dalembert[newton]"), pytest.mark.long]
 
 ADAPTER = get_adapter("newton")
 # A batch's world and the run alone are bit for bit the same: Newton's worlds share no data, and each world's

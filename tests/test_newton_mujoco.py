@@ -16,12 +16,13 @@ import sys
 import numpy as np
 import pytest
 
-pytest.importorskip("newton", reason="Newton is not installed: pip install dalembert[newton]")
+from dalembert import Settings, make_case
+from dalembert.adapters import get_adapter
+from dalembert.adapters.newton import mujoco_solver
+from dalembert.environments import INFO, environment
+from installed import needs
 
-from dalembert import Settings, make_case  # noqa: E402
-from dalembert.adapters import get_adapter  # noqa: E402
-from dalembert.adapters.newton import mujoco_solver  # noqa: E402
-from dalembert.environments import INFO, environment  # noqa: E402
+pytestmark = needs("newton", reason="Newton is not installed: pip install dalembert[newton]")
 
 SPEC = "newton==1.8.0"
 # Newton 1.8.0's own declaration (its METADATA), as a fake environment's Newton declares it
