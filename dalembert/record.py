@@ -227,7 +227,7 @@ class RunRecord:
         """``Settings.label()`` of the run: ``rk4 dt=0.001``, ``dop853 rtol=1e-09 atol=1e-09``, options appended."""
         return self.settings.label()
 
-    @property
+    @cached_property  # (asked of every run a hazard names, for what they share)
     def sweep_label(self):
         """Where the run sits in its sweep: ``dt=0.001`` or ``tol=1e-09``."""
         s = self.settings
@@ -238,10 +238,17 @@ class RunRecord:
         """Engine options as ``key=value`` words ("" for the defaults), values exactly as given: a run's identity."""
         return " ".join(f"{k}={v}" for k, v in sorted(self.settings.options.items()))
 
-    @property
+    @cached_property  # (asked of every run a hazard names, for what they share)
     def options_text(self):
         """``options_label`` as a report writes it: values by ``settings.option_text`` (4 significant digits)."""
         return " ".join(f"{k}={option_text(v)}" for k, v in sorted(self.settings.options.items()))
+
+    @cached_property  # (a report asks it of every run in several sections)
+    def cost_per_sim_s(self):
+        """Median stepping wall time per simulated second of the horizon (s/s), NaN when not timed or with no
+        horizon."""
+        horizon = self.t_final if math.isfinite(self.t_final) and self.t_final > 0 else _NAN
+        return self.cost.wall_s_median / horizon
 
     def max_error(self, quantity):
         """The max error over the horizon of ``quantity``, or NaN when not measured."""

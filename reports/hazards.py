@@ -145,9 +145,8 @@ NAMED = 3
 def _shared(runs):
     """What every one of ``runs`` has in common ("all rk44 with node=rxyz"), or ""."""
     parts = []
-    for get, word in ((lambda r: r.settings.integrator, ""), (lambda r: r.sweep_label, "at "),
-                      (lambda r: r.options_text, "with ")):
-        values = {get(r) for r in runs}
+    for values, word in (({r.settings.integrator for r in runs}, ""), ({r.sweep_label for r in runs}, "at "),
+                         ({r.options_text for r in runs}, "with ")):
         if len(values) == 1 and next(iter(values)):
             parts.append(word + next(iter(values)))
     return ("all " + " ".join(parts)) if parts and len(runs) > 1 else ""
@@ -397,10 +396,9 @@ def _disagreements(runs, quantity, case):
             s = r.settings
             groups.setdefault((s.integrator, s.dt, s.rtol, s.atol), {}).setdefault(r.engine, []).append(r)
     out = []
-    for (integrator, dt, rtol, _), by_engine in sorted(groups.items(), key=lambda kv: (kv[0][0], kv[0][1] is None,
-                                                                                      -(kv[0][1] or kv[0][2] or 0))):
-        if len(by_engine) < 2:
-            continue
+    shared = [kv for kv in groups.items() if len(kv[1]) >= 2]  # (a setting one engine ran disagrees with none)
+    for (integrator, dt, rtol, _), by_engine in sorted(shared, key=lambda kv: (kv[0][0], kv[0][1] is None,
+                                                                               -(kv[0][1] or kv[0][2] or 0))):
         chosen = {e: _representative(sorted(rs, key=lambda r: (bool(r.settings.options), _err(r, quantity))))
                   for e, rs in sorted(by_engine.items())}
         sample = next(iter(chosen.values()))
