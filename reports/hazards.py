@@ -40,7 +40,7 @@ stored numbers only; verdicts are the stored ones, never judged again here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -102,8 +102,12 @@ def case_hazards(engines, runs, case, quantity, store=None, refused=()):
     ``dalembert.refusal.Refusal``s of this case version (listed with the runs stored ``unsupported``, by engine)."""
     hazards = []
     for e in engines:
-        hazards += (_diverged(e, case) + _failed(e) + _energy(e, case) + _creep(e, case) + _closure(e, case, store)
-                    + _reactions(e, case, quantity) + _beyond(e, case) + _inert(e, quantity))
+        # the engine's runs in sweep order, sorted once: the kinds that keep a subset of them in that order filter these
+        # (a stable sort: a subset of the sorted runs is the sorted subset)
+        swept = replace(e, runs=tuple(_by_sweep(e.runs)))
+        hazards += (_diverged(swept, case) + _failed(swept) + _energy(swept, case) + _creep(e, case)
+                    + _closure(e, case, store) + _reactions(swept, case, quantity) + _beyond(swept, case)
+                    + _inert(e, quantity))
     inert = {r.key for h in hazards if h.kind == "inert" for r in h.runs}
     hazards += _disagreements([r for r in runs if r.key not in inert], quantity, case)
     unsupported = [h for e in engines for h in _unsupported(e)] + [
@@ -166,7 +170,7 @@ def _hazard(kind, e, runs, lead, line, worst=None, tail=""):
 
 
 def _diverged(e, case):
-    bad = _by_sweep(r for r in e.runs if r.judgement.verdict == "diverged")
+    bad = [r for r in e.runs if r.judgement.verdict == "diverged"]  # (``e.runs`` in sweep order)
     if not bad:
         return []
     times = [r.t_diverged for r in bad if r.t_diverged is not None]
@@ -184,7 +188,7 @@ def _diverged(e, case):
 
 
 def _failed(e):
-    bad = _by_sweep(r for r in e.runs if r.status in BAD_STATUSES and r.judgement.verdict != "diverged")
+    bad = [r for r in e.runs if r.status in BAD_STATUSES and r.judgement.verdict != "diverged"]  # (in sweep order)
     if not bad:
         return []
 
@@ -202,8 +206,8 @@ def _energy(e, case):
     name = _energy_name(case)
     if name is None:
         return []
-    bad = _by_sweep(r for r in e.runs
-                    if r.ok and r.judgement.verdict != "diverged" and r.drifts.get(name, 0.0) > ENERGY_HAZARD)
+    bad = [r for r in e.runs  # (in sweep order)
+           if r.ok and r.judgement.verdict != "diverged" and r.drifts.get(name, 0.0) > ENERGY_HAZARD]
     if not bad:
         return []
     what = "energy" if name == "energy" else "energy balance (energy less the work of the loads)"
@@ -283,8 +287,8 @@ def _reactions(e, case, quantity):
     tol, motion = case.tolerances.get("reaction_force"), case.tolerances.get(quantity) if quantity else None
     if tol is None or motion is None:
         return []
-    bad = _by_sweep(r for r in e.runs if r.ok and r.judgement.verdict != "diverged" and r.max_error(quantity) <= motion.value
-                    and not r.max_error("reaction_force") <= tol.value)
+    bad = [r for r in e.runs if r.ok and r.judgement.verdict != "diverged" and r.max_error(quantity) <= motion.value
+           and not r.max_error("reaction_force") <= tol.value]  # (in sweep order)
 
     if not bad:
         return []
@@ -301,7 +305,7 @@ def _reactions(e, case, quantity):
 
 def _beyond(e, case):
     finished = [r for r in e.runs if r.ok and r.judgement.verdict != "diverged"]
-    bad = _by_sweep(r for r in finished if r.judgement.within_tolerance is False)
+    bad = [r for r in finished if r.judgement.within_tolerance is False]  # (in sweep order)
     if not bad:
         return []
     counts = {}
