@@ -87,7 +87,7 @@ _TEXTS = ("device",)  # the text fields of Cost
 class _cached:
     """A derived value computed on its first read and kept in the instance's ``__dict__`` (later reads find it there,
     never calling this): ``functools.cached_property`` without the lock Python 3.11's takes on every first read (1.5 us
-    each, as long as the value itself: a report reads several of these of each of 1e5-1e6 records). Two threads
+    each, profiled: longer than computing the value; a report reads five of these of each of 1e5-1e6 records). Two threads
     reading it first at once both compute it, to the same value."""
 
     def __init__(self, func):
