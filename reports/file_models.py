@@ -82,6 +82,8 @@ def _error(r, quantity):
 
 def file_readings(records):
     """Every ``FileReading`` in ``records`` (RunRecords), by case, engine and label; [] where no run read a file."""
+    if not any(r.settings.options.get("model_file", SCENE) != SCENE for r in records):
+        return []  # (no run read a file: nothing to pair, asked of every run of a map otherwise)
     groups = {}
     for r in records:
         path, on = _source(r)

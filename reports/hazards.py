@@ -40,7 +40,7 @@ stored numbers only; verdicts are the stored ones, never judged again here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -102,8 +102,12 @@ def case_hazards(engines, runs, case, quantity, store=None, refused=()):
     ``dalembert.refusal.Refusal``s of this case version (listed with the runs stored ``unsupported``, by engine)."""
     hazards = []
     for e in engines:
-        hazards += (_diverged(e, case) + _failed(e) + _energy(e, case) + _creep(e, case) + _closure(e, case, store)
-                    + _reactions(e, case, quantity) + _beyond(e, case) + _inert(e, quantity))
+        # the engine's runs in sweep order, sorted once: the kinds that keep a subset of them in that order filter these
+        # (a stable sort: a subset of the sorted runs is the sorted subset)
+        swept = replace(e, runs=tuple(_by_sweep(e.runs)))
+        hazards += (_diverged(swept, case) + _failed(swept) + _energy(swept, case) + _creep(e, case)
+                    + _closure(e, case, store) + _reactions(swept, case, quantity) + _beyond(swept, case)
+                    + _inert(e, quantity))
     inert = {r.key for h in hazards if h.kind == "inert" for r in h.runs}
     hazards += _disagreements([r for r in runs if r.key not in inert], quantity, case)
     unsupported = [h for e in engines for h in _unsupported(e)] + [
@@ -145,9 +149,8 @@ NAMED = 3
 def _shared(runs):
     """What every one of ``runs`` has in common ("all rk44 with node=rxyz"), or ""."""
     parts = []
-    for get, word in ((lambda r: r.settings.integrator, ""), (lambda r: r.sweep_label, "at "),
-                      (lambda r: r.options_text, "with ")):
-        values = {get(r) for r in runs}
+    for values, word in (({r.settings.integrator for r in runs}, ""), ({r.sweep_label for r in runs}, "at "),
+                         ({r.options_text for r in runs}, "with ")):
         if len(values) == 1 and next(iter(values)):
             parts.append(word + next(iter(values)))
     return ("all " + " ".join(parts)) if parts and len(runs) > 1 else ""
@@ -167,7 +170,7 @@ def _hazard(kind, e, runs, lead, line, worst=None, tail=""):
 
 
 def _diverged(e, case):
-    bad = _by_sweep(r for r in e.runs if r.judgement.verdict == "diverged")
+    bad = [r for r in e.runs if r.judgement.verdict == "diverged"]  # (``e.runs`` in sweep order)
     if not bad:
         return []
     times = [r.t_diverged for r in bad if r.t_diverged is not None]
@@ -185,7 +188,7 @@ def _diverged(e, case):
 
 
 def _failed(e):
-    bad = _by_sweep(r for r in e.runs if r.status in BAD_STATUSES and r.judgement.verdict != "diverged")
+    bad = [r for r in e.runs if r.status in BAD_STATUSES and r.judgement.verdict != "diverged"]  # (in sweep order)
     if not bad:
         return []
 
@@ -203,8 +206,8 @@ def _energy(e, case):
     name = _energy_name(case)
     if name is None:
         return []
-    bad = _by_sweep(r for r in e.runs
-                    if r.ok and r.judgement.verdict != "diverged" and r.drifts.get(name, 0.0) > ENERGY_HAZARD)
+    bad = [r for r in e.runs  # (in sweep order)
+           if r.ok and r.judgement.verdict != "diverged" and r.drifts.get(name, 0.0) > ENERGY_HAZARD]
     if not bad:
         return []
     what = "energy" if name == "energy" else "energy balance (energy less the work of the loads)"
@@ -284,8 +287,8 @@ def _reactions(e, case, quantity):
     tol, motion = case.tolerances.get("reaction_force"), case.tolerances.get(quantity) if quantity else None
     if tol is None or motion is None:
         return []
-    bad = _by_sweep(r for r in e.runs if r.ok and r.judgement.verdict != "diverged" and r.max_error(quantity) <= motion.value
-                    and not r.max_error("reaction_force") <= tol.value)
+    bad = [r for r in e.runs if r.ok and r.judgement.verdict != "diverged" and r.max_error(quantity) <= motion.value
+           and not r.max_error("reaction_force") <= tol.value]  # (in sweep order)
 
     if not bad:
         return []
@@ -302,7 +305,7 @@ def _reactions(e, case, quantity):
 
 def _beyond(e, case):
     finished = [r for r in e.runs if r.ok and r.judgement.verdict != "diverged"]
-    bad = _by_sweep(r for r in finished if r.judgement.within_tolerance is False)
+    bad = [r for r in finished if r.judgement.within_tolerance is False]  # (in sweep order)
     if not bad:
         return []
     counts = {}
@@ -397,10 +400,9 @@ def _disagreements(runs, quantity, case):
             s = r.settings
             groups.setdefault((s.integrator, s.dt, s.rtol, s.atol), {}).setdefault(r.engine, []).append(r)
     out = []
-    for (integrator, dt, rtol, _), by_engine in sorted(groups.items(), key=lambda kv: (kv[0][0], kv[0][1] is None,
-                                                                                      -(kv[0][1] or kv[0][2] or 0))):
-        if len(by_engine) < 2:
-            continue
+    shared = [kv for kv in groups.items() if len(kv[1]) >= 2]  # (a setting one engine ran disagrees with none)
+    for (integrator, dt, rtol, _), by_engine in sorted(shared, key=lambda kv: (kv[0][0], kv[0][1] is None,
+                                                                               -(kv[0][1] or kv[0][2] or 0))):
         chosen = {e: _representative(sorted(rs, key=lambda r: (bool(r.settings.options), _err(r, quantity))))
                   for e, rs in sorted(by_engine.items())}
         sample = next(iter(chosen.values()))

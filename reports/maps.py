@@ -63,8 +63,11 @@ def stability_maps(records, units_of):
     """The ``StabilityMap`` of every case swept over a scalar parameter whose fixed-step runs probe
     at least two steps on some curve. ``units_of(case name) -> {parameter: unit}``."""
     out = []
-    for name in sorted({r.case for r in records}):
-        runs = [r for r in records if r.case == name]
+    by_case = {}  # (grouped once: a map's case holds most of a store's runs)
+    for r in records:
+        by_case.setdefault(r.case, []).append(r)
+    for name in sorted(by_case):
+        runs = by_case[name]
         versions = {r.case_version: r.params for r in runs}
         swept = [k for k in _swept(list(versions.values()))
                  if all(isinstance(p.get(k), (int, float)) for p in versions.values())]
@@ -79,9 +82,11 @@ def stability_maps(records, units_of):
             label = " ".join(x for x in (b.integrator, b.options) if x)
             curves.setdefault((b.engine, label), []).append((float(b.params[parameter]), b))
         quantity = headline_quantity(runs)
-        costs = {}
+        costs, by_version = {}, {}
+        for r in runs:
+            by_version.setdefault(r.case_version, []).append(r)
         for version, params in versions.items():
-            lines = series([r for r in runs if r.case_version == version], quantity) if quantity else {}
+            lines = series(by_version[version], quantity) if quantity else {}
             for full, points in lines.items():
                 engine, _, label = full.partition(" ")
                 best = cheapest_reaching(points, COST_TARGET)

@@ -162,11 +162,12 @@ def step_pairs(groups, excluded=None):
                 lines.setdefault((r.engine, r.settings.integrator, r.options_label, _params(r)), []).append(r)
         for (engine, integrator, options, _), runs in sorted(lines.items()):
             runs = sorted(runs, key=lambda r: -r.settings.dt)
-            for coarse, fine in zip(runs, runs[1:]):
+            # why each run is outside the asymptotic range, asked once per run (most are in two pairs)
+            usable = [""] * len(runs) if case.scene.contacts else [_usable(r, quantity, floor) for r in runs]
+            for i, (coarse, fine) in enumerate(zip(runs, runs[1:])):
                 if not coarse.settings.dt > fine.settings.dt:
                     continue
-                why = ("of a contact case" if case.scene.contacts
-                       else _usable(coarse, quantity, floor) or _usable(fine, quantity, floor))
+                why = "of a contact case" if case.scene.contacts else usable[i] or usable[i + 1]
                 if not why and quantity in ANGLES and not coarse.max_error(quantity) < SATURATED_ANGLE:
                     why = "with an angle error saturated"
                 if why:

@@ -31,7 +31,7 @@ import math
 from dataclasses import dataclass
 
 from dalembert.reports.names import settings_text
-from dalembert.reports.work_precision import cost_per_sim_s, figure_of, sweep_key
+from dalembert.reports.work_precision import figure_reader, sweep_key
 
 __all__ = ["TARGETS", "SINGLE_SAMPLE_SPREAD", "ProblemClass", "PROBLEM_CLASSES", "problem_class", "Candidate",
            "Recommendation", "recommend"]
@@ -132,7 +132,7 @@ class Recommendation:
 def _spread(r):
     """``(low, high)`` s/s of run ``r``: its repeats' min and max per simulated second (or the single sample's
     ``SINGLE_SAMPLE_SPREAD`` either side)."""
-    cost = cost_per_sim_s(r)
+    cost = r.cost_per_sim_s
     reps = [x for x in r.cost.wall_s_repeats if math.isfinite(x)]
     if len(reps) >= 2:
         return min(reps) / r.t_final, max(reps) / r.t_final
@@ -152,11 +152,12 @@ def _setting_key(r):
     return _line(r) + (s.dt, s.rtol, s.atol)
 
 
-def _measured(f, r):
-    """Run ``r``'s headline figure on case findings ``f`` and its cost, or None when it has none."""
+def _measured(f, r, figure=None):
+    """Run ``r``'s headline figure on case findings ``f`` and its cost, or None when it has none (``figure``: ``f``'s
+    ``work_precision.figure_reader``, made once per case by a caller that asks of many runs)."""
     if not (r.ok and r.judgement.verdict != "diverged" and f.ranked):
         return None
-    err, cost = figure_of(r, f.ranked, f.case), cost_per_sim_s(r)
+    err, cost = (figure or figure_reader(f.ranked, f.case))(r), r.cost_per_sim_s
     return (err, cost) if math.isfinite(err) and math.isfinite(cost) and cost > 0 else None
 
 
@@ -165,18 +166,20 @@ def _candidates(members):
     ``Candidate``."""
     by_key = {}
     for f in members:
+        figure = figure_reader(f.ranked, f.case) if f.ranked else None
         for r in f.runs:
-            if _measured(f, r) is not None:
-                by_key.setdefault(_setting_key(r), {})[id(f)] = (f, r)
+            measured = _measured(f, r, figure)
+            if measured is not None:
+                by_key.setdefault(_setting_key(r), {})[id(f)] = (r, measured[0])
     out = []
     for found in by_key.values():
         if len(found) != len(members):
             continue
-        runs = tuple(r for _, r in found.values())
+        runs = tuple(r for r, _ in found.values())
         spreads = [_spread(r) for r in runs]
-        out.append(Candidate(runs[0].engine, settings_text(runs[0]), _geomean([cost_per_sim_s(r) for r in runs]),
+        out.append(Candidate(runs[0].engine, settings_text(runs[0]), _geomean([r.cost_per_sim_s for r in runs]),
                              _geomean([lo for lo, _ in spreads]), _geomean([hi for _, hi in spreads]),
-                             max(_measured(f, r)[0] for f, r in found.values()), runs))
+                             max(err for _, err in found.values()), runs))
     return out
 
 

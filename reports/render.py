@@ -16,6 +16,7 @@ hands them to the page writer (``reports/page.py``).
 
 from __future__ import annotations
 
+import gc
 import numbers
 import os
 
@@ -45,12 +46,16 @@ from dalembert.reports.sections.versions import versions
 from dalembert.reports.sections.work_precision import work_precision
 from dalembert.store import atomic_write
 
-__all__ = ["build_report", "DETAILED_VERSIONS", "in_page_order"]
+__all__ = ["build_report", "DETAILED_VERSIONS", "YOUNG_COLLECTION", "in_page_order"]
 
 # A case swept over more versions than this shows its summary rows, not a full section per version
 # (ten spins would otherwise be ten copies of every figure); a case with a stability map shows the
 # map instead of its versions' sections, however few (their probes would fill the grids).
 DETAILED_VERSIONS = 4
+# New objects between two collections of the youngest generation while a report is built (Python's default: 700):
+# the build's objects are few and short-lived beside the records it holds, and a pass per 700 of them made a 1e5-run
+# build's aggregation 1.8x slower than with no collector; at 10,000 it is within 7 % of none (``find``, measured).
+YOUNG_COLLECTION = 10_000
 
 
 def _value_key(v):
@@ -98,7 +103,28 @@ def _case_sections(rep, f, names, mapped):
 def build_report(store, out_dir=None):
     """Write ``report.html``, ``report.md`` (+ ``report_files/``) and ``summary.csv``; returns their paths."""
     out_dir = out_dir or store.path
-    records = store.table_records()
+    # Python's cyclic garbage collector, tuned for the records (a dozen objects each, 1e5-1e6 runs, no cycles among
+    # them, kept to the end): paused while they are read, then kept out of its passes (``gc.freeze``), its youngest
+    # generation collected every YOUNG_COLLECTION new objects; all as it was after. Each pass otherwise revisits what
+    # the aggregation holds, again and again: measured on a 1e5-run map store, the read 2.7 -> 1.9 s, ``find``
+    # 2.4 -> 1.4 s (1.3 s with no collector at all).
+    enabled, thresholds = gc.isenabled(), gc.get_threshold()
+    gc.disable()
+    try:
+        records = store.table_records()
+        gc.freeze()
+        gc.set_threshold(YOUNG_COLLECTION, *thresholds[1:])
+        if enabled:
+            gc.enable()
+        return _build(store, records, out_dir)
+    finally:
+        gc.set_threshold(*thresholds)
+        gc.unfreeze()
+        if enabled:
+            gc.enable()
+
+
+def _build(store, records, out_dir):
     found = in_page_order(find(store, records))
     names = [f.case.name for f in found]
     rep = Report(store=store, records=records, manifest=store.manifest(), found=found,

@@ -34,7 +34,8 @@ def _shared(load, cores):
 
 def loaded_runs(records, cores):
     """The runs that started or ended with the 1-minute load average above ``cores + OWN_LOAD``."""
-    return [r for r in records if any(_shared(x, cores) for x in _loads(r))]
+    limit = cores + OWN_LOAD  # (``_shared`` of a finite reading, spelt out: it is asked of every run)
+    return [r for r in records if limit < r.cost.load_start < math.inf or limit < r.cost.load_end < math.inf]
 
 
 def timing_note(manifest, records):
@@ -44,13 +45,14 @@ def timing_note(manifest, records):
         return None
     marks = [v[0] for v in ((manifest.get("load_average") or {}).get(k) for k in ("start", "end")) if v]
     loaded = loaded_runs(records, cores)
-    peak = max(marks + [x for r in records for x in _loads(r)], default=0.0)
+    readings = [_loads(r) for r in records]
+    peak = max(marks + [x for loads in readings for x in loads], default=0.0)
     jobs = manifest.get("jobs") or 0
     parts = []
     if _shared(peak, cores):
         parts.append(f"the 1-minute load average reached {peak:.3g} on {cores} cores")
         if loaded:
-            timed = sum(1 for r in records if _loads(r))
+            timed = sum(1 for loads in readings if loads)
             names = ", ".join(f"{r.case} {run_name(r)}" for r in loaded[:3])
             parts.append(f"{len(loaded)} of {timed} timed runs started or ended with the load above the cores "
                          f"by more than the matrix's own load of {OWN_LOAD:g} (e.g. {names})")

@@ -2,6 +2,7 @@
 is shown with its description and unit, times and parameters print without float noise, and a
 case's versions read in the order of their parameter's values."""
 
+import gc
 import math
 import os
 import re
@@ -185,3 +186,19 @@ def test_each_trajectory_is_read_once(sweep_report):
     traj = store.trajectory(reads[0])
     assert not traj.t.flags.writeable
     assert not next(iter(traj.bodies.values())).position.flags.writeable
+
+
+def test_building_a_report_leaves_the_garbage_collector_as_it_found_it(tmp_path):
+    """``build_report`` tunes Python's collector for the records it reads (``render.YOUNG_COLLECTION``): every
+    setting is back after it, enabled or not, and nothing is left frozen."""
+    store = seed_store(tmp_path / "store")
+    thresholds = gc.get_threshold()
+    try:
+        for enabled in (True, False):
+            gc.set_threshold(500, 7, 9)
+            (gc.enable if enabled else gc.disable)()
+            build_report(store, str(tmp_path / f"out-{enabled}"))
+            assert (gc.isenabled(), gc.get_threshold(), gc.get_freeze_count()) == (enabled, (500, 7, 9), 0)
+    finally:
+        gc.set_threshold(*thresholds)
+        gc.enable()

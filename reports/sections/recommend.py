@@ -7,7 +7,7 @@ from dalembert.reports.causes import single_precision
 from dalembert.reports.formatting import counted
 from dalembert.reports.page import Part
 from dalembert.reports.recommend import PROBLEM_CLASSES, SINGLE_SAMPLE_SPREAD, TARGETS, recommend
-from dalembert.reports.work_precision import figure_of
+from dalembert.reports.work_precision import figure_reader
 from dalembert.reports.sections.common import run_link
 from dalembert.reports.tables import Cell, Table, escape_html
 from dalembert.reports.timing import loaded_runs
@@ -68,10 +68,11 @@ def _best_of(rep, keep):
     engine lines (engine, integrator, options) those runs are; (None, 0) when none."""
     best, lines = None, set()
     for f in rep.found:
+        figure = figure_reader(f.ranked, f.case) if f.ranked else None
         for r in f.runs:
             if f.ranked and r.ok and r.judgement.verdict != "diverged" and keep(r):
                 lines.add((r.engine, r.settings.integrator, r.options_label))
-                e = figure_of(r, f.ranked, f.case)
+                e = figure(r)
                 best = e if best is None or e < best else best
     return best, len(lines)
 
