@@ -6,8 +6,10 @@ that shows one hazard at a time, with the real case record, truth and trajectory
 """
 
 import json
+import math
 import os
-from dataclasses import replace
+import shutil
+from dataclasses import fields, replace
 
 import numpy as np
 
@@ -91,3 +93,27 @@ def tamper(store, change, index=0):
         record = RunRecord.from_row(json.load(fh))
     with open(path, "w") as fh:
         json.dump(change(record).to_row(), fh)
+
+
+def segmented(files, path, records=None):
+    """A layout-2 store at ``path`` holding ``records`` (default: every run of the store ``files``), written one by
+    one, with ``files``' cases, truths and trajectories."""
+    store = Store(path).create(files.manifest(), layout=2)
+    for d in ("cases", "truth", "trajectories"):
+        shutil.copytree(os.path.join(files.path, d), os.path.join(path, d), dirs_exist_ok=True)
+    for r in files.records() if records is None else records:
+        store.write_record(r)
+    return store
+
+
+def plain(value):
+    """``value`` with NaN as None, tuples as lists, dataclasses as dicts, recursively: to compare exactly."""
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: plain(v) for k, v in value.items()}
+    if hasattr(value, "__dataclass_fields__"):
+        return {f.name: plain(getattr(value, f.name)) for f in fields(value)}
+    return value

@@ -15,7 +15,7 @@ from dalembert import runs_table
 from dalembert.record import RunRecord, SchemaError
 from dalembert.segments import segment_names
 from dalembert.store import Store, StoreError
-from stores import small_store
+from stores import plain, segmented, small_store
 
 
 @pytest.fixture(scope="module")
@@ -32,25 +32,8 @@ def files(tmp_path_factory):
     return store
 
 
-def _segmented(files, path, records):
-    store = Store(path).create(files.manifest(), layout=2)
-    for d in ("cases", "truth", "trajectories"):
-        shutil.copytree(os.path.join(files.path, d), os.path.join(path, d), dirs_exist_ok=True)
-    for r in records:
-        store.write_record(r)
-    return store
 
 
-def _plain(value):
-    if isinstance(value, float) and math.isnan(value):
-        return None
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
-    if hasattr(value, "__dataclass_fields__"):
-        return {f.name: _plain(getattr(value, f.name)) for f in fields(value)}
-    return value
 
 
 # The metric dicts, whose null entries a table reads as absent (``records_from_table``'s notes).
@@ -70,7 +53,7 @@ def _same_records(got, want):
     assert [r.key for r in got] == [r.key for r in want]
     for a, b in zip(got, want):
         for f in fields(RunRecord):
-            assert _plain(getattr(a, f.name)) == _plain(getattr(b, f.name)), (a.key, f.name)
+            assert plain(getattr(a, f.name)) == plain(getattr(b, f.name)), (a.key, f.name)
 
 
 def test_records_read_from_the_table_are_the_records_written(files, tmp_path):
@@ -78,7 +61,7 @@ def test_records_read_from_the_table_are_the_records_written(files, tmp_path):
     assert any(not r.errors or any(math.isnan(mx) for mx, _ in r.errors.values()) for r in records)
     want = [_measured(r) for r in records]
     assert any(len(w.errors) < len(r.errors) for w, r in zip(want, records))  # the rule is exercised
-    seg = _segmented(files, tmp_path / "seg", records[:3])
+    seg = segmented(files, tmp_path / "seg", records[:3])
     _same_records(Store(seg.path).table_records(), want[:3])  # from the segment alone
     seg.write_table()
     for r in records[3:]:  # from runs.parquet and the lines appended since
@@ -90,14 +73,14 @@ def test_records_read_from_the_table_are_the_records_written(files, tmp_path):
 
 
 def test_a_row_of_another_schema_is_refused_in_bulk(files, tmp_path):
-    seg = _segmented(files, tmp_path / "seg", files.records()[:2])
+    seg = segmented(files, tmp_path / "seg", files.records()[:2])
     seg.write_record(replace(files.records()[2], schema_version=99))
     with pytest.raises(SchemaError, match="schema 99"):
         Store(seg.path).table_records()
 
 
 def test_a_name_outside_the_store_is_refused_in_bulk(files, tmp_path):
-    seg = _segmented(files, tmp_path / "seg", files.records()[:2])
+    seg = segmented(files, tmp_path / "seg", files.records()[:2])
     seg.write_record(replace(files.records()[2], case="../outside"))
     with pytest.raises(StoreError, match="case '../outside' is not a file name"):
         Store(seg.path).table_records()
@@ -113,7 +96,7 @@ def _segment_keys_alone(store):
 
 def test_the_keys_stored_come_from_the_table_and_the_lines_since(files, tmp_path, monkeypatch):
     records = files.records()
-    seg = _segmented(files, tmp_path / "seg", records[:3])
+    seg = segmented(files, tmp_path / "seg", records[:3])
     seg.write_table()
     for r in records[3:]:
         seg.write_record(r)
@@ -128,7 +111,7 @@ def test_the_keys_stored_come_from_the_table_and_the_lines_since(files, tmp_path
 
 
 def test_the_keys_stored_pass_over_a_damaged_table(files, tmp_path):
-    seg = _segmented(files, tmp_path / "seg", files.records())
+    seg = segmented(files, tmp_path / "seg", files.records())
     seg.write_table()
     with open(os.path.join(seg.path, "runs.parquet"), "wb") as fh:
         fh.write(b"not a table")
@@ -146,11 +129,11 @@ def _mixed(records):
 def test_a_column_of_two_types_is_kept_in_its_widest_in_layout_2(files, tmp_path, split):
     records = _mixed(files.records())
     if split:  # the number in the table, the text in a line after it: two tables of two types concatenated
-        seg = _segmented(files, tmp_path / "seg", records[:1] + records[2:])
+        seg = segmented(files, tmp_path / "seg", records[:1] + records[2:])
         seg.write_table()
         seg.write_record(records[1])
     else:  # both in one segment: Arrow's JSON reader refuses it, the lines are read one by one
-        seg = _segmented(files, tmp_path / "seg", records)
+        seg = segmented(files, tmp_path / "seg", records)
     table = Store(seg.path).write_table()
     by_key = dict(zip(table["key"], table["param_p"]))
     assert by_key[records[0].key] == "2" and by_key[records[1].key] == "[1.0, 2.0]"
@@ -189,7 +172,7 @@ def test_a_matrix_outcome_reads_its_counts_and_failing_runs_from_the_table(files
     changes = {a.key: dict(judgement=beyond), b.key: dict(judgement=unmeasured),
                c.key: dict(status="failed", message="an error")}
     records = [replace(r, **changes.get(r.key, {})) for r in records]
-    seg = _segmented(files, tmp_path / "seg", records)
+    seg = segmented(files, tmp_path / "seg", records)
     runs = StoredRuns(Store(seg.path))
     lazy, listed = (Outcome(seg, rs, [], strict="tolerance") for rs in (runs, Store(seg.path).table_records()))
     assert runs._records is None  # nothing read as records yet

@@ -4,7 +4,6 @@ and line; a store of layout 1 (``rows/*.json``, or a manifest from before layout
 
 import errno
 import json
-import math
 import os
 import shutil
 import signal
@@ -23,7 +22,7 @@ from dalembert.harness.cli import main
 from dalembert.record import RunRecord
 from dalembert.segments import segment_names
 from dalembert.store import FILES_UP_TO, Store, StoreError
-from stores import small_store
+from stores import plain, segmented, small_store
 
 
 @pytest.fixture(scope="module")
@@ -35,38 +34,19 @@ def files(tmp_path_factory):
     return store
 
 
-def _segmented(files, path, records=None):
-    """A layout-2 store at ``path`` holding ``records`` (default: every run of ``files``), written one by one."""
-    store = Store(path).create(files.manifest(), layout=2)
-    for d in ("cases", "truth", "trajectories"):
-        shutil.copytree(os.path.join(files.path, d), os.path.join(path, d), dirs_exist_ok=True)
-    for r in files.records() if records is None else records:
-        store.write_record(r)
-    return store
 
 
-def _plain(value):
-    """``value`` with NaN as None, tuples as lists, dataclasses as dicts, recursively: to compare exactly."""
-    if isinstance(value, float) and math.isnan(value):
-        return None
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
-    if hasattr(value, "__dataclass_fields__"):
-        return {f.name: _plain(getattr(value, f.name)) for f in fields(value)}
-    return value
 
 
 def _same_records(got, want):
     assert [r.key for r in got] == [r.key for r in want]
     for a, b in zip(got, want):
         for f in fields(RunRecord):
-            assert _plain(getattr(a, f.name)) == _plain(getattr(b, f.name)), (a.key, f.name)
+            assert plain(getattr(a, f.name)) == plain(getattr(b, f.name)), (a.key, f.name)
 
 
 def test_rows_read_back_field_by_field_as_written(files, tmp_path):
-    seg = _segmented(files, tmp_path / "seg")
+    seg = segmented(files, tmp_path / "seg")
     assert seg.layout() == 2 and not os.path.exists(seg.rows_dir) and len(segment_names(seg.segments_dir)) == 1
     assert len({frozenset(r) for r in files.rows()}) > 1  # rows of different columns: none may gain another's
     assert Store(seg.path).rows() == files.rows()
@@ -84,7 +64,7 @@ def _same_table(got, want):
 
 def test_the_table_is_the_rows_as_columns_before_and_after_each_rebuild(files, tmp_path):
     records = files.records()
-    seg = _segmented(files, tmp_path / "seg", records[:3])
+    seg = segmented(files, tmp_path / "seg", records[:3])
     want = pd.DataFrame(files.rows())
     _same_table(seg.table(), want.iloc[:3])  # from the segment alone
     _same_table(seg.write_table(), want.iloc[:3])
@@ -98,7 +78,7 @@ def test_the_table_is_the_rows_as_columns_before_and_after_each_rebuild(files, t
 
 def test_rows_longer_than_the_json_readers_block_read_line_by_line_the_same(files, tmp_path, monkeypatch):
     monkeypatch.setattr(runs_table, "JSON_BLOCK_BYTES", 1000)  # every row of these runs is longer (2-3 kB)
-    seg = _segmented(files, tmp_path / "seg")
+    seg = segmented(files, tmp_path / "seg")
     _same_table(seg.write_table(), pd.DataFrame(files.rows()))
 
 
@@ -109,7 +89,7 @@ def _segment(store):
 
 def test_a_torn_last_line_is_no_run_and_is_redone(files, tmp_path):
     records = files.records()
-    seg = _segmented(files, tmp_path / "seg")
+    seg = segmented(files, tmp_path / "seg")
     path = _segment(seg)
     with open(path, "rb") as fh:
         lines = fh.read().splitlines(keepends=True)
@@ -143,7 +123,7 @@ while True:  # until killed
 
 
 def test_a_writer_killed_at_any_point_leaves_every_complete_row(files, tmp_path):
-    seg = _segmented(files, tmp_path / "seg", [])
+    seg = segmented(files, tmp_path / "seg", [])
     proc = subprocess.Popen([sys.executable, "-c", WRITER, files.path, seg.path])
     try:
         while proc.poll() is None and not (segment_names(seg.segments_dir)
@@ -162,7 +142,7 @@ def test_a_writer_killed_at_any_point_leaves_every_complete_row(files, tmp_path)
 def test_a_write_the_disk_cuts_short_leaves_a_torn_line_and_the_next_row_a_new_segment(files, tmp_path,
                                                                                       monkeypatch):
     records = files.records()
-    seg = _segmented(files, tmp_path / "seg", records[:2])
+    seg = segmented(files, tmp_path / "seg", records[:2])
     write = os.write
 
     def full(fd, data):  # the disk fills halfway through the line
@@ -181,7 +161,7 @@ def test_a_write_the_disk_cuts_short_leaves_a_torn_line_and_the_next_row_a_new_s
 
 
 def test_a_damaged_line_is_named_with_its_file_and_line(files, tmp_path):
-    seg = _segmented(files, tmp_path / "seg")
+    seg = segmented(files, tmp_path / "seg")
     path = _segment(seg)
     with open(path, "rb") as fh:
         lines = fh.read().splitlines(keepends=True)
@@ -200,7 +180,7 @@ def test_a_damaged_line_is_named_with_its_file_and_line(files, tmp_path):
 
 
 def test_a_table_that_covers_more_than_its_segments_is_refused(files, tmp_path):
-    seg = _segmented(files, tmp_path / "seg")
+    seg = segmented(files, tmp_path / "seg")
     seg.write_table()
     path = _segment(seg)
     with open(path, "rb") as fh:
@@ -244,8 +224,8 @@ def test_a_matrix_in_segments_runs_reports_and_resumes_after_a_crash(tmp_path, m
     store, files = Store(out), Store(tmp_path / "files")
     assert store.layout() == 2 and os.path.exists(out / "runs.parquet")
     numbers = ("key", "status", "errors", "drifts", "growths", "checks", "judgement")
-    assert [[_plain(getattr(r, n)) for n in numbers] for r in store.records()] == \
-        [[_plain(getattr(r, n)) for n in numbers] for r in files.records()]
+    assert [[plain(getattr(r, n)) for n in numbers] for r in store.records()] == \
+        [[plain(getattr(r, n)) for n in numbers] for r in files.records()]
     # the trajectories in a pack (its name in the row), read back as the files store's
     assert all(r.trajectory.startswith("trajectories/") and r.trajectory.endswith(".trajpack") for r in store.records())
     for key in files.done_keys():
@@ -261,6 +241,6 @@ def test_a_matrix_in_segments_runs_reports_and_resumes_after_a_crash(tmp_path, m
     assert len(Store(out).done_keys()) == 1
     assert main(["run", "--resume", str(out)]) == 0
     assert len(segment_names(store.segments_dir)) == 2
-    assert [[_plain(getattr(r, n)) for n in numbers] for r in Store(out).records()] == \
-        [[_plain(getattr(r, n)) for n in numbers] for r in files.records()]
+    assert [[plain(getattr(r, n)) for n in numbers] for r in Store(out).records()] == \
+        [[plain(getattr(r, n)) for n in numbers] for r in files.records()]
     assert list(Store(out).table()["key"]) == sorted(files.done_keys())
