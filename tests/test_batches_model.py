@@ -154,6 +154,7 @@ def test_mjx_worlds_of_swept_masses_are_each_mass_alone_to_float32_roundoff():
         alone = adapter.run(adapter.prepare(case.scene, case.times, settings)).trajectory
         assert _largest_difference(world.trajectory, alone) <= WORLD_TOL
     assert _largest_difference(out.worlds[0].trajectory, out.worlds[-1].trajectory) > 100 * WORLD_TOL
+    assert "body_mass" in adapter.audit(batch.worlds[0], out.worlds[0])["batch_world_fields"]
 
 
 @warp

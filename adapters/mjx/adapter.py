@@ -231,7 +231,8 @@ class MjxAdapter(MujocoAdapter):
         p0 = prepared.worlds[0]
         with precision(p0.precision):
             Q, V, wall = run_rollout(prepared.mx, prepared.dx0, p0.steps_device, batched=True, rows=prepared.rows)
-        return BatchOutcome(wall, tuple(self._outcome(p, [q[k] for q in Q], [v[k] for v in V], wall)
+        return BatchOutcome(wall, tuple(self._outcome(p, [q[k] for q in Q], [v[k] for v in V], wall,
+                                                      prepared.world_fields)
                                         for k, p in enumerate(prepared.worlds)))
 
     # ------------------------------------------------------------- run
@@ -241,8 +242,9 @@ class MjxAdapter(MujocoAdapter):
             Q, V, wall = run_rollout(p.mx, p.dx0, p.steps_device)
         return self._outcome(p, Q, V, wall)
 
-    def _outcome(self, p, Q, V, wall):
-        """The ``Outcome`` of the rollout's samples ``Q``, ``V`` (``run_rollout``'s chunks, one world's) from ``p``."""
+    def _outcome(self, p, Q, V, wall, world_fields=()):
+        """The ``Outcome`` of the rollout's samples ``Q``, ``V`` (``run_rollout``'s chunks, one world's) from ``p``;
+        ``world_fields``: the model fields a batch varied per world (in the audit where any, as MuJoCo Warp's)."""
         n_steps = int(p.steps.sum())
         info = {"message": "", "device": p.backend}
 
@@ -250,6 +252,8 @@ class MjxAdapter(MujocoAdapter):
             Qh, Vh = to_host(Q, V, p.qpos0, p.qvel0, len(p.times))
             # the contact forces MJX's own solver gives at its states (``contact.read_forces``), not MuJoCo C's
             traj, info["audit"] = read_back(p, Qh, Vh, contact_forces=read_forces(p, Qh, Vh))
+            if world_fields:
+                info["audit"]["batch_world_fields"] = ", ".join(world_fields)
             return traj
 
         return Outcome(read, wall, n_steps, n_steps * STAGES[p.settings.integrator], info)
