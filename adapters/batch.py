@@ -54,7 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["BatchPrepared", "BatchOutcome", "has_batches", "same_model", "world_fields", "world_fields_problem",
-           "model_fields",
+           "model_fields", "keep_sample",
            "differing", "same_value", "MAX_BATCH"]
 
 # The most worlds one batch may hold: MuJoCo Warp's and MJX's per-world arrays are ~MBs per thousand worlds for
@@ -194,3 +194,13 @@ def model_fields(model, host):
         else:
             out[f.name] = host(v)
     return out
+
+
+def keep_sample(Q, V, bad, k, q, v, finite):
+    """Sample ``k`` of a batch stepped world by world in lockstep: each world's state ``q``, ``v`` (worlds first) kept
+    in ``Q[k]``, ``V[k]`` while it is ``finite`` (bool per world); a world's first non-finite sample goes into ``bad``
+    (0: none yet) and the world keeps no later sample. Returns whether any world is still finite (else stop)."""
+    bad[(bad == 0) & ~finite] = k
+    good = bad == 0
+    Q[k, good], V[k, good] = q[good], v[good]
+    return bool(good.any())

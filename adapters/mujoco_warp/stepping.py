@@ -36,6 +36,8 @@ import time
 
 import numpy as np
 
+from dalembert.adapters.batch import keep_sample
+
 __all__ = ["warp", "device_model", "batched_fields", "model_fields", "worlds_model", "sizes", "put_state", "put_worlds",
            "compile_step", "step_samples", "step_worlds", "DEVICE", "NCONMAX"]
 
@@ -234,10 +236,7 @@ def step_worlds(mx, d, steps, Q0, V0):
                 step(mx, d)
             q, v = d.qpos.numpy(), d.qvel.numpy()
             finite = np.all(np.isfinite(q), axis=1) & np.all(np.isfinite(v), axis=1)
-            bad[(bad == 0) & ~finite] = k
-            ok = bad == 0
-            Q[k, ok], V[k, ok] = q[ok], v[ok]
-            if not ok.any():
+            if not keep_sample(Q, V, bad, k, q, v, finite):
                 break
         wall = time.perf_counter() - start
     return Q, V, wall, bad

@@ -19,6 +19,7 @@ import time
 import numpy as np
 
 from dalembert import spatial
+from dalembert.adapters.batch import keep_sample
 from dalembert.adapters.newton.engine import engine
 
 __all__ = ["load_plan", "fresh_states", "simulate", "simulate_worlds"]
@@ -101,10 +102,7 @@ def simulate_worlds(ps):
             finite = np.isfinite(q).all(axis=(1, 2)) & np.isfinite(v).all(axis=(1, 2))
             # a quaternion that collapsed to zero (Featherstone's at 1e26 rad/s, the step before NaN) is no attitude
             finite &= (np.abs(q[..., 3:]).max(axis=2) > 0.0).all(axis=1)
-            bad[(bad == 0) & ~finite] = k
-            good = bad == 0
-            Q[k, good], V[k, good] = q[good], v[good]
-            if not good.any():
+            if not keep_sample(Q, V, bad, k, q, v, finite):
                 break
         wall = time.perf_counter() - start
     return Q, V, wall, bad
