@@ -74,6 +74,18 @@ def test_an_adapter_without_world_fields_holds_none_per_world():
 warp = pytest.mark.skipif(not __import__("importlib").util.find_spec("mujoco_warp"), reason="dalembert[mujoco-warp]")
 
 
+
+def _each_world_is_its_mass_alone(adapter, settings, cases, batch):
+    """Run ``batch`` (one world per case of ``cases``, swept over mass): each world within ``WORLD_TOL`` of its case
+    run alone, the lightest and heaviest worlds far apart (a batch that used one mass everywhere fails), and the
+    audit naming ``body_mass`` among the fields the batch varied per world."""
+    out = adapter.run_batch(batch)
+    for case, world in zip(cases, out.worlds):
+        alone = adapter.run(adapter.prepare(case.scene, case.times, settings)).trajectory
+        assert _largest_difference(world.trajectory, alone) <= WORLD_TOL
+    assert _largest_difference(out.worlds[0].trajectory, out.worlds[-1].trajectory) > 100 * WORLD_TOL
+    assert "body_mass" in adapter.audit(batch.worlds[0], out.worlds[0])["batch_world_fields"]
+
 @warp
 @pytest.mark.long  # Warp's kernels: loaded from its cache, compiled (tens of seconds) from a fresh clone
 def test_mujoco_warp_worlds_of_swept_masses_are_each_mass_run_alone():
@@ -85,12 +97,7 @@ def test_mujoco_warp_worlds_of_swept_masses_are_each_mass_run_alone():
     assert {"body_mass", "body_inertia"} <= adapter.world_fields()
     batch = adapter.prepare_batch([c.scene for c in cases], cases[0].times, settings)
     assert "body_mass" in batch.world_fields and batch.mx.body_mass.shape[0] == len(MASSES)
-    out = adapter.run_batch(batch)
-    for case, world in zip(cases, out.worlds):
-        alone = adapter.run(adapter.prepare(case.scene, case.times, settings)).trajectory
-        assert _largest_difference(world.trajectory, alone) <= WORLD_TOL
-    assert _largest_difference(out.worlds[0].trajectory, out.worlds[-1].trajectory) > 100 * WORLD_TOL
-    assert "body_mass" in adapter.audit(batch.worlds[0], out.worlds[0])["batch_world_fields"]
+    _each_world_is_its_mass_alone(adapter, settings, cases, batch)
 
 
 @warp
@@ -149,12 +156,7 @@ def test_mjx_worlds_of_swept_masses_are_each_mass_alone_to_float32_roundoff():
                                                            settings)
     batch = adapter.prepare_batch([c.scene for c in cases], cases[0].times, settings)
     assert "body_mass" in batch.world_fields and batch.rows[1][0].shape[0] == 4  # three worlds padded to four
-    out = adapter.run_batch(batch)
-    for case, world in zip(cases, out.worlds):
-        alone = adapter.run(adapter.prepare(case.scene, case.times, settings)).trajectory
-        assert _largest_difference(world.trajectory, alone) <= WORLD_TOL
-    assert _largest_difference(out.worlds[0].trajectory, out.worlds[-1].trajectory) > 100 * WORLD_TOL
-    assert "body_mass" in adapter.audit(batch.worlds[0], out.worlds[0])["batch_world_fields"]
+    _each_world_is_its_mass_alone(adapter, settings, cases, batch)
 
 
 @warp
