@@ -33,10 +33,35 @@ def _example():
     return re.search(r"<!-- example: my_cases.py.*?-->\n```python\n(.*?)```", text, re.S).group(1)
 
 
+# The author's commands, in one interpreter that sees the installed package only through PYTHONPATH (what is tested
+# is that the entry point is found from outside; one interpreter start, not one per command): ``dalembert cases``,
+# ``check_case``, a run its declared domain refuses, a run; what each said, as JSON on stdout.
+COMMANDS = """
+import contextlib, io, json, sys
+
+from dalembert.harness.cli import main
+from dalembert.testing import check_case
+
+def command(*args):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = main(list(args))
+    return {"status": status, "stdout": out.getvalue(), "stderr": err.getvalue()}
+
+said = {"cases": command("cases")}
+from my_cases import spherical_pendulum
+check_case(spherical_pendulum, horizon=0.5)
+said["refused"] = command("run", "--case", "spherical_pendulum", "--param", "length=0", "--out", sys.argv[1])
+said["run"] = command("run", "--case", "spherical_pendulum", "--engine", "reference", "--integrator", "rk4", "--dt",
+                      "1e-2", "--param", "t_final=0.5", "--jobs", "1", "--quick", "--out", sys.argv[2])
+print(json.dumps(said))
+"""
+
+
 def _run(args, env, cwd):
     done = subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env, cwd=cwd, timeout=600)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
-    return done.stdout + done.stderr
+    return done.stdout
 
 
 def test_an_out_of_tree_case_package_runs_through_dalembert(tmp_path):
@@ -49,20 +74,15 @@ def test_an_out_of_tree_case_package_runs_through_dalembert(tmp_path):
          env, tmp_path)
     assert any(p.name.startswith("my_cases-0.1.dist-info") for p in site.iterdir())
     env["PYTHONPATH"] = str(site)  # the installed package and its entry point, for these commands only
-    listed = _run(["-m", "dalembert.harness.cli", "cases"], env, tmp_path)
-    assert "spherical_pendulum" in listed and "pendulum " in listed
-    _run(["-c", "from dalembert.testing import check_case; from my_cases import spherical_pendulum; "
-                "check_case(spherical_pendulum, horizon=0.5)"], env, tmp_path)
-    refused = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--case", "spherical_pendulum",
-                              "--param", "length=0", "--out", str(tmp_path / "refused")],
-                             capture_output=True, text=True, env=env, cwd=tmp_path, timeout=600)
-    assert refused.returncode == 2 and "spherical_pendulum.length: must be positive (m)" in refused.stderr, \
-        refused.stderr  # its declared domain (positive=), checked when the case is made
-    assert not (tmp_path / "refused").exists()
     out = tmp_path / "out"
-    _run(["-m", "dalembert.harness.cli", "run", "--case", "spherical_pendulum", "--engine", "reference",
-          "--integrator", "rk4", "--dt", "1e-2", "--param", "t_final=0.5", "--jobs", "1", "--quick", "--out", str(out)],
-         env, tmp_path)
+    said = json.loads(_run(["-c", COMMANDS, str(tmp_path / "refused"), str(out)], env, tmp_path).splitlines()[-1])  # (the last line)
+    listed = said["cases"]
+    assert listed["status"] == 0 and "spherical_pendulum" in listed["stdout"] and "pendulum " in listed["stdout"]
+    refused = said["refused"]
+    assert refused["status"] == 2 and "spherical_pendulum.length: must be positive (m)" in refused["stderr"], \
+        refused["stderr"]  # its declared domain (positive=), checked when the case is made
+    assert not (tmp_path / "refused").exists()
+    assert said["run"]["status"] == 0, said["run"]["stderr"]
     (row_file,) = (out / "rows").iterdir()
     row = json.loads(row_file.read_text())
     assert row["status"] == "ok" and row["case"] == "spherical_pendulum"

@@ -5,6 +5,7 @@ of issue 35's faults injected fails with a message that names the fault; every p
 The faults are subclasses of the example adapter registered for one test each (the example imported from
 docs/example_engine on sys.path: installing it once per fault would cost a pip run each)."""
 
+import json
 import os
 import re
 import shutil
@@ -289,6 +290,27 @@ def test_the_guide_quotes_the_example_as_it_is():
         assert code in open(os.path.join(ROOT, path)).read(), f"docs/engines.md quotes {path} as it is not:\n{code}"
 
 
+# The user's three commands, in one interpreter that sees the pip-installed example only through PYTHONPATH (what is
+# tested is that its entry point is found from outside; one interpreter start, not one per command): what each
+# said, as JSON on stdout's last line.
+COMMANDS = """
+import contextlib, io, json, sys
+
+from dalembert.harness.cli import main
+
+def command(*args):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = main(list(args))
+    return {"status": status, "stdout": out.getvalue(), "stderr": err.getvalue()}
+
+said = {"engines": command("engines"), "check-engine": command("check-engine", "tinyrigid")}
+said["run"] = command("run", "--case", "pendulum", "--case", "free_top", "--engine", "tinyrigid", "--param",
+                      "t_final=0.5", "--dt", "1e-2", "--jobs", "1", "--quick", "--out", sys.argv[1])
+print(json.dumps(said))
+"""
+
+
 def test_the_example_installed_from_a_temporary_directory_passes_and_runs(tmp_path):
     """pip-installed (its entry point in ``dalembert.adapters``) from a copy in a temporary directory: listed by
     ``dalembert engines``, no problem in ``dalembert check-engine``, its runs stored by ``dalembert run``."""
@@ -297,15 +319,11 @@ def test_the_example_installed_from_a_temporary_directory_passes_and_runs(tmp_pa
     subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
                     "--no-index", "--target", str(site), str(source)], check=True, capture_output=True)
     env = dict(os.environ, PYTHONPATH=str(site))
-    cli = [sys.executable, "-m", "dalembert.harness.cli"]
-
-    def dalembert(*args):
-        return subprocess.run([*cli, *args], capture_output=True, text=True, env=env, cwd=tmp_path)
-
-    listed = dalembert("engines")
-    assert listed.returncode == 0 and "tinyrigid  0.1.0" in listed.stdout, listed.stderr
-    checked = dalembert("check-engine", "tinyrigid")
-    assert checked.returncode == 0 and "no problems" in checked.stdout, checked.stdout + checked.stderr
-    ran = dalembert("run", "--case", "pendulum", "--case", "free_top", "--engine", "tinyrigid", "--param",
-                    "t_final=0.5", "--dt", "1e-2", "--jobs", "1", "--quick", "--out", str(tmp_path / "runs"))
-    assert ran.returncode == 0 and "2 runs stored" in ran.stderr and "2 ok" in ran.stderr, ran.stderr
+    done = subprocess.run([sys.executable, "-c", COMMANDS, str(tmp_path / "runs")], capture_output=True, text=True,
+                          env=env, cwd=tmp_path)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    said = json.loads(done.stdout.splitlines()[-1])
+    listed, checked, ran = said["engines"], said["check-engine"], said["run"]
+    assert listed["status"] == 0 and "tinyrigid  0.1.0" in listed["stdout"], listed["stderr"]
+    assert checked["status"] == 0 and "no problems" in checked["stdout"], checked["stdout"] + checked["stderr"]
+    assert ran["status"] == 0 and "2 runs stored" in ran["stderr"] and "2 ok" in ran["stderr"], ran["stderr"]

@@ -104,10 +104,19 @@ def test_a_run_that_never_moved_is_a_failure_not_ok():
 
 
 # ---------------------------------------------------------------- damaged and tampered stores
-@pytest.fixture
-def store(tmp_path):
-    out = tmp_path / "store"
+@pytest.fixture(scope="module")
+def made_store(tmp_path_factory):
+    """A store of two runs, made once for the module: the tests that damage or change one get a copy each."""
+    out = tmp_path_factory.mktemp("made") / "store"
     assert main(["run", *TINY, "--integrator", "euler", "--out", str(out)]) == 0
+    return out
+
+
+@pytest.fixture
+def store(made_store, tmp_path):
+    """A copy of ``made_store``, this test's own (a store holds no path of its own: the copy is a store)."""
+    out = tmp_path / "store"
+    shutil.copytree(made_store, out)
     return Store(out)
 
 
@@ -173,9 +182,11 @@ def test_a_run_writes_nothing_outside_its_store(tmp_path, monkeypatch):
     # every integrator of every engine (an engine's solvers may each have their own files to write), but
     # MJX, which writes nothing of its own and compiles for ~6 s per integrator and precision: one of each
     # (those installed: an optional engine outside dalembert[all], MuJoCo Warp, is absent from a fresh make test)
+    # One worker: each worker loads every engine before its first run (Warp's, Newton's: seconds), and what an
+    # engine writes does not depend on how many workers share the runs (two: 14 s of CPU, one: 9 s).
     engines = [a for name in sorted(BUILTIN) if name != "mjx" and installed(name) for a in ("--engine", name)]
     assert main(["run", "--case", "pivoted_rod", *engines, "--dt", "1e-2", "--rtol", "1e-6", "--param",
-                 "t_final=0.2", "--quick", "--out", "r"]) == 0
+                 "t_final=0.2", "--quick", "--jobs", "1", "--out", "r"]) == 0
     # in a fresh process: JAX's threads, started in this one by other tests, deadlock a forked worker
     subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", "--case", "pivoted_rod", "--engine", "mjx",
                     "--integrator", "euler", "--dt", "1e-2", "--param", "t_final=0.2", "--quick", "--out", "m"], check=True,
@@ -219,17 +230,19 @@ def _busy_workers(proc, n=2):
     return workers
 
 
-def test_a_second_writer_is_refused_naming_the_first(tmp_path):
+def test_a_second_writer_is_refused_naming_the_first(tmp_path, capsys):
+    """The first writer another process (its lock is the kernel's, per open file); the second and third asked in
+    this one, as ``main`` (their refusal is the command line's exit status and message, not a process's)."""
     out = tmp_path / "r"
     first = _cli("run", *SLOW, "--out", str(out))
     try:
         assert len(_busy_workers(first)) == 2
-        second = _cli("run", "--resume", str(out))
-        _, err = second.communicate()
-        assert second.returncode == 2 and f"PID {first.pid} on" in err and "one store takes one writer" in err, err
-        third = _cli("run", *TINY, "--out", str(out))  # a fresh run into the same --out
-        _, err = third.communicate()
-        assert third.returncode == 2 and "already being written" in err, err
+        assert main(["run", "--resume", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert f"PID {first.pid} on" in err and "one store takes one writer" in err, err
+        assert main(["run", *TINY, "--out", str(out)]) == 2  # a fresh run into the same --out
+        err = capsys.readouterr().err
+        assert "already being written" in err, err
     finally:
         first.kill()
         first.wait()
@@ -275,9 +288,17 @@ def _strip(rows):
     return [{k: v for k, v in r.items() if k not in TIMING_FIELDS} for r in rows]
 
 
+@pytest.fixture(scope="module")
+def stoppable_clean(tmp_path_factory):
+    """``STOPPABLE`` run uninterrupted, once for the module: what each stopped and resumed matrix must equal."""
+    clean = tmp_path_factory.mktemp("clean") / "r"
+    assert main(["run", *STOPPABLE, "--out", str(clean)]) == 0
+    return Store(clean)
+
+
 @pytest.mark.long
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
-def test_a_worker_stopped_from_outside_ends_its_run_without_failing_it(sig, tmp_path):
+def test_a_worker_stopped_from_outside_ends_its_run_without_failing_it(sig, tmp_path, stoppable_clean):
     """SIGTERM (an operator, a shutdown) or SIGKILL (the out-of-memory killer) to one worker mid-run: that
     run is not stored (it did not fail, it was not run), the parent names it and exits 4 with the --resume
     command, the rest of the matrix is stored; --resume runs it, and the store then holds the rows of an
@@ -309,9 +330,7 @@ def test_a_worker_stopped_from_outside_ends_its_run_without_failing_it(sig, tmp_
     resumed = _cli("run", "--resume", str(out))
     _, err = resumed.communicate()
     assert resumed.returncode == 0, err
-    clean = tmp_path / "clean"
-    assert main(["run", *STOPPABLE, "--out", str(clean)]) == 0
-    assert _strip(store.rows()) == _strip(Store(clean).rows())
+    assert _strip(store.rows()) == _strip(stoppable_clean.rows())
 
 
 def _late_worker(sent):
