@@ -10,7 +10,7 @@ import pytest
 from dalembert import testing
 from dalembert.case import CASES, load_cases
 from dalembert.reference import truth
-from truths import shared_reference, shared_truth
+from truths import contract_case, shared_reference, shared_truth
 
 load_cases()
 NAMES = list(CASES)
@@ -18,12 +18,10 @@ NAMES = list(CASES)
 
 @pytest.fixture(scope="module", params=NAMES)
 def case(request):
-    """The case; a hard one shortened to ``HARD_HORIZON``, never lengthened: a hard case whose own horizon is
-    shorter (``robot_free_fall``: 1 s) is checked over it, the truth ``test_hard_cases.py`` needs too."""
-    factory = CASES[request.param]
-    if "hard" not in factory.tags or factory.params["t_final"] <= testing.HARD_HORIZON:
-        return factory()
-    return factory(t_final=testing.HARD_HORIZON)
+    """The case; a hard one shortened to ``HARD_HORIZON``, never lengthened (``truths.contract_case``): a hard case
+    whose own horizon is shorter (``robot_free_fall``: 1 s) is checked over it, the truth ``test_hard_cases.py``
+    needs too."""
+    return contract_case(request.param)
 
 
 @pytest.fixture

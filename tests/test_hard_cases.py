@@ -12,7 +12,7 @@ from dalembert.store import Store
 from dalembert.reference import simulate
 from dalembert.reference.closed_form import TorqueFreeTop
 from taylor import integrate_top
-from truths import shared_truth
+from truths import contract_case, shared_truth_from
 
 HARD = [n for n, f in load_cases().items() if "hard" in f.tags]
 # The built-in engines (other tests register deliberately broken ones in this process).
@@ -78,12 +78,13 @@ def test_separatrix_closed_form_is_still_exact():
 def test_reference_is_stable_and_matches_the_truth(name, shared_dir):
     """The reference's rkmk4 against the closed form, or, for a case without one, against its truth (the
     reference's DOP853 or, for a stiff case, Radau at 1e-12: another integrator), computed once in the session
-    (``truths.shared_truth``: the case contract needs the same truth where the horizons agree)."""
+    (``truths.shared_truth``: the case contract needs the same truth where the horizons agree; where this one is
+    shorter, its samples are the first of the contract's: ``truths.shared_truth_from``)."""
     case = make_case(name, **SHORT.get(name, dict(t_final=2.0)))
     traj = simulate(case.scene, case.times, Settings("rkmk4", dt=STEP.get(name, 1e-3)))[0]
     from dalembert import invariants
 
-    errors = trajectory_errors(traj, shared_truth(case, shared_dir))
+    errors = trajectory_errors(traj, shared_truth_from(case, contract_case(name), shared_dir))
     drifts = invariants.summary(case.scene, traj, case.conserved, case.invariants).drifts
     judged = judge("ok", "", {q: mx for q, (mx, _) in errors.items()}, drifts, case.tolerances)
     assert judged.verdict == "stable", judged.reason
