@@ -145,16 +145,18 @@ def test_prepare_compiles_the_rollout_the_run_calls():
     """``prepare``'s compilation is the run's (``stepping.compile_rollout`` puts its zero steps where the run's steps
     are): the run adds no executable to the rollout's, so its stepping wall holds no compilation. JAX's caches are
     cleared first, so that a rollout another test ran cannot hide a second one (this one is then loaded from JAX's
-    persistent cache: well under a second)."""
+    persistent cache: well under a second). The one-step parity (``parity.one_step``) steps that program too."""
     import jax
 
     from dalembert.adapters.mjx import stepping
+    from dalembert.adapters.mjx.parity import one_step
 
     case, settings = make_case("pivoted_rod"), Settings("rk4", dt=1e-3, options=F64)
     jax.clear_caches()
     prepared = ADAPTER.prepare(case.scene, case.times, settings)
     compiled = stepping._rollout()._cache_size()
     ADAPTER.run(prepared)
+    one_step(case, settings)
     assert compiled == stepping._rollout()._cache_size() == 1
 
 
