@@ -12,19 +12,25 @@ from dalembert.store import Store
 from dalembert.reference import simulate
 from dalembert.reference.closed_form import TorqueFreeTop
 from taylor import integrate_top
-from truths import shared_truth
+from truths import contract_case, shared_truth_from
 
 HARD = [n for n, f in load_cases().items() if "hard" in f.tags]
 # The built-in engines (other tests register deliberately broken ones in this process).
 ENGINES = ["reference", "mujoco", "pinocchio", "exudyn"]
 # Each engine's fourth-order fixed-step integrator: the smoke test of the stability grid.
 SMOKE_INTEGRATORS = ["rk4", "rk44"]
+# The smoke matrix's horizon, s: 50 steps at its dt of 1e-2. Its 49 runs get the verdicts they get over 1 s
+# (measured at both: 34 stable, 9 drifts, 6 diverged; the stiff flyball_governor's non-finite from 0.03 s); most
+# of the matrix's CPU is the truths of the cases without a closed form (flyball_governor's Radau, robot_free_fall's
+# 17 bodies), which grow with it (measured: 8.8 s over 1 s, 6.2 s over 0.5 s).
+SMOKE_HORIZON = 0.5
 # Per-run limit of the smoke matrix, s: it catches a hung run, not a slow one. Each smoke run takes seconds
 # on an idle machine; 30 min is beyond any loaded machine's slowdown of that and inside CI's 90-min limit
 # (120 s was a false alarm: one run timed out while the machine's 2 cores ran 4 other jobs).
 HUNG_RUN_S = 1800
 # Horizons for the tests (the full ones are for `dalembert run --tag hard`).
 SHORT = {"free_top_long_horizon": dict(t_final=5.0), "pivoted_rod_violent": {},
+         "robot_free_fall": {},  # its own 1 s (the case contract's too: one truth), not 2 s of a 17-body Kane loop
          "particle_box_welded": dict(t_final=0.5),  # 27 bodies: the reference's Kane loop is slow
          "flyball_governor": dict(t_final=0.5)}  # its small steps (STEP) make each second 10000 evaluations
 # The reference's step in the test below, where 1e-3 is beyond a case's stability: flyball_governor is stiff (its
@@ -72,12 +78,13 @@ def test_separatrix_closed_form_is_still_exact():
 def test_reference_is_stable_and_matches_the_truth(name, shared_dir):
     """The reference's rkmk4 against the closed form, or, for a case without one, against its truth (the
     reference's DOP853 or, for a stiff case, Radau at 1e-12: another integrator), computed once in the session
-    (``truths.shared_truth``: the case contract needs the same truth where the horizons agree)."""
+    (``truths.shared_truth``: the case contract needs the same truth where the horizons agree; where this one is
+    shorter, its samples are the first of the contract's: ``truths.shared_truth_from``)."""
     case = make_case(name, **SHORT.get(name, dict(t_final=2.0)))
     traj = simulate(case.scene, case.times, Settings("rkmk4", dt=STEP.get(name, 1e-3)))[0]
     from dalembert import invariants
 
-    errors = trajectory_errors(traj, shared_truth(case, shared_dir))
+    errors = trajectory_errors(traj, shared_truth_from(case, contract_case(name), shared_dir))
     drifts = invariants.summary(case.scene, traj, case.conserved, case.invariants).drifts
     judged = judge("ok", "", {q: mx for q, (mx, _) in errors.items()}, drifts, case.tolerances)
     assert judged.verdict == "stable", judged.reason
@@ -90,7 +97,7 @@ def test_reference_is_stable_and_matches_the_truth(name, shared_dir):
 @pytest.mark.long
 def test_every_engine_gets_a_verdict_on_every_hard_case(tmp_path):
     """A smoke test of the stability grid: every hard case in every built-in engine, with its
-    fourth-order fixed-step integrator at a coarse step over 1 s, gets a stored verdict and no
+    fourth-order fixed-step integrator at a coarse step over ``SMOKE_HORIZON``, gets a stored verdict and no
     crash — through the command line in a fresh process, as a user runs it. (The full grid,
     every integrator at dt 1e-2 and 1e-3 over the full horizons, is ``dalembert run --tag hard``.)"""
     import subprocess
@@ -98,8 +105,8 @@ def test_every_engine_gets_a_verdict_on_every_hard_case(tmp_path):
 
     out = tmp_path / "hard"
     selection = ["--tag", "hard", *[a for e in ENGINES for a in ("--engine", e)],
-                 *[a for i in SMOKE_INTEGRATORS for a in ("--integrator", i)], "--dt", "1e-2", "--param", "t_final=1",
-                 "--no-maps", "--quick"]
+                 *[a for i in SMOKE_INTEGRATORS for a in ("--integrator", i)], "--dt", "1e-2",
+                 "--param", f"t_final={SMOKE_HORIZON}", "--no-maps", "--quick"]
     # no deadline of its own: a busy CI machine makes this slow, not wrong
     proc = subprocess.run([sys.executable, "-m", "dalembert.harness.cli", "run", *selection,
                            "--timeout", str(HUNG_RUN_S),
@@ -107,7 +114,7 @@ def test_every_engine_gets_a_verdict_on_every_hard_case(tmp_path):
     assert "runs stored" in proc.stderr, proc.stderr[-2000:]
     records = Store(out).records()
     specs, _ = expand(tags=["hard"], engines=ENGINES, integrators=SMOKE_INTEGRATORS, dts=[1e-2],
-                      params={"t_final": 1.0})
+                      params={"t_final": SMOKE_HORIZON})
     runnable, _ = split(specs)  # (what an engine refuses before the build is listed in the manifest, not run)
     assert len(records) == len(runnable)
     assert {(r.case, r.engine) for r in records} == {(s.case, s.engine) for s in runnable}

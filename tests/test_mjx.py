@@ -141,6 +141,25 @@ def test_an_effect_mjx_cannot_put_on_the_device_is_unsupported(monkeypatch):
     assert reason.startswith("MJX cannot put this model on the device") and "mjJNT_BALL" in reason
 
 
+def test_prepare_compiles_the_rollout_the_run_calls():
+    """``prepare``'s compilation is the run's (``stepping.compile_rollout`` puts its zero steps where the run's steps
+    are): the run adds no executable to the rollout's, so its stepping wall holds no compilation. JAX's caches are
+    cleared first, so that a rollout another test ran cannot hide a second one (this one is then loaded from JAX's
+    persistent cache: well under a second). The one-step parity (``parity.one_step``) steps that program too."""
+    import jax
+
+    from dalembert.adapters.mjx import stepping
+    from dalembert.adapters.mjx.parity import one_step
+
+    case, settings = make_case("pivoted_rod"), Settings("rk4", dt=1e-3, options=F64)
+    jax.clear_caches()
+    prepared = ADAPTER.prepare(case.scene, case.times, settings)
+    compiled = stepping._rollout()._cache_size()
+    ADAPTER.run(prepared)
+    one_step(case, settings)
+    assert compiled == stepping._rollout()._cache_size() == 1
+
+
 def test_the_default_matrix_runs_both_precisions():
     # (option values and MuJoCo's loads option, which MJX does not take, are refused in test_adapter_contract)
     assert {"precision": "float64"} in ADAPTER.variants(make_case("free_top").scene)

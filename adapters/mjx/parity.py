@@ -25,7 +25,7 @@ def one_step(case, settings, n_steps=1):
 
     MJX steps through the adapter's own compiled rollout (one interval of ``n_steps`` steps, the rest of the
     chunk empty), so it is the program a run of the case executes, and no second one is compiled for it."""
-    import jax.numpy as jnp
+    import jax
     import mujoco
 
     from dalembert.adapters import get_adapter
@@ -33,7 +33,9 @@ def one_step(case, settings, n_steps=1):
 
     p = get_adapter("mjx").prepare(case.scene, case.times, settings)
     with precision(p.precision):
-        Q, V, _ = run_rollout(p.mx, p.dx0, [jnp.asarray(c) for c in chunks([n_steps])])
+        # put where a run's steps are (``p.steps_device``): JAX compiles host steps again, as another program
+        on = next(iter(p.steps_device[0].devices()))
+        Q, V, _ = run_rollout(p.mx, p.dx0, [jax.device_put(c, on) for c in chunks([n_steps])])
         qpos, qvel = np.asarray(Q[0][0], dtype=float), np.asarray(V[0][0], dtype=float)
     model, data = p.model, mujoco.MjData(p.model)
     data.qpos[:], data.qvel[:] = p.qpos0, p.qvel0

@@ -243,9 +243,16 @@ def chunks(steps):
 def compile_rollout(m, d, batched=False, rows=()):
     """Compile the rollout for ``m`` and ``d`` (JAX's cache keeps it): one call with zero steps per
     interval, so nothing is stepped. ``batched``: ``d`` is a batch of worlds (``stack``), ``rows`` the model's
-    per-world leaves (``varying``). Returns the compile wall time, s."""
+    per-world leaves (``varying``). Returns the compile wall time, s.
+
+    The zeros are put on the state's device, as the run's steps are (``jax.device_put``): JAX keys a compiled
+    function by its arguments' placement too, and host zeros compiled another executable than the run's (measured:
+    each run lowered the rollout again and loaded it from the cache, 0.2-0.7 s inside its stepping wall)."""
+    import jax
+
+    zeros = jax.device_put(np.zeros(CHUNK, dtype=np.int32), next(iter(jax.tree.leaves(d)[0].devices())))
     start = time.perf_counter()
-    _, Q, V = (_batched(rows) if batched else _rollout())(m, d, np.zeros(CHUNK, dtype=np.int32))
+    _, Q, V = (_batched(rows) if batched else _rollout())(m, d, zeros)
     Q.block_until_ready()
     return time.perf_counter() - start
 
