@@ -38,7 +38,7 @@ from dalembert.settings import Settings
 from dalembert.trajectory import read_csv, write_csv
 
 __all__ = ["CaseCheckError", "EngineCheckError", "check_case", "check_engine", "factory_of", "second_solution", "INITIAL_STATE_TOL",
-           "HARD_HORIZON", "SECOND_RTOL", "REFERENCE_RTOL", "SINGULAR_RTOL", "check_builds", "check_truth_starts_at_initial_state",
+           "HARD_HORIZON", "SECOND_RTOL", "contract_horizon", "REFERENCE_RTOL", "SINGULAR_RTOL", "check_builds", "check_truth_starts_at_initial_state",
            "check_truth_conserves", "check_reference_agrees", "check_floor", "check_csv_round_trip",
            "reference_cannot_judge"]
 
@@ -229,18 +229,26 @@ def check_csv_round_trip(case, truth, directory=None):
                 _fail(case.name, f"the truth's {name}.{field} does not survive the CSV round trip")
 
 
+def contract_horizon(factory):
+    """The horizon (s) the case contract checks ``factory``'s case over, or None for its own: a case tagged ``hard``
+    shortened to ``HARD_HORIZON``, never lengthened (a hard case whose own ``t_final`` is shorter keeps it)."""
+    if "hard" in factory.tags and factory.params["t_final"] > HARD_HORIZON:
+        return HARD_HORIZON
+    return None
+
+
 def check_case(factory, horizon=None, **params):
     """Run every check of the case contract on ``factory`` (a function decorated ``@case``, its registered
     name, or a ``CaseFactory``) built with ``params``; raise ``CaseCheckError`` listing every failure.
 
-    ``horizon`` (s) shortens the case (``t_final``); cases tagged ``hard`` default to ``HARD_HORIZON``.
+    ``horizon`` (s) shortens the case (``t_final``); cases tagged ``hard`` default to ``contract_horizon``.
     Returns the case checked.
     """
     from dalembert.reference import truth as reference_truth
 
     factory = factory_of(factory)
-    if horizon is None and "hard" in factory.tags and "t_final" not in params:
-        horizon = HARD_HORIZON
+    if horizon is None and "t_final" not in params:
+        horizon = contract_horizon(factory)
     if horizon is not None:
         params = {**params, "t_final": horizon}
     case = check_builds(factory, **params)

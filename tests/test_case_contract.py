@@ -35,6 +35,17 @@ def test_registry_is_not_empty():
             "kovalevskaya_top"} <= set(NAMES)
 
 
+def test_a_hard_case_is_shortened_to_the_contract_horizon_never_lengthened():
+    """``check_case`` (a third party's cases) and this module check a hard case over the same horizon: the
+    shorter of ``HARD_HORIZON`` and its own."""
+    cases = load_cases()
+    assert cases["robot_free_fall"].params["t_final"] < testing.HARD_HORIZON  # (what makes it the case to ask)
+    assert testing.contract_horizon(cases["robot_free_fall"]) is None
+    assert testing.contract_horizon(cases["free_top_fast_spin"]) == testing.HARD_HORIZON
+    assert testing.contract_horizon(cases["free_top"]) is None  # not hard: its own horizon
+    assert contract_case("robot_free_fall").t_final == cases["robot_free_fall"].params["t_final"]
+
+
 def test_builds_with_defaults_and_is_versioned(case):
     testing.check_builds(case.name, **case.params)
     for name, tol in case.tolerances.items():

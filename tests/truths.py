@@ -74,9 +74,8 @@ def contract_case(name):
     to ``testing.HARD_HORIZON``, never lengthened (``robot_free_fall``'s own horizon is 1 s), the others as
     registered."""
     factory = load_cases()[name]
-    if "hard" not in factory.tags or factory.params["t_final"] <= testing.HARD_HORIZON:
-        return factory()
-    return factory(t_final=testing.HARD_HORIZON)
+    horizon = testing.contract_horizon(factory)
+    return factory() if horizon is None else factory(t_final=horizon)
 
 
 def shared_truth_from(case, longer, shared_dir):
