@@ -9,6 +9,8 @@ import subprocess
 import sys
 import textwrap
 
+from cli_script import PRELUDE
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PYPROJECT = textwrap.dedent("""\
     [build-system]
@@ -36,17 +38,8 @@ def _example():
 # The author's commands, in one interpreter that sees the installed package only through PYTHONPATH (what is tested
 # is that the entry point is found from outside; one interpreter start, not one per command): ``dalembert cases``,
 # ``check_case``, a run its declared domain refuses, a run; what each said, as JSON on stdout.
-COMMANDS = """
-import contextlib, io, json, sys
-
-from dalembert.harness.cli import main
+COMMANDS = PRELUDE + """
 from dalembert.testing import check_case
-
-def command(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        status = main(list(args))
-    return {"status": status, "stdout": out.getvalue(), "stderr": err.getvalue()}
 
 said = {"cases": command("cases")}
 from my_cases import spherical_pendulum

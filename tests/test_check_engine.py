@@ -22,6 +22,8 @@ from dalembert.adapters import registry as adapter_registry
 from dalembert.engine_check import PROBES, Problem, check_engine
 from dalembert.trajectory import BodyStates, Trajectory
 
+from cli_script import PRELUDE
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXAMPLE = os.path.join(ROOT, "docs", "example_engine")
 sys.path.insert(0, EXAMPLE)  # tinyrigid, as the guide writes it (a fresh interpreter gets sys.path too)
@@ -293,17 +295,7 @@ def test_the_guide_quotes_the_example_as_it_is():
 # The user's three commands, in one interpreter that sees the pip-installed example only through PYTHONPATH (what is
 # tested is that its entry point is found from outside; one interpreter start, not one per command): what each
 # said, as JSON on stdout's last line.
-COMMANDS = """
-import contextlib, io, json, sys
-
-from dalembert.harness.cli import main
-
-def command(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        status = main(list(args))
-    return {"status": status, "stdout": out.getvalue(), "stderr": err.getvalue()}
-
+COMMANDS = PRELUDE + """
 said = {"engines": command("engines"), "check-engine": command("check-engine", "tinyrigid")}
 said["run"] = command("run", "--case", "pendulum", "--case", "free_top", "--engine", "tinyrigid", "--param",
                       "t_final=0.5", "--dt", "1e-2", "--jobs", "1", "--quick", "--out", sys.argv[1])
