@@ -18,6 +18,7 @@ import pytest
 from dalembert.harness.cli import main
 from dalembert.store import Store
 from engine_runs import installed
+from installed import needs
 
 TINY = ["--case", "free_top", "--engine", "reference", "--integrator", "rk4", "--dt", "1e-2", "--param", "t_final=0.5",
         "--quick"]
@@ -366,6 +367,26 @@ def test_a_sigterm_before_a_worker_is_ready_ends_it_quietly():
     sent.set()
     proc.join()
     assert proc.exitcode == -signal.SIGTERM
+
+
+# In a fresh interpreter (this one may have JAX running, from other tests): which start method a matrix's workers get
+# with JAX imported, then with its runtime up.
+JAX_CONTEXT = """
+import jax
+from dalembert.harness.pool import _context
+imported = _context().get_start_method()
+jax.numpy.zeros(1).block_until_ready()
+print(imported, _context().get_start_method())
+"""
+
+
+@needs("jax")
+def test_workers_are_not_forked_from_a_process_running_jax():
+    """JAX's runtime threads are native (``threading`` counts one thread), and a fork copies their locks: once
+    JAX has computed (an MJX run in a notebook before ``api.run``), workers start from a forkserver; JAX
+    imported but idle still forks (``dalembert run`` imports MJX's adapter in the parent)."""
+    done = subprocess.run([sys.executable, "-c", JAX_CONTEXT], capture_output=True, text=True, check=True)
+    assert done.stdout.split() == ["fork", "forkserver"], done.stderr
 
 
 # `dalembert run` with its store's disk full from the second run's row on (the parent writes the store: a

@@ -81,12 +81,23 @@ def stopped_from_outside(spec, code):
             f"{STOPPED_FROM_OUTSIDE[sig]}")
 
 
+def _jax_running():
+    """Whether JAX's runtime is up in this process (its backends made: a computation ran, e.g. an MJX run in a
+    notebook before ``api.run``): its threads are native, not counted by ``threading``, and JAX itself warns that
+    a fork then "will likely lead to a deadlock". Its import alone starts none."""
+    bridge = sys.modules.get("jax._src.xla_bridge")
+    if bridge is None:
+        return False
+    initialized = getattr(bridge, "backends_are_initialized", None)
+    return True if initialized is None else initialized()  # (a JAX without the question: assume it runs)
+
+
 def _context():
     """``fork`` (fast: workers share the parent's imports) when this process has one
-    Python thread; else a ``forkserver``: forking a process that has other threads
-    (an in-process Dask client, a notebook's kernel threads) can copy a lock that
-    another thread holds into the child (Python's documentation warns against it)."""
-    if threading.active_count() == 1:
+    thread; else a ``forkserver``: forking a process that has other threads (an
+    in-process Dask client, a notebook's kernel threads, JAX's runtime) can copy a lock
+    that another thread holds into the child (Python's documentation warns against it)."""
+    if threading.active_count() == 1 and not _jax_running():
         return mp.get_context("fork")
     ctx = mp.get_context("forkserver")
     ctx.set_forkserver_preload(["dalembert.harness.execute", "dalembert.adapters"])
