@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from itertools import islice
 
 import numpy as np
 
@@ -54,7 +55,7 @@ from dalembert.reports.names import settings_text, speed_text
 from dalembert.reports.work_precision import sweep_key
 
 __all__ = ["ENERGY_HAZARD", "DISAGREEMENT_FACTOR", "CLOSURE_GROWTH", "HAZARDS", "LISTED", "listed", "ENERGY_LIKE", "CREEP_METRIC", "NAMED",
-           "Hazard", "case_hazards", "list_text"]
+           "LISTED_RUNS", "Hazard", "case_hazards", "list_text"]
 
 # Energy lost or gained over the horizon beyond which a simulation is visibly not the physics
 # any more (a pendulum's amplitude, a top's spin, off by about the square root of it): 1%.
@@ -79,13 +80,20 @@ ENERGY_LIKE = ("energy", "energy_balance")
 # The metric a contact case names its creep by (``cases/block_on_incline``): the slip speed, m/s, over a phase
 # in which its closed form sticks.
 CREEP_METRIC = "creep"
+# A hazard of more runs than this lists the first ones (in sweep order) and counts the rest: a map of a million probes
+# would otherwise list most of them (a 60 MB page at 1e6 rows, benchmarks/map.py), and the lines of the runs not
+# listed are not made at all (naming each of 1e6 runs cost ~20 s of a report); the default matrix's hazards name far
+# fewer (it runs 1,754), and every run is in the store (``dalembert export --all``).
+LISTED_RUNS = 1000
+
 
 @dataclass(frozen=True)
 class Hazard:
     """A finding against one engine (``engine``) or between engines (``engine`` "").
 
     ``text`` is one sentence (naming the runs when they are few, else what they share and the
-    worst); ``details`` one line per run it is about, naming it. Plain text: the renderer escapes.
+    worst); ``details`` one line per run it is about, naming it, for its first ``LISTED_RUNS`` runs (``runs``
+    counts them all), or none where the hazard lists no runs. Plain text: the renderer escapes.
     """
 
     kind: str  # one of HAZARDS
@@ -166,7 +174,7 @@ def _hazard(kind, e, runs, lead, line, worst=None, tail=""):
         shared = _shared(runs)
         text = f"{e.engine}: {lead}" + (f", {shared}" if shared else "")
         text += f"; worst: {line(worst)}." if worst is not None else "."
-    return Hazard(kind, e.engine, runs, text + (f" {tail}" if tail else ""), tuple(map(line, runs)))
+    return Hazard(kind, e.engine, runs, text + (f" {tail}" if tail else ""), tuple(map(line, runs[:LISTED_RUNS])))
 
 
 def _diverged(e, case):
@@ -364,8 +372,9 @@ def _inert(e, quantity):
     text = (f"{e.engine}: a tolerance changed nothing: {'; '.join(group_text(rs) for rs in same)} — every stored "
             "error the same, bit for bit: the tolerance did not decide their steps (something else did, such as the "
             "sample interval), so they say nothing of what it buys, and are compared with no other engine.")
-    details = tuple(f"{settings_text(r)} (the same errors as {list_text([settings_text(x) for x in rs if x is not r])})"
-                    for rs in same for r in rs)
+    details = tuple(islice((f"{settings_text(r)} (the same errors as "
+                            f"{list_text([settings_text(x) for x in rs if x is not r])})" for rs in same for r in rs),
+                           LISTED_RUNS))
     return [Hazard("inert", e.engine, tuple(runs), text, details)]
 
 
