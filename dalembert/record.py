@@ -248,18 +248,17 @@ class RunRecord:
     @_cached  # (asked of every run a hazard names, for what they share)
     def sweep_label(self):
         """Where the run sits in its sweep: ``dt=0.001`` or ``tol=1e-09``."""
-        s = self.settings
-        return f"dt={s.dt:g}" if s.dt is not None else f"tol={s.rtol:g}"
+        return _sweep_label(self.settings)
 
     @_cached  # (a report asks it of every run several times: 5e5 calls for 1e5 runs)
     def options_label(self):
         """Engine options as ``key=value`` words ("" for the defaults), values exactly as given: a run's identity."""
-        return " ".join(f"{k}={v}" for k, v in sorted(self.settings.options.items()))
+        return _options_label(self.settings)
 
     @_cached  # (asked of every run a hazard names, for what they share)
     def options_text(self):
         """``options_label`` as a report writes it: values by ``settings.option_text`` (4 significant digits)."""
-        return " ".join(f"{k}={option_text(v)}" for k, v in sorted(self.settings.options.items()))
+        return _options_text(self.settings)
 
     @_cached  # (a report asks it of every run in several sections)
     def cost_per_sim_s(self):
@@ -345,6 +344,23 @@ class RunRecord:
             trajectory=row.get("trajectory") if isinstance(row.get("trajectory"), str) else "",
             traceback=row.get("traceback") if isinstance(row.get("traceback"), str) else "",
             schema_version=schema)
+
+
+def _sweep_label(s):
+    return f"dt={s.dt:g}" if s.dt is not None else f"tol={s.rtol:g}"
+
+
+def _options_label(s):
+    return " ".join(f"{k}={v}" for k, v in sorted(s.options.items()))
+
+
+def _options_text(s):
+    return " ".join(f"{k}={option_text(v)}" for k, v in sorted(s.options.items()))
+
+
+# The derived values (``_cached``) a record reads from its ``settings`` alone, each a function of the ``Settings``:
+# records that share one have the same ones (``bulk_records`` makes them once per distinct settings, not per record).
+SETTINGS_DERIVED = {"sweep_label": _sweep_label, "options_label": _options_label, "options_text": _options_text}
 
 
 def _cost_field(name, value):
