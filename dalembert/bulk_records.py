@@ -21,7 +21,8 @@ def records_from_table(table):
     What ``from_row`` does one row at a time, done per column: numbers converted as whole columns, and each
     distinct JSON text (``params``, ``options``, ``audit``, ``provenance``, ``wall_s_repeats``) and each distinct
     settings and judgement parsed or made once — a map's rows repeat them. Records read together share their
-    ``audit`` and ``provenance`` dicts (read-only, like the frozen record; ``params`` is each record's own).
+    ``params``, ``audit`` and ``provenance`` dicts (read-only, like the frozen record): a reader may make what it
+    derives from one once per distinct dict (``reports.order.step_pairs``).
 
     Parameters
     ----------
@@ -135,8 +136,7 @@ def records_from_table(table):
         "engine": objects("engine"),
         "settings": made(settings_of, objects("integrator"), *([_opt(v) for v in floats(name)]
                                                                for name in ("dt", "rtol", "atol")), objects("options")),
-        "params": [dict(p) for p in parsed("params", {}, lambda p: {k: tuple(v) if isinstance(v, list) else v
-                                                                    for k, v in p.items()})],
+        "params": parsed("params", {}, lambda p: {k: tuple(v) if isinstance(v, list) else v for k, v in p.items()}),
         "status": objects("status"), "message": [v or "" for v in objects("message")],
         "engine_version": [v or "" for v in objects("engine_version")],
         "adapter_distribution": [_text(v) for v in objects("adapter_distribution")],
