@@ -63,8 +63,12 @@ class CaseFindings:
     sentences: tuple  # the case's findings in prose
     headline: object = None  # the case's headline metric (InvariantLabel) where it declares one: engines rank by it
     # the work-precision Point of every finished run of ``ranked`` (``work_precision.points``), in ``runs``' order: made
-    # once, for the engines' summaries and for what else reads them (``known_points``)
-    points: tuple = field(default=(), compare=False, repr=False)
+    # once, for the engines' summaries and for what else reads them (``known_points``, ``recommend``); None: made here
+    points: tuple | None = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self):
+        if self.points is None:
+            object.__setattr__(self, "points", tuple(points(self.runs, self.ranked, self.case)) if self.ranked else ())
 
     @property
     def unit(self):

@@ -169,9 +169,10 @@ NAMED = 3
 
 def _shared(runs):
     """What every one of ``runs`` has in common ("all rk44 with node=rxyz"), or ""."""
+    distinct = list({id(r.settings): r for r in runs}.values())  # (what is read here is the settings': once each)
     parts = []
-    for values, word in (({r.settings.integrator for r in runs}, ""), ({r.sweep_label for r in runs}, "at "),
-                         ({r.options_text for r in runs}, "with ")):
+    for values, word in (({r.settings.integrator for r in distinct}, ""), ({r.sweep_label for r in distinct}, "at "),
+                         ({r.options_text for r in distinct}, "with ")):
         if len(values) == 1 and next(iter(values)):
             parts.append(word + next(iter(values)))
     return ("all " + " ".join(parts)) if parts and len(runs) > 1 else ""
@@ -416,11 +417,15 @@ def _disagreements(runs, quantity, case):
         return []
     unit = QUANTITIES[quantity]
     tol = case.tolerances.get(quantity)
-    groups = {}
+    groups, keys = {}, {}  # (a run's group key is its settings': made once per distinct Settings, None: not comparable)
     for r in runs:
-        if r.status != "unsupported" and _comparable(r):
+        if r.status != "unsupported":
             s = r.settings
-            groups.setdefault((s.integrator, s.dt, s.rtol, s.atol), {}).setdefault(r.engine, []).append(r)
+            key = keys.get(id(s), False)
+            if key is False:
+                key = keys[id(s)] = (s.integrator, s.dt, s.rtol, s.atol) if _comparable(r) else None
+            if key is not None:
+                groups.setdefault(key, {}).setdefault(r.engine, []).append(r)
     out = []
     shared = [kv for kv in groups.items() if len(kv[1]) >= 2]  # (a setting one engine ran disagrees with none)
     for (integrator, dt, rtol, _), by_engine in sorted(shared, key=lambda kv: (kv[0][0], kv[0][1] is None,
