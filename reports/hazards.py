@@ -432,14 +432,14 @@ def _disagreements(runs, quantity, case):
                                                                                -(kv[0][1] or kv[0][2] or 0))):
         chosen = {e: _representative(sorted(rs, key=lambda r: (bool(r.settings.options), _err(r, quantity))))
                   for e, rs in sorted(by_engine.items())}
-        sample = next(iter(chosen.values()))
-        setting = " ".join([integrator, sample.sweep_label.replace("tol=", "rtol=")])
         finite = {e: r for e, r in chosen.items() if r.ok and math.isfinite(r.max_error(quantity))}
         within = [e for e, r in finite.items() if tol is None or r.max_error(quantity) <= tol.value]
-        broken = [e for e, r in chosen.items() if r.judgement.verdict in ("diverged", "failed", "timeout")]
+        broken = ([e for e, r in chosen.items() if r.judgement.verdict in ("diverged", "failed", "timeout")]
+                  if within else ())
         if within and broken:
-            text = (f"at {setting}, {list_text(within)} {'stays' if len(within) == 1 else 'stay'} within the "
-                    f"{quantity} tolerance while " + list_text(f"{e} {chosen[e].judgement.verdict}" for e in broken) + ".")
+            text = (f"at {_setting(integrator, chosen)}, {list_text(within)} {'stays' if len(within) == 1 else 'stay'} "
+                    f"within the {quantity} tolerance while "
+                    + list_text(f"{e} {chosen[e].judgement.verdict}" for e in broken) + ".")
             out.append(Hazard("disagreement", "", tuple(chosen.values()), text))
             continue
         if len(finite) < 2:
@@ -451,9 +451,14 @@ def _disagreements(runs, quantity, case):
                            for e in sorted(errs, key=errs.get))
             bound = f" (tolerance {tol.value:g} {unit})" if tol else ""
             out.append(Hazard("disagreement", "", tuple(finite.values()),
-                              f"at {setting} the engines' {quantity} errors differ {hi / lo:.2g}-fold: {values} {unit}"
-                              f"{bound}."))
+                              f"at {_setting(integrator, chosen)} the engines' {quantity} errors differ {hi / lo:.2g}-fold: "
+                              f"{values} {unit}{bound}."))
     return out
+
+
+def _setting(integrator, chosen):
+    """A disagreement's setting in words (made only for a hazard: most of a map's settings are none)."""
+    return " ".join([integrator, next(iter(chosen.values())).sweep_label.replace("tol=", "rtol=")])
 
 
 def _err(r, quantity):

@@ -147,11 +147,6 @@ def _line(r):
     return (r.engine, r.settings.integrator, r.options_label)
 
 
-def _setting_key(r):
-    s = r.settings
-    return _line(r) + (s.dt, s.rtol, s.atol)
-
-
 def _candidates(members):
     """Every setting that ran (finished, measured) on every case version of ``members`` (``CaseFindings``), as a
     ``Candidate``."""
@@ -164,7 +159,9 @@ def _candidates(members):
         for p in f.points:
             r = p.run
             if r.judgement.verdict != "diverged" and p.cost > 0:
-                by_key.setdefault(_setting_key(r), {})[id(f)] = (r, figure(r))
+                s = r.settings  # (a setting: its line, ``_line``, and its step or tolerances)
+                by_key.setdefault((r.engine, s.integrator, r.options_label, s.dt, s.rtol, s.atol), {})[id(f)] = (
+                    r, figure(r))
     out = []
     for found in by_key.values():
         if len(found) != len(members):
