@@ -116,11 +116,10 @@ class ObservedOrder:
     flagged: bool
 
 
-def _usable(r, quantity, floor):
-    """Why run ``r`` is outside the asymptotic range ("" when it is in it)."""
+def _usable(r, e, floor):
+    """Why run ``r``, of headline error ``e``, is outside the asymptotic range ("" when it is in it)."""
     if not r.ok or r.judgement.verdict == "diverged":
         return "diverged or did not finish"
-    e = r.max_error(quantity)
     if not math.isfinite(e):
         return "diverged or did not finish"
     if e < FLOOR_MARGIN * _floor(r, floor):
@@ -169,7 +168,7 @@ def step_pairs(groups, excluded=None):
             # each run's step, error and why it is outside the asymptotic range, asked once (most are in two pairs)
             dts = [r.settings.dt for r in runs]
             errors = [r.max_error(quantity) for r in runs]
-            usable = [""] * len(runs) if contact else [_usable(r, quantity, floor) for r in runs]
+            usable = [""] * len(runs) if contact else [_usable(r, e, floor) for r, e in zip(runs, errors)]
             for i in range(len(runs) - 1):
                 dt1, dt2 = dts[i], dts[i + 1]
                 if not dt1 > dt2:
