@@ -82,8 +82,8 @@ ENERGY_LIKE = ("energy", "energy_balance")
 CREEP_METRIC = "creep"
 # A hazard of more runs than this lists the first ones (in sweep order) and counts the rest: a map of a million probes
 # would otherwise list most of them (a 60 MB page at 1e6 rows, benchmarks/map.py), and the lines of the runs not
-# listed are not made at all (naming each of 1e6 runs cost ~20 s of a report); the default matrix's hazards name far
-# fewer (it runs 1,754), and every run is in the store (``dalembert export --all``).
+# listed are not made at all (a line for each of 1e5 runs was ~0.5 s of its report, profiled); the default
+# matrix's hazards name far fewer (it runs 1,754), and every run is in the store (``dalembert export --all``).
 LISTED_RUNS = 1000
 
 
