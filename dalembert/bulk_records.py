@@ -8,8 +8,8 @@ import json
 from dataclasses import fields
 
 from dalembert.judge import Judgement
-from dalembert.record import (_COUNTS, _NAN, _TEXTS, CHECKS, READABLE_SCHEMAS, SETTINGS_DERIVED, Cost, RunRecord,
-                              SchemaError, _cost_field, _num, _opt, _text)
+from dalembert.record import (_COUNTS, _NAN, _TEXTS, CHECKS, READABLE_SCHEMAS, Cost, RunRecord, SchemaError,
+                              _cost_field, _num, _opt, _text)
 from dalembert.settings import Settings
 
 __all__ = ["records_from_table"]
@@ -153,25 +153,16 @@ def records_from_table(table):
         "schema_version": [1 if v is None else v for v in schemas]}
     for status in set(column["status"]):  # (``RunRecord.__post_init__``'s check, once per distinct status)
         RunRecord(key="", case="", case_version="", engine="", settings=column["settings"][0], status=status)
-    # the derived values a report asks of every record, each made once per distinct value they derive from (the
-    # record's ``_cached`` values, found in its ``__dict__`` as if it had been asked them already)
-    derived = {}
-    for s in column["settings"]:
-        if id(s) not in derived:
-            derived[id(s)] = tuple(make(s) for make in SETTINGS_DERIVED.values())
-    for i, name in enumerate(SETTINGS_DERIVED):
-        column[name] = [derived[id(s)][i] for s in column["settings"]]
-    column["ok"] = [status == "ok" for status in column["status"]]
-    names = [f.name for f in fields(RunRecord)] + [*SETTINGS_DERIVED, "ok"]
+    names = [f.name for f in fields(RunRecord)]
     return made_each(RunRecord, names, (column[name] for name in names))
 
 
 def made_each(cls, names, columns):
     """An instance of frozen dataclass ``cls`` per row of ``columns`` (an iterable of lists of one length, one per
-    name in ``names``: its fields, then any of its cached derived values), its ``__dict__`` filled from the row's
-    values: what ``cls(*values)`` makes, less the per-field ``object.__setattr__`` of a frozen ``__init__`` (0.53 s of
-    making 1e5 records and their costs that way, 0.28 s this way, measured). The caller checks the values as
-    ``__post_init__`` would."""
+    name in ``names``: its fields, in their order, so that its dict shares its keys as ``__init__``'s does), its
+    ``__dict__`` filled from the row's values: what ``cls(*values)`` makes, less the per-field
+    ``object.__setattr__`` of a frozen ``__init__`` (0.53 s of making 1e5 records and their costs that way, 0.28 s
+    this way, measured). The caller checks the values as ``__post_init__`` would."""
     new = object.__new__
 
     def one(*values):

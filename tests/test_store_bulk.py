@@ -101,6 +101,8 @@ def test_records_read_in_bulk_derive_what_a_record_made_alone_derives(files, tmp
     for r in got:
         alone = replace(r)  # (made by its ``__init__``: its derived values made on reading them)
         assert [plain(getattr(r, d)) for d in DERIVED] == [plain(getattr(alone, d)) for d in DERIVED], r.key
+        # at most one derived value kept in a record's own dict (``record.py``: so that records' dicts share keys)
+        assert len(vars(r)) <= len(fields(RunRecord)) + 1 and len(vars(alone)) <= len(fields(RunRecord)) + 1
 
 
 def test_a_row_of_an_unknown_status_is_refused_in_bulk(files, tmp_path):
