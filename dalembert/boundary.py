@@ -71,10 +71,11 @@ def curve_of(record):
 
 def bracket(probes, passes):
     """The ``Bracket`` of ``probes`` (``[(dt, verdict)]``) under ``passes(verdict) -> bool``."""
-    failing = [dt for dt, v in probes if not passes(v)]
+    passed = {v: passes(v) for v in {v for _, v in probes}}  # (asked once per distinct verdict, not per probe)
+    failing = [dt for dt, v in probes if not passed[v]]
     first_fail = min(failing) if failing else None
-    passing = [dt for dt, v in probes if passes(v) and (first_fail is None or dt < first_fail)]
-    monotone = not any(passes(v) and first_fail is not None and dt > first_fail for dt, v in probes)
+    passing = [dt for dt, v in probes if passed[v] and (first_fail is None or dt < first_fail)]
+    monotone = not any(passed[v] and first_fail is not None and dt > first_fail for dt, v in probes)
     return Bracket(max(passing) if passing else None, first_fail, monotone)
 
 

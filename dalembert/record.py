@@ -236,7 +236,11 @@ class RunRecord:
             raise ValueError(f"status: unknown {self.status!r} — use one of {STATUSES}")
 
     # -------------------------------------------------------------- derived
-    @_cached  # (asked of every run by most sections: 1e6 times for 1e5 runs)
+    # A record keeps at most one derived value in its ``__dict__`` (``cost_per_sim_s``): with its 28 fields that is the
+    # most CPython 3.11 keeps in a dict that shares its keys with every other record's (29: 288 bytes a record; one more
+    # and each record's dict is its own, 1584 bytes: 1.3 GB more for a map of 1e6 runs). What a record derives from its
+    # settings is kept once per ``Settings`` instead (``_settings_derived``: records read together share theirs).
+    @property  # (asked of every run by most sections: 1e6 times for 1e5 runs; a comparison, not kept)
     def ok(self):
         return self.status == "ok"
 
@@ -245,21 +249,20 @@ class RunRecord:
         """``Settings.label()`` of the run: ``rk4 dt=0.001``, ``dop853 rtol=1e-09 atol=1e-09``, options appended."""
         return self.settings.label()
 
-    @_cached  # (asked of every run a hazard names, for what they share)
+    @property  # (asked of every run a hazard names, for what they share)
     def sweep_label(self):
         """Where the run sits in its sweep: ``dt=0.001`` or ``tol=1e-09``."""
-        s = self.settings
-        return f"dt={s.dt:g}" if s.dt is not None else f"tol={s.rtol:g}"
+        return _settings_derived(self.settings)[0]
 
-    @_cached  # (a report asks it of every run several times: 5e5 calls for 1e5 runs)
+    @property  # (a report asks it of every run several times: 5e5 calls for 1e5 runs)
     def options_label(self):
         """Engine options as ``key=value`` words ("" for the defaults), values exactly as given: a run's identity."""
-        return " ".join(f"{k}={v}" for k, v in sorted(self.settings.options.items()))
+        return _settings_derived(self.settings)[1]
 
-    @_cached  # (asked of every run a hazard names, for what they share)
+    @property  # (asked of every run a hazard names, for what they share)
     def options_text(self):
         """``options_label`` as a report writes it: values by ``settings.option_text`` (4 significant digits)."""
-        return " ".join(f"{k}={option_text(v)}" for k, v in sorted(self.settings.options.items()))
+        return _settings_derived(self.settings)[2]
 
     @_cached  # (a report asks it of every run in several sections)
     def cost_per_sim_s(self):
@@ -345,6 +348,33 @@ class RunRecord:
             trajectory=row.get("trajectory") if isinstance(row.get("trajectory"), str) else "",
             traceback=row.get("traceback") if isinstance(row.get("traceback"), str) else "",
             schema_version=schema)
+
+
+def _sweep_label(s):
+    return f"dt={s.dt:g}" if s.dt is not None else f"tol={s.rtol:g}"
+
+
+def _options_label(s):
+    return " ".join(f"{k}={v}" for k, v in sorted(s.options.items()))
+
+
+def _options_text(s):
+    return " ".join(f"{k}={option_text(v)}" for k, v in sorted(s.options.items()))
+
+
+# The values a record derives from its ``settings`` alone, each a function of the ``Settings``, in this order.
+SETTINGS_DERIVED = {"sweep_label": _sweep_label, "options_label": _options_label, "options_text": _options_text}
+_DERIVED_KEY = "_record_derived"  # (where a Settings keeps them: its own fields' names never start with "_")
+
+
+def _settings_derived(s):
+    """``SETTINGS_DERIVED``'s values of ``s``, made on the first read and kept in the frozen ``Settings``' own
+    ``__dict__`` (as ``_cached`` keeps a record's: its fields, equality and hash are untouched): once per ``Settings``,
+    not per record — records read together share theirs (``bulk_records``)."""
+    got = s.__dict__.get(_DERIVED_KEY)
+    if got is None:
+        got = s.__dict__[_DERIVED_KEY] = tuple(make(s) for make in SETTINGS_DERIVED.values())
+    return got
 
 
 def _cost_field(name, value):

@@ -11,7 +11,7 @@ stored numbers only; verdicts are the stored ones, never judged again here.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 from dalembert.errors import QUANTITIES
 from dalembert.refusal import manifest_refusals
@@ -21,11 +21,12 @@ from dalembert.reports.hazards import (CLOSURE_GROWTH, CREEP_METRIC, DISAGREEMEN
                                        HAZARDS, NAMED, Hazard, case_hazards, list_text,
                                        listed)
 from dalembert.reports.names import run_name, settings_text, speed_text
-from dalembert.reports.work_precision import cheapest_reaching, headline_metric, headline_quantity, pareto_front, points
+from dalembert.reports.work_precision import (cheapest_reaching, headline_metric, headline_quantity, metric_label,
+                                              pareto_front, points)
 
 # (the hazards' and the names' spellings re-exported: what the report's sections import from here)
 __all__ = ["ACCURACY_TARGETS", "ENERGY_HAZARD", "DISAGREEMENT_FACTOR", "CLOSURE_GROWTH", "HAZARDS", "CREEP_METRIC",
-           "ENERGY_LIKE", "NAMED", "Reach", "EngineSummary", "Hazard", "CaseFindings", "find", "run_name",
+           "ENERGY_LIKE", "NAMED", "Reach", "EngineSummary", "Hazard", "CaseFindings", "find", "known_points", "run_name",
            "settings_text", "speed_text"]
 
 # Three accuracies a user asks for, three decades apart: an engineering answer (1e-3),
@@ -61,6 +62,13 @@ class CaseFindings:
     hazards: tuple  # Hazard, in HAZARDS order
     sentences: tuple  # the case's findings in prose
     headline: object = None  # the case's headline metric (InvariantLabel) where it declares one: engines rank by it
+    # the work-precision Point of every finished run of ``ranked`` (``work_precision.points``), in ``runs``' order: made
+    # once, for the engines' summaries and for what else reads them (``known_points``, ``recommend``); None: made here
+    points: tuple | None = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self):
+        if self.points is None:
+            object.__setattr__(self, "points", tuple(points(self.runs, self.ranked, self.case)) if self.ranked else ())
 
     @property
     def unit(self):
@@ -110,10 +118,14 @@ def _case_findings(case, runs, store=None, refused=()):
     quantity = headline_quantity(runs)
     headline = headline_metric(case, runs)
     ranked = headline.name if headline is not None else quantity
+    made = tuple(points(runs, ranked, case)) if ranked else ()
+    by_engine = {}
+    for p in made:  # (each engine's points in the runs' order: ``points`` of its runs alone)
+        by_engine.setdefault(p.run.engine, []).append(p)
     engines = []
     for engine in sorted({r.engine for r in runs}):
         mine = tuple(r for r in runs if r.engine == engine)
-        pts = points(mine, ranked, case) if ranked else []
+        pts = by_engine.get(engine, [])
         best = min(pts, key=lambda p: p.error) if pts else None
         engines.append(EngineSummary(engine, mine, tuple(Reach(t, cheapest_reaching(pts, t)) for t in ACCURACY_TARGETS),
                                      best, tuple(pareto_front(pts))))
@@ -122,8 +134,23 @@ def _case_findings(case, runs, store=None, refused=()):
         orders = case_orders(case, runs, quantity)
         hazards = [replace(h, causes=tuple(disagreement_causes(h.runs, case, runs, quantity, orders)))
                    if h.kind == "disagreement" else h for h in hazards]
-    found = CaseFindings(case, tuple(runs), quantity, tuple(engines), tuple(hazards), (), headline)
+    found = CaseFindings(case, tuple(runs), quantity, tuple(engines), tuple(hazards), (), headline, made)
     return replace(found, sentences=tuple(_sentences(found)))  # the prose reads the rest
+
+
+def known_points(found):
+    """``known(case name, version, quantity)`` for ``maps.stability_maps``: a case version's work-precision points of
+    error ``quantity`` as its findings (``found``) made them, where it ranks by that error (no headline metric, none
+    named like it), else None."""
+    by_version = {(f.case.name, f.case.version): f for f in found}
+
+    def known(name, version, quantity):
+        f = by_version.get((name, version))
+        if f is None or f.headline is not None or f.quantity != quantity or metric_label(quantity, f.case) is not None:
+            return None
+        return f.points
+
+    return known
 
 
 # ---------------------------------------------------------------------------------------------- prose

@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from dalembert.boundary import boundaries
-from dalembert.reports.work_precision import cheapest_reaching, headline_quantity, series
+from dalembert.reports.work_precision import cheapest_reaching, headline_quantity, series, series_of
 
 __all__ = ["StabilityMap", "stability_maps", "RATE_UNITS", "COST_TARGET"]
 
@@ -59,9 +59,11 @@ def _swept(params_by_version):
     return [k for k in keys if len({repr(p.get(k)) for p in params_by_version}) > 1]
 
 
-def stability_maps(records, units_of):
+def stability_maps(records, units_of, known=None):
     """The ``StabilityMap`` of every case swept over a scalar parameter whose fixed-step runs probe
-    at least two steps on some curve. ``units_of(case name) -> {parameter: unit}``."""
+    at least two steps on some curve. ``units_of(case name) -> {parameter: unit}``; ``known(case name, version,
+    quantity)``: that version's ``work_precision.points`` of error ``quantity`` where made already
+    (``findings.known_points``), else None (made here)."""
     out = []
     by_case = {}  # (grouped once: a map's case holds most of a store's runs)
     for r in records:
@@ -86,7 +88,8 @@ def stability_maps(records, units_of):
         for r in runs:
             by_version.setdefault(r.case_version, []).append(r)
         for version, params in versions.items():
-            lines = series(by_version[version], quantity) if quantity else {}
+            made = known(name, version, quantity) if known is not None and quantity else None
+            lines = (series_of(made) if made is not None else series(by_version[version], quantity)) if quantity else {}
             for full, points in lines.items():
                 engine, _, label = full.partition(" ")
                 best = cheapest_reaching(points, COST_TARGET)

@@ -116,11 +116,10 @@ class ObservedOrder:
     flagged: bool
 
 
-def _usable(r, quantity, floor):
-    """Why run ``r`` is outside the asymptotic range ("" when it is in it)."""
+def _usable(r, e, floor):
+    """Why run ``r``, of headline error ``e``, is outside the asymptotic range ("" when it is in it)."""
     if not r.ok or r.judgement.verdict == "diverged":
         return "diverged or did not finish"
-    e = r.max_error(quantity)
     if not math.isfinite(e):
         return "diverged or did not finish"
     if e < FLOOR_MARGIN * _floor(r, floor):
@@ -156,25 +155,32 @@ def step_pairs(groups, excluded=None):
         if quantity is None:
             continue
         floor = case.floor.get(quantity) or DEFAULT_FLOOR
-        lines = {}
+        contact, angle = bool(case.scene.contacts), quantity in ANGLES
+        lines, params = {}, {}  # (the parameters' words made once per distinct dict: records read together share them)
         for r in records:
             if r.settings.dt is not None:
-                lines.setdefault((r.engine, r.settings.integrator, r.options_label, _params(r)), []).append(r)
+                words = params.get(id(r.params))
+                if words is None:
+                    words = params[id(r.params)] = _params(r)
+                lines.setdefault((r.engine, r.settings.integrator, r.options_label, words), []).append(r)
         for (engine, integrator, options, _), runs in sorted(lines.items()):
             runs = sorted(runs, key=lambda r: -r.settings.dt)
-            # why each run is outside the asymptotic range, asked once per run (most are in two pairs)
-            usable = [""] * len(runs) if case.scene.contacts else [_usable(r, quantity, floor) for r in runs]
-            for i, (coarse, fine) in enumerate(zip(runs, runs[1:])):
-                if not coarse.settings.dt > fine.settings.dt:
+            # each run's step, error and why it is outside the asymptotic range, asked once (most are in two pairs)
+            dts = [r.settings.dt for r in runs]
+            errors = [r.max_error(quantity) for r in runs]
+            usable = [""] * len(runs) if contact else [_usable(r, e, floor) for r, e in zip(runs, errors)]
+            for i in range(len(runs) - 1):
+                dt1, dt2 = dts[i], dts[i + 1]
+                if not dt1 > dt2:
                     continue
-                why = "of a contact case" if case.scene.contacts else usable[i] or usable[i + 1]
-                if not why and quantity in ANGLES and not coarse.max_error(quantity) < SATURATED_ANGLE:
+                e1, e2 = errors[i], errors[i + 1]
+                why = "of a contact case" if contact else usable[i] or usable[i + 1]
+                if not why and angle and not e1 < SATURATED_ANGLE:
                     why = "with an angle error saturated"
                 if why:
                     excluded[why] = excluded.get(why, 0) + 1
                     continue
-                e1, e2 = coarse.max_error(quantity), fine.max_error(quantity)
-                dt1, dt2 = coarse.settings.dt, fine.settings.dt
+                coarse, fine = runs[i], runs[i + 1]
                 declared = coarse.integrator_order if coarse.integrator_order == fine.integrator_order else None
                 out.append(StepPair(case.name, case.version, engine, integrator, options, quantity, (dt1, dt2),
                                     (e1, e2), (coarse.key, fine.key), math.log(e1 / e2) / math.log(dt1 / dt2),

@@ -147,30 +147,21 @@ def _line(r):
     return (r.engine, r.settings.integrator, r.options_label)
 
 
-def _setting_key(r):
-    s = r.settings
-    return _line(r) + (s.dt, s.rtol, s.atol)
-
-
-def _measured(f, r, figure=None):
-    """Run ``r``'s headline figure on case findings ``f`` and its cost, or None when it has none (``figure``: ``f``'s
-    ``work_precision.figure_reader``, made once per case by a caller that asks of many runs)."""
-    if not (r.ok and r.judgement.verdict != "diverged" and f.ranked):
-        return None
-    err, cost = (figure or figure_reader(f.ranked, f.case))(r), r.cost_per_sim_s
-    return (err, cost) if math.isfinite(err) and math.isfinite(cost) and cost > 0 else None
-
-
 def _candidates(members):
     """Every setting that ran (finished, measured) on every case version of ``members`` (``CaseFindings``), as a
     ``Candidate``."""
     by_key = {}
     for f in members:
         figure = figure_reader(f.ranked, f.case) if f.ranked else None
-        for r in f.runs:
-            measured = _measured(f, r, figure)
-            if measured is not None:
-                by_key.setdefault(_setting_key(r), {})[id(f)] = (r, measured[0])
+        # the runs measured: finished, not diverged, a finite headline figure and a finite positive cost — from the
+        # work-precision points the findings made (``CaseFindings.points``: the finished runs of a finite figure and
+        # cost), the rest asked here
+        for p in f.points:
+            r = p.run
+            if r.judgement.verdict != "diverged" and p.cost > 0:
+                s = r.settings  # (a setting: its line, ``_line``, and its step or tolerances)
+                by_key.setdefault((r.engine, s.integrator, r.options_label, s.dt, s.rtol, s.atol), {})[id(f)] = (
+                    r, figure(r))
     out = []
     for found in by_key.values():
         if len(found) != len(members):

@@ -18,10 +18,10 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-__all__ = ["ERROR_DISPLAY_FLOOR", "Point", "headline_quantity", "headline_metric", "figure_of", "figure_reader",
-           "cost_per_sim_s",
+__all__ = ["ERROR_DISPLAY_FLOOR", "Point", "headline_quantity", "headline_metric", "metric_label", "figure_of",
+           "figure_reader", "cost_per_sim_s",
            "line_label", "batch_text", "lines_of",
-           "sweep_key", "points", "series", "pareto_front", "cheapest_reaching"]
+           "sweep_key", "points", "series", "series_of", "pareto_front", "cheapest_reaching"]
 
 # Errors of exactly 0 are drawn at this level on log axes (below any double-precision roundoff).
 ERROR_DISPLAY_FLOOR = 1e-17
@@ -59,14 +59,21 @@ def figure_of(r, quantity, case=None):
     return figure_reader(quantity, case)(r)
 
 
+def metric_label(quantity, case):
+    """The metric of ``case`` (a ``CaseRecord``, or None) named ``quantity`` (an ``InvariantLabel``), or None: then
+    ``quantity`` is read as an error quantity."""
+    if case is None:
+        return None
+    return next((i for i in case.invariants if i.name == quantity and i.kind == "metric"), None)
+
+
 def figure_reader(quantity, case=None):
     """``figure_of(·, quantity, case)`` as a function of the run alone: the case's metric looked up once, not per
     run (a section reads the figure of every run of a case: 1e5 of them in a map)."""
-    if case is not None:
-        label = next((i for i in case.invariants if i.name == quantity and i.kind == "metric"), None)
-        if label is not None:
-            scale = label.scale
-            return lambda r: r.drifts.get(quantity, math.nan) * scale
+    label = metric_label(quantity, case)
+    if label is not None:
+        scale = label.scale
+        return lambda r: r.drifts.get(quantity, math.nan) * scale
     missing = (math.nan, math.nan)
     return lambda r: r.errors.get(quantity, missing)[0]  # (``RunRecord.max_error``, inlined)
 
@@ -130,7 +137,12 @@ def points(records, quantity, case=None):
 
 def series(records, quantity, case=None):
     """``{line_label: [Point, ...]}``, each line ordered along its sweep (coarse to fine)."""
-    out = lines_of(points(records, quantity, case))
+    return series_of(points(records, quantity, case))
+
+
+def series_of(pts):
+    """``series`` of points made already (``points``' list)."""
+    out = lines_of(pts)
     for pts in out.values():
         pts.sort(key=lambda p: sweep_key(p.run))
     return out

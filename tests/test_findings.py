@@ -9,9 +9,10 @@ from dataclasses import replace
 
 import pytest
 
-from dalembert.reports.findings import ACCURACY_TARGETS, DISAGREEMENT_FACTOR, ENERGY_HAZARD, find
+from dalembert.reports.findings import ACCURACY_TARGETS, DISAGREEMENT_FACTOR, ENERGY_HAZARD, find, known_points
 from dalembert.reports.render import build_report
 from dalembert.reports.tables import escape_md
+from dalembert.reports.work_precision import points
 from dalembert.store import Store
 from stores import add_run, base, seed_store, small_store, tamper
 
@@ -184,6 +185,20 @@ def test_the_cheapest_run_reaching_each_accuracy_is_a_stored_run(store):
     assert reach[ACCURACY_TARGETS[1]].cost == first.cost.wall_s_median / first.t_final
     if first.max_error("orientation") > ACCURACY_TARGETS[2]:
         assert reach[ACCURACY_TARGETS[2]] is None and "never" in open(_summary_md(store)).read()
+
+
+def test_the_points_found_are_made_once_and_read_by_the_maps_as_made(store):
+    first = base(store)
+    add_run(store, "other", engine="other", integrator="euler", dt=1e-2)
+    add_run(store, "failed", integrator="euler", dt=2e-2, status="failed", verdict="failed", within_tolerance=None)
+    (case,) = find(store)
+    assert {p.run.key for p in case.points} == {first.key, "other"}  # (a finished run's point only)
+    for e in case.engines:  # each engine's summary reads its own of them
+        assert e.best == min(points(e.runs, case.ranked, case.case), key=lambda p: p.error)
+    known = known_points([case])
+    assert known(case.case.name, case.case.version, case.quantity) == tuple(points(case.runs, case.quantity))
+    assert known(case.case.name, case.case.version, "velocity") is None  # (made of another error: not these)
+    assert known(case.case.name, "another version", case.quantity) is None
 
 
 def _summary_md(store):

@@ -49,6 +49,17 @@ def test_a_known_order_is_observed_and_matches_its_declaration():
     assert not found["rk4"].flagged and not found["rk4"].below and found["rk4"].cases == ("top",)
 
 
+def test_runs_pair_only_with_runs_of_their_parameters_whether_or_not_they_share_one_dict():
+    case = _case("top")
+    slow, fast = {"spin": 1.0}, {"spin": 2.0}  # (records read together share a dict: ``bulk_records``)
+    runs = [replace(r, params=slow if i % 2 == 0 else dict(slow)) for i, r in enumerate(_runs("top", "eng", "rk4", 4))]
+    runs += [replace(r, key=r.key + "-fast", params=fast) for r in _runs("top", "eng", "rk4", 2, dts=(8e-3, 4e-3))]
+    pairs = step_pairs([(case, runs, "orientation")])
+    assert sorted(p.dts for p in pairs) == [(2.5e-3, 1.25e-3), (5e-3, 2.5e-3), (8e-3, 4e-3), (1e-2, 5e-3)]
+    assert {round(p.order, 9) for p in pairs if p.dts == (8e-3, 4e-3)} == {2.0}
+    assert {round(p.order, 9) for p in pairs if p.dts != (8e-3, 4e-3)} == {4.0}
+
+
 def test_an_order_below_its_declaration_is_flagged_and_the_case_that_loses_it_named():
     hinge, ball = _case("hinge"), _case("ball")
     # RK4 keeps its order on the hinge and is second order on the ball joint (as MJX's is)

@@ -59,6 +59,17 @@ def test_a_clear_winner_is_recommended_with_the_next_engine_as_runner_up(seed):
     assert fine.best.runs[0].key == "a2" and fine.runner_up is None
 
 
+def test_only_measured_runs_are_candidates_and_an_exact_run_s_error_is_its_own(seed):
+    first = base(seed)
+    runs = [_run(first, "blew", "alpha", 0.01, 1e-5),  # finite, but judged a blow-up: no candidate
+            _run(first, "free", "beta", 0.0, 1e-5),  # no cost measured: no candidate
+            _run(first, "exact", "gamma", 0.5, 0.0), _run(first, "ok", "delta", 1.0, 1e-5)]
+    runs[0] = changed(runs[0], verdict="diverged")
+    rec = _one(recommend(_found(seed, *runs)), 1e-3)
+    assert (rec.best.runs[0].key, rec.runner_up.runs[0].key) == ("exact", "ok")
+    assert rec.best.error == 0.0  # (the stored error, not the floor a plot draws it at)
+
+
 def test_costs_within_their_spreads_are_a_tie(seed):
     first = base(seed)
     runs = [_run(first, "a", "alpha", 0.10, 1e-4, repeats=(0.08, 0.10, 0.13)),

@@ -1,12 +1,17 @@
 """A hazard of many runs lists at most ``LISTED_RUNS`` of them and counts the rest: a map of a million probes
-must not make a page of a million lines."""
+must not make a page of a million lines, nor a line per run it does not list."""
 
+from types import SimpleNamespace
+
+from dalembert.reports import hazards as found
 from dalembert.reports.hazards import Hazard
 from dalembert.reports.sections import hazards as section
 
 
-def _hazard(n):
-    return Hazard(kind="diverged", engine="e", runs=(), text="Diverged.", details=tuple(f"run {i}" for i in range(n)))
+def _hazard(n, listed=None):
+    """A hazard of ``n`` runs whose details name the first ``listed`` (all by default)."""
+    return Hazard(kind="diverged", engine="e", runs=tuple(range(n)), text="Diverged.",
+                  details=tuple(f"run {i}" for i in range(n if listed is None else listed)))
 
 
 def test_a_hazard_of_more_runs_than_listed_names_the_first_and_counts_the_rest(monkeypatch):
@@ -22,3 +27,26 @@ def test_a_hazard_of_as_many_runs_as_listed_names_every_one(monkeypatch):
     monkeypatch.setattr(section, "LISTED_RUNS", 10)
     _, md = section._block([("diverged", [_hazard(10)])])
     assert [line for line in md if line.startswith("  - ")] == [f"  - run {i}" for i in range(10)]
+
+
+def test_the_runs_are_counted_from_the_hazard_s_runs_not_its_lines(monkeypatch):
+    # a hazard names only its first LISTED_RUNS runs (``Hazard.details``): the count is of every run
+    monkeypatch.setattr(section, "LISTED_RUNS", 4)
+    _, md = section._block([("diverged", [_hazard(10, listed=4)])])
+    assert "the 10 runs" in "".join(md) and "6 more runs" in "".join(md)
+    assert [line for line in md if line.startswith("  - run")] == [f"  - run {i}" for i in range(4)]
+
+
+def test_a_hazard_names_only_the_runs_it_lists(monkeypatch):
+    monkeypatch.setattr(found, "LISTED_RUNS", 4)
+    runs = [SimpleNamespace(i=i, settings=SimpleNamespace(integrator="rk4"), sweep_label=f"dt={i}", options_text="")
+            for i in range(10)]
+    named = []
+
+    def line(r):
+        named.append(r.i)
+        return f"run {r.i}"
+
+    h = found._hazard("diverged", SimpleNamespace(engine="e"), runs, "10 runs diverged", line, worst=runs[9])
+    assert h.runs == tuple(runs) and h.details == tuple(f"run {i}" for i in range(4))
+    assert sorted(set(named)) == [0, 1, 2, 3, 9]  # the listed ones and the worst, for the sentence

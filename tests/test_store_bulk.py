@@ -86,6 +86,34 @@ def test_a_name_outside_the_store_is_refused_in_bulk(files, tmp_path):
         Store(seg.path).table_records()
 
 
+# What a record derives from its fields (``record._cached``): a record read in bulk has them made already.
+DERIVED = ("ok", "sweep_label", "options_label", "options_text", "cost_per_sim_s")
+
+
+def test_records_read_in_bulk_derive_what_a_record_made_alone_derives(files, tmp_path):
+    records = files.records()
+    options = [replace(r, key=f"{r.key}-{i}", settings=replace(r.settings, options=o))
+               for i, (r, o) in enumerate(zip(records, ({"solver": "newton", "tolerance": 1.23456789e-7}, {"b": 2})))]
+    seg = segmented(files, tmp_path / "seg", records + options)
+    got = Store(seg.path).table_records()
+    assert {r.options_label for r in got} >= {"solver=newton tolerance=1.23456789e-07", "b=2"}
+    assert {r.options_text for r in got} >= {"solver=newton tolerance=1.235e-07"} and not all(r.ok for r in got)
+    for r in got:
+        alone = replace(r)  # (made by its ``__init__``: its derived values made on reading them)
+        assert [plain(getattr(r, d)) for d in DERIVED] == [plain(getattr(alone, d)) for d in DERIVED], r.key
+        # at most one derived value kept in a record's own dict (``record.py``: so that records' dicts share keys)
+        assert len(vars(r)) <= len(fields(RunRecord)) + 1 and len(vars(alone)) <= len(fields(RunRecord)) + 1
+
+
+def test_a_row_of_an_unknown_status_is_refused_in_bulk(files, tmp_path):
+    seg = segmented(files, tmp_path / "seg", files.records()[:2])
+    bad = replace(files.records()[2])
+    object.__setattr__(bad, "status", "lost")  # (a row no dalembert wrote)
+    seg.write_record(bad)
+    with pytest.raises(StoreError, match="status: unknown 'lost'"):
+        Store(seg.path).table_records()
+
+
 def _segment_keys_alone(store):
     """The keys as the segments alone give them (no table)."""
     from dalembert.segments import segment_keys

@@ -6,7 +6,7 @@ disagreements without a named cause, tolerances that changed nothing, what an en
 from __future__ import annotations
 
 from dalembert.reports.findings import CLOSURE_GROWTH, DISAGREEMENT_FACTOR, ENERGY_HAZARD, HAZARDS, NAMED
-from dalembert.reports.hazards import listed
+from dalembert.reports.hazards import LISTED_RUNS, listed
 from dalembert.reports.page import Part
 from dalembert.reports.tables import escape_html, escape_md
 from dalembert.refusal import manifest_refusals
@@ -18,18 +18,22 @@ HAZARD_TITLES = {"diverged": "Diverged", "failed": "Stopped early", "energy": "E
                  "closure": "Loops still opening", "reactions": "Motion right, reactions wrong",
                  "tolerance": "Finite but beyond the tolerance", "inert": "A tolerance changed nothing",
                  "disagreement": "Engines disagree", "unsupported": "Not supported (not run, not drawn)"}
-# A hazard of more runs than this lists the first ones by key and counts the rest: a map of a million probes
-# would otherwise list most of them (a 60 MB page at 1e6 rows, benchmarks/map.py); the default matrix's hazards
-# name far fewer (it runs 1,754), and every run is in the store (``dalembert export --all``).
-LISTED_RUNS = 1000
 
 
-def _listed(details):
-    """The runs a hazard lists: all of ``details``, or the first ``LISTED_RUNS`` and a line counting the rest."""
-    if len(details) <= LISTED_RUNS:
-        return list(details)
-    return list(details[:LISTED_RUNS]) + [f"… and {len(details) - LISTED_RUNS} more runs (every run is in the store: "
-                                          "dalembert export --all)"]
+def _count(h):
+    """The runs hazard ``h`` lists (its ``details``: the first ``LISTED_RUNS`` of them): all its runs, or 0 where it
+    lists none."""
+    return len(h.runs) if h.details else 0
+
+
+def _listed(h):
+    """The lines hazard ``h`` lists: its ``details``, and past ``LISTED_RUNS`` runs, the first ones and a line counting
+    the rest."""
+    n = _count(h)
+    if n <= LISTED_RUNS:
+        return list(h.details)
+    return list(h.details[:LISTED_RUNS]) + [f"… and {n - LISTED_RUNS} more runs (every run is in the store: "
+                                            "dalembert export --all)"]
 
 
 def _block(mine_by_kind):
@@ -41,14 +45,15 @@ def _block(mine_by_kind):
         md += [f"*{escape_md(title)}*", ""]
         for h in mine:
             text = h.text + (" Cause: " + "; ".join(h.causes) + "." if h.causes else "")
-            many = len(h.details) > NAMED  # the sentence names only a few: every run in a list beside it
-            shown = _listed(h.details) if many else []
-            runs = (f"<details><summary>the {len(h.details)} runs</summary><ul>"
+            n = _count(h)
+            many = n > NAMED  # the sentence names only a few: every run in a list beside it
+            shown = _listed(h) if many else []
+            runs = (f"<details><summary>the {n} runs</summary><ul>"
                     + "".join(f"<li>{escape_html(d)}</li>" for d in shown) + "</ul></details>") if many else ""
             html.append(f"<li>{escape_html(text)}{runs}</li>")
             md.append(f"- {escape_md(text)}")
             if many:
-                md += [f"  <details><summary>the {len(h.details)} runs</summary>", ""]
+                md += [f"  <details><summary>the {n} runs</summary>", ""]
                 md += [f"  - {escape_md(d)}" for d in shown] + ["", "  </details>"]
         html.append("</ul>")
         md.append("")

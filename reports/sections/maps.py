@@ -4,6 +4,7 @@ step against the parameter, and the cost of an accuracy against it."""
 from __future__ import annotations
 
 from dalembert.reports import figures
+from dalembert.reports.findings import known_points
 from dalembert.reports.formatting import value_text
 from dalembert.reports.maps import COST_TARGET, stability_maps
 from dalembert.reports.page import Part
@@ -24,7 +25,7 @@ def maps(rep):
     for r in rep.records:
         if r.case not in units:
             units[r.case] = rep.case_of(r).units
-    found = stability_maps(rep.records, lambda name: units.get(name, {}))
+    found = stability_maps(rep.records, lambda name: units.get(name, {}), known_points(rep.found))
     if not found:
         return part, set()
     part.heading("Stability maps", 2, anchor="maps")

@@ -68,9 +68,11 @@ def _best_of(rep, keep):
     engine lines (engine, integrator, options) those runs are; (None, 0) when none."""
     best, lines = None, set()
     for f in rep.found:
-        figure = figure_reader(f.ranked, f.case) if f.ranked else None
+        if not f.ranked:  # (asked once per case, not per run)
+            continue
+        figure = figure_reader(f.ranked, f.case)
         for r in f.runs:
-            if f.ranked and r.ok and r.judgement.verdict != "diverged" and keep(r):
+            if r.ok and r.judgement.verdict != "diverged" and keep(r):
                 lines.add((r.engine, r.settings.integrator, r.options_label))
                 e = figure(r)
                 best = e if best is None or e < best else best
