@@ -49,15 +49,16 @@ def records_from_table(table):
     n = table.num_rows
     names = set(table.column_names)
 
-    def objects(name, default=None):
-        """Column ``name`` as Python values (None for null), or ``default`` in every row when absent."""
-        return table.column(name).to_pylist() if name in names else [default] * n
+    def objects(name, default=None, rows=table):
+        """Column ``name`` (of the table, or of ``rows``: some of its rows) as Python values (None for null), or
+        ``default`` in every row when absent."""
+        return rows.column(name).to_pylist() if name in names else [default] * rows.num_rows
 
-    def floats(name):
-        """Column ``name`` as Python floats, null (and absent) as NaN."""
+    def floats(name, rows=table):
+        """Column ``name`` (of the table, or of ``rows``) as Python floats, null (and absent) as NaN."""
         if name not in names:
-            return [_NAN] * n
-        col = table.column(name)
+            return [_NAN] * rows.num_rows
+        col = rows.column(name)
         if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type) or pa.types.is_null(col.type)):
             return [_num(v) for v in col.to_pylist()]  # (a text column: float() names the bad value)
         return col.cast(pa.float64()).to_numpy(zero_copy_only=False).astype(float, copy=False).tolist()
@@ -111,7 +112,7 @@ def records_from_table(table):
     checks = dicts([(c, c) for c in CHECKS if c in names])
 
     def settings_of(integrator, dt, rtol, atol, options):
-        return Settings(integrator, dt, rtol, atol, json.loads(options or "{}"))
+        return Settings(integrator, _opt(dt), _opt(rtol), _opt(atol), json.loads(options or "{}"))
 
     def judgement_of(beyond, verdict, reason, within, not_measured):
         return Judgement(beyond=tuple((beyond or "").split()), verdict=verdict or "", reason=reason or "",
@@ -134,8 +135,8 @@ def records_from_table(table):
     column = {
         "key": objects("key"), "case": objects("case"), "case_version": objects("case_version"),
         "engine": objects("engine"),
-        "settings": made(settings_of, objects("integrator"), *([_opt(v) for v in floats(name)]
-                                                               for name in ("dt", "rtol", "atol")), objects("options")),
+        "settings": made(table, settings_of, (("integrator", objects), ("dt", floats), ("rtol", floats),
+                                              ("atol", floats), ("options", objects))),
         "params": parsed("params", {}, lambda p: {k: tuple(v) if isinstance(v, list) else v for k, v in p.items()}),
         "status": objects("status"), "message": [v or "" for v in objects("message")],
         "engine_version": [v or "" for v in objects("engine_version")],
@@ -145,8 +146,8 @@ def records_from_table(table):
         "t_final": floats("t_final"), "t_diverged": [_opt(v) for v in floats("t_diverged")],
         "cost": made_each(Cost, defaults, (cost[name] for name in defaults)),
         "errors": errors, "drifts": drifts, "drift_rates": rates, "growths": growths, "checks": checks,
-        "judgement": made(judgement_of, objects("beyond_tolerance"), objects("verdict"), objects("verdict_reason"),
-                          objects("within_tolerance"), objects("not_measured")),
+        "judgement": made(table, judgement_of, tuple((name, objects) for name in (
+            "beyond_tolerance", "verdict", "verdict_reason", "within_tolerance", "not_measured"))),
         "audit": parsed("audit", {}), "model": [_text(v) for v in objects("model")],
         "provenance": parsed("provenance", {}), "trajectory": [_text(v) for v in objects("trajectory")],
         "traceback": [_text(v) for v in objects("traceback")],
@@ -173,14 +174,44 @@ def made_each(cls, names, columns):
     return list(map(one, *columns))
 
 
-def made(factory, *columns):
-    """``factory(*values)`` per row of ``columns`` (lists of one length), made once per distinct row of values:
-    the objects are frozen, so rows alike share one."""
-    memo = {}
-    out = []
-    for values in zip(*columns):
-        obj = memo.get(values)
-        if obj is None:
-            obj = memo[values] = factory(*values)
-        out.append(obj)
-    return out
+def made(table, factory, columns):
+    """``factory(*values)`` per row of ``table``, its values those of ``columns`` (``[(name, read)]``: ``read(name,
+    rows)`` gives the Python values of column ``name`` in the table ``rows``), made once per distinct row of values:
+    the objects are frozen, so rows alike share one.
+
+    The distinct rows are found on the table's columns (each dictionary-encoded: a row's code combines its columns'
+    indices), and only one row of each is read as Python values: a map's settings differ run by run in one column
+    (each probe its own step), its judgements hardly at all: every row's values are not read to look them up one row
+    at a time (1e5 runs, settings and judgements: 0.155 -> 0.123 s, measured)."""
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    n = table.num_rows
+    if n == 0:
+        return []
+    code = np.zeros(n, dtype=np.int64)
+    distinct = 1
+    for name, _ in columns:
+        if name not in table.column_names:
+            continue  # (the same in every row)
+        col = table.column(name).combine_chunks()
+        encoded = col if pa.types.is_dictionary(col.type) else pc.dictionary_encode(col, null_encoding="encode")
+        size = len(encoded.dictionary) + 1  # (+1: a null, where the encoding leaves one)
+        index = encoded.indices.fill_null(size - 1).to_numpy(zero_copy_only=False).astype(np.int64)
+        if distinct * size >= 2 ** 62:  # (the combined code would overflow: renumber the distinct rows so far)
+            distinct, code = _renumbered(code)
+        code = code * size + index
+        distinct *= size
+    _, first, inverse = np.unique(code, return_index=True, return_inverse=True)
+    rows = table.take(pa.array(first))
+    objects = list(map(factory, *(read(name, rows=rows) for name, read in columns)))
+    return list(map(objects.__getitem__, inverse.tolist()))
+
+
+def _renumbered(code):
+    """``code`` renumbered 0.. by distinct value, and how many there are."""
+    import numpy as np
+
+    values, inverse = np.unique(code, return_inverse=True)
+    return len(values), inverse.astype(np.int64)
