@@ -433,7 +433,7 @@ def _disagreements(runs, quantity, case):
     the reference and in Pinocchio; ``rk4``: the classical RK4; ``euler``: semi-implicit Euler), and an engine's
     own variants of it are compared through its default one (``_representative``). Runs whose settings do
     not mean the same in every engine are left out too (``_comparable``)."""
-    if quantity is None:
+    if quantity is None or len({r.engine for r in runs}) < 2:  # (one engine disagrees with none: a map's not grouped)
         return []
     unit = QUANTITIES[quantity]
     tol = case.tolerances.get(quantity)
