@@ -231,4 +231,5 @@ def test_records_read_in_bulk_share_the_values_their_rows_repeat(files):
     first, second = got[0], got[1]
     assert first.engine is second.engine and first.model is second.model and first.case_version is second.case_version
     assert first.cost.n_steps is second.cost.n_steps and first.cost.wall_s_median is second.cost.wall_s_median
+    assert first.params is second.params and first.audit is second.audit and first.message is second.message
     assert len({id(x.key) for x in got}) == len(got)
