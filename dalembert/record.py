@@ -254,10 +254,11 @@ class RunRecord:
         """Where the run sits in its sweep: ``dt=0.001`` or ``tol=1e-09``."""
         return _settings_derived(self.settings)[0]
 
-    @property  # (a report asks it of every run several times: 5e5 calls for 1e5 runs)
+    @property  # (a report asks it of every run several times: 5e5 calls for 1e5 runs; the kept value read inline)
     def options_label(self):
         """Engine options as ``key=value`` words ("" for the defaults), values exactly as given: a run's identity."""
-        return _settings_derived(self.settings)[1]
+        s = self.settings
+        return (s.__dict__.get(_DERIVED_KEY) or _settings_derived(s))[1]
 
     @property  # (asked of every run a hazard names, for what they share)
     def options_text(self):

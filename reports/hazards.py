@@ -169,13 +169,33 @@ NAMED = 3
 
 def _shared(runs):
     """What every one of ``runs`` has in common ("all rk44 with node=rxyz"), or ""."""
-    distinct = list({id(r.settings): r for r in runs}.values())  # (what is read here is the settings': once each)
-    parts = []
-    for values, word in (({r.settings.integrator for r in distinct}, ""), ({r.sweep_label for r in distinct}, "at "),
-                         ({r.options_text for r in distinct}, "with ")):
-        if len(values) == 1 and next(iter(values)):
-            parts.append(word + next(iter(values)))
-    return ("all " + " ".join(parts)) if parts and len(runs) > 1 else ""
+    if len(runs) < 2:
+        return ""
+    parts = [word + value for value, word in ((_the_one(r.settings.integrator for r in runs), ""),
+                                              (_the_one_text(runs, lambda s: (s.dt, s.rtol), "sweep_label"), "at "),
+                                              (_the_one_text(runs, lambda s: s.options, "options_text"), "with "))
+             if value]
+    return ("all " + " ".join(parts)) if parts else ""
+
+
+def _the_one(values):
+    """The value every one of ``values`` (an iterable) is, or None: read up to the first that differs."""
+    values = iter(values)
+    first = next(values, None)
+    return first if all(v == first for v in values) else None
+
+
+def _the_one_text(runs, raw, text):
+    """The run property ``text`` (words made of the settings' ``raw(settings)``) every one of ``runs`` has, or None:
+    the first run's where every run's ``raw`` is the same (compared as it is, not made into words run by run: a
+    hazard's runs of a map, 1e4-1e5, mostly share their options and many their step); made for a run only where its
+    ``raw`` differs from the first's (values that differ may read alike: ``option_text`` keeps 4 significant digits,
+    ``:g`` 6)."""
+    first_raw, first = raw(runs[0].settings), getattr(runs[0], text)
+    for r in runs:
+        if raw(r.settings) != first_raw and getattr(r, text) != first:
+            return None
+    return first
 
 
 def _hazard(kind, e, runs, lead, line, worst=None, tail=""):
@@ -413,7 +433,7 @@ def _disagreements(runs, quantity, case):
     the reference and in Pinocchio; ``rk4``: the classical RK4; ``euler``: semi-implicit Euler), and an engine's
     own variants of it are compared through its default one (``_representative``). Runs whose settings do
     not mean the same in every engine are left out too (``_comparable``)."""
-    if quantity is None:
+    if quantity is None or len({r.engine for r in runs}) < 2:  # (one engine disagrees with none: a map's not grouped)
         return []
     unit = QUANTITIES[quantity]
     tol = case.tolerances.get(quantity)

@@ -39,7 +39,8 @@ def test_the_runs_are_counted_from_the_hazard_s_runs_not_its_lines(monkeypatch):
 
 def test_a_hazard_names_only_the_runs_it_lists(monkeypatch):
     monkeypatch.setattr(found, "LISTED_RUNS", 4)
-    runs = [SimpleNamespace(i=i, settings=SimpleNamespace(integrator="rk4"), sweep_label=f"dt={i}", options_text="")
+    runs = [SimpleNamespace(i=i, settings=SimpleNamespace(integrator="rk4", dt=float(i), rtol=None, options={}),
+                            sweep_label=f"dt={i}", options_text="")
             for i in range(10)]
     named = []
 
@@ -50,3 +51,19 @@ def test_a_hazard_names_only_the_runs_it_lists(monkeypatch):
     h = found._hazard("diverged", SimpleNamespace(engine="e"), runs, "10 runs diverged", line, worst=runs[9])
     assert h.runs == tuple(runs) and h.details == tuple(f"run {i}" for i in range(4))
     assert sorted(set(named)) == [0, 1, 2, 3, 9]  # the listed ones and the worst, for the sentence
+
+
+def test_what_a_hazards_runs_share_is_read_in_words():
+    """``_shared`` compares the runs' settings as they are, and their words where those differ: values that differ
+    may read alike (a step past ``:g``'s 6 digits, an option past ``option_text``'s 4)."""
+    from dalembert.settings import option_text
+
+    def run(dt, k):
+        s = SimpleNamespace(integrator="rk4", dt=dt, rtol=None, options={"k": k})
+        return SimpleNamespace(settings=s, sweep_label=f"dt={dt:g}", options_text=f"k={option_text(k)}")
+
+    runs = [run(0.1, 0.123451), run(0.1000000001, 0.123452), run(0.1, 0.123451)]
+    assert found._shared(runs) == "all rk4 at dt=0.1 with k=0.1235"
+    assert found._shared(runs + [run(0.2, 0.123451)]) == "all rk4 with k=0.1235"
+    assert found._shared(runs + [run(0.1, 0.2)]) == "all rk4 at dt=0.1"
+    assert found._shared(runs[:1]) == ""

@@ -213,3 +213,23 @@ def test_a_matrix_outcome_reads_its_counts_and_failing_runs_from_the_table(files
         assert got[0].key == next(iter(got)).key and got[-1].key == list(got)[-1].key
     assert runs._records is None and lazy.exit_status == listed.exit_status == 1
     assert len(runs) == len(records) and [r.key for r in runs] == sorted(r.key for r in records)
+
+
+def test_records_read_in_bulk_share_the_values_their_rows_repeat(files):
+    """A value most rows repeat (engine, model text, a step count, a timing copied) is one object the records share;
+    a value of a row's own (the key, a message) its own; each the value written, a null number NaN."""
+    from dalembert.bulk_records import records_from_table
+
+    r = next(x for x in files.records() if x.ok)
+    nan = float("nan")
+    many = [replace(r, key=f"{r.key}-{i}") for i in range(8)] + [
+        replace(r, key=f"{r.key}-own", status="diverged", message="not finite", t_diverged=0.5,
+                cost=replace(r.cost, n_steps=123457, wall_s_median=nan))]
+    got = records_from_table(runs_table.rows_table([x.to_row() for x in many]))
+    _same_records(got, [_measured(x) for x in many])
+    assert math.isnan(got[-1].cost.wall_s_median) and got[-1].cost.n_steps == 123457
+    first, second = got[0], got[1]
+    assert first.engine is second.engine and first.model is second.model and first.case_version is second.case_version
+    assert first.cost.n_steps is second.cost.n_steps and first.cost.wall_s_median is second.cost.wall_s_median
+    assert first.params is second.params and first.audit is second.audit and first.message is second.message
+    assert len({id(x.key) for x in got}) == len(got)
