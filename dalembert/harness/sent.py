@@ -10,6 +10,13 @@ checks are computed from the trajectory in the worker; only its bytes stay there
 For ``drawn`` the worker applies the parent's own rule (``reports.drawn.may_be_drawn``), on the manifest's
 case versions (``Sent.of``) and the run's case as built in the worker (the same case version as the store's
 record of it: a run whose case changed fails before it has a trajectory).
+
+Measured (2 shared cores, load 3 to 6, alternated in one sitting; ``benchmarks.map``'s ``--probes`` map kept
+``none``): 1042 probes on 2 local workers sent 3.3 MB of trajectories before (3.1 kB a probe: 6 samples), none
+after; 311 probes on a 2-worker ``LocalCluster`` 0.98 MB, none after; the same map at a 20-s horizon (1083 probes,
+45 kB a probe) 49 MB, none after. Neither wall time (34 to 44 s, 47 to 57 s, 145 to 172 s) nor the parent's or
+the workers' CPU moved beyond the noise between repeats: at these sizes building and pickling a trajectory is
+well under a millisecond of a probe's cost; what is saved is the bytes, which grow with a map's trajectories.
 """
 
 from __future__ import annotations
