@@ -6,7 +6,9 @@ report draws (``dalembert.reports.drawn``: a run that can never be drawn, ``Traj
 written; the others are, and those not drawn are dropped when the matrix ends complete,
 ``Trajectories.keep_only``); ``none`` keeps none, and the rows say so (an
 empty ``trajectory``). A matrix of up to ``dalembert.store.FILES_UP_TO`` runs keeps ``all`` unless told,
-a larger one ``drawn`` (``default_keep``).
+a larger one ``drawn`` (``default_keep``). The matrix's workers are told the same choice
+(``dalembert.harness.sent``): they never build or send a trajectory ``write`` would drop, which it still drops
+from a caller that does not tell its workers.
 
 How: a store of layout 1 keeps a file per run, ``trajectories/<key>.npz``
 (``dalembert.trajectory_files``). A store of layout 2 appends them to a pack per writing process,

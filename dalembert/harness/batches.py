@@ -33,7 +33,7 @@ moved one verdict near its bound (spin 199 rad/s at dt 1e-3: angular-momentum dr
 probe by probe at a load of ~17.
 
 ``python -m dalembert.harness.batches``: run one group read (pickled: specs, timing, truths by case,
-parent pid, the engine environment) from stdin; write the pickled ``[(RunRecord, npz)]`` to stdout (a
+parent pid, the engine environment, the trajectories the store keeps: ``harness.sent.Sent``) from stdin; write the pickled ``[(RunRecord, npz)]`` to stdout (a
 Dask task's process, as ``dalembert.harness.worker`` is for one run).
 """
 
@@ -47,7 +47,7 @@ import traceback
 
 import numpy as np
 
-from dalembert.harness.execute import Timing, _load, _record, _truth, execute
+from dalembert.harness.execute import Timing, _load, _record, _truth, execute, sent_npz
 
 __all__ = ["batch_key", "chunk_key", "groups", "execute_group", "execute_batch", "per_world", "DEFAULT_CHUNK"]
 
@@ -93,19 +93,21 @@ def groups(specs, batched=False, chunk=DEFAULT_CHUNK):
     return [(tuple(g), kind == "batch" and len(g) > 1) for (kind, _), parts in out.items() for g in parts]
 
 
-def execute_group(specs, timing=Timing(), truths=None, concurrent=1, batched=False):
+def execute_group(specs, timing=Timing(), truths=None, concurrent=1, batched=False, sent=None):
     """Run ``specs`` in this process: one batch when ``batched`` (``execute_batch``), else one after another
-    (``execute``). ``truths``: (case, version) -> truth trajectory (computed where missing). Returns
-    ``[(RunRecord, npz or None)]`` in the order of ``specs``; never raises."""
+    (``execute``). ``truths``: (case, version) -> truth trajectory (computed where missing); ``sent``: which
+    trajectories the store keeps (``harness.sent.Sent``; None: all). Returns ``[(RunRecord, npz or None)]`` in the
+    order of ``specs``, npz None where ``sent`` does not want it; never raises."""
     truths = truths or {}
     if batched:
-        return execute_batch(specs, timing, truths, concurrent)
-    return [execute(s, timing, truths.get((s.case, s.case_version)), concurrent) for s in specs]
+        return execute_batch(specs, timing, truths, concurrent, sent)
+    return [execute(s, timing, truths.get((s.case, s.case_version)), concurrent, sent) for s in specs]
 
 
-def execute_batch(specs, timing=Timing(), truths=None, concurrent=1):
+def execute_batch(specs, timing=Timing(), truths=None, concurrent=1, sent=None):
     """Run ``specs`` (one ``batch_key``) as the worlds of one engine call: ``[(RunRecord, npz or None)]`` in their
-    order; never raises (a failure of the batch is every world's, with its traceback)."""
+    order, npz None where ``sent`` does not want it (``execute_group``); never raises (a failure of the batch is
+    every world's, with its traceback)."""
     from dalembert.adapters import get_adapter
     from dalembert.adapters.registry import adapter_distribution
     from dalembert.harness.truths import built_case
@@ -138,7 +140,8 @@ def execute_batch(specs, timing=Timing(), truths=None, concurrent=1):
                                        if not np.array_equal(cases[i].times, times)), None))
         if problem:  # not one model: each world run alone, as ordinary runs, its audit saying why
             for i in worlds:
-                record, npz = execute(specs[i], timing, truths.get((specs[i].case, specs[i].case_version)), concurrent)
+                record, npz = execute(specs[i], timing, truths.get((specs[i].case, specs[i].case_version)), concurrent,
+                                      sent)
                 out[i] = replace(record, audit={**record.audit, "batch_refused": problem}), npz
         elif worlds:
             _run_batch(adapter, [specs[i] for i in worlds], [cases[i] for i in worlds], timing, truths, concurrent,
@@ -147,16 +150,22 @@ def execute_batch(specs, timing=Timing(), truths=None, concurrent=1):
         for i, s in enumerate(specs):
             if out[i] is None:
                 out[i] = _record(s, "failed", f"{type(e).__name__}: {e}", traceback=traceback.format_exc(), **found), None
+    for i, (record, traj) in enumerate(out):  # a world's Trajectory (``_run_batch``) to bytes where the store keeps it
+        if traj is not None and not isinstance(traj, bytes):
+            try:
+                out[i] = record, sent_npz(record, traj, sent, specs[i].params)
+            except Exception as e:  # noqa: BLE001 - a failure is data
+                out[i] = _record(specs[i], "failed", f"{type(e).__name__}: {e}", traceback=traceback.format_exc(),
+                                 **found), None
     return out
 
 
 def _run_batch(adapter, specs, cases, timing, truths, concurrent, found, started, load_start, out, where):
     """Prepare, warm up, time and read back the batch of ``specs`` (every one runnable, one model), writing each
-    world's ``(record, npz)`` into ``out[where[k]]``."""
+    world's ``(record, Trajectory or None)`` into ``out[where[k]]``."""
     from dalembert import invariants
     from dalembert.errors import trajectory_errors
     from dalembert.record import Cost
-    from dalembert.store import trajectory_to_npz
 
     n, settings = len(specs), specs[0].settings
     t0 = time.perf_counter()
@@ -191,8 +200,7 @@ def _run_batch(adapter, specs, cases, timing, truths, concurrent, found, started
             cost = Cost(wall_s_median=w, wall_s_min=w, wall_s_max=w, wall_s_repeats=(w,), repeats=1, **timed)
             why = world.info.get("message", "")
             out[where[k]] = _record(s, "diverged", f"non-finite state from t = {t_bad:.10g} s"
-                                    + (f" ({why})" if why else ""), t_diverged=t_bad, cost=cost, **here), \
-                trajectory_to_npz(traj)
+                                    + (f" ({why})" if why else ""), t_diverged=t_bad, cost=cost, **here), traj
             continue
         if world.n_steps == 0:
             out[where[k]] = _record(s, "failed", f"the engine took no step over the {case.t_final:g}-s horizon",
@@ -213,8 +221,7 @@ def _run_batch(adapter, specs, cases, timing, truths, concurrent, found, started
                     stepping_total_s=(first.wall_s + sum(walls)) / n, worker_s=(time.perf_counter() - started) / n,
                     **timed)
         out[where[k]] = _record(s, "ok", "", errors, summary.drifts, case.tolerances, drift_rates=summary.drift_rates,
-                                growths=summary.growths, checks=summary.checks, cost=cost, **here), \
-            trajectory_to_npz(traj)
+                                growths=summary.growths, checks=summary.checks, cost=cost, **here), traj
 
 
 def per_world(cost, info):
@@ -247,7 +254,8 @@ def main():
         serving(request["environment"])
     truths = {tuple(k): trajectory_from_npz(t) for k, t in request["truths"]}
     specs = [RunSpec.from_json(s) for s in request["specs"]]
-    result = execute_group(specs, Timing(**request["timing"]), truths, batched=request["batched"])
+    result = execute_group(specs, Timing(**request["timing"]), truths, batched=request["batched"],
+                           sent=request.get("sent"))
     sys.stdout.buffer.write(pickle.dumps(result))
 
 

@@ -74,8 +74,9 @@ def _threads(hosts):
     return threads.per_worker(hosts.get(get_address_host(worker.address), worker.state.nthreads))
 
 
-def execute_isolated(spec_json, timing_json, truth_npz, timeout, hosts=None):
-    """Run one spec in a fresh Python subprocess (the Dask task): ``(RunRecord, npz)``.
+def execute_isolated(spec_json, timing_json, truth_npz, timeout, hosts=None, sent=None):
+    """Run one spec in a fresh Python subprocess (the Dask task): ``(RunRecord, npz)``, npz None where ``sent`` (a
+    ``harness.sent.Sent``: the store's choice) does not want it.
 
     A subprocess, not a fork: Dask workers are daemonic and cannot have
     multiprocessing children; the subprocess also gives a hard timeout. Its BLAS and
@@ -88,7 +89,7 @@ def execute_isolated(spec_json, timing_json, truth_npz, timeout, hosts=None):
         made = require(spec.engine)
         command, environment = boot.command(made.python, "run"), made.path
     payload = pickle.dumps({"spec": spec_json, "timing": timing_json, "truth": truth_npz, "parent": os.getpid(),
-                            "environment": environment})
+                            "environment": environment, "sent": sent})
     n = _threads(hosts or {})
     env = None if n is None else {**os.environ, **{var: str(n) for var in threads.VARIABLES}}
     try:
@@ -103,17 +104,18 @@ def execute_isolated(spec_json, timing_json, truth_npz, timeout, hosts=None):
     return pickle.loads(proc.stdout)
 
 
-def execute_group_isolated(specs_json, timing_json, truths_npz, timeout, hosts=None, batched=False):
+def execute_group_isolated(specs_json, timing_json, truths_npz, timeout, hosts=None, batched=False, sent=None):
     """Run a group of specs (``harness.batches.groups``) in one fresh Python subprocess (a Dask task):
     ``[(RunRecord, npz)]`` in their order. ``truths_npz``: ``[((case, version), npz)]`` of their cases; ``timeout``:
-    the per-run limit, the group's being that times its runs. As ``execute_isolated`` otherwise."""
+    the per-run limit, the group's being that times its runs; ``sent``: the trajectories wanted back. As
+    ``execute_isolated`` otherwise."""
     specs = [RunSpec.from_json(s) for s in specs_json]
     command, environment = [sys.executable, "-m", "dalembert.harness.batches"], None
     if is_versioned(specs[0].engine):  # (a group is one engine's) its environment's interpreter, on this code
         made = require(specs[0].engine)
         command, environment = boot.command(made.python, "batches"), made.path
     payload = pickle.dumps({"specs": specs_json, "timing": timing_json, "truths": truths_npz, "parent": os.getpid(),
-                            "environment": environment, "batched": batched})
+                            "environment": environment, "batched": batched, "sent": sent})
     n = _threads(hosts or {})
     env = None if n is None else {**os.environ, **{var: str(n) for var in threads.VARIABLES}}
     limit = timeout * len(specs)
@@ -132,8 +134,10 @@ def execute_group_isolated(specs_json, timing_json, truths_npz, timeout, hosts=N
 
 
 def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None,
-                    batched=False, chunk=None):
+                    batched=False, chunk=None, sent=None):
     """Like ``dalembert.harness.pool.run_matrix`` on the Dask cluster at ``scheduler`` (address or Client).
+
+    ``sent``: the trajectories the store keeps (``harness.sent.Sent``; None: all): a task sends back no other.
 
     ``batched``: a task per batch of worlds where the engine has batches; the other runs in tasks of at most
     ``chunk`` runs (None: ``chunk_for`` the runs to do and the cluster's threads; module docstring).
@@ -157,7 +161,7 @@ def run_matrix_dask(specs, store, scheduler, timeout=DEFAULT_TIMEOUT_S, timing=T
     for group, batch in groups(todo, batched, chunk):
         cases = sorted({(s.case, s.case_version) for s in group})
         futures[client.submit(execute_group_isolated, [s.to_json() for s in group], asdict(timing),
-                              [(k, truths[k]) for k in cases], timeout, hosts, batch, pure=False)] = group
+                              [(k, truths[k]) for k in cases], timeout, hosts, batch, sent, pure=False)] = group
     lost = []
     try:
         for fut in as_completed(futures):

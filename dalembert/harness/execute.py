@@ -27,7 +27,7 @@ from dalembert.identity import check_version
 from dalembert.judge import judge
 from dalembert.record import Cost, RunRecord
 
-__all__ = ["QUICK", "Timing", "execute", "unfinished"]
+__all__ = ["QUICK", "Timing", "execute", "sent_npz", "unfinished"]
 
 
 @dataclass(frozen=True)
@@ -142,14 +142,13 @@ def _load():
 
 
 def _execute(spec, timing, truth, concurrent):
-    """``execute``'s run, without its libraries."""
+    """``execute``'s run, without its libraries: ``(RunRecord, its Trajectory or None)``."""
     from dalembert import invariants
     from dalembert.adapters import get_adapter
     from dalembert.adapters.registry import adapter_distribution
     from dalembert.errors import trajectory_errors
     from dalembert.harness.batches import per_world
     from dalembert.harness.truths import built_case
-    from dalembert.store import trajectory_to_npz
 
     started, load_start = time.perf_counter(), _load()
     found = {}  # what is known so far, for the record of a run that fails part-way
@@ -190,7 +189,7 @@ def _execute(spec, timing, truth, concurrent):
             why = first.info.get("message", "")  # the engine's own account, where it gives one
             return _record(spec, "diverged", f"non-finite state from t = {t_bad:.10g} s" + (f" ({why})" if why else ""),
                            t_diverged=t_bad, cost=cost,
-                           **found), trajectory_to_npz(traj)
+                           **found), traj
         truth = truth if truth is not None else _truth(case)
         if first.n_steps == 0:  # e.g. a step too small to count: never a result that looks right
             return _record(spec, "failed", f"the engine took no step over the {case.t_final:g}-s horizon",
@@ -208,7 +207,6 @@ def _execute(spec, timing, truth, concurrent):
             walls.append(out.wall_s)
         errors = trajectory_errors(traj, truth)
         summary = invariants.summary(case.scene, traj, case.conserved, case.invariants, truth)
-        npz = trajectory_to_npz(traj)
         cost = Cost(build_s=build_s, wall_s_median=float(np.median(walls)), wall_s_min=float(np.min(walls)),
                     wall_s_max=float(np.max(walls)), wall_s_repeats=tuple(float(w) for w in walls), repeats=len(walls), n_steps=first.n_steps, n_rhs=first.n_rhs,
                     overhead_s=float(np.median(np.array(totals) - np.array(walls))), readback_s=readback_s,
@@ -217,24 +215,49 @@ def _execute(spec, timing, truth, concurrent):
         cost = per_world(cost, first.info)  # its device; a batch the adapter stepped beside it: cost per world
         return _record(spec, "ok", "", errors, summary.drifts, case.tolerances, drift_rates=summary.drift_rates,
                        growths=summary.growths,
-                       checks=summary.checks, cost=cost, **found), npz
+                       checks=summary.checks, cost=cost, **found), traj
     except Exception as e:  # a failure is data
         return _record(spec, "failed", f"{type(e).__name__}: {e}", traceback=traceback.format_exc(), **found), None
 
 
-def execute(spec, timing=Timing(), truth=None, concurrent=1):
+def execute(spec, timing=Timing(), truth=None, concurrent=1, sent=None):
     """Run ``spec`` in this process: ``(RunRecord, trajectory npz or None)``. Never raises.
 
     ``truth``: the case's truth trajectory at its sample times (computed here when None);
-    ``concurrent``: runs in flight when this one started, itself included (stored with its cost). The record's
-    ``provenance`` names the versions of the libraries loaded where it ran (``libraries``: ``_libraries``).
+    ``concurrent``: runs in flight when this one started, itself included (stored with its cost); ``sent``:
+    which trajectories the store keeps (``harness.sent.Sent``; None: every one), the npz None for one it does
+    not (never built). The record's ``provenance`` names the versions of the libraries loaded where it ran
+    (``libraries``: ``_libraries``).
     """
-    record, npz = _execute(spec, timing, truth, concurrent)
+    record, traj = _execute(spec, timing, truth, concurrent)
     try:
         libraries = _libraries()
     except Exception as e:  # noqa: BLE001 - a broken distribution's metadata must not lose the run
         libraries = {"(unread)": f"{type(e).__name__}: {e}"}
-    return replace(record, provenance={**record.provenance, "libraries": libraries}), npz
+    record = replace(record, provenance={**record.provenance, "libraries": libraries})
+    try:
+        return record, sent_npz(record, traj, sent, spec.params)
+    except Exception as e:  # a failure is data (as one inside the run)
+        failed = _record(spec, "failed", f"{type(e).__name__}: {e}", traceback=traceback.format_exc())
+        return replace(failed, provenance=record.provenance), None
+
+
+def sent_npz(record, traj, sent, params):
+    """The ``.npz`` bytes of ``traj`` (the trajectory of ``record``'s run, or None) where ``sent`` (a
+    ``harness.sent.Sent``, None: all) wants them, else None; ``params``: its spec's, to build its case."""
+    from dalembert.store import trajectory_to_npz
+
+    if traj is None:
+        return None
+    if sent is not None and not sent.wants(record, lambda name, version: _built(name, params)):
+        return None
+    return trajectory_to_npz(traj)
+
+
+def _built(name, params):
+    from dalembert.harness.truths import built_case
+
+    return built_case(name, params)[0]
 
 
 def _truth(case):

@@ -105,7 +105,7 @@ def _context():
 
 
 def _serve(conn, parent_pid, n_threads, engines):
-    """A worker's life: run each ``(spec, timing, truth, concurrent)`` it is sent, answer with
+    """A worker's life: run each ``(spec, timing, truth, concurrent, sent)`` it is sent, answer with
     ``(record, npz)``; a truth is sent once per case version (``None`` afterwards: kept here).
     ``n_threads``: what its native thread pools may use; ``engines``: ``(name, "module:Class")`` of the
     matrix's engines, loaded first (``Adapter.load``) so that the worker's first run holds no import."""
@@ -126,17 +126,17 @@ def _serve(conn, parent_pid, n_threads, engines):
             return
         if job is None:
             return
-        spec, timing, truth, concurrent = job
+        spec, timing, truth, concurrent, sent = job
         if isinstance(spec, Group):  # several runs, one answer (``harness.batches``); truth: the new cases' truths
             from dalembert.harness.batches import execute_group
 
             truths.update(truth)
-            conn.send(execute_group(spec.specs, timing, truths, concurrent, spec.batched))
+            conn.send(execute_group(spec.specs, timing, truths, concurrent, spec.batched, sent))
             continue
         key = (spec.case, spec.case_version)
         if truth is not None:
             truths[key] = truth
-        conn.send(execute(spec, timing, truths[key], concurrent))
+        conn.send(execute(spec, timing, truths[key], concurrent, sent))
 
 
 class Group:
@@ -238,7 +238,7 @@ class _Worker:
         child.close()
         self.spec, self.started, self.truths, self.group = None, 0.0, set(), None
 
-    def submit(self, spec, timing, truth, concurrent):
+    def submit(self, spec, timing, truth, concurrent, sent=None):
         """Send a run (``truth``: its case's) or a ``Group`` (``truth``: (case, version) -> truth of its runs)."""
         if isinstance(spec, Group):
             send = {k: t for k, t in truth.items() if k not in self.truths}
@@ -247,7 +247,7 @@ class _Worker:
             key = (spec.case, spec.case_version)
             send, keys = None if key in self.truths else truth, {key}
         try:
-            self.conn.send((spec, timing, send, concurrent))
+            self.conn.send((spec, timing, send, concurrent, sent))
         except OSError:  # it died before it got the run (stopped, crashed): its end reaches ``wait`` as any death
             pass
         self.truths |= keys
@@ -301,11 +301,13 @@ def _unwritable(store, e, what):
     return err
 
 
-def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None, batched=False):
+def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing(), progress=None, batched=False,
+               sent=None):
     """Run ``specs`` not yet in ``store`` on ``jobs`` long-lived workers (default: the cores).
 
     ``batched``: the runs an engine can step as one batch of worlds (``dalembert.harness.batches``) go to a
-    worker as one job, its timeout the batch's; the rest one by one.
+    worker as one job, its timeout the batch's; the rest one by one. ``sent``: the trajectories the store keeps
+    (``harness.sent.Sent``; None: all): a worker sends back no other.
 
     Returns the runs lost to the infrastructure, not stored: ``[(key, reason)]``.
     """
@@ -341,7 +343,7 @@ def run_matrix(specs, store, jobs=None, timeout=DEFAULT_TIMEOUT_S, timing=Timing
                     spec = _take(queue, worker, {w.group for w in busy.values()}, pythons)
                 truth = ({(s.case, s.case_version): truths[(s.case, s.case_version)] for s in _runs(spec)}
                          if isinstance(spec, Group) else truths[(spec.case, spec.case_version)])
-                worker.submit(spec, timing, truth, len(busy) + 1)
+                worker.submit(spec, timing, truth, len(busy) + 1, sent)
                 busy[worker.conn] = worker
             # each worker stays in ``busy`` or ``idle`` until it is gone: a Ctrl-C at any point finds it
             for conn in wait(list(busy), timeout=POLL_S):

@@ -1,8 +1,8 @@
 """Workers started as their own interpreter.
 
 ``python -m dalembert.harness.worker``: run one spec read (pickled: spec, timing, truth
-npz, and the engine environment it was started for, if any) from stdin, write the pickled
-``(RunRecord, trajectory npz)`` to stdout. Used to isolate runs on Dask workers.
+npz, the engine environment it was started for, if any, and the trajectories the store keeps,
+``harness.sent.Sent``) from stdin, write the pickled ``(RunRecord, trajectory npz or None)`` to stdout. Used to isolate runs on Dask workers.
 
 ``serve()``: a pool's long-lived worker in an engine environment's interpreter
 (``dalembert.harness.pool._Interpreter`` starts it), reading its settings as JSON from
@@ -30,7 +30,7 @@ def main():
 
         serving(request["environment"])
     truth = trajectory_from_npz(request["truth"]) if request["truth"] is not None else None
-    result = execute(RunSpec.from_json(request["spec"]), Timing(**request["timing"]), truth)
+    result = execute(RunSpec.from_json(request["spec"]), Timing(**request["timing"]), truth, sent=request.get("sent"))
     sys.stdout.buffer.write(pickle.dumps(result))
 
 

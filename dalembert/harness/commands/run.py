@@ -255,17 +255,20 @@ def _stop_on_sigterm():
     signal.signal(signal.SIGTERM, stop)
 
 
-def _search(store, plan, run_batch):
-    """Run the boundary search the manifest's ``plan`` describes; each round's probes join the
-    manifest's specs before they run (so ``--resume`` knows them)."""
+def _search(store, manifest, plan, run_batch):
+    """Run the boundary search ``plan`` of ``manifest`` (the store's, as read) describes; each round's new probes
+    join the manifest's specs (in ``manifest`` too) before they run (so ``--resume`` knows them)."""
     from dalembert.harness.matrix import RunSpec
     from dalembert.harness.search import search
 
+    known = {json.dumps(s, sort_keys=True) for s in manifest["specs"]}  # once, not every spec every round
+
     def run_round(batch):
-        manifest = store.manifest()
-        known = {json.dumps(s, sort_keys=True) for s in manifest["specs"]}
-        manifest["specs"] += [s.to_json() for s in batch if json.dumps(s.to_json(), sort_keys=True) not in known]
-        store.write_manifest(manifest)
+        new = {t: d for t, d in ((json.dumps(d, sort_keys=True), d) for d in map(RunSpec.to_json, batch)) if t not in known}
+        if new:  # the whole manifest written atomically, as ever: a crash leaves the old one or the new one
+            manifest["specs"] += list(new.values())
+            store.write_manifest(manifest)
+            known.update(new)
         return run_batch(batch)
 
     def said(rnd, probes):
@@ -281,9 +284,8 @@ def _keep_drawn(store, lost):
     from dalembert.reports.drawn import drawn_keys
     from dalembert.trajectory_store import DRAWN
 
-    if store.kept().keep != DRAWN or lost:
-        return
-    if {RunSpec.from_json(s).key for s in store.manifest()["specs"]} - store.done_keys():
+    if (store.kept().keep != DRAWN or lost
+            or {RunSpec.from_json(s).key for s in store.manifest()["specs"]} - store.done_keys()):
         return
     dropped = store.keep_trajectories(drawn_keys(store))
     if dropped:
@@ -371,8 +373,9 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
     from dalembert.harness.execute import QUICK, Timing
     from dalembert.harness.pool import run_matrix
     from dalembert.harness.selection import select
+    from dalembert.harness.sent import told
     from dalembert.harness.truths import build
-    from dalembert.trajectory_store import DRAWN, check_keep
+    from dalembert.trajectory_store import check_keep
 
     strict = strict_level(strict)
     check_keep(trajectories)
@@ -433,22 +436,20 @@ def run(cases=None, tags=None, engines=None, integrators=None, dts=None, rtols=N
         print(f"dalembert: {len(specs)} runs, {len(specs) - len(store.done_keys())} to do -> {store.path}",
               file=sys.stderr)
 
-        if store.kept().keep == DRAWN:  # a run never drawn (a map's probe) is not written at all
-            from dalembert.reports.drawn import may_be_drawn
-
-            store.kept().drawable = may_be_drawn(store.manifest()["specs"], store.case)
+        made = store.manifest()  # (read once: a map's manifest holds every probe's spec)
+        sent = told(store, made["specs"])  # a run never drawn (a map's probe) is not built, sent nor written
 
         def run_batch(runs):
             if client is not None:
-                return run_matrix_dask(runs, store, client, timeout, timing, progress, batched=batch)
-            return run_matrix(runs, store, jobs, timeout, timing, progress, batched=batch)
+                return run_matrix_dask(runs, store, client, timeout, timing, progress, batched=batch, sent=sent)
+            return run_matrix(runs, store, jobs, timeout, timing, progress, batched=batch, sent=sent)
 
         try:
-            plans = store.manifest().get("searches", [])
+            plans = made.get("searches", [])
             searched = {json.dumps(s, sort_keys=True) for plan in plans for s in plan["first"]}
             lost = run_batch([s for s in specs if json.dumps(s.to_json(), sort_keys=True) not in searched])
             for plan in plans:
-                lost += _search(store, plan, run_batch)
+                lost += _search(store, made, plan, run_batch)
         except KeyboardInterrupt:  # every finished run is stored; the workers are gone
             print(f"\ndalembert: interrupted; {len(store.done_keys())} of {len(specs)} runs stored in {store.path} — "
                   f"finish with: dalembert run --resume {store.path}", file=sys.stderr)
