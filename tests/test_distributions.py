@@ -20,6 +20,20 @@ def cache(tmp_path, monkeypatch):
     return tmp_path / "cache" / "distributions"
 
 
+def _install(site, name, version, top, files=()):
+    """A distribution ``name`` installed in folder ``site``: its dist-info (METADATA, top_level.txt, RECORD) and
+    ``files`` (paths under ``site``)."""
+    info = site / f"{name.replace('-', '_')}-{version}.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: {version}\n")
+    (info / "top_level.txt").write_text(f"{top}\n")
+    for path in files:
+        (site / path).parent.mkdir(parents=True, exist_ok=True)
+        (site / path).write_text("")
+    (info / "RECORD").write_text("".join(f"{p},,\n" for p in (*files, f"{info.name}/METADATA")))
+    return info
+
+
 def _forget(monkeypatch):
     """Make the next ``installed()`` read the cache file, as a fresh worker process does."""
     monkeypatch.setattr(distributions, "_MEMO", (None, None))
@@ -31,7 +45,11 @@ def _no_compute(monkeypatch):
     monkeypatch.setattr(distributions, "compute", refuse)
 
 
-def test_the_cached_answer_is_importlib_metadatas(cache, monkeypatch):
+def test_the_cached_answer_is_importlib_metadatas(cache, tmp_path, monkeypatch):
+    site = tmp_path / "site"  # (two distributions in one folder, as mujoco's and mujoco-mjx's: their files kept)
+    _install(site, "fake-one", "1.0", "fake_shared", ["fake_shared/__init__.py", "fake_shared/one.py"])
+    _install(site, "fake-two", "2.0", "fake_shared", ["fake_shared/two.py"])
+    monkeypatch.syspath_prepend(str(site))
     written = distributions.installed()
     assert len(os.listdir(cache)) == 1
     _forget(monkeypatch)
@@ -44,14 +62,16 @@ def test_the_cached_answer_is_importlib_metadatas(cache, monkeypatch):
     for name in names:
         assert read.version(name) == metadata.version(name)
     shared = {d for names in read.packages.values() if len(names) > 1 for d in names}
-    assert shared  # (dalembert's editable install and main's, mujoco's and mujoco-mjx's folder)
+    assert {"fake-one", "fake-two"} <= shared
+    assert read.files("fake-two") == {os.path.realpath(site / p) for p in ("fake_shared/two.py",
+                                                                        "fake_two-2.0.dist-info/METADATA")}
     for name in shared:
         dist = metadata.distribution(name)
         assert read.files(name) == {os.path.realpath(dist.locate_file(p)) for p in dist.files or ()}
 
 
 def test_a_runs_libraries_are_those_the_uncached_metadata_gives(cache, monkeypatch):
-    import mujoco  # noqa: F401  (one folder, several distributions: told apart by the files loaded)
+    pytest.importorskip("mujoco")  # (one folder, several distributions: told apart by the files loaded)
     import numpy  # noqa: F401
 
     distributions.installed()  # (written)
@@ -71,10 +91,7 @@ def test_a_distribution_installed_is_seen_on_the_next_read_and_removed_is_gone(c
     site.mkdir()
     monkeypatch.syspath_prepend(str(site))
     assert "fake_top" not in distributions.installed().packages
-    info = site / "fake_dist-1.2.3.dist-info"
-    info.mkdir()
-    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: fake-dist\nVersion: 1.2.3\n")
-    (info / "top_level.txt").write_text("fake_top\n")
+    info = _install(site, "fake-dist", "1.2.3", "fake_top")
     answer = distributions.installed()
     assert answer.packages["fake_top"] == ["fake-dist"] and answer.version("fake-dist") == "1.2.3"
     _forget(monkeypatch)
