@@ -149,8 +149,9 @@ def adapter_distribution(name):
 
     ``("dalembert", its version)`` for a built-in; for a plugin, the distribution that declares its entry
     point; for an adapter registered programmatically, the distribution that installs its top-level module;
-    ``("", "")`` when none does (a class defined in a script or a test)."""
-    from importlib import metadata
+    ``("", "")`` when none does (a class defined in a script or a test). The installed distributions are read
+    once per environment (``dalembert.distributions``)."""
+    from dalembert.distributions import installed
 
     if name in BUILTIN:
         return OWN_DISTRIBUTION, _own_version()
@@ -161,16 +162,19 @@ def adapter_distribution(name):
             return dist.name, dist.version
     if name in _REGISTRY:
         top = _REGISTRY[name].__module__.split(".")[0]
-        for dist in metadata.packages_distributions().get(top, ()):
-            return dist, metadata.version(dist)
+        installs = installed()
+        for dist in installs.packages.get(top, ()):
+            return dist, installs.version(dist)
     return "", ""
 
 
 def _own_version():
     from importlib import metadata
 
+    from dalembert.distributions import installed
+
     try:
-        return metadata.version(OWN_DISTRIBUTION)
+        return installed().version(OWN_DISTRIBUTION)
     except metadata.PackageNotFoundError:  # run from a checkout that was never installed
         return sys.modules["dalembert"].__version__
 

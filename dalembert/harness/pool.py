@@ -100,7 +100,8 @@ def _context():
     if threading.active_count() == 1 and not _jax_running():
         return mp.get_context("fork")
     ctx = mp.get_context("forkserver")
-    ctx.set_forkserver_preload(["dalembert.harness.execute", "dalembert.adapters"])
+    # (the built-in cases too: every child's first run loads them, ~0.06 s of imports, nothing heavier than xml)
+    ctx.set_forkserver_preload(["dalembert.harness.execute", "dalembert.adapters", "dalembert.cases"])
     return ctx
 
 
