@@ -19,7 +19,9 @@ from bounds import ORDER_SLACK, ROD_ANGLE_TOL, ROD_REACTION_TOL
 from scenes import chain_case
 from installed import needs
 
-pytestmark = [needs("mujoco.mjx", "jax"), pytest.mark.long]  # every test here compiles an MJX rollout (seconds each)
+# every test here compiles an MJX rollout (seconds each); one xdist worker runs the MJX tests (``make test``:
+# --dist loadgroup), so that each program compiles once and the rest reuse it in memory
+pytestmark = [needs("mujoco.mjx", "jax"), pytest.mark.long, pytest.mark.xdist_group("mjx")]
 
 ADAPTER = get_adapter("mjx")
 F64 = {"precision": "float64"}
