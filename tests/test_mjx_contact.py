@@ -57,6 +57,11 @@ def test_block_that_must_stick_creeps_as_mujoco_and_the_options_reach_the_device
     assert (audit["cone"], audit["cone_device"], audit["impratio"], audit["impratio_device"]) == (
         "elliptic", "elliptic", 10.0, 10.0)
     assert "noslip" in audit["noslip"] and audit["contact_pairs"] and audit["default_collisions"] == 0
+    # the read-backs' contact-force programs (one per model) are kept in this process, as the rollouts are: a later
+    # run of either block (test_contact_forces' default one) compiles no forces again (5-9 s each on 2 cores)
+    from dalembert.adapters.mjx import contact
+
+    assert contact._forward_contacts()._cache_size() >= 2
 
 
 @pytest.mark.long
