@@ -8,7 +8,8 @@ comment; MuJoCo C 4.0 gives the same figures at these settings)."""
 import pytest
 from installed import needs
 
-pytestmark = needs("mujoco.mjx", "jax")
+# on the MJX tests' xdist worker (--dist loadgroup): test_contact_forces' MJX block is this file's default block
+pytestmark = [needs("mujoco.mjx", "jax"), pytest.mark.xdist_group("mjx")]
 
 from dalembert.adapters import get_adapter  # noqa: E402
 from dalembert.case import make_case  # noqa: E402
@@ -46,6 +47,7 @@ def test_mjx_declares_contact_and_mujocos_contact_options():
     assert all("cone" in spec.options for spec in ADAPTER.integrators.values())
 
 
+@pytest.mark.long  # each run compiles MJX's rollout and its contact forces (~5-9 s each on 2 cores)
 def test_block_that_must_stick_creeps_as_mujoco_and_the_options_reach_the_device():
     _, _, default = run("block_on_incline")
     prepared, outcome, elliptic = run("block_on_incline", {"cone": "elliptic", "impratio": 10.0})
@@ -55,13 +57,22 @@ def test_block_that_must_stick_creeps_as_mujoco_and_the_options_reach_the_device
     assert (audit["cone"], audit["cone_device"], audit["impratio"], audit["impratio_device"]) == (
         "elliptic", "elliptic", 10.0, 10.0)
     assert "noslip" in audit["noslip"] and audit["contact_pairs"] and audit["default_collisions"] == 0
+    # the read-backs' contact-force programs (one per model) are kept in this process, as the rollouts are: a later
+    # run of either block (test_contact_forces' default one) compiles no forces again (5-9 s each on 2 cores)
+    from dalembert.adapters.mjx import contact
+
+    assert contact._forward_contacts()._cache_size() >= 2
 
 
+@pytest.mark.long
 def test_ball_starts_rolling_near_t_star():
     *_, drifts = run("ball_slide_to_roll")
     assert 0.0 < drifts["roll_onset_error"] < ROLL_ONSET_BOUND
 
 
+# float64 last (a process switching precision clears JAX's caches: ``adapters.mjx.stepping``): the MJX tests before
+# this file's in collection order (test_mjx's) end in float32, those after (test_mujoco_*'s) are in float64
+@pytest.mark.long
 def test_bouncing_ball_apexes_and_sphere_collision_in_float64():
     *_, ball = run("bouncing_ball", {"precision": "float64"})
     assert ball["apex_error"] < APEX_ERROR_BOUND

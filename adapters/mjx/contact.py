@@ -9,13 +9,18 @@ force. It is the force of the step that starts at the sample's state, from MJX's
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 __all__ = ["read_forces"]
 
 
+@functools.cache
 def _forward_contacts():
-    """The compiled ``(m, d, Q, V) -> (geom, frame, dim, efc_address, friction, efc_force)`` over the samples."""
+    """The compiled ``(m, d, Q, V) -> (geom, frame, dim, efc_address, friction, efc_force)`` over the samples.
+    Built once per process, as ``stepping``'s rollout is: JAX keys its compilations by the function, so a new one per
+    call traced, lowered and compiled again for a model and sample count already seen (5-9 s a compile on 2 cores)."""
     import jax
 
     from dalembert.adapters.mjx.stepping import mjx
