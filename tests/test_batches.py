@@ -161,7 +161,6 @@ VMAP_TOL = 1e-5
 
 
 @pytest.mark.skipif(not __import__("importlib").util.find_spec("jax"), reason="dalembert[mjx]")
-@pytest.mark.xdist_group("mjx")  # the MJX tests share one xdist worker (--dist loadgroup): its programs compile once
 @pytest.mark.long  # MJX compiles the vmapped rollout (~1 min on 2 busy cores; JAX's cache keeps it)
 def test_mjx_worlds_are_each_scene_alone_to_float32_roundoff():
     from dalembert import make_case

@@ -142,7 +142,6 @@ def test_a_batch_of_masses_makes_each_mass_record_per_world():
 
 
 @pytest.mark.skipif(not __import__("importlib").util.find_spec("jax"), reason="dalembert[mjx]")
-@pytest.mark.xdist_group("mjx")  # the MJX tests share one xdist worker (--dist loadgroup): its programs compile once
 @pytest.mark.long  # MJX compiles the vmapped rollout and each world's alone (~1.5 min on 2 busy cores)
 def test_mjx_worlds_of_swept_masses_are_each_mass_alone_to_float32_roundoff():
     """The masses' ``body_mass`` (and what MuJoCo derives from it) vmapped with the state: each world within

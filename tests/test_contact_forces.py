@@ -92,7 +92,6 @@ def test_the_force_of_a_pair_of_spheres_is_the_one_on_its_first_sphere(engine, i
     assert np.sign(dp @ f.sum(axis=0)) == 1.0
 
 
-@pytest.mark.xdist_group("mjx")  # the MJX tests share one xdist worker (--dist loadgroup): its programs compile once
 def test_mjx_reports_its_own_solvers_forces_as_mujoco_c_would():
     pytest.importorskip("mujoco.mjx")
     # the case's default horizon, as test_mjx_contact's default block: the same two MJX programs (the rollout and the

@@ -44,10 +44,8 @@ def _has_gpu(engine):
 
 
 def _engine(engine):
-    """The engine's parameter, skipped where the engine is not installed (MJX is in dalembert[all]); MJX's on the
-    MJX tests' xdist worker (--dist loadgroup), where the other tests compile its programs."""
-    skip = pytest.mark.skipif(not _installed(engine), reason=f"{engine} not installed")
-    return pytest.param(engine, marks=[skip, pytest.mark.xdist_group("mjx")] if engine == "mjx" else skip)
+    """The engine's parameter, skipped where the engine is not installed (MJX is in dalembert[all])."""
+    return pytest.param(engine, marks=pytest.mark.skipif(not _installed(engine), reason=f"{engine} not installed"))
 
 
 @pytest.mark.parametrize("engine", list(ENGINES))

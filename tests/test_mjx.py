@@ -19,10 +19,7 @@ from bounds import ORDER_SLACK, ROD_ANGLE_TOL, ROD_REACTION_TOL
 from scenes import chain_case
 from installed import needs
 
-# every test here compiles an MJX rollout (seconds each). The MJX tests are one xdist group: under --dist loadgroup
-# one worker runs them all, each program compiled once and reused in memory (``make test`` keeps xdist's default
-# --dist load, which measured faster: the group runs its compilations one after another)
-pytestmark = [needs("mujoco.mjx", "jax"), pytest.mark.long, pytest.mark.xdist_group("mjx")]
+pytestmark = [needs("mujoco.mjx", "jax"), pytest.mark.long]  # every test here compiles an MJX rollout (seconds each)
 
 ADAPTER = get_adapter("mjx")
 F64 = {"precision": "float64"}

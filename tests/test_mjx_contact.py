@@ -8,8 +8,7 @@ comment; MuJoCo C 4.0 gives the same figures at these settings)."""
 import pytest
 from installed import needs
 
-# on the MJX tests' xdist worker (--dist loadgroup): test_contact_forces' MJX block is this file's default block
-pytestmark = [needs("mujoco.mjx", "jax"), pytest.mark.xdist_group("mjx")]
+pytestmark = needs("mujoco.mjx", "jax")
 
 from dalembert.adapters import get_adapter  # noqa: E402
 from dalembert.case import make_case  # noqa: E402

@@ -104,7 +104,6 @@ def test_distance_loops_are_unsupported_with_the_reason():
     assert "loop:distance" in reason and "efc_force" in reason
 
 
-@pytest.mark.xdist_group("mjx")  # the MJX tests share one xdist worker (--dist loadgroup): its programs compile once
 @pytest.mark.long
 def test_mjx_runs_the_same_equality_constraints(four_bar):
     """One compile (rk4, float64, dt = 1e-3): MJX's four-bar within 1e-7 rad of the closed form (measured

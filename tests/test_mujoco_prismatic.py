@@ -247,7 +247,6 @@ def test_the_references_slider_on_a_swinging_rod_and_slider_crank():
     assert audit["loop_constraints"] == {crank.loops[0].name: "connect", f"{crank.loops[0].name}:axis": "connect"}
 
 
-@pytest.mark.xdist_group("mjx")  # the MJX tests share one xdist worker (--dist loadgroup): its programs compile once
 @pytest.mark.long
 def test_mjx_slides_like_mujoco_c():
     """One compile (rk4, float64, dt = 1e-2): the slider and the bead in one model. The slider's constant

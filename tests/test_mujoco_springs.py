@@ -156,7 +156,6 @@ def test_andrews_squeezer_reaches_the_published_angles():
     assert [s["name"] for s in audit["springs"]] == ["spring_DC"] and audit["springs"][0]["body_b"] == "world"
 
 
-@pytest.mark.xdist_group("mjx")  # the MJX tests share one xdist worker (--dist loadgroup): its programs compile once
 @pytest.mark.long
 def test_mjx_runs_the_damped_oscillator():
     """One compile (MJX rk4, float64, dt = 5e-3): MJX puts the tendon's spring and damper on the device and its

@@ -10,8 +10,7 @@ from dalembert.reports.parity import parities
 from dalembert.store import Store
 from installed import needs
 
-pytestmark = [needs("mujoco.mjx", "jax"),  # CI installs it (dalembert[mjx]): this never skips there
-              pytest.mark.xdist_group("mjx")]  # on the MJX tests' xdist worker: free_top's Euler programs are the divergence test's
+pytestmark = needs("mujoco.mjx", "jax")  # CI installs it (dalembert[mjx]): this never skips there
 
 # MJX's semi-implicit Euler is MuJoCo C's, operation for operation, so the two differ by roundoff alone:
 # in float64 below the case's double-precision floor (measured 1.3e-15 rad against a floor of 1.0e-14 over

@@ -52,9 +52,7 @@ for _name, _cls in (("broken", Broken), ("no-follower", NoFollower), ("threads",
 
 
 @pytest.mark.long
-# MJX's on the MJX tests' xdist worker (--dist loadgroup): three of its five programs are other MJX tests' (above)
-@pytest.mark.parametrize("engine", [pytest.param(e, marks=pytest.mark.xdist_group("mjx")) if e == "mjx" else e
-                                    for e in ENGINES])
+@pytest.mark.parametrize("engine", ENGINES)
 def test_every_adapter_meets_the_contract(engine):
     from dalembert.case import load_cases
 
