@@ -19,8 +19,9 @@ the report grow with the number of rows.
    probes/s, load average 10.6 to 11.8; 102 Dask tasks; the 2000 first probes, then 12 rounds of 1000 to 86)
    and in 192 s with ``--jobs 2`` (54.4 probes/s, load 7.8 to 4.8); 377 CPU s against 179 for the whole
    command. ``--probes 1000``: 1042 probes in 605 s on the cluster (67 tasks, load 14 to 16), 199 s with
-   ``--jobs 2`` (load 13 to 16). A Dask task is a fresh process (~1.2 CPU s to start: dalembert, MuJoCo, the
-   installed distributions' metadata) and the cluster's own processes take their share, so on one small host
+   ``--jobs 2`` (load 13 to 16). A Dask task is a fresh process (~1.2 CPU s to start then: dalembert, MuJoCo, the
+   installed distributions' metadata, since read once per environment, ``dalembert.distributions``: a task's
+   process of one MuJoCo run 0.99 -> 0.77 CPU s) and the cluster's own processes take their share, so on one small host
    the local pool is the faster; the cluster pays where it has more hosts than one.
 2. The store and the report fed synthetic rows (copies of that map's runs under new keys, each
    a new probe of its curve) in the store layout ``--layout`` (``dalembert.store.LAYOUTS``; 2, the
