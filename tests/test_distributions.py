@@ -9,7 +9,7 @@ from importlib import metadata
 
 import pytest
 
-from dalembert import distributions
+from dalembert import atomic, cache as cache_module, distributions  # noqa: F401 (imported before ``small_path``)
 from dalembert.harness import execute
 
 
@@ -19,6 +19,18 @@ def cache(tmp_path, monkeypatch):
     monkeypatch.setenv("DALEMBERT_CACHE", str(tmp_path / "cache"))
     monkeypatch.setattr(distributions, "_MEMO", (None, None))
     return tmp_path / "cache" / "distributions"
+
+
+@pytest.fixture
+def small_path(tmp_path, monkeypatch):
+    """``sys.path`` without its site-packages, and an empty folder ``site`` first: the cache's behaviour (keys,
+    corrupt and unwritable files, its bound) over a handful of distributions instead of the whole environment's
+    (computing that is ~1 s of CPU each time, and these tests compute it a dozen times). The real environment's
+    answer is the first two tests'."""
+    site = tmp_path / "site"
+    site.mkdir()
+    monkeypatch.setattr(sys, "path", [str(site)] + [p for p in sys.path if "-packages" not in p])
+    return site
 
 
 def _install(site, name, version, top, files=()):
@@ -88,10 +100,8 @@ def test_a_runs_libraries_are_those_the_uncached_metadata_gives(cache, monkeypat
     assert ("mujoco-mjx" in cached) == any(name.startswith("mujoco.mjx") for name in sys.modules)
 
 
-def test_a_distribution_installed_is_seen_on_the_next_read_and_removed_is_gone(cache, tmp_path, monkeypatch):
-    site = tmp_path / "site"
-    site.mkdir()
-    monkeypatch.syspath_prepend(str(site))
+def test_a_distribution_installed_is_seen_on_the_next_read_and_removed_is_gone(cache, small_path, monkeypatch):
+    site = small_path
     assert "fake_top" not in distributions.installed().packages
     info = _install(site, "fake-dist", "1.2.3", "fake_top")
     answer = distributions.installed()
@@ -108,8 +118,10 @@ def test_a_distribution_installed_is_seen_on_the_next_read_and_removed_is_gone(c
 
 
 @pytest.mark.parametrize("text", ["{not json", "[1, 2]", '{"key": null}', ""])
-def test_a_corrupt_cache_file_is_computed_again_and_rewritten(cache, monkeypatch, text):
+def test_a_corrupt_cache_file_is_computed_again_and_rewritten(cache, small_path, monkeypatch, text):
+    _install(small_path, "fake-dist", "1.0", "fake_top")
     expected = distributions.installed()
+    assert expected.packages == {"fake_top": ["fake-dist"]}
     (path,) = cache.iterdir()
     if text == '{"key": null}':  # (the right key, then a field missing)
         text = json.dumps({"key": json.loads(path.read_text())["key"], "packages": {}})
@@ -119,7 +131,8 @@ def test_a_corrupt_cache_file_is_computed_again_and_rewritten(cache, monkeypatch
     assert json.loads(path.read_text())["packages"] == expected.packages
 
 
-def test_a_cache_that_cannot_be_written_still_answers(tmp_path, monkeypatch):
+def test_a_cache_that_cannot_be_written_still_answers(small_path, tmp_path, monkeypatch):
+    _install(small_path, "fake-dist", "1.0", "fake_top")
     expected = distributions.compute()
     blocker = tmp_path / "a file"
     blocker.write_text("")
@@ -136,7 +149,7 @@ def test_a_cache_that_cannot_be_written_still_answers(tmp_path, monkeypatch):
     assert os.listdir(tmp_path / "cache" / "distributions") == []
 
 
-def test_the_cache_keeps_a_bounded_number_of_files(cache, tmp_path, monkeypatch):
+def test_the_cache_keeps_a_bounded_number_of_files(cache, small_path, tmp_path, monkeypatch):
     monkeypatch.setattr(distributions, "MAX_FILES", 2)
     for i in range(4):
         folder = tmp_path / f"entry{i}"
