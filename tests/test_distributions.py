@@ -29,6 +29,8 @@ def small_path(tmp_path, monkeypatch):
     answer is the first two tests'."""
     site = tmp_path / "site"
     site.mkdir()
+    # (a list of its own, put back whole after the test: never ``monkeypatch.syspath_prepend`` with it, whose undo
+    # writes its saved copy into the list then in place, after this one is back)
     monkeypatch.setattr(sys, "path", [str(site)] + [p for p in sys.path if "-packages" not in p])
     return site
 
@@ -154,6 +156,6 @@ def test_the_cache_keeps_a_bounded_number_of_files(cache, small_path, tmp_path, 
     for i in range(4):
         folder = tmp_path / f"entry{i}"
         folder.mkdir()
-        monkeypatch.syspath_prepend(str(folder))  # (another sys.path: another file)
+        sys.path.insert(0, str(folder))  # (another sys.path: another file; ``small_path``'s list, dropped after)
         distributions.installed()
     assert len(os.listdir(cache)) == 2
