@@ -77,15 +77,19 @@ def _libraries():
     # (every installed distribution's file list, read once per environment: ~0.2 s of a fresh worker's first run)
     installs = installed()
     distributions = installs.packages
-    modules = {name: getattr(module, "__file__", None) for name, module in list(sys.modules.items())}
+    files_of = {}  # top-level name -> the files of its loaded modules (real paths taken only where needed: ~1e4 modules)
+    for name, module in list(sys.modules.items()):
+        files_of.setdefault(name.partition(".")[0], []).append(getattr(module, "__file__", None))
     # a private top-level name is an import hook or a compiled helper of a public one (``_distutils_hack``)
-    tops = ({name.partition(".")[0] for name in modules} - set(sys.stdlib_module_names) - {"dalembert"}
-            - {name for name in modules if name.startswith("_")})
+    tops = set(files_of) - set(sys.stdlib_module_names) - {"dalembert"} - {n for n in files_of if n.startswith("_")}
     out = {}
     for top in tops:
-        files = {os.path.realpath(f) for name, f in modules.items() if f and name.partition(".")[0] == top}
-        dists = distributions.get(top) or sorted({d for f in files for folder in _folders(f)
-                                                  for d in distributions.get(folder, ())})
+        dists = distributions.get(top)
+        files = None
+        if not dists or len(dists) > 1:
+            files = {os.path.realpath(f) for f in files_of[top] if f}
+        if not dists:
+            dists = sorted({d for f in files for folder in _folders(f) for d in distributions.get(folder, ())})
         if len(dists) > 1:  # one folder, several distributions (mujoco's and mujoco-mjx's): those of a loaded file
             dists = [d for d in dists if files & installs.files(d)]
         for dist in dists:
