@@ -14,7 +14,7 @@ The report reads a run's trajectory (``Store.trajectory``) for, and only for:
 - **parity** (``parity.pairs``): each port's run and its original engine's.
 
 A case version's sections are shown in full unless its case is mapped (``maps.stability_maps``) or swept over
-more than ``render.DETAILED_VERSIONS`` versions (``render._case_sections``). Every choice above is the report's own
+more than ``DETAILED_VERSIONS`` versions (``render._case_sections``). Every choice above is the report's own
 function or predicate, so ``drawn_keys`` follows it; ``tests/test_trajectory_store.py`` builds the report of
 stores holding every kind and checks that every trajectory it reads is here.
 
@@ -33,7 +33,13 @@ from dalembert.reports.parity import PORTS, pairs
 from dalembert.reports.trend import beyond_conserved
 from dalembert.reports.work_precision import headline_quantity
 
-__all__ = ["drawn_keys", "may_be_drawn"]
+__all__ = ["DETAILED_VERSIONS", "drawn_keys", "may_be_drawn"]
+
+# A case swept over more versions than this shows its summary rows, not a full section per version
+# (ten spins would otherwise be ten copies of every figure); a case with a stability map shows the
+# map instead of its versions' sections, however few (their probes would fill the grids).
+DETAILED_VERSIONS = 4
+# (Here, not in ``render``, which imports matplotlib: a pool's worker asks ``may_be_drawn`` after every run.)
 
 
 def _closure_read(r, case):
@@ -53,8 +59,6 @@ def may_be_drawn(specs, case_of):
     case_of : callable(name, version) -> CaseRecord
         The store's case records (``Store.case``).
     """
-    from dalembert.reports.render import DETAILED_VERSIONS
-
     versions = {}
     for s in specs:
         versions.setdefault(s["case"], set()).add(s["case_version"])
@@ -69,7 +73,6 @@ def may_be_drawn(specs, case_of):
 def drawn_keys(store, records=None):
     """The keys of the runs of ``store`` (``records``: its records, if read already) whose trajectories its
     report reads (the module docstring). Reads rows and case records only, never a trajectory."""
-    from dalembert.reports.render import DETAILED_VERSIONS
     from dalembert.reports.sections.common import has_contact
     from dalembert.reports.sections.contact import FIGURES
 

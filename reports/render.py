@@ -23,6 +23,7 @@ import os
 import pandas as pd
 
 from dalembert.reports import figures
+from dalembert.reports.drawn import DETAILED_VERSIONS
 from dalembert.reports.findings import find
 from dalembert.reports.page import Part, write_page
 from dalembert.reports.sections.against_time import against_time
@@ -48,10 +49,6 @@ from dalembert.store import atomic_write
 
 __all__ = ["build_report", "DETAILED_VERSIONS", "YOUNG_COLLECTION", "in_page_order"]
 
-# A case swept over more versions than this shows its summary rows, not a full section per version
-# (ten spins would otherwise be ten copies of every figure); a case with a stability map shows the
-# map instead of its versions' sections, however few (their probes would fill the grids).
-DETAILED_VERSIONS = 4
 # New objects between two collections of the youngest generation while a report is built (Python's default: 700):
 # the build's objects are few and short-lived beside the records it holds, and a pass per 700 of them made a 1e5-run
 # build's aggregation 1.8x slower than with no collector; at 10,000 it is within 7 % of none (``find``, measured).

@@ -19,7 +19,7 @@ from dalembert.harness.matrix import expand
 from dalembert.harness.sent import Sent, told
 from dalembert.record import Cost
 from dalembert.reports.drawn import may_be_drawn
-from dalembert.reports.render import DETAILED_VERSIONS
+from dalembert.reports.drawn import DETAILED_VERSIONS
 from dalembert.store import Store
 
 BASE = ["--case", "pivoted_rod", "--engine", "reference", "--integrator", "rk4", "--param", "t_final=0.2", "--quick",

@@ -55,7 +55,7 @@ class Sent:
         for ``drawn`` only)."""
         if keep != DRAWN:
             return cls(keep)
-        from dalembert.reports.render import DETAILED_VERSIONS
+        from dalembert.reports.drawn import DETAILED_VERSIONS
 
         versions = {}
         for s in specs:
