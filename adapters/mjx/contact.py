@@ -41,6 +41,7 @@ def read_forces(p, Q, V):
     ``p``: the ``MjxPrepared`` (its device model ``mx``, initial data ``dx0``, precision and MuJoCo C model)."""
     import mujoco
 
+    from dalembert.adapters.mjx.adapter import _padded
     from dalembert.adapters.mjx.stepping import precision
     from dalembert.contact import subject
 
@@ -55,8 +56,11 @@ def read_forces(p, Q, V):
     if len(finite) == 0:
         return out
     dtype = np.float64 if p.precision == "float64" else np.float32
+    # the finite samples padded with copies of the last to a power of two, as the worlds are (``adapter._padded``):
+    # JAX compiles once per sample count, and runs of other horizons or steps, or that diverged part way, share one
+    take = np.concatenate([finite, np.full(_padded(len(finite)) - len(finite), finite[-1])])
     with precision(p.precision):
-        found = _forward_contacts()(p.mx, p.dx0, Q[finite].astype(dtype), V[finite].astype(dtype))
+        found = _forward_contacts()(p.mx, p.dx0, Q[take].astype(dtype), V[take].astype(dtype))
     geom, frame, dim, adr, friction, efc = (np.asarray(a, dtype=float) if i in (1, 4, 5) else np.asarray(a)
                                             for i, a in enumerate(found))
     for row, k in enumerate(finite):
