@@ -61,7 +61,8 @@ def _chain_to_an_anchor():
     gravity = [0.0, 0.0, -9.81]
     s0 = spatial.initial_body_states(Scene("tree", bodies, joints, gravity))
     anchor = s0["l3"]["p"] + s0["l3"]["R"] @ np.array([0, 0, -length / 2]) + np.array([0.3, 0.2, 0.0])
-    loop = Loop("distance", "world", "l3", point_a=anchor, point_b=[0, 0, -length / 2], length=float(np.hypot(0.3, 0.2)), name="tip")
+    loop = Loop("distance", "world", "l3", point_a=anchor, point_b=[0, 0, -length / 2],
+                length=float(np.hypot(0.3, 0.2)), name="tip")
     return Scene("chain_to_an_anchor", bodies, joints, gravity, loops=[loop])
 
 
@@ -88,7 +89,8 @@ def test_all_loops_rows_are_each_loops_own(name):
         rows = [closure.rows(loop, kin[loop.body_a], kin[loop.body_b]) for loop in system.loops]
         twist = lambda body: np.concatenate([kin[body]["Jv"], kin[body]["Jw"]])  # noqa: E731
         bias_of = lambda body: np.concatenate([kin[body]["a_bias"], kin[body]["alpha_bias"]])  # noqa: E731
-        expected_J = np.vstack([r.G_a @ twist(lp.body_a) + r.G_b @ twist(lp.body_b) for lp, r in zip(system.loops, rows)])
+        expected_J = np.vstack([r.G_a @ twist(lp.body_a) + r.G_b @ twist(lp.body_b)
+                                for lp, r in zip(system.loops, rows)])
         expected_b = np.concatenate([r.G_a @ bias_of(lp.body_a) + r.G_b @ bias_of(lp.body_b) + r.gamma
                                      for lp, r in zip(system.loops, rows)])
         assert np.array_equal(phi, np.concatenate([r.phi for r in rows]))
