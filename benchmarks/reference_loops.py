@@ -8,11 +8,12 @@ solve are timed).
     python -m benchmarks.reference_loops [--repeats 3]
 
 Process CPU time (``time.process_time``: another process's load does not count), the least of ``--repeats``.
-Measured on 2 shared cores against the code before the formulation's rows were written in floats and assembled
-as one G (40b4c4a), alternating old and new in one process (CPU s per truth, old -> new): andrews_squeezer
-5.21 -> 4.07, bricard 2.13 -> 1.73, four_bar 0.015 -> 0.012, n_four_bar 0.053 -> 0.045 (all four 7.41 -> 5.85,
-1.27x); per right-hand side 1.23-1.47x, its own share 1.45-2.2x; the rest of a right-hand side is the tree's
-``Kane.kinematics``, three passes each (the state, the projected configuration, the projected state).
+Measured on 2 shared cores (load average 6.7) against the code before the formulation's rows were written in
+floats and assembled as one G (40b4c4a's modules imported under other names, old and new alternating in one
+process, least of 5; CPU s per truth, old -> new): andrews_squeezer 5.16 -> 4.17, bricard 2.23 -> 1.86,
+four_bar 0.016 -> 0.013, n_four_bar 0.056 -> 0.049 (all four 7.46 -> 6.09, 1.23x); per right-hand side
+1.18-1.43x; its own share 1.66-2.08x (andrews_squeezer 627 -> 378 us). The rest of a right-hand side is the
+tree's ``Kane.kinematics``: three full passes (the state, the projected configuration, the projected state).
 """
 
 from __future__ import annotations
