@@ -35,7 +35,8 @@ import numpy as np
 
 from dalembert import spatial
 
-__all__ = ["ROWS", "RANK_RTOL", "Rows", "ClosureSummary", "LoopRows", "rows", "rows_stacked", "stack", "residuals", "initial_rows", "world_state", "summary", "tree_jacobians"]
+__all__ = ["ROWS", "RANK_RTOL", "Rows", "ClosureSummary", "LoopRows", "rows", "rows_stacked", "stack_terms", "residuals",
+           "initial_rows", "world_state", "summary", "tree_jacobians"]
 
 # Scalar conditions per loop kind.
 ROWS = {"ball": 3, "revolute": 5, "distance": 1}
@@ -283,7 +284,7 @@ def summary(scene):
                           float(max(np.abs(r.velocity).max() for r in found)))
 
 
-def stack(scalars, lead):
+def stack_terms(scalars, lead):
     """``LoopRows.terms``' scalars (floats and (m,) arrays, a list or a list of rows) as one array with the leading
     sample axis ``lead`` ((m,)) first: (m, k) or (m, k, 6)."""
     flat = np.broadcast_arrays(*(x for row in scalars for x in (row if isinstance(row, list) else [row])),
@@ -298,7 +299,7 @@ def rows_stacked(loop, A, B):
     (m, k, 6), ...). The same terms as ``rows`` (``LoopRows.terms``), rounded alike."""
     lead = np.broadcast_shapes(np.shape(A["p"]), np.shape(B["p"]))[:-1]
     phi, G_a, G_b, gamma, vel = _loop_rows(loop).terms(A, B)
-    return Rows(*(stack(x, lead) for x in (phi, G_a, G_b, gamma, vel)))
+    return Rows(*(stack_terms(x, lead) for x in (phi, G_a, G_b, gamma, vel)))
 
 
 def residuals(loop, A, B):
