@@ -75,9 +75,9 @@ class Rows:
     velocity: np.ndarray
 
 
-# ``LoopRows`` writes each row's terms once, on scalars: Python floats at one state (their products and sums are the
-# IEEE ones numpy's would be, at a fraction of the cost of numpy calls on 3-vectors: ``rotations.skew``'s reason),
-# or (m,) arrays, one entry per state, where the states come stacked. Both paths then round every term alike.
+# ``LoopRows`` writes each row's terms once, on scalars: Python floats at one state (at a fraction of the cost of
+# numpy calls on 3-vectors: ``rotations.skew``'s reason), or (m,) arrays, one entry per state, where the states come
+# stacked. Each product and sum is then one IEEE operation either way, so both paths round every term alike.
 def _vector(x):
     """A 3-vector (3,) as 3 floats, or a stack (m, 3) as its 3 components (m,)."""
     x = x if isinstance(x, np.ndarray) else np.asarray(x, dtype=float)
