@@ -127,12 +127,13 @@ class ClosedLoops(Kane):
         G = np.zeros(lead + (self._shape[0] * self._shape[1],))
         G[..., self._spots] = closure.stack_terms(entries, lead) if lead else entries
         G = G.reshape(lead + self._shape)
-        J = G @ np.concatenate([kin[b][key] for b in self._bodies for key in ("Jv", "Jw")], axis=-2)
+        J = G @ np.concatenate([kin[body][key] for body in self._bodies for key in ("Jv", "Jw")], axis=-2)
         phi = closure.stack_terms(phi, lead) if lead else np.array(phi)
         if not rates:
             return phi, J, G, None
         gamma, vel = (closure.stack_terms(x, lead) if lead else np.array(x) for x in (gamma, vel))
-        b = _mv(G, np.concatenate([kin[b][key] for b in self._bodies for key in ("a_bias", "alpha_bias")], axis=-1))
+        bias = np.concatenate([kin[body][key] for body in self._bodies for key in ("a_bias", "alpha_bias")], axis=-1)
+        b = _mv(G, bias)
         return phi, J, G, (b + gamma, gamma, vel)
 
     def _loop_forces(self, kin, G, lam):
