@@ -28,13 +28,15 @@ Jacobian in the tree's speeds is ``G_a J_a + G_b J_b``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 from functools import lru_cache
 
 import numpy as np
 
 from dalembert import spatial
 
-__all__ = ["ROWS", "RANK_RTOL", "Rows", "ClosureSummary", "rows", "rows_stacked", "residuals", "initial_rows", "world_state", "summary", "tree_jacobians"]
+__all__ = ["ROWS", "RANK_RTOL", "Rows", "ClosureSummary", "LoopRows", "rows", "rows_stacked", "stack_terms", "residuals",
+           "initial_rows", "world_state", "summary", "tree_jacobians"]
 
 # Scalar conditions per loop kind.
 ROWS = {"ball": 3, "revolute": 5, "distance": 1}
@@ -73,13 +75,43 @@ class Rows:
     velocity: np.ndarray
 
 
-def _lever(R, point):
-    return R @ np.asarray(point, dtype=float)
+# ``LoopRows`` writes each row's terms once, on scalars: Python floats at one state (at a fraction of the cost of
+# numpy calls on 3-vectors: ``rotations.skew``'s reason), or (m,) arrays, one entry per state, where the states come
+# stacked. Each product and sum is then one IEEE operation either way, so both paths round every term alike.
+def _vector(x):
+    """A 3-vector (3,) as 3 floats, or a stack (m, 3) as its 3 components (m,)."""
+    x = x if isinstance(x, np.ndarray) else np.asarray(x, dtype=float)
+    return x.tolist() if x.ndim == 1 else [x[..., 0], x[..., 1], x[..., 2]]
+
+
+def _matrix(R):
+    """A matrix (3, 3) as nested floats, or a stack (m, 3, 3) as its 9 entries (m,), nested."""
+    R = R if isinstance(R, np.ndarray) else np.asarray(R, dtype=float)
+    return R.tolist() if R.ndim == 2 else [[R[..., i, j] for j in range(3)] for i in range(3)]
+
+
+def _turn(R, x):
+    """``R @ x`` for ``R`` nested (3, 3) and ``x`` 3 scalars (``_matrix``, ``_vector``)."""
+    x0, x1, x2 = x
+    return [R[0][0] * x0 + R[0][1] * x1 + R[0][2] * x2, R[1][0] * x0 + R[1][1] * x1 + R[1][2] * x2,
+            R[2][0] * x0 + R[2][1] * x1 + R[2][2] * x2]
+
+
+def _cross(a, b):
+    a0, a1, a2 = a
+    b0, b1, b2 = b
+    return [a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0]
+
+
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 def _point_block(rho):
-    """Partial velocity of a point at ``rho`` (world, from the COM) wrt the twist: ``[1, -skew(rho)]`` (3, 6)."""
-    return np.hstack([np.eye(3), -spatial.skew(rho)])
+    """Partial velocity of a point at ``rho`` (world, from the COM) wrt the twist: ``[1, -skew(rho)]`` (3, 6),
+    as rows of floats (``rho`` x ``(v, w)`` = ``v + w x rho``)."""
+    x, y, z = rho
+    return [[1.0, 0.0, 0.0, 0.0, z, -y], [0.0, 1.0, 0.0, -z, 0.0, x], [0.0, 0.0, 1.0, y, -x, 0.0]]
 
 
 @lru_cache(maxsize=256)
@@ -90,12 +122,74 @@ def _normals(axis):
     return F[:, 0].copy(), F[:, 1].copy()
 
 
-def _hinge(loop, A, B):
-    """A revolute loop's ``R_WJb`` (3, 3), its axis as body a carries it ``s_a`` (3,) (world) and the relative
-    angular velocity ``w_a - w_b`` (3,) (rad/s, world); one state or many (leading axes: ``rows_stacked``)."""
-    axis = np.asarray(loop.axis, dtype=float) / np.linalg.norm(loop.axis)
-    s_a = A["R"] @ spatial.quat_to_matrix(loop.quat_a) @ axis
-    return B["R"] @ spatial.quat_to_matrix(loop.quat_b), s_a, A["w"] - B["w"]
+class LoopRows:
+    """``rows`` of one loop at one state after another: the loop's vectors fixed in its bodies turned into Python
+    floats once (the joint points; a revolute's axis in a's body frame and its normals in b's), each state's
+    terms in floats (a few dozen products per loop, where numpy's per-call cost on 3-vectors was most of a step).
+
+    Parameters
+    ----------
+    loop : dalembert.scene.Loop
+    """
+
+    def __init__(self, loop):
+        self.loop, self.kind, self.length = loop, loop.kind, loop.length
+        self.point_a, self.point_b = _vector(loop.point_a), _vector(loop.point_b)
+        self.size = ROWS[loop.kind]
+        if loop.kind == "revolute":
+            axis = np.asarray(loop.axis, dtype=float) / np.linalg.norm(loop.axis)
+            self.axis_a = (spatial.quat_to_matrix(loop.quat_a) @ axis).tolist()  # in a's body frame
+            R_bJ = spatial.quat_to_matrix(loop.quat_b)
+            self.normals_b = [(R_bJ @ u).tolist() for u in _normals(tuple(loop.axis))]  # in b's body frame
+
+    def terms(self, A, B, rates=True):
+        """The rows at body states ``A``, ``B`` (``rows``' dicts of arrays, or ``rows_stacked``'s) as lists of
+        scalars (floats, or (m,) arrays for stacked states; a constant entry stays a float): ``phi`` (k,), ``G_a``,
+        ``G_b`` (k rows of 6), and with ``rates`` ``gamma`` and ``velocity`` (k,) (else ``None``: a projection
+        needs only the positions and the Jacobian)."""
+        R_a, R_b = _matrix(A["R"]), _matrix(B["R"])
+        rho_a, rho_b = _turn(R_a, self.point_a), _turn(R_b, self.point_b)
+        p_a, p_b = _vector(A["p"]), _vector(B["p"])
+        d = [p_a[i] + rho_a[i] - (p_b[i] + rho_b[i]) for i in range(3)]  # x_Ja - x_Jb
+        if rates:
+            w_a, w_b, v_a, v_b = _vector(A["w"]), _vector(B["w"]), _vector(A["v"]), _vector(B["v"])
+            wr_a, wr_b = _cross(w_a, rho_a), _cross(w_b, rho_b)
+            dd = [v_a[i] + wr_a[i] - (v_b[i] + wr_b[i]) for i in range(3)]  # the points' relative velocity
+            c_a, c_b = _cross(w_a, wr_a), _cross(w_b, wr_b)  # centripetal acceleration of each point
+            dc = [c_a[i] - c_b[i] for i in range(3)]
+        if self.kind == "distance":
+            r = _dot(d, d)
+            r = math.sqrt(r) if isinstance(r, float) else np.sqrt(r)  # (both IEEE's correctly rounded root)
+            e = [x / r for x in d]
+            n_a, n_b = _cross(rho_a, e), _cross(rho_b, e)  # e @ -skew(rho)
+            G_a, G_b = [e + n_a], [[-x for x in e + n_b]]
+            if not rates:
+                return [r - self.length], G_a, G_b, None, None
+            ed = _dot(e, dd)
+            return [r - self.length], G_a, G_b, [_dot(e, dc) + (_dot(dd, dd) - ed * ed) / r], [ed]
+        G_a, G_b = _point_block(rho_a), [[-x for x in row] for row in _point_block(rho_b)]
+        phi, gamma, vel = d, (dc if rates else None), (dd if rates else None)
+        if self.kind == "revolute":
+            s_a = _turn(R_a, self.axis_a)
+            if rates:
+                dw = [w_a[i] - w_b[i] for i in range(3)]
+                ws_a = _cross(w_a, s_a)
+            for u in self.normals_b:
+                s_b = _turn(R_b, u)
+                n = _cross(s_a, s_b)
+                phi = phi + [_dot(s_b, s_a)]
+                G_a.append([0.0, 0.0, 0.0] + n)
+                G_b.append([0.0, 0.0, 0.0, -n[0], -n[1], -n[2]])
+                if rates:
+                    n_dot = [x + y for x, y in zip(_cross(ws_a, s_b), _cross(s_a, _cross(w_b, s_b)))]
+                    gamma = gamma + [_dot(dw, n_dot)]
+                    vel = vel + [_dot(dw, n)]
+        return phi, G_a, G_b, gamma, vel
+
+
+@lru_cache(maxsize=256)
+def _loop_rows(loop):
+    return LoopRows(loop)
 
 
 def rows(loop, A, B):
@@ -111,35 +205,8 @@ def rows(loop, A, B):
     -------
     Rows
     """
-    rho_a, rho_b = _lever(A["R"], loop.point_a), _lever(B["R"], loop.point_b)
-    x_a, x_b = A["p"] + rho_a, B["p"] + rho_b
-    xd_a = A["v"] + spatial.cross(A["w"], rho_a)
-    xd_b = B["v"] + spatial.cross(B["w"], rho_b)
-    c_a = spatial.cross(A["w"], spatial.cross(A["w"], rho_a))  # centripetal acceleration of each point
-    c_b = spatial.cross(B["w"], spatial.cross(B["w"], rho_b))
-    P_a, P_b = _point_block(rho_a), _point_block(rho_b)
-    if loop.kind == "distance":
-        d, dd = x_a - x_b, xd_a - xd_b
-        r = float(np.linalg.norm(d))
-        e = d / r
-        phi = np.array([r - loop.length])
-        gamma = np.array([e @ (c_a - c_b) + (dd @ dd - (e @ dd) ** 2) / r])
-        G_a, G_b = (e @ P_a)[None, :], -(e @ P_b)[None, :]
-        return Rows(phi, G_a, G_b, gamma, np.array([e @ dd]))
-    phi, G_a, G_b, gamma = [x_a - x_b], [P_a], [-P_b], [c_a - c_b]
-    vel = [xd_a - xd_b]
-    if loop.kind == "revolute":
-        R_WJb, s_a, dw = _hinge(loop, A, B)
-        for u in _normals(tuple(loop.axis)):
-            s_b = R_WJb @ u
-            n = spatial.cross(s_a, s_b)
-            n_dot = spatial.cross(spatial.cross(A["w"], s_a), s_b) + spatial.cross(s_a, spatial.cross(B["w"], s_b))
-            phi.append([s_b @ s_a])
-            G_a.append(np.concatenate([np.zeros(3), n])[None, :])
-            G_b.append(np.concatenate([np.zeros(3), -n])[None, :])
-            gamma.append([dw @ n_dot])
-            vel.append([dw @ n])
-    return Rows(np.concatenate(phi), np.vstack(G_a), np.vstack(G_b), np.concatenate(gamma), np.concatenate(vel))
+    phi, G_a, G_b, gamma, vel = _loop_rows(loop).terms(A, B)
+    return Rows(np.array(phi), np.array(G_a), np.array(G_b), np.array(gamma), np.array(vel))
 
 
 def tree_jacobians(scene):
@@ -217,43 +284,22 @@ def summary(scene):
                           float(max(np.abs(r.velocity).max() for r in found)))
 
 
+def stack_terms(scalars, lead):
+    """``LoopRows.terms``' scalars (floats and (m,) arrays, a list or a list of rows) as one array with the leading
+    sample axis ``lead`` ((m,)) first: (m, k) or (m, k, 6)."""
+    flat = np.broadcast_arrays(*(x for row in scalars for x in (row if isinstance(row, list) else [row])),
+                               np.zeros(lead))[:-1]
+    out = np.stack(flat, axis=-1)
+    return out.reshape(lead + (len(scalars), -1)) if isinstance(scalars[0], list) else out
+
+
 def rows_stacked(loop, A, B):
     """``rows`` at m states at once: ``A``, ``B`` with a leading sample axis (``R`` (m, 3, 3), ``p``, ``v``,
-    ``w`` (m, 3)); a ``Rows`` whose arrays have it too (``phi`` (m, k), ``G_a`` (m, k, 6), ...). The same
-    terms as ``rows``, summed by numpy's stacked operations (equal to roundoff)."""
-    rho_a = A["R"] @ np.asarray(loop.point_a, dtype=float)
-    rho_b = B["R"] @ np.asarray(loop.point_b, dtype=float)
-    x_a, x_b = A["p"] + rho_a, B["p"] + rho_b
-    xd_a = A["v"] + spatial.cross(A["w"], rho_a)
-    xd_b = B["v"] + spatial.cross(B["w"], rho_b)
-    c_a = spatial.cross(A["w"], spatial.cross(A["w"], rho_a))
-    c_b = spatial.cross(B["w"], spatial.cross(B["w"], rho_b))
-    eye = np.broadcast_to(np.eye(3), rho_a.shape[:-1] + (3, 3))
-    P_a = np.concatenate([eye, -spatial.skew(rho_a)], axis=-1)  # (m, 3, 6): ``_point_block``
-    P_b = np.concatenate([eye, -spatial.skew(rho_b)], axis=-1)
-    dot = lambda x, y: np.sum(x * y, axis=-1, keepdims=True)  # noqa: E731  (m, 1)
-    if loop.kind == "distance":
-        d, dd = x_a - x_b, xd_a - xd_b
-        r = np.linalg.norm(d, axis=-1, keepdims=True)
-        e = d / r
-        gamma = dot(e, c_a - c_b) + (dot(dd, dd) - dot(e, dd) ** 2) / r
-        return Rows(r - loop.length, e[..., None, :] @ P_a, -(e[..., None, :] @ P_b), gamma, dot(e, dd))
-    phi, G_a, G_b, gamma = [x_a - x_b], [P_a], [-P_b], [c_a - c_b]
-    vel = [xd_a - xd_b]
-    if loop.kind == "revolute":
-        R_WJb, s_a, dw = _hinge(loop, A, B)
-        zero = np.zeros_like(s_a)
-        for u in _normals(tuple(loop.axis)):
-            s_b = R_WJb @ u
-            n = spatial.cross(s_a, s_b)
-            n_dot = spatial.cross(spatial.cross(A["w"], s_a), s_b) + spatial.cross(s_a, spatial.cross(B["w"], s_b))
-            phi.append(dot(s_b, s_a))
-            G_a.append(np.concatenate([zero, n], axis=-1)[..., None, :])
-            G_b.append(np.concatenate([zero, -n], axis=-1)[..., None, :])
-            gamma.append(dot(dw, n_dot))
-            vel.append(dot(dw, n))
-    return Rows(np.concatenate(phi, axis=-1), np.concatenate(G_a, axis=-2), np.concatenate(G_b, axis=-2),
-                np.concatenate(gamma, axis=-1), np.concatenate(vel, axis=-1))
+    ``w`` (m, 3); the world's may lack it); a ``Rows`` whose arrays have it too (``phi`` (m, k), ``G_a``
+    (m, k, 6), ...). The same terms as ``rows`` (``LoopRows.terms``), rounded alike."""
+    lead = np.broadcast_shapes(np.shape(A["p"]), np.shape(B["p"]))[:-1]
+    phi, G_a, G_b, gamma, vel = _loop_rows(loop).terms(A, B)
+    return Rows(*(stack_terms(x, lead) for x in (phi, G_a, G_b, gamma, vel)))
 
 
 def residuals(loop, A, B):

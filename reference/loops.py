@@ -91,21 +91,72 @@ class ClosedLoops(Kane):
     def __init__(self, scene):
         super().__init__(scene)
         self.loops = scene.loops
+        # All loops' rows as one G (m, 6 k) against the twists of the k bodies they join (the world among them where
+        # a loop ends on it: its zero twist adds exact zeros, and its side's G gives the loop's force ON it), so that
+        # J = G [Jv; Jw] and b = G [a_bias; alpha_bias] + gamma are one product each per state.
+        self._closures = [closure.LoopRows(loop) for loop in self.loops]
+        self._bodies = list(dict.fromkeys(b for loop in self.loops for b in (loop.body_a, loop.body_b)))
+        column = {b: 6 * i for i, b in enumerate(self._bodies)}
+        width, rows, spots, self._sides = 6 * len(self._bodies), 0, [], []
+        for loop, c in zip(self.loops, self._closures):
+            sides = (column[loop.body_a], column[loop.body_b])
+            for col in sides:  # the order in which ``_rows`` lists the entries: a's rows, then b's
+                spots.append((np.arange(rows, rows + c.size)[:, None] * width + col + np.arange(6)).ravel())
+            self._sides.append((slice(rows, rows + c.size), sides))
+            rows += c.size
+        self._shape = (rows, width)
+        self._spots = np.concatenate(spots)
 
     # ------------------------------------------------------------ constraints
+    def _rows(self, kin, rates):
+        """All loops' rows at the state of ``kin`` (``kinematics``): ``phi`` (m,), ``J`` (m, nv), ``G`` (m, 6 k)
+        (against the twists of ``self._bodies``) and, with ``rates``, ``(b, gamma, velocity)`` (m,) each, else
+        ``None`` (a projection needs only ``phi`` and ``J``). At n states at once (stacked ``kin``), the same
+        terms rounded alike (``closure.LoopRows``), each with a leading sample axis: ``phi`` (n, m), ``J``
+        (n, m, nv), ..."""
+        lead = kin[WORLD]["p"].shape[:-1]
+        phi, entries, gamma, vel = [], [], [], []
+        for c in self._closures:
+            p, G_a, G_b, g, v = c.terms(kin[c.loop.body_a], kin[c.loop.body_b], rates)
+            phi += p
+            for row in G_a + G_b:  # (the order of ``_spots``)
+                entries += row
+            if rates:
+                gamma += g
+                vel += v
+        G = np.zeros(lead + (self._shape[0] * self._shape[1],))
+        G[..., self._spots] = closure.stack_terms(entries, lead) if lead else entries
+        G = G.reshape(lead + self._shape)
+        J = G @ np.concatenate([kin[body][key] for body in self._bodies for key in ("Jv", "Jw")], axis=-2)
+        phi = closure.stack_terms(phi, lead) if lead else np.array(phi)
+        if not rates:
+            return phi, J, G, None
+        gamma, vel = (closure.stack_terms(x, lead) if lead else np.array(x) for x in (gamma, vel))
+        bias = np.concatenate([kin[body][key] for body in self._bodies for key in ("a_bias", "alpha_bias")], axis=-1)
+        b = _mv(G, bias)
+        return phi, J, G, (b + gamma, gamma, vel)
+
+    def _loop_forces(self, kin, G, lam):
+        """Each loop's wrench ``G^T lambda`` (force, moment about the COM; world) on body a and on body b for the
+        multipliers ``lam`` (m,) or (n, m) (``G``: ``_rows``'): the force added to each body's ``F`` in ``kin``
+        (the tree reactions see the loop forces), and under ``("loops",)`` each loop's ON its body b (3,) or
+        (n, 3)."""
+        forces = {}
+        for loop, (rows, sides) in zip(self.loops, self._sides):
+            wa, wb = (_mtv(G[..., rows, col:col + 6], lam[..., rows]) for col in sides)
+            for body, wrench in ((loop.body_a, wa), (loop.body_b, wb)):
+                if body != WORLD:
+                    kin[body]["F"] = kin[body]["F"] + wrench[..., :3]
+            forces[loop.name] = wb[..., :3]
+        kin[("loops",)] = forces  # (a tuple key: never a body name)
+
     def constraints(self, kin):
         """Loop rows at the state of ``kin`` (``kinematics``): ``phi`` (m,), ``J`` (m, nv), ``b`` (m,)
         and each loop's ``closure.Rows``."""
-        phi, J, b, found = [], [], [], []
-        for loop in self.loops:
-            A, B = kin[loop.body_a], kin[loop.body_b]
-            r = closure.rows(loop, A, B)
-            J.append(r.G_a[:, :3] @ A["Jv"] + r.G_a[:, 3:] @ A["Jw"] + r.G_b[:, :3] @ B["Jv"] + r.G_b[:, 3:] @ B["Jw"])
-            b.append(r.G_a @ np.concatenate([A["a_bias"], A["alpha_bias"]])
-                     + r.G_b @ np.concatenate([B["a_bias"], B["alpha_bias"]]) + r.gamma)
-            phi.append(r.phi)
-            found.append(r)
-        return np.concatenate(phi), np.vstack(J), np.concatenate(b), found
+        phi, J, G, (b, gamma, vel) = self._rows(kin, rates=True)
+        found = [closure.Rows(phi[..., rows], *(G[..., rows, col:col + 6] for col in sides), gamma[..., rows],
+                              vel[..., rows]) for rows, sides in self._sides]
+        return phi, J, b, found
 
     @staticmethod
     def _range(Jt):
@@ -114,26 +165,25 @@ class ClosedLoops(Kane):
         r = int(np.sum(S > closure.RANK_RTOL * S[0])) if len(S) and S[0] > 0.0 else 0
         return U[:, :r], S[:r], Vt[:r].T
 
-    def _solve(self, t, q, u):
+    def _accelerations(self, t, q, u):
+        """The index-1 system's ``udot`` (nv,) at ``(q, u)`` projected (module docstring: singular positions), the
+        kinematics there, the multipliers ``lambda`` (m,) and the rows' ``G`` (``_rows``)."""
         q, u = self.project(q, u)  # every evaluation on the manifolds (module docstring: singular positions)
         M, f, kin = self.mass_and_forces(t, q, u)
-        _, J, b, found = self.constraints(kin)
+        _, J, G, (b, _, _) = self._rows(kin, rates=True)
         Li = _inverse_cholesky(M)
         g = Li @ f
         U, S, V = self._range(J @ Li.T)
         c = V.T @ g + (U.T @ b) / S
-        udot = Li.T @ (g - V @ c)
-        lam = -U @ (c / S)
-        forces, i = {}, 0
-        for loop, r in zip(self.loops, found):
-            m = len(r.phi)
-            wa, wb = r.G_a.T @ lam[i:i + m], r.G_b.T @ lam[i:i + m]
-            for body, wrench in ((loop.body_a, wa), (loop.body_b, wb)):
-                if body != WORLD:
-                    kin[body]["F"] = kin[body]["F"] + wrench[:3]  # the tree reactions see the loop forces
-            forces[loop.name] = wb[:3]
-            i += m
-        kin[("loops",)] = forces  # (a tuple key: never a body name)
+        return Li.T @ (g - V @ c), kin, -U @ (c / S), G
+
+    def acceleration(self, t, q, v):
+        """Generalized accelerations ``u'`` (nv,) of the constrained motion (the reactions are not formed)."""
+        return self._accelerations(t, q, v)[0]
+
+    def _solve(self, t, q, u):
+        udot, kin, lam, G = self._accelerations(t, q, u)
+        self._loop_forces(kin, G, lam)
         return udot, kin
 
     def _solve_stacked(self, Q, U):
@@ -142,49 +192,24 @@ class ClosedLoops(Kane):
         with the loop forces on their bodies and, under ``("loops",)``, each loop's on its body b (m, 3)."""
         Q, U = self._project_stacked(Q, U)
         M, f, kin = self.mass_and_forces(None, Q, U)
-        _, J, b, found = self._constraints_stacked(kin)
+        _, J, G, (b, _, _) = self._rows(kin, rates=True)
         Li = _inverse_cholesky(M)
         LiT = Li.swapaxes(-1, -2)
         g = _mv(Li, f)
         Ur, inv_S, Vr = svd_cut(J @ LiT, closure.RANK_RTOL)
         c = _mtv(Vr, g) + _mtv(Ur, b) * inv_S
         udot = _mv(LiT, g - _mv(Vr, c))
-        lam = -_mv(Ur, c * inv_S)
-        forces, i = {}, 0
-        for loop, r in zip(self.loops, found):
-            m = r.phi.shape[-1]
-            wa, wb = _mtv(r.G_a, lam[:, i:i + m]), _mtv(r.G_b, lam[:, i:i + m])
-            for body, wrench in ((loop.body_a, wa), (loop.body_b, wb)):
-                if body != WORLD:
-                    kin[body]["F"] = kin[body]["F"] + wrench[:, :3]
-            forces[loop.name] = wb[:, :3]
-            i += m
-        kin[("loops",)] = forces
+        self._loop_forces(kin, G, -_mv(Ur, c * inv_S))
         return udot, kin
-
-    def _constraints_stacked(self, kin):
-        """``constraints`` at m states at once (``kin``: stacked kinematics): ``phi`` (m, k), ``J`` (m, k, nv),
-        ``b`` (m, k) and each loop's stacked ``closure.Rows``."""
-        phi, J, b, found = [], [], [], []
-        for loop in self.loops:
-            A, B = kin[loop.body_a], kin[loop.body_b]
-            r = closure.rows_stacked(loop, A, B)
-            J.append(r.G_a[..., :3] @ A["Jv"] + r.G_a[..., 3:] @ A["Jw"] + r.G_b[..., :3] @ B["Jv"]
-                     + r.G_b[..., 3:] @ B["Jw"])
-            b.append(_mv(r.G_a, np.concatenate([A["a_bias"], A["alpha_bias"]], axis=-1))
-                     + _mv(r.G_b, np.concatenate([B["a_bias"], B["alpha_bias"]], axis=-1)) + r.gamma)
-            phi.append(r.phi)
-            found.append(r)
-        return np.concatenate(phi, axis=-1), np.concatenate(J, axis=-2), np.concatenate(b, axis=-1), found
 
     def _project_stacked(self, Q, U):
         """``project`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): each state's Gauss-Newton iterations
         stop where its own stop (``PROJECTION_TOL``, or no halving), as ``project``'s."""
         zero = np.zeros_like(U)
         kin = self.kinematics(Q, zero)  # (one pass serves the metric and the first rows, as in ``project``)
-        Li = _inverse_cholesky(self.mass_matrix(kin))
-        LiT = Li.swapaxes(-1, -2)
-        phi, J, _, _ = self._constraints_stacked(kin)
+        L = np.linalg.cholesky(self.mass_matrix(kin))
+        LiT = np.linalg.inv(L).swapaxes(-1, -2)
+        phi, J, _, _ = self._rows(kin, rates=False)
         Q, last, going = Q.copy(), np.full(len(Q), np.inf), np.ones(len(Q), dtype=bool)
         for _ in range(PROJECTION_ITERATIONS):
             worst = np.max(np.abs(phi), axis=-1)
@@ -195,9 +220,9 @@ class ClosedLoops(Kane):
             last[i] = worst[i]
             Ur, inv_S, Vr = svd_cut(J[i] @ LiT[i], closure.RANK_RTOL)
             Q[i] = cfg.retract(self.blocks, Q[i], _mv(LiT[i], -_mv(Vr, _mtv(Ur, phi[i]) * inv_S)))
-            phi[i], J[i], _, _ = self._constraints_stacked(self.kinematics(Q[i], zero[i]))
+            phi[i], J[i], _, _ = self._rows(self.kinematics(Q[i], zero[i]), rates=False)
         Ur, inv_S, Vr = svd_cut(J @ LiT, closure.RANK_RTOL)
-        w = np.linalg.solve(LiT, U[..., None])[..., 0]  # L^T v
+        w = _mtv(L, U)  # L^T v
         return Q, _mv(LiT, w - _mv(Vr, _mtv(Vr, w)))
 
     def _forces_stacked(self, udot, kin):
@@ -234,8 +259,9 @@ class ClosedLoops(Kane):
         (see the module docstring); ``q`` (nq,), ``v`` (nv,)."""
         zero = np.zeros_like(v)
         kin = self.kinematics(q, zero)  # (one pass serves the metric and the first rows: configuration only)
-        Li = _inverse_cholesky(self.mass_matrix(kin))  # the metric (loads do not enter it)
-        phi, J, _, _ = self.constraints(kin)
+        L = np.linalg.cholesky(self.mass_matrix(kin))  # the metric (loads do not enter it)
+        Li = np.linalg.inv(L)
+        phi, J, _, _ = self._rows(kin, rates=False)
         last = np.inf
         for _ in range(PROJECTION_ITERATIONS):
             worst = float(np.max(np.abs(phi)))
@@ -244,9 +270,9 @@ class ClosedLoops(Kane):
             last = worst
             U, S, V = self._range(J @ Li.T)
             q = cfg.retract(self.blocks, q, Li.T @ (-V @ ((U.T @ phi) / S)))
-            phi, J, _, _ = self.constraints(self.kinematics(q, zero))
+            phi, J, _, _ = self._rows(self.kinematics(q, zero), rates=False)
         U, S, V = self._range(J @ Li.T)
-        w = np.linalg.solve(Li.T, v)  # L^T v
+        w = _mtv(L, v)  # L^T v (as ``_project_stacked``'s)
         return q, Li.T @ (w - V @ (V.T @ w))
 
     # ------------------------------------------------------------ read-back
