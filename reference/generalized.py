@@ -26,7 +26,7 @@ ran in call overhead), which also gives each speed's motion: the axis ``omega`` 
 subtree about, through the point ``o``, and the translation ``nu`` it gives. The Jacobians' columns
 follow for every body at once, ``J_v[:, c] = nu_c + omega_c x (p_i - o_c)`` and ``J_w[:, c] =
 omega_c`` where speed c moves body i, else 0; and ``M``, ``f`` as products of the bodies' stacked
-Jacobians (3 nb, nv), not a sum over bodies.
+Jacobians (6 nb, nv), not a sum over bodies.
 
 A prismatic joint slides the child joint frame by ``d a_W`` along the unit axis ``a_W`` fixed in
 the parent joint frame (no relative rotation): the lever from the parent's COM to the child's
@@ -201,15 +201,22 @@ class Kane:
             states, motions = forward(self._steps, q.tolist(), u.tolist(), FLOAT_MATH)
             zero, zeros, eye = _ZERO3, self._zeros, _EYE3
         # each body's R, p, v, a_bias, alpha_bias, w and skew(w); each speed's omega, nu, o and skew(omega)
-        body = _table([x for R, p, w, v, a, al in states for x in (*R, *p, *v, *a, *al, *w, *_skew9(w))], lead, 33)
-        cols = _table([x for om, nu, o in motions for x in (*om, *nu, *o, *_skew9(om))], lead, 18)
+        body = [x for R, p, w, v, a, al in states for x in (*R, *p, *v, *a, *al, *w, *_skew9(w))]
+        cols = [x for om, nu, o in motions for x in (*om, *nu, *o, *_skew9(om))]
+        if lead:
+            body, cols = _table(body, lead, 33), _table(cols, lead, 18)
+        else:  # (one conversion)
+            flat = np.array(body + cols, dtype=float)
+            body, cols = flat[:33 * nb].reshape(nb, 33), flat[33 * nb:].reshape(n, 18)
         p = body[..., 9:12]
         lever = _T(p)[..., None, :, :] - cols[..., 6:9, None]  # (..., nv, 3, nb): o_c -> p_b
         Jv = cols[..., 3:6, None] + cols[..., 9:18].reshape(lead + (n, 3, 3)) @ lever  # (..., nv, 3, nb)
-        Jv = np.where(self._moves, np.swapaxes(Jv, -1, -3), 0.0)  # (..., nb, 3, nv)
-        Jw = np.where(self._moves, _T(cols[..., 0:3])[..., None, :, :], 0.0)
+        # Jv (rows 0-2) and Jw (rows 3-5) of each body in one table (mass_and_forces: M and f in one product each)
+        J = np.zeros(lead + (nb, 6, n))
+        np.copyto(J[..., 0:3, :], np.swapaxes(Jv, -1, -3), where=self._moves)
+        np.copyto(J[..., 3:6, :], _T(cols[..., 0:3])[..., None, :, :], where=self._moves)
         tree = dict(R=body[..., 0:9].reshape(lead + (nb, 3, 3)), p=p, v=body[..., 12:15], a_bias=body[..., 15:18],
-                    alpha_bias=body[..., 18:21], w=body[..., 21:24], Jv=Jv, Jw=Jw)
+                    alpha_bias=body[..., 18:21], w=body[..., 21:24], Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J)
         tree["alpha_w"] = body[..., 18:24].reshape(lead + (nb, 2, 3))  # (mass_and_forces: I_W alpha, I_W w at once)
         tree["skew_w"] = body[..., 24:33].reshape(lead + (nb, 3, 3))
         out = {WORLD: dict(R=eye, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero),
@@ -227,14 +234,16 @@ class Kane:
     def mass_matrix(self, kin):
         """Kane's mass matrix ``M`` (nv, nv), or (m, nv, nv), at the configuration(s) of ``kin``
         (``kinematics``; its ``TREE`` tables gain ``I_W`` (..., nb, 3, 3), each body's inertia about its COM in
-        world axes, kg m^2): ``sum_b m_b Jv_b^T Jv_b + Jw_b^T I_W,b Jw_b`` as two products of the bodies'
-        stacked Jacobians (..., 3 nb, nv)."""
+        world axes, kg m^2): ``sum_b m_b Jv_b^T Jv_b + Jw_b^T I_W,b Jw_b`` as one product of the bodies'
+        stacked Jacobians (..., 6 nb, nv)."""
         tree = kin[TREE]
-        R, Jv, Jw = tree["R"], tree["Jv"], tree["Jw"]
+        R, J = tree["R"], tree["J"]
         tree["I_W"] = I_W = R @ self._I_B @ _T(R)
-        flat = Jv.shape[:-3] + (-1, self.nv)
-        return (_T(Jv.reshape(flat)) @ (self._masses[:, :, None] * Jv).reshape(flat)
-                + _T(Jw.reshape(flat)) @ (I_W @ Jw).reshape(flat))
+        weighted = np.empty(J.shape)  # (..., nb, 6, nv): m Jv, I_W Jw
+        np.multiply(self._masses[:, :, None], J[..., 0:3, :], out=weighted[..., 0:3, :])
+        np.matmul(I_W, J[..., 3:6, :], out=weighted[..., 3:6, :])
+        flat = J.shape[:-3] + (-1, self.nv)
+        return _T(J.reshape(flat)) @ weighted.reshape(flat)
 
     def mass_and_forces(self, t, q, u):
         """Kane's ``M u' = f``: ``M`` (nv, nv), ``f`` (nv,) and the ``kinematics`` (each body's
@@ -252,11 +261,11 @@ class Kane:
                 T[..., i, :] += T_s
         I_alpha_w = tree["I_W"] @ _T(tree["alpha_w"])  # (..., nb, 3, 2): I_W alpha, I_W w
         # generalized active + inertia forces: sum_b Jv_b^T (F_b - m_b a_b) + Jw_b^T (T_b - I_b alpha_b - w_b x I_b w_b)
-        g = F - self._masses * tree["a_bias"]
-        h = T - I_alpha_w[..., 0] - (tree["skew_w"] @ I_alpha_w[..., 1:])[..., 0]
+        gh = np.empty(F.shape[:-1] + (6,))
+        np.subtract(F, self._masses * tree["a_bias"], out=gh[..., 0:3])
+        np.subtract(T - I_alpha_w[..., 0], (tree["skew_w"] @ I_alpha_w[..., 1:])[..., 0], out=gh[..., 3:6])
         lead = q.shape[:-1]
-        f = (_tdot(tree["Jv"].reshape(lead + (-1, self.nv)), g.reshape(lead + (-1,)))
-             + _tdot(tree["Jw"].reshape(lead + (-1, self.nv)), h.reshape(lead + (-1,))))
+        f = _tdot(tree["J"].reshape(lead + (-1, self.nv)), gh.reshape(lead + (-1,)))
         for i, name in enumerate(self._names):
             kin[name]["F"] = F[..., i, :]
         return M, f, kin
