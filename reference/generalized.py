@@ -20,8 +20,13 @@ system ``M u' = f`` with
     f = sum_i J_v^T (F_i - m_i a_bias) + J_w^T (T_i - I_i alpha_bias - w_i x I_i w_i)
 
 all in world axes (``F_i``, ``T_i``: the loads, gravity and spring-dampers on body i, force and
-moment about its COM). Jacobians and bias accelerations come from one recursive
-pass from the root to the leaves.
+moment about its COM). Poses, velocities and bias accelerations come from one recursive
+pass from the root to the leaves (``tree_pass``, in scalar arithmetic: as numpy calls on 3-vectors it
+ran in call overhead), which also gives each speed's motion: the axis ``omega`` it turns its joint's
+subtree about, through the point ``o``, and the translation ``nu`` it gives. The Jacobians' columns
+follow for every body at once, ``J_v[:, c] = nu_c + omega_c x (p_i - o_c)`` and ``J_w[:, c] =
+omega_c`` where speed c moves body i, else 0; and ``M``, ``f`` as products of the bodies' stacked
+Jacobians (6 nb, nv), not a sum over bodies.
 
 A prismatic joint slides the child joint frame by ``d a_W`` along the unit axis ``a_W`` fixed in
 the parent joint frame (no relative rotation): the lever from the parent's COM to the child's
@@ -32,7 +37,8 @@ the Coriolis term ``2 w_P x (d' a_W)`` (the centripetal ``w_P x (w_P x r)`` uses
 law per body, from the leaves back to the root.
 
 The read-back (``trajectory``) solves the same system at every sample at once (``_solve_stacked``:
-the same terms in the same order, each with a leading sample axis), where the integrators call
+the same code, each scalar of the pass an array over the samples, each table with a leading sample
+axis), where the integrators call
 ``_solve`` one state at a time: a Python pass per sample cost about one evaluation of the
 right-hand side per sample, as much as a whole run where a run takes one or two evaluations per
 sample. The two agree to roundoff (``tests/test_reference.py``); a formulation whose solve is its
@@ -47,7 +53,8 @@ from dalembert import spatial, springs
 from dalembert.scene import JOINT_KINDS, WORLD
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
 from dalembert.reference.configuration import Block
-from dalembert.reference.loads import BodyLoads
+from dalembert.reference.loads import BodyLoads, TreeLoads
+from dalembert.reference.tree_pass import ARRAY_MATH, FLOAT_MATH, Step, forward
 
 __all__ = ["Kane"]
 
@@ -75,31 +82,31 @@ def _tdot(A, x):
     return A.T @ x if A.ndim == 2 else _mtv(A, x)
 
 
-def _unit(x):
-    """``x`` over its norm along the last axis: (k,) or (m, k)."""
-    return x / np.linalg.norm(x) if x.ndim == 1 else x / np.linalg.norm(x, axis=-1, keepdims=True)
-
-
 def _T(A):
     """The transpose of the last two axes: ``A.T`` of a matrix, each matrix's of a stack."""
     return A.swapaxes(-1, -2)
 
 
 def _linear_solve(M, f):
-    """``M^-1 f``: ``M`` (n, n), ``f`` (n,); or stacked (m, n, n), (m, n)."""
+    """``M^-1 f``: ``M`` (n, n), ``f`` (n,); or stacked (m, n, n), (m, n). One speed: the division LAPACK's solve
+    does (the same numbers, measured on 20000 random systems), without its ~3 us of call overhead."""
+    if f.shape[-1] == 1:
+        return f / M[..., 0]
     return np.linalg.solve(M, f) if f.ndim == 1 else np.linalg.solve(M, f[..., None])[..., 0]
 
 
-def _child(P, R, r_PJ, r_JC, w, alpha_bias, Jw, Jv_slide, v_slide, a_slide):
-    """A child's ``kinematics`` entry from its parent's ``P``: its COM reached through the joint (``r_PJ``: parent
-    COM -> joint point, slid; ``r_JC``: joint point -> child COM), with its rotation ``R``, angular velocity
-    ``w``, angular bias ``alpha_bias`` and angular Jacobian ``Jw`` and the slide's terms. One state or many (a
-    leading sample axis on every array: ``Kane.kinematics`` of a stack): the same operations either way."""
-    Jv = P["Jv"] - spatial.skew(r_PJ) @ P["Jw"] + Jv_slide - spatial.skew(r_JC) @ Jw
-    v = P["v"] + spatial.cross(P["w"], r_PJ) + v_slide + spatial.cross(w, r_JC)
-    a_bias = (P["a_bias"] + spatial.cross(P["alpha_bias"], r_PJ) + spatial.cross(P["w"], spatial.cross(P["w"], r_PJ))
-              + a_slide + spatial.cross(alpha_bias, r_JC) + spatial.cross(w, spatial.cross(w, r_JC)))
-    return dict(R=R, p=P["p"] + r_PJ + r_JC, w=w, v=v, Jv=Jv, Jw=Jw, a_bias=a_bias, alpha_bias=alpha_bias)
+def _table(values, lead, width):
+    """The scalars ``values`` (k * width of them: floats, or arrays of shape ``lead``) as an array (k, width), or
+    (lead..., k, width): ``tree_pass``'s output in one allocation per table."""
+    if not lead:
+        return np.array(values, dtype=float).reshape(-1, width)
+    flat = np.stack(np.broadcast_arrays(*values, np.empty(lead)))[:-1]  # (the last one: the shape, if no values)
+    return np.moveaxis(flat.reshape((-1, width) + lead), (0, 1), (-2, -1))
+
+
+def _skew9(x):
+    """``skew(x)`` of a 3-tuple of scalars, row-major: ``skew(x) y = x cross y``."""
+    return 0.0, -x[2], x[1], x[2], 0.0, -x[0], -x[1], x[0], 0.0
 
 
 def _frozen(a):
@@ -110,6 +117,10 @@ def _frozen(a):
 # The world's and the joints' constant terms in ``kinematics``: one allocation each, shared by every call
 # (read-only, so that sharing them cannot leak a write from one body's entry into another's).
 _EYE3, _ZERO3 = _frozen(np.eye(3)), _frozen(np.zeros(3))
+# Each body's entry in ``kinematics``
+_BODY_KEYS = ("R", "p", "w", "v", "Jv", "Jw", "a_bias", "alpha_bias")
+# The key of ``kinematics``' stacked tables (a tuple: never a body name)
+TREE = ("tree",)
 
 
 class Kane:
@@ -150,7 +161,26 @@ class Kane:
         self.q0 = np.concatenate(q0) if q0 else np.zeros(0)
         self.v0 = np.concatenate(v0) if v0 else np.zeros(0)
         self.nv = iv
-        self._zeros = _frozen(np.zeros((3, iv)))  # (3, nv): the world's Jacobians, a joint's no-slide term
+        self._zeros = _frozen(np.zeros((3, iv)))  # (3, nv): the world's Jacobians
+        # The pass's constants (``tree_pass``), and which speeds move which body: ``_moves[b, 0, c]`` when speed c
+        # is one of body b's joint's or of its ancestors' up to the nearest free joint (whose coordinates are
+        # the world's: ``tree_pass.forward``)
+        slot = {WORLD: 0} | {jd["joint"].child: i + 1 for i, jd in enumerate(self.joints)}
+        self._steps = [Step(jd["joint"].kind, slot[jd["joint"].parent], jd["q"].start, jd["v"].start, jd["R_PJ"],
+                            jd["p_PJ"], jd["R_CJ"], jd["p_CJ"], jd["axis"]) for jd in self.joints]
+        nb = len(self.joints)
+        moves = np.zeros((nb + 1, iv), dtype=bool)
+        for i, jd in enumerate(self.joints):
+            if jd["joint"].kind != "free":
+                moves[i + 1] = moves[slot[jd["joint"].parent]]
+            moves[i + 1, jd["v"]] = True
+        self._moves = _frozen(moves[1:, None, :])  # (nb, 1, nv)
+        self._names = [jd["joint"].child for jd in self.joints]
+        self._masses = np.array([jd["m"] for jd in self.joints], dtype=float).reshape(nb, 1)
+        self._I_B = np.array([jd["I_B"] for jd in self.joints], dtype=float).reshape(nb, 3, 3)
+        self._loads = TreeLoads(scene, [jd["body"] for jd in self.joints])
+        self._children = {name: [c["joint"].child for c in self.joints if c["joint"].parent == name]
+                          for name in self._names}
 
     # ------------------------------------------------------------ kinematics
     def kinematics(self, q, u):
@@ -158,60 +188,45 @@ class Kane:
 
         ``q`` (nq,), ``u`` (nv,) for one state, or ``(m, nq)``, ``(m, nv)`` for m states at once: every entry
         then has a leading sample axis. Returns a dict per body name with ``R (3,3)``, ``p (3,)``,
-        ``w (3,)``, ``v (3,)``, ``Jv (3, nv)``, ``Jw (3, nv)``, ``a_bias (3,)``, ``alpha_bias (3,)``.
+        ``w (3,)``, ``v (3,)``, ``Jv (3, nv)``, ``Jw (3, nv)``, ``a_bias (3,)``, ``alpha_bias (3,)`` (views of
+        the tables under ``TREE``: the same names, each body's along the axis -3 or -2).
+
+        The pass from the root (``tree_pass``) gives each body's state and each speed's motion ``(omega, nu,
+        o)``; the Jacobians' columns follow at once: speed c moves body b's COM at ``nu_c + omega_c x (p_b -
+        o_c)`` and turns it at ``omega_c`` where c is its joint's or an ancestor's (``_moves``), else 0.
         """
-        lead, n = q.shape[:-1], self.nv
+        lead, n, nb = q.shape[:-1], self.nv, len(self.joints)
         if lead:
+            states, motions = forward(self._steps, list(np.moveaxis(q, -1, 0)), list(np.moveaxis(u, -1, 0)),
+                                      ARRAY_MATH)
             zero, zeros, eye = np.zeros(lead + (3,)), np.zeros(lead + (3, n)), np.broadcast_to(_EYE3, lead + (3, 3))
-        else:  # read-only and shared: every entry below is a new array or a copy
+        else:
+            states, motions = forward(self._steps, q.tolist(), u.tolist(), FLOAT_MATH)
             zero, zeros, eye = _ZERO3, self._zeros, _EYE3
-        out = {WORLD: dict(R=eye, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero)}
-        for jd in self.joints:
-            j = jd["joint"]
-            P = out[j.parent]
-            qj, uj, cols = q[..., jd["q"]], u[..., jd["v"]], jd["v"]
-            if j.kind == "free":
-                R = spatial.quat_to_matrix(_unit(qj[..., 3:]))
-                Jv = np.zeros(lead + (3, n))
-                Jv[..., cols.start:cols.start + 3] = _EYE3
-                Jw = np.zeros(lead + (3, n))
-                Jw[..., cols.start + 3:cols.stop] = R
-                out[j.child] = dict(R=R, p=qj[..., :3].copy(), w=_dot(R, uj[..., 3:]), v=uj[..., :3].copy(), Jv=Jv,
-                                    Jw=Jw, a_bias=zero, alpha_bias=zero)
-                continue
-            R_WJp = P["R"] @ jd["R_PJ"]
-            if j.kind == "revolute":
-                R_J = spatial.so3_exp(jd["axis"] * qj[..., :1])
-            elif j.kind == "ball":
-                R_J = spatial.quat_to_matrix(_unit(qj))
-            else:
-                R_J = eye
-            R_WJc = R_WJp @ R_J
-            R = R_WJc @ jd["R_CJ"].T
-            r_PJ = P["R"] @ jd["p_PJ"]  # parent COM -> (parent's) joint point
-            r_JC = -R @ jd["p_CJ"]  # joint point -> child COM
-            Jw = P["Jw"].copy()
-            w, alpha_bias = P["w"].copy(), P["alpha_bias"].copy()
-            v_slide, a_slide, Jv_slide = zero, zero, zeros
-            if j.kind == "prismatic":
-                Jv_slide = np.zeros(lead + (3, n))
-                a_W = R_WJp @ jd["axis"]
-                r_PJ = r_PJ + a_W * qj[..., :1]  # parent COM -> the child's joint point, slid
-                v_slide = a_W * uj[..., :1]
-                a_slide = 2.0 * spatial.cross(P["w"], v_slide)  # Coriolis: the axis turns with the parent
-                Jv_slide[..., cols] = a_W[..., None]
-            if j.kind == "revolute":
-                s = R_WJp @ jd["axis"]
-                Jw[..., cols] += s[..., None]
-                w_rel = s * uj[..., :1]
-                w += w_rel
-                alpha_bias += spatial.cross(P["w"], w_rel)
-            elif j.kind == "ball":
-                Jw[..., cols] += R_WJc
-                w_rel = _dot(R_WJc, uj)
-                w += w_rel
-                alpha_bias += spatial.cross(w, w_rel)
-            out[j.child] = _child(P, R, r_PJ, r_JC, w, alpha_bias, Jw, Jv_slide, v_slide, a_slide)
+        # each body's R, p, v, a_bias, alpha_bias, w and skew(w); each speed's omega, nu, o and skew(omega)
+        body = [x for R, p, w, v, a, al in states for x in (*R, *p, *v, *a, *al, *w, *_skew9(w))]
+        cols = [x for om, nu, o in motions for x in (*om, *nu, *o, *_skew9(om))]
+        if lead:
+            body, cols = _table(body, lead, 33), _table(cols, lead, 18)
+        else:  # (one conversion)
+            flat = np.array(body + cols, dtype=float)
+            body, cols = flat[:33 * nb].reshape(nb, 33), flat[33 * nb:].reshape(n, 18)
+        p = body[..., 9:12]
+        lever = _T(p)[..., None, :, :] - cols[..., 6:9, None]  # (..., nv, 3, nb): o_c -> p_b
+        Jv = cols[..., 3:6, None] + cols[..., 9:18].reshape(lead + (n, 3, 3)) @ lever  # (..., nv, 3, nb)
+        # Jv (rows 0-2) and Jw (rows 3-5) of each body in one table (mass_and_forces: M and f in one product each)
+        J = np.zeros(lead + (nb, 6, n))
+        np.copyto(J[..., 0:3, :], np.swapaxes(Jv, -1, -3), where=self._moves)
+        np.copyto(J[..., 3:6, :], _T(cols[..., 0:3])[..., None, :, :], where=self._moves)
+        tree = dict(R=body[..., 0:9].reshape(lead + (nb, 3, 3)), p=p, v=body[..., 12:15], a_bias=body[..., 15:18],
+                    alpha_bias=body[..., 18:21], w=body[..., 21:24], Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J)
+        tree["alpha_w"] = body[..., 18:24].reshape(lead + (nb, 2, 3))  # (mass_and_forces: I_W alpha, I_W w at once)
+        tree["skew_w"] = body[..., 24:33].reshape(lead + (nb, 3, 3))
+        out = {WORLD: dict(R=eye, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero),
+               TREE: tree}
+        each = [(k, np.moveaxis(tree[k], len(lead), 0) if lead else tree[k]) for k in _BODY_KEYS]  # body first
+        for i, name in enumerate(self._names):
+            out[name] = {k: x[i] for k, x in each}
         return out
 
     # -------------------------------------------------------------- dynamics
@@ -221,33 +236,41 @@ class Kane:
 
     def mass_matrix(self, kin):
         """Kane's mass matrix ``M`` (nv, nv), or (m, nv, nv), at the configuration(s) of ``kin``
-        (``kinematics``; each body's entry gains ``I_W``, its inertia about the COM in world axes, kg m^2)."""
-        M = np.zeros(kin[WORLD]["p"].shape[:-1] + (self.nv, self.nv))
-        for jd in self.joints:
-            k = kin[jd["joint"].child]
-            R, Jv, Jw = k["R"], k["Jv"], k["Jw"]
-            k["I_W"] = I_W = R @ jd["I_B"] @ _T(R)
-            M += jd["m"] * _T(Jv) @ Jv + _T(Jw) @ I_W @ Jw
-        return M
+        (``kinematics``; its ``TREE`` tables gain ``I_W`` (..., nb, 3, 3), each body's inertia about its COM in
+        world axes, kg m^2): ``sum_b m_b Jv_b^T Jv_b + Jw_b^T I_W,b Jw_b`` as one product of the bodies'
+        stacked Jacobians (..., 6 nb, nv)."""
+        tree = kin[TREE]
+        R, J = tree["R"], tree["J"]
+        tree["I_W"] = I_W = R @ self._I_B @ _T(R)
+        weighted = np.empty(J.shape)  # (..., nb, 6, nv): m Jv, I_W Jw
+        np.multiply(self._masses[:, :, None], J[..., 0:3, :], out=weighted[..., 0:3, :])
+        np.matmul(I_W, J[..., 3:6, :], out=weighted[..., 3:6, :])
+        flat = J.shape[:-3] + (-1, self.nv)
+        return _T(J.reshape(flat)) @ weighted.reshape(flat)
 
     def mass_and_forces(self, t, q, u):
         """Kane's ``M u' = f``: ``M`` (nv, nv), ``f`` (nv,) and the ``kinematics`` (each body's
         entry gains ``F``, the resultant of its loads, springs and gravity, N, world); at m states at once
         (``q`` (m, nq), ``u`` (m, nv)), ``M`` (m, nv, nv), ``f`` (m, nv), ``F`` (m, 3)."""
         kin = self.kinematics(q, u)
-        M, f = self.mass_matrix(kin), np.zeros(q.shape[:-1] + (self.nv,))
-        wrenches = springs.wrenches if q.ndim == 1 else springs.wrenches_stacked
-        spring_wrenches = wrenches(self.scene.springs, kin) if self.scene.springs else {}
-        for jd in self.joints:
-            k = kin[jd["joint"].child]
-            m, I_W = jd["m"], k["I_W"]
-            F, T = jd["loads"].resultant(k["R"])
-            if jd["joint"].child in spring_wrenches:
-                F_s, T_s = spring_wrenches[jd["joint"].child]
-                F, T = F + F_s, T + T_s
-            k["F"] = F
-            f += _tdot(k["Jv"], F - m * k["a_bias"])  # generalized active + inertia forces
-            f += _tdot(k["Jw"], T - _dot(I_W, k["alpha_bias"]) - spatial.cross(k["w"], _dot(I_W, k["w"])))
+        M = self.mass_matrix(kin)
+        tree = kin[TREE]
+        F, T = self._loads.resultant(tree["R"])  # (..., nb, 3) each, new arrays
+        if self.scene.springs:
+            wrenches = springs.wrenches if q.ndim == 1 else springs.wrenches_stacked
+            for name, (F_s, T_s) in wrenches(self.scene.springs, kin).items():
+                i = self._names.index(name)
+                F[..., i, :] += F_s
+                T[..., i, :] += T_s
+        I_alpha_w = tree["I_W"] @ _T(tree["alpha_w"])  # (..., nb, 3, 2): I_W alpha, I_W w
+        # generalized active + inertia forces: sum_b Jv_b^T (F_b - m_b a_b) + Jw_b^T (T_b - I_b alpha_b - w_b x I_b w_b)
+        gh = np.empty(F.shape[:-1] + (6,))
+        np.subtract(F, self._masses * tree["a_bias"], out=gh[..., 0:3])
+        np.subtract(T - I_alpha_w[..., 0], (tree["skew_w"] @ I_alpha_w[..., 1:])[..., 0], out=gh[..., 3:6])
+        lead = q.shape[:-1]
+        f = _tdot(tree["J"].reshape(lead + (-1, self.nv)), gh.reshape(lead + (-1,)))
+        for i, name in enumerate(self._names):
+            kin[name]["F"] = F[..., i, :]
         return M, f, kin
 
     def _solve_stacked(self, Q, U):
@@ -280,7 +303,7 @@ class Kane:
         out = {}
         for jd in reversed(self.joints):
             name = jd["joint"].child
-            children = sum((out[c["joint"].child] for c in self.joints if c["joint"].parent == name), np.zeros(3))
+            children = sum((out[c] for c in self._children[name]), np.zeros(3))
             out[name] = unbalanced[name] + children
         return out
 
