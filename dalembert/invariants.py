@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import cumulative_simpson
 
 from dalembert import spatial, springs
 from dalembert.scene import WORLD
@@ -110,6 +109,8 @@ def dissipated_energy(scene, traj):
         return np.zeros(len(traj.t))
     lengths = spring_lengths(scene, traj)
     power = sum(springs.dissipated_power(sp, lengths[sp.name][1]) for sp in scene.springs)
+    from scipy.integrate import cumulative_simpson  # here, not at the top: scipy.integrate is most of `import dalembert`
+
     return cumulative_simpson(power, x=traj.t, initial=0.0)
 
 
@@ -137,6 +138,8 @@ def load_work(scene, traj):
     """
     if not scene.loads:
         return np.zeros(len(traj.t))
+    from scipy.integrate import cumulative_simpson  # lazily, as in dissipated_energy
+
     return cumulative_simpson(load_power(scene, traj), x=traj.t, initial=0.0)
 
 

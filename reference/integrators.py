@@ -23,8 +23,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate as scipy_integrate
-from scipy.integrate import solve_ivp
 
 from dalembert.registry import Registry
 from dalembert.settings import is_numerical_failure, knob_problems, steps_per_interval
@@ -179,6 +177,8 @@ class _SolveIVP:
         project = getattr(system, "project", None)
         if project is not None:  # a constrained system: integrate sample to sample, projecting at each
             return self._run_projected(rhs, project, nq, times, y0, Y, tols)
+        from scipy.integrate import solve_ivp  # here, not at the top: scipy.integrate is ~0.3 s of a process's start
+
         try:
             sol = solve_ivp(rhs, (times[0], times[-1]), y0, method=self.method, t_eval=times, **tols)
         except Exception as e:  # a blown-up state: NaN (contract item 5)
@@ -197,13 +197,16 @@ class _SolveIVP:
         takes more than ``MAX_STEPS_PER_INTERVAL`` steps (its step size collapsing, e.g. near a
         singular position of a loop, ``reference.loops``) ends the run after a bounded number of
         steps: NaN from that sample on (contract item 5), and ``Stats.message`` says where and why."""
+        from scipy import integrate  # lazily, as in run
+
         Y[0] = y = y0
         steps = nfev = 0
         message = ""
+        stepper = getattr(integrate, self.method)  # the stepper class of solve_ivp's method (DOP853, LSODA, Radau)
         for k in range(len(times) - 1):
             try:
                 with np.errstate(over="ignore", invalid="ignore"):
-                    solver = self.solver(rhs, times[k], y, times[k + 1], **tols)
+                    solver = stepper(rhs, times[k], y, times[k + 1], **tols)
                     taken, failure = 0, None
                     while solver.status == "running" and taken < MAX_STEPS_PER_INTERVAL:
                         failure = solver.step()  # scipy returns its message when the step fails (else None)
@@ -243,7 +246,6 @@ class DOP853(_SolveIVP):
     (at ``TRUTH_RTOL``/``TRUTH_ATOL``)."""
 
     method = "DOP853"
-    solver = scipy_integrate.DOP853
     # Defaults when the settings give no tolerance; tight enough to serve as truth
     # (errors ~1e-12 on the canonical cases), loose enough to finish in seconds.
     TRUTH_RTOL = 1e-12
@@ -261,7 +263,6 @@ class LSODA(_SolveIVP):
     another family than the truth's one-step DOP853, to check it (``dalembert.testing``)."""
 
     method = "LSODA"
-    solver = scipy_integrate.LSODA
 
     @staticmethod
     def steps(sol):
@@ -277,12 +278,13 @@ class Radau(_SolveIVP):
     1.3e-12 (rates) of DOP853 at 1e-12, with 10729 evaluations against DOP853's 47513."""
 
     method = "Radau"
-    solver = scipy_integrate.Radau
 
     def run(self, system, times, settings):
         if getattr(system, "project", None) is not None:  # constrained: stepped per interval (steps counted there)
             return super().run(system, times, settings)
         nq, rhs, y0, Y, tols = self._problem(system, times, settings)
+        from scipy.integrate import solve_ivp  # lazily, as in _SolveIVP.run
+
         try:  # dense output rather than t_eval: the same interpolants, and the steps are then known
             sol = solve_ivp(rhs, (times[0], times[-1]), y0, method=self.method, dense_output=True, **tols)
         except Exception as e:  # a blown-up state: NaN (contract item 5)

@@ -38,6 +38,7 @@ most. Timing, timeouts, deaths and stops from outside are told and stored as for
 from __future__ import annotations
 
 import contextlib
+import importlib
 import json
 import multiprocessing as mp
 import os
@@ -92,16 +93,25 @@ def _jax_running():
     return True if initialized is None else initialized()  # (a JAX without the question: assume it runs)
 
 
+# What the workers use and get imported once, before they start (``_context``), not once each: the invariants'
+# quadratures and the reference's adaptive integrators (``scipy.integrate``, with scipy's special, linalg and
+# optimize: ~0.3 CPU-s), which dalembert imports where they are called so that a process starting no workers
+# (``dalembert --help``, ``cases``, a report) does not pay them.
+WORKER_IMPORTS = ("scipy.integrate",)
+
+
 def _context():
-    """``fork`` (fast: workers share the parent's imports) when this process has one
-    thread; else a ``forkserver``: forking a process that has other threads (an
-    in-process Dask client, a notebook's kernel threads, JAX's runtime) can copy a lock
-    that another thread holds into the child (Python's documentation warns against it)."""
+    """``fork`` (fast: workers share the parent's imports, ``WORKER_IMPORTS`` imported here first) when this
+    process has one thread; else a ``forkserver``, which preloads them: forking a process that has other
+    threads (an in-process Dask client, a notebook's kernel threads, JAX's runtime) can copy a lock that
+    another thread holds into the child (Python's documentation warns against it)."""
     if threading.active_count() == 1 and not _jax_running():
+        for name in WORKER_IMPORTS:
+            importlib.import_module(name)
         return mp.get_context("fork")
     ctx = mp.get_context("forkserver")
     # (the built-in cases too: every child's first run loads them, ~0.06 s of imports, nothing heavier than xml)
-    ctx.set_forkserver_preload(["dalembert.harness.execute", "dalembert.adapters", "dalembert.cases"])
+    ctx.set_forkserver_preload(["dalembert.harness.execute", "dalembert.adapters", "dalembert.cases", *WORKER_IMPORTS])
     return ctx
 
 

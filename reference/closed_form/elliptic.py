@@ -20,7 +20,6 @@ exactly from the physical data, and every formula avoids cancellation:
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import elliprf
 
 __all__ = ["ellipk", "ellipj", "amplitude", "inverse_amplitude"]
 
@@ -39,6 +38,8 @@ def ellipk(m1):
     """
     if m1 == 0.0:
         return np.inf
+    from scipy.special import elliprf  # here, not at the top: scipy.special is ~0.2 s of a process's start
+
     return float(elliprf(0.0, m1, 1.0))
 
 
@@ -130,6 +131,8 @@ def inverse_amplitude(sn, cn, m1):
         if c <= 0.0:
             raise ValueError("on the separatrix (m1 = 0) cn must be positive")
         return float(np.arctanh(s))
+    from scipy.special import elliprf  # lazily, as in ellipk
+
     # F(phi) for |phi| <= pi/2 from Carlson's R_F; F(pi - phi) = 2K - F(phi).
     f = s * elliprf(c * c, c * c + m1 * s * s, 1.0)
     if c >= 0.0:

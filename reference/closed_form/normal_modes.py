@@ -21,7 +21,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.linalg import eigh
 
 __all__ = ["NormalModes", "rod_chain_matrices"]
 
@@ -68,6 +67,8 @@ class NormalModes:
     _modes: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
+        from scipy.linalg import eigh  # here, not at the top: scipy.linalg is ~0.15 s of a process's start
+
         M, K = np.asarray(self.mass_matrix, float), np.asarray(self.stiffness, float)
         w2, U = eigh(K, M)  # U^T M U = 1
         if not np.all(w2 > 0.0):
