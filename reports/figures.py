@@ -8,7 +8,6 @@ integrators within a work-precision panel, sweep values in time plots.
 
 from __future__ import annotations
 
-import io
 import math
 
 import matplotlib
@@ -21,6 +20,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 
 from dalembert.reports import tick_labels  # noqa: E402
 from dalembert.reports.formatting import value_text  # noqa: E402
+from dalembert.reports.svg_text import svg  # noqa: E402
 
 plt.rcParams.update({"svg.fonttype": "none", "font.size": 9, "axes.grid": True, "grid.alpha": 0.3,
                      "legend.fontsize": 7, "axes.titlesize": 10})
@@ -51,15 +51,6 @@ DIVERGED_MARGIN = 2.0  # factor of room below the lowest and above the largest e
 # Per diverged run, the share of its samples (%) that may lie below the axis: its start at roundoff (1e-16 at
 # the first samples) before the error grows, which would otherwise squeeze every run into the top decades.
 DIVERGED_LOW_PERCENTILE = 5.0
-
-
-def svg(fig):
-    tick_labels.plain_figure(fig)  # a colour bar's own log formatter too
-    buf = io.StringIO()
-    fig.savefig(buf, format="svg", bbox_inches="tight")
-    plt.close(fig)
-    text = buf.getvalue()
-    return text[text.index("<svg"):]
 
 
 def thin(t, y):
