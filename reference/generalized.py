@@ -26,7 +26,8 @@ ran in call overhead), which also gives each speed's motion: the axis ``omega`` 
 subtree about, through the point ``o``, and the translation ``nu`` it gives. The Jacobians' columns
 follow for every body at once, ``J_v[:, c] = nu_c + omega_c x (p_i - o_c)`` and ``J_w[:, c] =
 omega_c`` where speed c moves body i, else 0; and ``M``, ``f`` as products of the bodies' stacked
-Jacobians (6 nb, nv), not a sum over bodies.
+Jacobians (6 nb, nv), not a sum over bodies. ``kinematics`` is ``velocities(positions(q), u)``: the configuration's
+part (poses, Jacobians: the mass matrix's and a loop projection's) apart, so that one serves several evaluations.
 
 A prismatic joint slides the child joint frame by ``d a_W`` along the unit axis ``a_W`` fixed in
 the parent joint frame (no relative rotation): the lever from the parent's COM to the child's

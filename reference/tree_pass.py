@@ -10,6 +10,12 @@ scalars, the code evaluates m states at once as well: every scalar is then an ar
 elementwise products and sums round as Python's floats do; its ``sin`` may differ from the math
 module's in the last bit), so the stacked pass is the same one, not a twin.
 
+The pass comes in two parts: ``positions`` (the poses and each speed's motion: all a projection onto loop closures
+needs, and the mass matrix) and ``velocities`` (the bodies' velocities and bias accelerations, from the per-joint
+terms ``positions`` leaves), so that one configuration's part serves several evaluations (``loops.ClosedLoops``:
+the projection's last pass is the solve's); ``forward`` is the two in a row. Each formula is the one-piece pass's,
+in its order: the split changes no bit.
+
 Conventions: a rotation matrix is a 9-tuple, row-major; a vector a 3-tuple, world axes. Each body's state
 is ``(R, p, w, v, a_bias, alpha_bias)``: ``R_WB``, COM position (m), angular velocity (rad/s), COM velocity
 (m/s) and the accelerations' parts free of ``u'`` (m/s^2, rad/s^2). Each speed's motion is
