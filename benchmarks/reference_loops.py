@@ -15,11 +15,11 @@ four_bar 0.016 -> 0.013, n_four_bar 0.056 -> 0.049 (all four 7.46 -> 6.09, 1.23x
 1.18-1.43x; its own share 1.66-2.08x (andrews_squeezer 627 -> 378 us). The rest of a right-hand side was the
 tree's ``Kane.kinematics``: three full passes (the state, the projected configuration, the projected state).
 Split into ``positions`` and ``velocities`` (the projection's passes on the configuration only, the solve's
-velocities at the projection's last positions), against 80c169b's modules (imported from a copy, old and new
-processes alternating, two rounds, least of 3 each; load average ~5): per right-hand side andrews_squeezer
-456 -> 360 us (1.27x), bricard 331 -> 268 (1.24x), four_bar 280 -> 230 (1.22x), n_four_bar 383 -> 307 (1.25x);
-per truth andrews_squeezer 1.70 -> 1.44 s (1.19x), bricard 0.78 -> 0.64 s (1.22x), all four 2.52 -> 2.13 s
-(1.18x).
+velocities at the projection's last positions; results unchanged to the last bit), against 80c169b's modules (a copy
+on ``PYTHONPATH``, old and new processes alternating, two rounds, least of 3 each; load average ~5; old -> new):
+per right-hand side andrews_squeezer 462 -> 358 us (1.29x), bricard 331 -> 269 (1.23x), four_bar 282 -> 238
+(1.18x), n_four_bar 366 -> 312 (1.17x); per truth andrews_squeezer 1.72 -> 1.45 s (1.19x), bricard 0.78 -> 0.64 s
+(1.21x), all four 2.54 -> 2.13 s (1.19x; four_bar's and n_four_bar's truths are closed forms).
 """
 
 from __future__ import annotations
