@@ -122,6 +122,7 @@ _EYE3, _ZERO3 = _frozen(np.eye(3)), _frozen(np.zeros(3))
 # Each body's entry in ``positions``; the ones ``velocities`` adds
 _POSE_KEYS = ("R", "p", "Jv", "Jw")
 _RATE_KEYS = ("w", "v", "a_bias", "alpha_bias")
+_ALL_KEYS = _POSE_KEYS + _RATE_KEYS
 # The key of ``kinematics``' stacked tables (a tuple: never a body name)
 TREE = ("tree",)
 
@@ -278,13 +279,17 @@ class Kane:
         J = np.zeros(lead + (nb, 6, n))
         np.copyto(J[..., 0:3, :], np.swapaxes(Jv, -1, -3), where=self._moves)
         np.copyto(J[..., 3:6, :], _T(cols[..., 0:3])[..., None, :, :], where=self._moves)
-        tree = dict(R=body[..., 0:9].reshape(lead + (nb, 3, 3)), p=p, Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J,
-                    links=links)
-        world, keys = dict(R=eye, p=zero, Jv=zeros, Jw=zeros), _POSE_KEYS
-        if states is not None:
-            self._rates(tree, body, 12, lead)
-            world.update(w=zero, v=zero, a_bias=zero, alpha_bias=zero)
-            keys = _POSE_KEYS + _RATE_KEYS
+        R = body[..., 0:9].reshape(lead + (nb, 3, 3))
+        if states is None:
+            tree = dict(R=R, p=p, Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J, links=links)
+            world, keys = dict(R=eye, p=zero, Jv=zeros, Jw=zeros), _POSE_KEYS
+        else:  # (one literal each, as ``velocities``' ``_rates`` at column 12: this is every tree's right-hand side)
+            tree = dict(R=R, p=p, v=body[..., 12:15], a_bias=body[..., 15:18], alpha_bias=body[..., 18:21],
+                        w=body[..., 21:24], Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J, links=links,
+                        alpha_w=body[..., 18:24].reshape(lead + (nb, 2, 3)),
+                        skew_w=body[..., 24:33].reshape(lead + (nb, 3, 3)))
+            world = dict(R=eye, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero)
+            keys = _ALL_KEYS
         out = {WORLD: world, TREE: tree}
         each = self._each(tree, keys, lead)
         for i, name in enumerate(self._names):
