@@ -2,8 +2,8 @@
 loops: per truth (``dalembert.reference.truth``: the integration, the read-back and the self-stresses), per
 right-hand side (``acceleration`` at the case's own states moved 1e-10 off the manifolds, a step's drift: one
 Gauss-Newton iteration each, as in a run), and the share of that right-hand side that is the formulation's own
-(the same calls with ``Kane.kinematics`` memoized, so that only the projection, the rows, the metric and the
-solve are timed).
+(the same calls with the tree's ``positions`` and ``velocities`` memoized, so that only the projection, the rows,
+the metric and the solve are timed).
 
     python -m benchmarks.reference_loops [--repeats 3]
 
@@ -12,8 +12,14 @@ Measured on 2 shared cores (load average 6.7) against the code before the formul
 floats and assembled as one G (40b4c4a's modules imported under other names, old and new alternating in one
 process, least of 5; CPU s per truth, old -> new): andrews_squeezer 5.16 -> 4.17, bricard 2.23 -> 1.86,
 four_bar 0.016 -> 0.013, n_four_bar 0.056 -> 0.049 (all four 7.46 -> 6.09, 1.23x); per right-hand side
-1.18-1.43x; its own share 1.66-2.08x (andrews_squeezer 627 -> 378 us). The rest of a right-hand side is the
+1.18-1.43x; its own share 1.66-2.08x (andrews_squeezer 627 -> 378 us). The rest of a right-hand side was the
 tree's ``Kane.kinematics``: three full passes (the state, the projected configuration, the projected state).
+Split into ``positions`` and ``velocities`` (the projection's passes on the configuration only, the solve's
+velocities at the projection's last positions; results unchanged to the last bit), against 80c169b's modules (a copy
+on ``PYTHONPATH``, old and new processes alternating, two rounds, least of 3 each; load average ~5; old -> new):
+per right-hand side andrews_squeezer 462 -> 358 us (1.29x), bricard 331 -> 269 (1.23x), four_bar 282 -> 238
+(1.18x), n_four_bar 366 -> 312 (1.17x); per truth andrews_squeezer 1.72 -> 1.45 s (1.19x), bricard 0.78 -> 0.64 s
+(1.21x), all four 2.54 -> 2.13 s (1.19x; four_bar's and n_four_bar's truths are closed forms).
 """
 
 from __future__ import annotations
@@ -41,17 +47,23 @@ def _cpu(f):
 
 
 def _memoized(system):
-    """``system`` with ``kinematics`` memoized by state (each call gets its own body entries: the solve writes
-    into them)."""
-    memo, kinematics = {}, system.kinematics
+    """``system`` with its tree kinematics memoized by state: ``positions`` by ``q``, ``velocities`` by the positions
+    and ``u`` (each call gets its own body entries: the solve writes into them)."""
+    memo, positions, velocities = {}, system.positions, system.velocities
 
-    def cached(q, u):
-        key = (q.tobytes(), u.tobytes())
+    def cached_positions(q):
+        key = q.tobytes()
         if key not in memo:
-            memo[key] = kinematics(q, u)
+            memo[key] = positions(q)
+        return memo[key]
+
+    def cached_velocities(pos, u):
+        key = (id(pos), u.tobytes())
+        if key not in memo:
+            memo[key] = velocities(pos, u)
         return {body: dict(entry) for body, entry in memo[key].items()}
 
-    system.kinematics = cached
+    system.positions, system.velocities = cached_positions, cached_velocities
     return system
 
 

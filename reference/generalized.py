@@ -26,7 +26,8 @@ ran in call overhead), which also gives each speed's motion: the axis ``omega`` 
 subtree about, through the point ``o``, and the translation ``nu`` it gives. The Jacobians' columns
 follow for every body at once, ``J_v[:, c] = nu_c + omega_c x (p_i - o_c)`` and ``J_w[:, c] =
 omega_c`` where speed c moves body i, else 0; and ``M``, ``f`` as products of the bodies' stacked
-Jacobians (6 nb, nv), not a sum over bodies.
+Jacobians (6 nb, nv), not a sum over bodies. ``kinematics`` is ``velocities(positions(q), u)``, the configuration's
+part (poses, Jacobians: the mass matrix's and a loop projection's) apart, so that one serves several evaluations.
 
 A prismatic joint slides the child joint frame by ``d a_W`` along the unit axis ``a_W`` fixed in
 the parent joint frame (no relative rotation): the lever from the parent's COM to the child's
@@ -54,7 +55,8 @@ from dalembert.scene import JOINT_KINDS, WORLD
 from dalembert.trajectory import BodyStates, JointStates, Trajectory
 from dalembert.reference.configuration import Block
 from dalembert.reference.loads import BodyLoads, TreeLoads
-from dalembert.reference.tree_pass import ARRAY_MATH, FLOAT_MATH, Step, forward
+from dalembert.reference import tree_pass
+from dalembert.reference.tree_pass import ARRAY_MATH, FLOAT_MATH, Step
 
 __all__ = ["Kane"]
 
@@ -117,8 +119,10 @@ def _frozen(a):
 # The world's and the joints' constant terms in ``kinematics``: one allocation each, shared by every call
 # (read-only, so that sharing them cannot leak a write from one body's entry into another's).
 _EYE3, _ZERO3 = _frozen(np.eye(3)), _frozen(np.zeros(3))
-# Each body's entry in ``kinematics``
-_BODY_KEYS = ("R", "p", "w", "v", "Jv", "Jw", "a_bias", "alpha_bias")
+# Each body's entry in ``positions``; the ones ``velocities`` adds
+_POSE_KEYS = ("R", "p", "Jv", "Jw")
+_RATE_KEYS = ("w", "v", "a_bias", "alpha_bias")
+_ALL_KEYS = _POSE_KEYS + _RATE_KEYS
 # The key of ``kinematics``' stacked tables (a tuple: never a body name)
 TREE = ("tree",)
 
@@ -164,7 +168,7 @@ class Kane:
         self._zeros = _frozen(np.zeros((3, iv)))  # (3, nv): the world's Jacobians
         # The pass's constants (``tree_pass``), and which speeds move which body: ``_moves[b, 0, c]`` when speed c
         # is one of body b's joint's or of its ancestors' up to the nearest free joint (whose coordinates are
-        # the world's: ``tree_pass.forward``)
+        # the world's: ``tree_pass.positions``)
         slot = {WORLD: 0} | {jd["joint"].child: i + 1 for i, jd in enumerate(self.joints)}
         self._steps = [Step(jd["joint"].kind, slot[jd["joint"].parent], jd["q"].start, jd["v"].start, jd["R_PJ"],
                             jd["p_PJ"], jd["R_CJ"], jd["p_CJ"], jd["axis"]) for jd in self.joints]
@@ -191,26 +195,83 @@ class Kane:
         ``w (3,)``, ``v (3,)``, ``Jv (3, nv)``, ``Jw (3, nv)``, ``a_bias (3,)``, ``alpha_bias (3,)`` (views of
         the tables under ``TREE``: the same names, each body's along the axis -3 or -2).
 
-        The pass from the root (``tree_pass``) gives each body's state and each speed's motion ``(omega, nu,
-        o)``; the Jacobians' columns follow at once: speed c moves body b's COM at ``nu_c + omega_c x (p_b -
-        o_c)`` and turns it at ``omega_c`` where c is its joint's or an ancestor's (``_moves``), else 0.
+        ``velocities(positions(q), u)`` in one piece (one table, one entry per body: the split's own assembly cost
+        ~10% of a tree's right-hand side, ``benchmarks/reference_rhs.py``), the same numbers to the last bit.
         """
-        lead, n, nb = q.shape[:-1], self.nv, len(self.joints)
+        lead = q.shape[:-1]
         if lead:
-            states, motions = forward(self._steps, list(np.moveaxis(q, -1, 0)), list(np.moveaxis(u, -1, 0)),
-                                      ARRAY_MATH)
+            q, u, fns = list(np.moveaxis(q, -1, 0)), list(np.moveaxis(u, -1, 0)), ARRAY_MATH
+        else:  # (the pass's scalars, without a call per array: this is every tree's right-hand side)
+            q, u, fns = q.tolist(), u.tolist(), FLOAT_MATH
+        poses, motions, links = tree_pass.positions(self._steps, q, fns)
+        return self._assemble(lead, poses, motions, links, tree_pass.velocities(self._steps, links, u))
+
+    def positions(self, q):
+        """The configuration's part of ``kinematics``: every body's ``R``, ``p``, ``Jv``, ``Jw`` (and ``TREE``'s
+        ``R``, ``p``, ``J``, ``Jv``, ``Jw``), shapes as ``kinematics``'; what ``mass_matrix`` and a projection onto
+        loop closures need, and ``velocities``' input (``TREE``'s ``links``: the pass's per-joint terms)."""
+        fns = ARRAY_MATH if q.ndim > 1 else FLOAT_MATH
+        return self._assemble(q.shape[:-1], *tree_pass.positions(self._steps, self._scalars(q), fns))
+
+    def velocities(self, pos, u):
+        """``kinematics`` at the configuration of ``pos`` (``positions``, left as it is: it may serve again) and the
+        speeds ``u`` (nv,), or (m, nv) where ``pos`` is at m configurations: new dicts, ``pos``' arrays shared."""
+        lead, nb = u.shape[:-1], len(self.joints)
+        states = tree_pass.velocities(self._steps, pos[TREE]["links"], self._scalars(u))
+        body = [x for w, v, a, al in states for x in (*v, *a, *al, *w, *_skew9(w))]
+        body = _table(body, lead, 21) if lead else np.array(body, dtype=float).reshape(nb, 21)
+        tree = {k: x for k, x in pos[TREE].items() if k != "I_W"}  # (mass_matrix adds I_W where it is asked)
+        self._rates(tree, body, 0, lead)
+        zero = pos[WORLD]["p"]
+        out = {WORLD: dict(pos[WORLD], w=zero, v=zero, a_bias=zero, alpha_bias=zero), TREE: tree}
+        each = self._each(tree, _RATE_KEYS, lead)
+        for i, name in enumerate(self._names):
+            out[name] = {**pos[name], **{k: x[i] for k, x in each}}
+        return out
+
+    @staticmethod
+    def _scalars(x):
+        """The pass's scalars: ``x`` (n,) as n floats, or (m, n) as n arrays (m,)."""
+        return list(np.moveaxis(x, -1, 0)) if x.ndim > 1 else x.tolist()
+
+    @staticmethod
+    def _each(tree, keys, lead):
+        """``tree``'s tables under ``keys``, body first (each body's entries: their views)."""
+        return [(k, np.moveaxis(tree[k], len(lead), 0) if lead else tree[k]) for k in keys]
+
+    def _rates(self, tree, body, o, lead):
+        """``tree``'s velocity tables from ``body``'s columns from ``o`` on: v, a_bias, alpha_bias, w, skew(w)."""
+        tree.update(v=body[..., o:o + 3], a_bias=body[..., o + 3:o + 6], alpha_bias=body[..., o + 6:o + 9],
+                    w=body[..., o + 9:o + 12])
+        # (mass_and_forces: I_W alpha, I_W w at once)
+        tree["alpha_w"] = body[..., o + 6:o + 12].reshape(lead + (len(self.joints), 2, 3))
+        tree["skew_w"] = body[..., o + 12:o + 21].reshape(lead + (len(self.joints), 3, 3))
+
+    def _assemble(self, lead, poses, motions, links, states=None):
+        """``positions``' dicts from the pass (``tree_pass.positions``'), or with its ``states`` (``velocities``')
+        ``kinematics``'.
+
+        Each body's pose (and velocities) and each speed's motion ``(omega, nu, o)`` as tables; the Jacobians'
+        columns follow at once: speed c moves body b's COM at ``nu_c + omega_c x (p_b - o_c)`` and turns it at
+        ``omega_c`` where c is its joint's or an ancestor's (``_moves``), else 0.
+        """
+        n, nb = self.nv, len(self.joints)
+        if lead:
             zero, zeros, eye = np.zeros(lead + (3,)), np.zeros(lead + (3, n)), np.broadcast_to(_EYE3, lead + (3, 3))
         else:
-            states, motions = forward(self._steps, q.tolist(), u.tolist(), FLOAT_MATH)
             zero, zeros, eye = _ZERO3, self._zeros, _EYE3
-        # each body's R, p, v, a_bias, alpha_bias, w and skew(w); each speed's omega, nu, o and skew(omega)
-        body = [x for R, p, w, v, a, al in states for x in (*R, *p, *v, *a, *al, *w, *_skew9(w))]
+        # each body's R, p (and v, a_bias, alpha_bias, w and skew(w)); each speed's omega, nu, o and skew(omega)
+        if states is None:
+            body, width = [x for R, p in poses for x in (*R, *p)], 12
+        else:
+            body = [x for (R, p), (w, v, a, al) in zip(poses, states) for x in (*R, *p, *v, *a, *al, *w, *_skew9(w))]
+            width = 33
         cols = [x for om, nu, o in motions for x in (*om, *nu, *o, *_skew9(om))]
         if lead:
-            body, cols = _table(body, lead, 33), _table(cols, lead, 18)
+            body, cols = _table(body, lead, width), _table(cols, lead, 18)
         else:  # (one conversion)
             flat = np.array(body + cols, dtype=float)
-            body, cols = flat[:33 * nb].reshape(nb, 33), flat[33 * nb:].reshape(n, 18)
+            body, cols = flat[:width * nb].reshape(nb, width), flat[width * nb:].reshape(n, 18)
         p = body[..., 9:12]
         lever = _T(p)[..., None, :, :] - cols[..., 6:9, None]  # (..., nv, 3, nb): o_c -> p_b
         Jv = cols[..., 3:6, None] + cols[..., 9:18].reshape(lead + (n, 3, 3)) @ lever  # (..., nv, 3, nb)
@@ -218,13 +279,19 @@ class Kane:
         J = np.zeros(lead + (nb, 6, n))
         np.copyto(J[..., 0:3, :], np.swapaxes(Jv, -1, -3), where=self._moves)
         np.copyto(J[..., 3:6, :], _T(cols[..., 0:3])[..., None, :, :], where=self._moves)
-        tree = dict(R=body[..., 0:9].reshape(lead + (nb, 3, 3)), p=p, v=body[..., 12:15], a_bias=body[..., 15:18],
-                    alpha_bias=body[..., 18:21], w=body[..., 21:24], Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J)
-        tree["alpha_w"] = body[..., 18:24].reshape(lead + (nb, 2, 3))  # (mass_and_forces: I_W alpha, I_W w at once)
-        tree["skew_w"] = body[..., 24:33].reshape(lead + (nb, 3, 3))
-        out = {WORLD: dict(R=eye, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero),
-               TREE: tree}
-        each = [(k, np.moveaxis(tree[k], len(lead), 0) if lead else tree[k]) for k in _BODY_KEYS]  # body first
+        R = body[..., 0:9].reshape(lead + (nb, 3, 3))
+        if states is None:
+            tree = dict(R=R, p=p, Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J, links=links)
+            world, keys = dict(R=eye, p=zero, Jv=zeros, Jw=zeros), _POSE_KEYS
+        else:  # (one literal each, as ``velocities``' ``_rates`` at column 12: this is every tree's right-hand side)
+            tree = dict(R=R, p=p, v=body[..., 12:15], a_bias=body[..., 15:18], alpha_bias=body[..., 18:21],
+                        w=body[..., 21:24], Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J, links=links,
+                        alpha_w=body[..., 18:24].reshape(lead + (nb, 2, 3)),
+                        skew_w=body[..., 24:33].reshape(lead + (nb, 3, 3)))
+            world = dict(R=eye, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero)
+            keys = _ALL_KEYS
+        out = {WORLD: world, TREE: tree}
+        each = self._each(tree, keys, lead)
         for i, name in enumerate(self._names):
             out[name] = {k: x[i] for k, x in each}
         return out
@@ -248,11 +315,12 @@ class Kane:
         flat = J.shape[:-3] + (-1, self.nv)
         return _T(J.reshape(flat)) @ weighted.reshape(flat)
 
-    def mass_and_forces(self, t, q, u):
+    def mass_and_forces(self, t, q, u, kin=None):
         """Kane's ``M u' = f``: ``M`` (nv, nv), ``f`` (nv,) and the ``kinematics`` (each body's
         entry gains ``F``, the resultant of its loads, springs and gravity, N, world); at m states at once
-        (``q`` (m, nq), ``u`` (m, nv)), ``M`` (m, nv, nv), ``f`` (m, nv), ``F`` (m, 3)."""
-        kin = self.kinematics(q, u)
+        (``q`` (m, nq), ``u`` (m, nv)), ``M`` (m, nv, nv), ``f`` (m, nv), ``F`` (m, 3). ``kin``: the
+        ``kinematics`` at ``(q, u)`` where the caller has them (``loops``: from its projection's positions)."""
+        kin = self.kinematics(q, u) if kin is None else kin
         M = self.mass_matrix(kin)
         tree = kin[TREE]
         F, T = self._loads.resultant(tree["R"])  # (..., nb, 3) each, new arrays

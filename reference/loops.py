@@ -168,8 +168,8 @@ class ClosedLoops(Kane):
     def _accelerations(self, t, q, u):
         """The index-1 system's ``udot`` (nv,) at ``(q, u)`` projected (module docstring: singular positions), the
         kinematics there, the multipliers ``lambda`` (m,) and the rows' ``G`` (``_rows``)."""
-        q, u = self.project(q, u)  # every evaluation on the manifolds (module docstring: singular positions)
-        M, f, kin = self.mass_and_forces(t, q, u)
+        q, u, pos = self._project(q, u)  # every evaluation on the manifolds (module docstring: singular positions)
+        M, f, kin = self.mass_and_forces(t, q, u, self.velocities(pos, u))  # (the positions at the projected q)
         _, J, G, (b, _, _) = self._rows(kin, rates=True)
         Li = _inverse_cholesky(M)
         g = Li @ f
@@ -205,8 +205,7 @@ class ClosedLoops(Kane):
     def _project_stacked(self, Q, U):
         """``project`` at m states at once (``Q`` (m, nq), ``U`` (m, nv)): each state's Gauss-Newton iterations
         stop where its own stop (``PROJECTION_TOL``, or no halving), as ``project``'s."""
-        zero = np.zeros_like(U)
-        kin = self.kinematics(Q, zero)  # (one pass serves the metric and the first rows, as in ``project``)
+        kin = self.positions(Q)  # (one pass serves the metric and the first rows, as in ``project``)
         L = np.linalg.cholesky(self.mass_matrix(kin))
         LiT = np.linalg.inv(L).swapaxes(-1, -2)
         phi, J, _, _ = self._rows(kin, rates=False)
@@ -220,7 +219,7 @@ class ClosedLoops(Kane):
             last[i] = worst[i]
             Ur, inv_S, Vr = svd_cut(J[i] @ LiT[i], closure.RANK_RTOL)
             Q[i] = cfg.retract(self.blocks, Q[i], _mv(LiT[i], -_mv(Vr, _mtv(Ur, phi[i]) * inv_S)))
-            phi[i], J[i], _, _ = self._rows(self.kinematics(Q[i], zero[i]), rates=False)
+            phi[i], J[i], _, _ = self._rows(self.positions(Q[i]), rates=False)
         Ur, inv_S, Vr = svd_cut(J @ LiT, closure.RANK_RTOL)
         w = _mtv(L, U)  # L^T v
         return Q, _mv(LiT, w - _mv(Vr, _mtv(Vr, w)))
@@ -257,11 +256,14 @@ class ClosedLoops(Kane):
     def project(self, q, v):
         """``(q, v)`` moved onto ``phi(q) = 0`` and ``J(q) v = 0`` in the kinetic-energy metric
         (see the module docstring); ``q`` (nq,), ``v`` (nv,)."""
-        zero = np.zeros_like(v)
-        kin = self.kinematics(q, zero)  # (one pass serves the metric and the first rows: configuration only)
-        L = np.linalg.cholesky(self.mass_matrix(kin))  # the metric (loads do not enter it)
+        return self._project(q, v)[:2]
+
+    def _project(self, q, v):
+        """``project``'s ``(q, v)`` and the ``positions`` at that ``q`` (its last Gauss-Newton pass: the solve's)."""
+        pos = self.positions(q)  # (one pass serves the metric and the first rows: configuration only)
+        L = np.linalg.cholesky(self.mass_matrix(pos))  # the metric (loads do not enter it)
         Li = np.linalg.inv(L)
-        phi, J, _, _ = self._rows(kin, rates=False)
+        phi, J, _, _ = self._rows(pos, rates=False)
         last = np.inf
         for _ in range(PROJECTION_ITERATIONS):
             worst = float(np.max(np.abs(phi)))
@@ -270,10 +272,11 @@ class ClosedLoops(Kane):
             last = worst
             U, S, V = self._range(J @ Li.T)
             q = cfg.retract(self.blocks, q, Li.T @ (-V @ ((U.T @ phi) / S)))
-            phi, J, _, _ = self._rows(self.kinematics(q, zero), rates=False)
+            pos = self.positions(q)
+            phi, J, _, _ = self._rows(pos, rates=False)
         U, S, V = self._range(J @ Li.T)
         w = _mtv(L, v)  # L^T v (as ``_project_stacked``'s)
-        return q, Li.T @ (w - V @ (V.T @ w))
+        return q, Li.T @ (w - V @ (V.T @ w)), pos
 
     # ------------------------------------------------------------ read-back
     def forces(self, udot, kin):

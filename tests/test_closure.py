@@ -121,3 +121,21 @@ def test_a_quaternion_blocks_rate_is_the_quaternion_derivative_bit_for_bit():
         out = qdot(blocks, q, v)
         assert out[3:].tobytes() == spatial.quat_derivative(q[3:], v[3:]).tobytes()
         assert out[:3].tobytes() == v[:3].tobytes()
+
+
+def test_the_projection_hands_the_solve_the_positions_of_the_configuration_it_returns():
+    """``ClosedLoops._project`` returns the ``positions`` of its last Gauss-Newton pass for the solve to reuse: those
+    of the configuration it returns, to the last bit, whether the projection moved it (off the manifold) or not
+    (a configuration already projected)."""
+    system = ClosedLoops(SCENES["andrews_squeezer"]())
+    rng = np.random.default_rng(4)
+    for scale in (1e-6, 1e-10, 0.0):
+        q, v = system.q0 + scale * rng.normal(size=system.q0.shape), system.v0 + rng.normal(size=system.nv)
+        if scale == 0.0:
+            q = system.project(q, v)[0]
+        q1, _, pos = system._project(q, v)
+        assert (q1.tobytes() == q.tobytes()) == (scale == 0.0)
+        fresh = system.positions(q1)
+        for body in system._names:
+            for key in ("R", "p", "Jv", "Jw"):
+                assert pos[body][key].tobytes() == fresh[body][key].tobytes(), (scale, body, key)

@@ -75,3 +75,30 @@ def test_a_revolute_joint_at_a_small_angle_keeps_every_digit_of_its_rotation():
         expected = np.eye(3, dtype=np.longdouble) + sin * K + one_minus_cos * (K @ K)
         got = np.array(R, dtype=np.longdouble).reshape(3, 3)
         assert np.all(np.abs(got - expected) <= SMALL_ANGLE_ROUNDOFFS * np.finfo(float).eps * np.abs(expected)), th
+
+
+def _same(a, b):
+    return np.shape(a) == np.shape(b) and np.asarray(a).tobytes() == np.asarray(b).tobytes()
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_one_positions_pass_serves_the_metric_and_any_speeds_bit_for_bit(name):
+    """``positions(q)`` reused (``ClosedLoops``: the projection's last one is the solve's): after it served the mass
+    matrix and another state's speeds, ``velocities`` at it are a fresh ``kinematics(q, u)`` to the last bit, for
+    one state and for a stack, and it keeps its own entries (its configuration's, whatever the speeds)."""
+    system = Kane(make_case(name).scene)
+    rng = np.random.default_rng(5)
+    Q, U = zip(*(_random_state(system, rng) for _ in range(3)))
+    for q, u in [(Q[0], U[0]), (np.array(Q), np.array(U))]:
+        pos = system.positions(q)
+        kept = {body: dict(pos[body]) for body in system._names}
+        system.mass_matrix(pos)
+        system.velocities(pos, 2.0 * u + 1.0)
+        got, expected = system.velocities(pos, u), system.kinematics(q, u)
+        for body in system._names:
+            assert set(got[body]) == set(expected[body]), body
+            for key, x in expected[body].items():
+                assert _same(got[body][key], x), (body, key)
+            assert set(pos[body]) == set(kept[body]) == {"R", "p", "Jv", "Jw"}, body
+            for key, x in kept[body].items():
+                assert _same(pos[body][key], x) and _same(x, expected[body][key]), (body, key)
