@@ -164,6 +164,14 @@ class _SolveIVP:
     options = ()
     method = ""
 
+    @classmethod
+    def stepper(cls):
+        """scipy's stepper class of ``method`` (``scipy.integrate.DOP853``, ``LSODA``, ``Radau``), imported here: the
+        ``_run_projected`` path steps it itself."""
+        from scipy import integrate  # lazily: scipy.integrate is ~0.3 s of a process's start
+
+        return getattr(integrate, cls.method)
+
     @staticmethod
     def _problem(system, times, settings):
         """The first-order problem on ``y = (q, v)``: ``nq``, the right-hand side, ``y0``, the sampled
@@ -197,12 +205,10 @@ class _SolveIVP:
         takes more than ``MAX_STEPS_PER_INTERVAL`` steps (its step size collapsing, e.g. near a
         singular position of a loop, ``reference.loops``) ends the run after a bounded number of
         steps: NaN from that sample on (contract item 5), and ``Stats.message`` says where and why."""
-        from scipy import integrate  # lazily, as in run
-
         Y[0] = y = y0
         steps = nfev = 0
         message = ""
-        stepper = getattr(integrate, self.method)  # the stepper class of solve_ivp's method (DOP853, LSODA, Radau)
+        stepper = self.stepper()
         for k in range(len(times) - 1):
             try:
                 with np.errstate(over="ignore", invalid="ignore"):

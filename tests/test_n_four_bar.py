@@ -122,12 +122,12 @@ def test_a_scipy_failure_in_a_projected_adaptive_run_ends_as_data_with_scipys_me
     step of the run on."""
     taken = []
 
-    class Failing(integrators.DOP853.solver):
+    class Failing(integrators.DOP853.stepper()):
         def _step_impl(self):
             taken.append(1)
             return (False, "refused by the test") if len(taken) > 3 else super()._step_impl()
 
-    monkeypatch.setattr(integrators.DOP853, "solver", Failing)
+    monkeypatch.setattr(integrators.DOP853, "stepper", classmethod(lambda cls: Failing))
     c = n_four_bar(t_final=0.05)
     traj, stats, _ = simulate(c.scene, c.times, Settings("dop853", rtol=1e-9, atol=1e-9))
     q = traj.joints["rocker0"].q[:, 0]
