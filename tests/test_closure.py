@@ -10,7 +10,8 @@ import pytest
 from dalembert import closure, make_case, spatial
 from dalembert.reference.configuration import Block, qdot
 from dalembert.reference.loops import ClosedLoops
-from dalembert.scene import Body, Joint, Loop, Scene
+from dalembert.scene import Loop
+from scenes import spatial_chain
 
 # ``ClosedLoops`` sums each row's products with the bodies' Jacobians in one product of all loops' G, where the
 # rows' own G_a J_a + G_b J_b sums them loop by loop: the same terms in another order, so roundoff of the largest
@@ -48,28 +49,10 @@ def test_rows_of_stacked_states_are_each_states_rows_bit_for_bit(loop):
                 assert getattr(stacked, field)[k].tobytes() == getattr(one, field).tobytes(), (loop.kind, field, k)
 
 
-def _chain_to_an_anchor():
-    """Four rods hanging from the world by revolute joints about alternating axes, the last one's tip held by a
-    ``distance`` loop to a world anchor 0.3 m along x and 0.2 m along y from it (no registered case has a distance
-    loop)."""
-    length, axes, q0 = 0.5, ([1, 0, 0], [0, 1, 0], [1, 0, 0], [0, 1, 0]), (0.3, -0.4, 0.5, 0.2)
-    names = [f"l{i}" for i in range(4)]
-    bodies = [Body.cylinder(n, 1.0, length, 0.02, axis=2) for n in names]
-    joints = [Joint("revolute", "world" if i == 0 else names[i - 1], n, q0=[q0[i]], v0=[0.0], axis=axes[i],
-                    parent_point=[0, 0, 0] if i == 0 else [0, 0, -length / 2], child_point=[0, 0, length / 2])
-              for i, n in enumerate(names)]
-    gravity = [0.0, 0.0, -9.81]
-    s0 = spatial.initial_body_states(Scene("tree", bodies, joints, gravity))
-    anchor = s0["l3"]["p"] + s0["l3"]["R"] @ np.array([0, 0, -length / 2]) + np.array([0.3, 0.2, 0.0])
-    loop = Loop("distance", "world", "l3", point_a=anchor, point_b=[0, 0, -length / 2],
-                length=float(np.hypot(0.3, 0.2)), name="tip")
-    return Scene("chain_to_an_anchor", bodies, joints, gravity, loops=[loop])
-
-
 SCENES = {"andrews_squeezer": lambda: make_case("andrews_squeezer").scene,  # three balls on one body
           "bricard": lambda: make_case("bricard").scene,  # a revolute to the world
           "n_four_bar": lambda: make_case("n_four_bar").scene,  # two revolutes
-          "chain_to_an_anchor": _chain_to_an_anchor}  # a distance to the world
+          "chain_to_an_anchor": lambda: spatial_chain("distance")}  # a distance to the world
 
 
 @pytest.mark.parametrize("name", SCENES)

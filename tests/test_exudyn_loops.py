@@ -9,15 +9,15 @@ Numbers measured with Exudyn 1.13.6.
 import numpy as np
 import pytest
 
-from dalembert import closure, invariants, spatial
+from dalembert import invariants
 from dalembert.adapters import get_adapter
 from dalembert.adapters.exudyn.loops import LoopRows, loop_axes
 from dalembert.cases.four_bar import four_bar, parallelogram_pendulum  # the one line naming the module (it may be renamed)
 from dalembert.reference import simulate
 from dalembert.reference.closed_form import RigidPendulum
-from dalembert.scene import Body, Joint, Loop, Scene
 from dalembert.settings import Settings
 from bounds import ORDER_SLACK
+from scenes import spatial_chain
 
 exudyn = pytest.importorskip("exudyn")  # CI installs it: this never skips there
 
@@ -63,36 +63,6 @@ def _run(scene, times, integrator, dt, **options):
 def _closed_form_angle(times):
     m, d, I, g, theta0, rate0 = parallelogram_pendulum()
     return RigidPendulum(m, d, I, g, theta0, rate0).angle(times) - np.pi / 2
-
-
-def spatial_chain(kind):
-    """Four 0.5-m, 1-kg rods hanging from the world by revolute joints whose axes alternate between x
-    and y (a spatial chain), the last rod's tip closed to the world: by a ``ball`` at its initial place
-    (4 speeds - 3 rows: one degree of freedom) or by a ``distance`` loop to an anchor 0.36 m away (three).
-    The initial joint rates lie in the loop Jacobian's null space (the fastest joint at 2 rad/s), so the
-    loop closes at velocity level too."""
-    length, axes, q0 = 0.5, ([1, 0, 0], [0, 1, 0], [1, 0, 0], [0, 1, 0]), (0.3, -0.4, 0.5, 0.2)
-    names = [f"l{i}" for i in range(4)]
-    bodies = [Body.cylinder(n, 1.0, length, 0.02, axis=2) for n in names]
-    joints = [Joint("revolute", "world" if i == 0 else names[i - 1], n, q0=[q0[i]], v0=[0.0], axis=axes[i],
-                    parent_point=[0, 0, 0] if i == 0 else [0, 0, -length / 2], child_point=[0, 0, length / 2])
-              for i, n in enumerate(names)]
-    gravity = [0.0, 0.0, -9.81]
-    s0 = spatial.initial_body_states(Scene("tree", bodies, joints, gravity))
-    tip = s0["l3"]["p"] + s0["l3"]["R"] @ np.array([0, 0, -length / 2])
-    if kind == "ball":
-        loop = Loop("ball", "world", "l3", point_a=tip, point_b=[0, 0, -length / 2], name="tip")
-    else:
-        anchor = tip + np.array([0.3, 0.2, 0.0])
-        loop = Loop("distance", "world", "l3", point_a=anchor, point_b=[0, 0, -length / 2],
-                    length=np.linalg.norm(anchor - tip), name="tip")
-    at_rest = Scene("at_rest", bodies, joints, gravity, loops=[loop])
-    _, J = closure.tree_jacobians(at_rest)
-    r = closure.initial_rows(at_rest)[0]
-    null = np.linalg.svd(r.G_a @ J["world"] + r.G_b @ J["l3"])[2][-1]
-    rates = 2.0 * null / np.abs(null).max()
-    joints = [Joint(**{**j.__dict__, "v0": (rates[i],)}) for i, j in enumerate(joints)]
-    return Scene(f"chain_{kind}", bodies, joints, gravity, loops=[loop])
 
 
 @pytest.fixture(scope="module")
