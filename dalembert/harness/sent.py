@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 from dalembert.trajectory_store import ALL, DRAWN, KEEPS, NONE
 
-__all__ = ["Sent", "SEND_ALL", "told"]
+__all__ = ["Sent", "told"]
 
 
 @dataclass(frozen=True)
@@ -74,10 +74,6 @@ class Sent:
         from dalembert.reports.drawn import may_be_drawn
 
         return may_be_drawn([{"case": c, "case_version": v} for c, v in self.versions], case_of)(record)
-
-
-# Every trajectory sent: a caller that names no store choice gets what it always got.
-SEND_ALL = Sent(ALL)
 
 
 def told(store, specs):
