@@ -283,11 +283,9 @@ class Kane:
         if states is None:
             tree = dict(R=R, p=p, Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J, links=links)
             world, keys = dict(R=eye, p=zero, Jv=zeros, Jw=zeros), _POSE_KEYS
-        else:  # (one literal each, as ``velocities``' ``_rates`` at column 12: this is every tree's right-hand side)
-            tree = dict(R=R, p=p, v=body[..., 12:15], a_bias=body[..., 15:18], alpha_bias=body[..., 18:21],
-                        w=body[..., 21:24], Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J, links=links,
-                        alpha_w=body[..., 18:24].reshape(lead + (nb, 2, 3)),
-                        skew_w=body[..., 24:33].reshape(lead + (nb, 3, 3)))
+        else:  # the velocities' columns after the pose's 12, laid out as ``velocities``' own table
+            tree = dict(R=R, p=p, Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J, links=links)
+            self._rates(tree, body, 12, lead)
             world = dict(R=eye, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero)
             keys = _ALL_KEYS
         out = {WORLD: world, TREE: tree}
