@@ -249,8 +249,15 @@ def frame_with_z(z):
 def quat_derivative(q_WB, w_WB_B):
     """Time derivative ``dq/dt = 1/2 q * (0, w_B)`` of ``q_WB``, shape (..., 4)."""
     w = np.asarray(w_WB_B, dtype=float)
+    q = np.asarray(q_WB, dtype=float)
+    if w.ndim == 1 and q.ndim == 1:  # (Python floats: ``quat_multiply``'s products and sums with w2 = 0, bit for bit;
+        w1, x1, y1, z1 = q.tolist()  # the reference's qdot asks this per quaternion block per right-hand side)
+        x2, y2, z2 = w.tolist()
+        w2 = 0.0
+        return np.array([0.5 * (w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2), 0.5 * (w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2),
+                         0.5 * (w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2), 0.5 * (w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2)])
     if w.ndim == 1:
-        return 0.5 * quat_multiply(q_WB, np.array([0.0, w[0], w[1], w[2]]))
+        return 0.5 * quat_multiply(q, np.array([0.0, w[0], w[1], w[2]]))
     zero = np.zeros(w.shape[:-1] + (1,))
     return 0.5 * quat_multiply(q_WB, np.concatenate([zero, w], axis=-1))
 

@@ -95,14 +95,15 @@ def test_an_acceleration_without_its_reactions_is_the_solves_bit_for_bit():
 
 
 def test_a_quaternion_blocks_rate_is_the_quaternion_derivative_bit_for_bit():
-    """``configuration.qdot``'s quaternion block (in floats, once per block per right-hand side) is
-    ``spatial.quat_derivative`` to the last bit, at magnitudes from 1e-8 to 1e8."""
+    """``configuration.qdot``'s quaternion block (``spatial.quat_derivative`` of one quaternion: in floats, once per
+    block per right-hand side) is the stacked quaternion derivative's, ``1/2 q * (0, w)``, to the last bit, at
+    magnitudes from 1e-8 to 1e8."""
     rng = np.random.default_rng(3)
     blocks = (Block("vector", slice(0, 3), slice(0, 3)), Block("quat", slice(3, 7), slice(3, 6)))
     for _ in range(2000):
         q, v = rng.normal(size=7) * 10.0 ** rng.integers(-8, 9), rng.normal(size=6) * 10.0 ** rng.integers(-8, 9)
         out = qdot(blocks, q, v)
-        assert out[3:].tobytes() == spatial.quat_derivative(q[3:], v[3:]).tobytes()
+        assert out[3:].tobytes() == spatial.quat_derivative(q[None, 3:], v[None, 3:])[0].tobytes()
         assert out[:3].tobytes() == v[:3].tobytes()
 
 
