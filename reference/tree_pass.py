@@ -30,6 +30,8 @@ import math
 
 import numpy as np
 
+from dalembert import spatial
+
 __all__ = ["Step", "positions", "velocities", "forward", "FLOAT_MATH", "ARRAY_MATH"]
 
 _I9 = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
@@ -101,7 +103,7 @@ class Step:
         self.axis = self.K = self.K2 = None
         if axis is not None:
             a = np.asarray(axis, dtype=float)
-            K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+            K = spatial.skew(a)
             self.axis, self.K, self.K2 = tuple(a.tolist()), tuple(K.ravel().tolist()), tuple((K @ K).ravel().tolist())
 
 
