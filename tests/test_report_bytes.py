@@ -64,6 +64,7 @@ def test_a_figure_s_ids_are_its_own_and_the_same_in_every_save():
     one, again = svg_text.svg(_line_figure(1.0)), svg_text.svg(_line_figure(1.0))
     other = svg_text.svg(_line_figure(2.0))
     assert one == again
+    assert plt.rcParams["svg.hashsalt"] is None  # the fixed salt was the save's, not the process's
     ids = set(_DEFINED_ID.findall(one))
     assert {i[0] for i in ids} >= {"p", "m"}
     assert ids.isdisjoint(_DEFINED_ID.findall(other))
