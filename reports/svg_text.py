@@ -5,11 +5,17 @@ draws it again into the file. For a figure laid out already (``tight_layout``, o
 draw changes nothing the measurement reads: ``tight_box`` measures the same box without it (the same numbers to
 the SVG's last digit), and the figure is drawn once. A constrained layout is computed in that first draw, so a
 figure with one is saved as before.
+
+The text is a function of the figure alone, so that two reports of one store are byte-identical: no date in its
+metadata, and none of the random ids matplotlib salts with ``uuid4()`` (``svg.hashsalt`` unset). Its ids are salted
+by the figure's own drawing (``own_ids``): unique to it among a page's inlined figures, as the random ones were.
 """
 
 from __future__ import annotations
 
+import hashlib
 import io
+import re
 
 import matplotlib
 
@@ -19,9 +25,14 @@ from matplotlib.backends.backend_svg import FigureCanvasSVG, RendererSVG  # noqa
 
 from dalembert.reports import tick_labels  # noqa: E402
 
-__all__ = ["svg", "tight_box", "SVG_DPI"]
+__all__ = ["svg", "tight_box", "own_ids", "SVG_DPI", "SAVE_SALT"]
 
 SVG_DPI = 72  # matplotlib's SVG backend draws a figure at 72 dpi: its units are points
+SAVE_SALT = "dalembert"  # ``svg.hashsalt`` while a figure is saved: any fixed text (``own_ids`` salts again)
+# An id matplotlib's SVG backend makes from a hash (``RendererSVG._make_id``: a type, then 10 hex digits of the
+# salted SHA-256 of what it names): clip paths p, markers m, hatches h, images, a path collection's paths
+# C<collection>_<path>_. Matched where it is defined (id="...") and referred to ("#..." in an href, url(#...)).
+_HASHED_ID = re.compile(r'(?<=["#])((?:[pmh]|image|C[0-9a-f]+_[0-9a-f]+_)[0-9a-f]{10})(?=[")])')
 
 
 def svg(fig):
@@ -38,10 +49,38 @@ def svg(fig):
     tick_labels.plain_figure(fig)  # a colour bar's own log formatter too
     box = tight_box(fig)
     buf = io.StringIO()
-    fig.savefig(buf, format="svg", bbox_inches=box)
+    # the salt for this save only, not the user's process's; "Date": None writes no date (not even SOURCE_DATE_EPOCH's)
+    with matplotlib.rc_context({"svg.hashsalt": SAVE_SALT}):
+        fig.savefig(buf, format="svg", bbox_inches=box, metadata={"Date": None})
     plt.close(fig)
     text = buf.getvalue()
-    return text[text.index("<svg"):]
+    return own_ids(text[text.index("<svg"):])
+
+
+def own_ids(text):
+    """``text`` (an SVG matplotlib wrote with a fixed ``svg.hashsalt``) with each of its hashed ids salted again by
+    the SHA-256 of ``text`` itself: the same ids for the same drawing in any process, and ids that no other figure
+    inlined in the same page has (a fixed salt alone gives two figures' equal clip boxes, markers, one id), unless it
+    is the same drawing.
+
+    Parameters
+    ----------
+    text : str — an SVG document
+
+    Returns
+    -------
+    str — ``text`` with each id ``_HASHED_ID`` matches, and every reference to it, renamed (its type kept)
+    """
+    salt = hashlib.sha256(text.encode("utf-8")).digest()
+    new = {}
+
+    def renamed(match):
+        old = match.group(1)
+        if old not in new:
+            new[old] = old[:-10] + hashlib.sha256(salt + old.encode("utf-8")).hexdigest()[:10]
+        return new[old]
+
+    return _HASHED_ID.sub(renamed, text)
 
 
 def tight_box(fig):
