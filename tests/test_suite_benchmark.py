@@ -96,6 +96,9 @@ def test_the_outcomes_are_the_last_summary_line_s(suite):
         "passed": 2449, "skipped": 14, "xfailed": 1, "warnings": 41}
     assert suite.outcomes("= 1 error, 1 warning in 0.5s =") == {"errors": 1, "warnings": 1}
     assert suite.outcomes("collected 5 items\n") == {}
+    # a failed test's captured output can hold an inner pytest's summary (a test that runs pytest): not the suite's
+    inner = "----------------------------- Captured stdout call -----------------------------\n3 passed in 0.02s\n"
+    assert suite.outcomes(inner + "1 failed, 2 passed in 9.10s\n") == {"failed": 1, "passed": 2}
 
 
 def test_jax_compiles_count_every_finished_compilation_and_its_cache_hits(suite):
