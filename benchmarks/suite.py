@@ -378,7 +378,9 @@ def main(argv=None):
     argv = list(sys.argv[1:] if argv is None else argv)
     extra = argv[argv.index("--") + 1:] if "--" in argv else []
     argv = argv[:argv.index("--")] if "--" in argv else argv
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                epilog="-- PYTEST ARGS: after the README's command (-- -n 1: the last -n wins; -- "
+                                       "tests/test_x.py: those files only)")
     p.add_argument("--jax-cache", choices=("cold", "warm"), default=None,
                    help="cold: a fresh cache but for the Pinocchio stepper (default); warm: the suite run once into "
                         "it first, untimed")
