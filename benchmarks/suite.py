@@ -25,10 +25,12 @@ setup + call + teardown from ``--durations``, summed over the workers (test time
 
 The project's goal is the suite under 4 minutes from a fresh clone on 2 cores while another process keeps them
 busy: then the suite gets about one core, so its wall time there is about the CPU this measures, not the wall time
-it prints. Measured at f0fb449, cold, on 2 cores that other work shared (2521 passed, 14 skipped, 1 xfailed):
-644 CPU-s in 623 s wall (load 3.1 at the start, 1.9 at the end), and again from a load of 0.1 (1.6 at the end) 587
-CPU-s in 342 s; both 161 XLA compiles (9 from the cache the run itself filled), 253 and 111 s of compile wall time;
-the costliest files MJX's, Newton's, the batches', the matrix's and reliability's, ~7 % each. The hook costs no CPU
+it prints. Measured at bf279fa in a fresh clone after ``make setup`` (``dalembert[all]``: 2455 passed, 82 skipped,
+1 xfailed), 2 cores, load ~1 at the start: cold 433 CPU-s in 224 s wall, 161 XLA compiles, 120 s of compile wall
+time; warm 303 CPU-s in 158 s (39 of the compiles from the cache, 7 s). So MJX's XLA compiles are ~130 CPU-s of a
+cold suite, and even a warm one is ~60 CPU-s over the goal's ~240. The costliest files cold: test_mjx_contact
+(11.5 %), test_run_matrix (9.7 %), test_reliability (8.1 %), test_mjx (6.0 %). Load inflates the CPU itself (a
+checkout with Newton installed: 587 CPU-s near idle, 644 beside other work). The hook costs no CPU
 that shows: ``import dalembert`` 0.21 CPU-s a start with it and without (30 starts each).
 
 Prints the tests passed/failed/skipped, wall s, CPU s, CPU/wall, the JAX compiles and the top ``TOP`` files with
