@@ -2,11 +2,10 @@
 ``robot_costs``, the scaling section's robots) and the benchmark's interpolation of the chain's line."""
 
 import math
-import os
-import sys
 from types import SimpleNamespace
 
 import pytest
+from benchmark_modules import benchmark
 
 from dalembert import Settings
 from dalembert.record import Cost, RunRecord
@@ -14,8 +13,6 @@ from dalembert.reports import figures
 from dalembert.reports.scaling import robot_costs
 from dalembert.reports.sections.scaling import scaling
 from dalembert.scene import Body, Joint, Scene
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def _scene(n, free=False):
@@ -70,12 +67,8 @@ def test_the_scaling_section_draws_robots_against_dof_and_not_one_robot_alone():
 
 @pytest.fixture()
 def bench():
-    sys.path.insert(0, ROOT)
-    try:
-        import benchmarks.scaling as module
+    with benchmark("scaling") as module:
         yield module
-    finally:
-        sys.path.remove(ROOT)
 
 
 def test_the_benchmark_reads_the_chain_s_cost_at_a_robot_s_joints_on_its_log_log_line(bench):

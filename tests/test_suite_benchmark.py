@@ -11,8 +11,8 @@ import sys
 import textwrap
 
 import pytest
+from benchmark_modules import benchmark
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 # pytest's --durations lines: several phases of one file, a file with setup only, lines that are not durations
 DURATIONS = """\
@@ -65,12 +65,8 @@ STARTS_S = 1.0
 
 @pytest.fixture()
 def suite():
-    sys.path.insert(0, ROOT)
-    try:
-        import benchmarks.suite as module
+    with benchmark("suite") as module:
         yield module
-    finally:
-        sys.path.remove(ROOT)
 
 
 def test_each_file_sums_its_tests_setup_call_and_teardown(suite):
