@@ -15,8 +15,8 @@ $(STAMP): pyproject.toml $(CONSTRAINTS)
 	$(BIN)/python -m pip install --quiet --upgrade pip -c $(CONSTRAINTS)
 	$(BIN)/python -m pip install --quiet -e ".[test,all]" -c $(CONSTRAINTS)  # all: the optional engines (Drake, MJX)
 	$(BIN)/python -m dalembert.adapters.pinocchio.native  # compile the Pinocchio stepper once (~2 min)
-	# bytecode for the checkout's sources, as pip writes it for every package it installs (an editable install gets
-	# none): where PYTHONDONTWRITEBYTECODE is set, every interpreter would otherwise compile dalembert again
+# bytecode for the checkout's sources, as pip writes it for every package it installs (an editable install gets
+# none): where PYTHONDONTWRITEBYTECODE is set, every interpreter would otherwise compile dalembert again
 	$(BIN)/python -m compileall -q $(CURDIR)/dalembert $(CURDIR)/reference $(CURDIR)/adapters $(CURDIR)/cases $(CURDIR)/reports
 	touch $(STAMP)
 
