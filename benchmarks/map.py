@@ -2,7 +2,7 @@
 the report grow with the number of rows.
 
     python -m benchmarks.map [--rows 10000,100000,1000000] [--json FILE] [--layout 2] [--source STORE]
-    python -m benchmarks.map --probes 10000 [--jobs 2] [--json FILE] [--log FILE]
+    python -m benchmarks.map --probes 10000 [--jobs 2] [--trajectories all|drawn|none] [--json FILE] [--log FILE]
 
 1. A small map on a ``LocalCluster`` of 2 worker processes (1 thread each): the reference's RK4
    and RKMK4 on ``free_top_fast_spin`` swept over 4 spins from 5 to 500 rad/s, each curve
@@ -12,9 +12,14 @@ the report grow with the number of rows.
    (``probe_map``: MuJoCo's RK4 on ``free_top_fast_spin`` over N / ``PROBES_PER_CURVE`` spins, each
    curve bisected to a resolution of 1.05), on the cluster or, with ``--jobs J``, on J local worker
    processes without Dask (the same map, for the ratio), and prints the probes, the wall time, probes
-   per second, the search's rounds, the Dask tasks and the load average; the store's figures follow
-   only with ``--rows``. ``--json FILE`` writes the map as ``{"cluster": {"probes", "wall_s",
-   "probes_per_s", "workers", "tasks", "rounds", "load_start", "load_end"}}`` (``"local"`` with ``--jobs``).
+   per second, the search's rounds, the Dask tasks, the load average and the store's size on disk; the
+   store's figures follow only with ``--rows``. ``--trajectories`` is ``dalembert run``'s (which trajectories
+   the store keeps: every probe's, only those the report draws, or none; ``dalembert run``'s default
+   without it), to see what keeping them costs in time and disk. ``--json FILE`` writes the map as
+   ``{"cluster": {"probes", "wall_s", "probes_per_s", "workers", "tasks", "rounds", "load_start", "load_end",
+   "trajectories", "store_mb"}}`` (``"local"`` with ``--jobs``).
+   Measured on 2 idle cores (load 0.7 to 1.8) at 60b62a6: ``--probes 10000``, 10433 probes in 117 s on the
+   cluster (88.9 probes/s; 102 Dask tasks, 12 rounds).
    Measured on 2 cores shared with other work: ``--probes 10000``, 10433 probes in 852 s (14.2 min, 12.2
    probes/s, load average 10.6 to 11.8; 102 Dask tasks; the 2000 first probes, then 12 rounds of 1000 to 86)
    and in 192 s with ``--jobs 2`` (54.4 probes/s, load 7.8 to 4.8); 377 CPU s against 179 for the whole
@@ -49,6 +54,8 @@ import sys
 import tempfile
 import time
 from dataclasses import replace
+
+from dalembert.trajectory_store import KEEPS
 
 SIZES = (10_000, 100_000, 1_000_000)
 
@@ -89,11 +96,12 @@ PROBE_SPINS = (30.0, 500.0)  # rad/s: the swept range, log-spaced
 PROBES_PER_CURVE = 10
 
 
-def probe_map(tmp, probes, jobs=None, log=None):
+def probe_map(tmp, probes, jobs=None, log=None, trajectories=None):
     """The ``--probes`` map of ~``probes`` probes on a 2-worker ``LocalCluster`` (or on ``jobs`` local workers, no
     Dask): ``{"probes", "wall_s", "probes_per_s", "workers", "tasks", "rounds", "load_start", "load_end"}`` (tasks
-    None without Dask), its store at ``tmp/probes``; ``log``: a file for what ``dalembert run`` told (its rounds and
-    each probe's progress)."""
+    None without Dask), ``"trajectories"`` (what the store keeps: ``trajectories``, ``dalembert run``'s
+    ``--trajectories``, or its default where None) and ``"store_mb"`` (the store's size on disk, MB); its store at
+    ``tmp/probes``; ``log``: a file for what ``dalembert run`` told (its rounds and each probe's progress)."""
     from distributed import LocalCluster
     from distributed.diagnostics.plugin import SchedulerPlugin
 
@@ -106,7 +114,8 @@ def probe_map(tmp, probes, jobs=None, log=None):
     spins = max(1, round(probes / PROBES_PER_CURVE))
     out = os.path.join(tmp, "probes")
     command = [sys.executable, "-m", "dalembert.harness.cli", "run", *PROBE_MAP, "--param",
-               f"spin=log:{PROBE_SPINS[0]:g},{PROBE_SPINS[1]:g},{spins}", "--out", out]
+               f"spin=log:{PROBE_SPINS[0]:g},{PROBE_SPINS[1]:g},{spins}", "--out", out,
+               *(["--trajectories", trajectories] if trajectories else [])]
     load = os.getloadavg()[0]
     if jobs:
         t0 = time.perf_counter()
@@ -128,10 +137,17 @@ def probe_map(tmp, probes, jobs=None, log=None):
         raise SystemExit(proc.stderr[-2000:])
     from dalembert.store import Store
 
-    n = len(Store(out).done_keys())
+    store = Store(out)
+    n = len(store.done_keys())
     rounds = sum(line.startswith("dalembert: search round") for line in proc.stderr.splitlines())
     return {"probes": n, "wall_s": wall, "probes_per_s": n / wall, "workers": workers, "tasks": tasks,
-            "rounds": rounds, "spins": spins, "load_start": load, "load_end": os.getloadavg()[0]}
+            "rounds": rounds, "spins": spins, "load_start": load, "load_end": os.getloadavg()[0],
+            "trajectories": store.kept().keep, "store_mb": _disk_bytes(out) / 1e6}
+
+
+def _disk_bytes(path):
+    """The bytes of every file under ``path``."""
+    return sum(os.path.getsize(os.path.join(d, f)) for d, _, names in os.walk(path) for f in names)
 
 
 def _synthetic(source, path, n, layout):
@@ -195,11 +211,18 @@ def main(argv=None):
     p.add_argument("--jobs", type=int, default=None, metavar="J",
                    help="with --probes: run the map on J local worker processes, without Dask")
     p.add_argument("--log", metavar="FILE", help="with --probes: write what the map's `dalembert run` told to FILE")
+    p.add_argument("--trajectories", default=None, metavar="KEEP",
+                   help=f"with --probes: which trajectories the map's store keeps ({', '.join(KEEPS)}; "
+                   "default: dalembert run's)")
     args = p.parse_args(argv)
     if args.probes is not None and args.probes < 1:
         p.error(f"--probes: {args.probes} probes — give at least 1")
     if args.jobs is not None and (args.probes is None or args.jobs < 1):
         p.error("--jobs: runs the --probes map locally — give --probes N and at least 1 job")
+    if args.trajectories is not None and args.trajectories not in KEEPS:
+        p.error(f"--trajectories: {args.trajectories!r} is not a choice — use one of {', '.join(KEEPS)}")
+    if args.trajectories is not None and args.probes is None:
+        p.error("--trajectories: says what the --probes map's store keeps — give --probes N")
     if args.probes is not None and args.source:
         p.error("--probes and --source: --source skips the cluster map — give one")
     rows = args.rows if args.rows is not None else ("" if args.probes else ",".join(map(str, SIZES)))
@@ -209,12 +232,13 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as tmp:
         if args.probes:
             where = "local" if args.jobs else "cluster"
-            head[where] = m = probe_map(tmp, args.probes, args.jobs, args.log)
+            head[where] = m = probe_map(tmp, args.probes, args.jobs, args.log, args.trajectories)
             on = (f"{args.jobs} local workers (no Dask)" if args.jobs
                   else f"a 2-worker LocalCluster ({m['tasks']} Dask tasks)")
             print(f"map of {m['spins']} spins on {on}: {m['probes']} probes in {m['wall_s']:.1f} s = "
                   f"{m['probes_per_s']:.2f} probes/s, {m['rounds']} search rounds ({os.cpu_count()} cores, load "
-                  f"{m['load_start']:.2f} at the start, {m['load_end']:.2f} at the end)", flush=True)
+                  f"{m['load_start']:.2f} at the start, {m['load_end']:.2f} at the end); store {m['store_mb']:.1f} MB "
+                  f"on disk, trajectories kept: {m['trajectories']}", flush=True)
             if args.json:
                 with open(args.json, "w") as fh:
                     json.dump({**head, "cores": os.cpu_count()}, fh, indent=1)
