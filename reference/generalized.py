@@ -198,13 +198,10 @@ class Kane:
         ``velocities(positions(q), u)`` in one piece (one table, one entry per body: the split's own assembly cost
         ~10% of a tree's right-hand side, ``benchmarks/reference_rhs.py``), the same numbers to the last bit.
         """
-        lead = q.shape[:-1]
-        if lead:
-            q, u, fns = list(np.moveaxis(q, -1, 0)), list(np.moveaxis(u, -1, 0)), ARRAY_MATH
-        else:  # (the pass's scalars, without a call per array: this is every tree's right-hand side)
-            q, u, fns = q.tolist(), u.tolist(), FLOAT_MATH
-        poses, motions, links = tree_pass.positions(self._steps, q, fns)
-        return self._assemble(lead, poses, motions, links, tree_pass.velocities(self._steps, links, u))
+        fns = ARRAY_MATH if q.ndim > 1 else FLOAT_MATH
+        poses, motions, links = tree_pass.positions(self._steps, self._scalars(q), fns)
+        states = tree_pass.velocities(self._steps, links, self._scalars(u))
+        return self._assemble(q.shape[:-1], poses, motions, links, states)
 
     def positions(self, q):
         """The configuration's part of ``kinematics``: every body's ``R``, ``p``, ``Jv``, ``Jw`` (and ``TREE``'s
@@ -279,14 +276,12 @@ class Kane:
         J = np.zeros(lead + (nb, 6, n))
         np.copyto(J[..., 0:3, :], np.swapaxes(Jv, -1, -3), where=self._moves)
         np.copyto(J[..., 3:6, :], _T(cols[..., 0:3])[..., None, :, :], where=self._moves)
-        R = body[..., 0:9].reshape(lead + (nb, 3, 3))
-        if states is None:
-            tree = dict(R=R, p=p, Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J, links=links)
-            world, keys = dict(R=eye, p=zero, Jv=zeros, Jw=zeros), _POSE_KEYS
-        else:  # the velocities' columns after the pose's 12, laid out as ``velocities``' own table
-            tree = dict(R=R, p=p, Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J, links=links)
+        tree = dict(R=body[..., 0:9].reshape(lead + (nb, 3, 3)), p=p, Jv=J[..., 0:3, :], Jw=J[..., 3:6, :], J=J,
+                    links=links)
+        world, keys = dict(R=eye, p=zero, Jv=zeros, Jw=zeros), _POSE_KEYS
+        if states is not None:  # the velocities' columns after the pose's 12, laid out as ``velocities``' own table
             self._rates(tree, body, 12, lead)
-            world = dict(R=eye, p=zero, w=zero, v=zero, Jv=zeros, Jw=zeros, a_bias=zero, alpha_bias=zero)
+            world.update(w=zero, v=zero, a_bias=zero, alpha_bias=zero)
             keys = _ALL_KEYS
         out = {WORLD: world, TREE: tree}
         each = self._each(tree, keys, lead)
