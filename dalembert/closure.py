@@ -33,7 +33,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from dalembert import spatial
+from dalembert import scalar3, spatial
 
 __all__ = ["ROWS", "RANK_RTOL", "Rows", "ClosureSummary", "LoopRows", "rows", "rows_stacked", "stack_terms", "residuals",
            "initial_rows", "world_state", "summary", "tree_jacobians"]
@@ -75,9 +75,8 @@ class Rows:
     velocity: np.ndarray
 
 
-# ``LoopRows`` writes each row's terms once, on scalars: Python floats at one state (at a fraction of the cost of
-# numpy calls on 3-vectors: ``rotations.skew``'s reason), or (m,) arrays, one entry per state, where the states come
-# stacked. Each product and sum is then one IEEE operation either way, so both paths round every term alike.
+# ``LoopRows`` writes each row's terms once, on scalars (``scalar3``): Python floats at one state, or (m,) arrays,
+# one entry per state, where the states come stacked; both paths round every term alike.
 def _vector(x):
     """A 3-vector (3,) as 3 floats, or a stack (m, 3) as its 3 components (m,)."""
     x = x if isinstance(x, np.ndarray) else np.asarray(x, dtype=float)
@@ -85,26 +84,9 @@ def _vector(x):
 
 
 def _matrix(R):
-    """A matrix (3, 3) as nested floats, or a stack (m, 3, 3) as its 9 entries (m,), nested."""
+    """A matrix (3, 3) as its 9 floats, or a stack (m, 3, 3) as its 9 entries (m,); row-major (``scalar3``'s)."""
     R = R if isinstance(R, np.ndarray) else np.asarray(R, dtype=float)
-    return R.tolist() if R.ndim == 2 else [[R[..., i, j] for j in range(3)] for i in range(3)]
-
-
-def _turn(R, x):
-    """``R @ x`` for ``R`` nested (3, 3) and ``x`` 3 scalars (``_matrix``, ``_vector``)."""
-    x0, x1, x2 = x
-    return [R[0][0] * x0 + R[0][1] * x1 + R[0][2] * x2, R[1][0] * x0 + R[1][1] * x1 + R[1][2] * x2,
-            R[2][0] * x0 + R[2][1] * x1 + R[2][2] * x2]
-
-
-def _cross(a, b):
-    a0, a1, a2 = a
-    b0, b1, b2 = b
-    return [a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0]
-
-
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    return R.ravel().tolist() if R.ndim == 2 else [R[..., i, j] for i in range(3) for j in range(3)]
 
 
 def _point_block(rho):
@@ -148,42 +130,42 @@ class LoopRows:
         ``G_b`` (k rows of 6), and with ``rates`` ``gamma`` and ``velocity`` (k,) (else ``None``: a projection
         needs only the positions and the Jacobian)."""
         R_a, R_b = _matrix(A["R"]), _matrix(B["R"])
-        rho_a, rho_b = _turn(R_a, self.point_a), _turn(R_b, self.point_b)
+        rho_a, rho_b = scalar3.rot(R_a, self.point_a), scalar3.rot(R_b, self.point_b)
         p_a, p_b = _vector(A["p"]), _vector(B["p"])
         d = [p_a[i] + rho_a[i] - (p_b[i] + rho_b[i]) for i in range(3)]  # x_Ja - x_Jb
         if rates:
             w_a, w_b, v_a, v_b = _vector(A["w"]), _vector(B["w"]), _vector(A["v"]), _vector(B["v"])
-            wr_a, wr_b = _cross(w_a, rho_a), _cross(w_b, rho_b)
+            wr_a, wr_b = scalar3.cross(w_a, rho_a), scalar3.cross(w_b, rho_b)
             dd = [v_a[i] + wr_a[i] - (v_b[i] + wr_b[i]) for i in range(3)]  # the points' relative velocity
-            c_a, c_b = _cross(w_a, wr_a), _cross(w_b, wr_b)  # centripetal acceleration of each point
+            c_a, c_b = scalar3.cross(w_a, wr_a), scalar3.cross(w_b, wr_b)  # centripetal acceleration of each point
             dc = [c_a[i] - c_b[i] for i in range(3)]
         if self.kind == "distance":
-            r = _dot(d, d)
+            r = scalar3.dot(d, d)
             r = math.sqrt(r) if isinstance(r, float) else np.sqrt(r)  # (both IEEE's correctly rounded root)
             e = [x / r for x in d]
-            n_a, n_b = _cross(rho_a, e), _cross(rho_b, e)  # e @ -skew(rho)
-            G_a, G_b = [e + n_a], [[-x for x in e + n_b]]
+            n_a, n_b = scalar3.cross(rho_a, e), scalar3.cross(rho_b, e)  # e @ -skew(rho)
+            G_a, G_b = [[*e, *n_a]], [[-x for x in (*e, *n_b)]]
             if not rates:
                 return [r - self.length], G_a, G_b, None, None
-            ed = _dot(e, dd)
-            return [r - self.length], G_a, G_b, [_dot(e, dc) + (_dot(dd, dd) - ed * ed) / r], [ed]
+            ed = scalar3.dot(e, dd)
+            return [r - self.length], G_a, G_b, [scalar3.dot(e, dc) + (scalar3.dot(dd, dd) - ed * ed) / r], [ed]
         G_a, G_b = _point_block(rho_a), [[-x for x in row] for row in _point_block(rho_b)]
         phi, gamma, vel = d, (dc if rates else None), (dd if rates else None)
         if self.kind == "revolute":
-            s_a = _turn(R_a, self.axis_a)
+            s_a = scalar3.rot(R_a, self.axis_a)
             if rates:
                 dw = [w_a[i] - w_b[i] for i in range(3)]
-                ws_a = _cross(w_a, s_a)
+                ws_a = scalar3.cross(w_a, s_a)
             for u in self.normals_b:
-                s_b = _turn(R_b, u)
-                n = _cross(s_a, s_b)
-                phi = phi + [_dot(s_b, s_a)]
-                G_a.append([0.0, 0.0, 0.0] + n)
+                s_b = scalar3.rot(R_b, u)
+                n = scalar3.cross(s_a, s_b)
+                phi = phi + [scalar3.dot(s_b, s_a)]
+                G_a.append([0.0, 0.0, 0.0, *n])
                 G_b.append([0.0, 0.0, 0.0, -n[0], -n[1], -n[2]])
                 if rates:
-                    n_dot = [x + y for x, y in zip(_cross(ws_a, s_b), _cross(s_a, _cross(w_b, s_b)))]
-                    gamma = gamma + [_dot(dw, n_dot)]
-                    vel = vel + [_dot(dw, n)]
+                    n_dot = scalar3.add(scalar3.cross(ws_a, s_b), scalar3.cross(s_a, scalar3.cross(w_b, s_b)))
+                    gamma = gamma + [scalar3.dot(dw, n_dot)]
+                    vel = vel + [scalar3.dot(dw, n)]
         return phi, G_a, G_b, gamma, vel
 
 

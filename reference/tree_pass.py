@@ -31,6 +31,7 @@ import math
 import numpy as np
 
 from dalembert import spatial
+from dalembert.scalar3 import add, cross, mat, rot
 
 __all__ = ["Step", "positions", "velocities", "forward", "FLOAT_MATH", "ARRAY_MATH"]
 
@@ -41,32 +42,6 @@ _E3 = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 # sin and sqrt of a scalar: floats for one state, numpy's for m states at once
 FLOAT_MATH = (math.sin, math.sqrt)
 ARRAY_MATH = (np.sin, np.sqrt)
-
-
-def _mat(A, B):
-    """``A B`` of 9-tuples."""
-    a0, a1, a2, a3, a4, a5, a6, a7, a8 = A
-    b0, b1, b2, b3, b4, b5, b6, b7, b8 = B
-    return (a0 * b0 + a1 * b3 + a2 * b6, a0 * b1 + a1 * b4 + a2 * b7, a0 * b2 + a1 * b5 + a2 * b8,
-            a3 * b0 + a4 * b3 + a5 * b6, a3 * b1 + a4 * b4 + a5 * b7, a3 * b2 + a4 * b5 + a5 * b8,
-            a6 * b0 + a7 * b3 + a8 * b6, a6 * b1 + a7 * b4 + a8 * b7, a6 * b2 + a7 * b5 + a8 * b8)
-
-
-def _rot(A, x):
-    """``A x``: a 9-tuple times a 3-tuple."""
-    a0, a1, a2, a3, a4, a5, a6, a7, a8 = A
-    x0, x1, x2 = x
-    return (a0 * x0 + a1 * x1 + a2 * x2, a3 * x0 + a4 * x1 + a5 * x2, a6 * x0 + a7 * x1 + a8 * x2)
-
-
-def _cross(a, b):
-    a0, a1, a2 = a
-    b0, b1, b2 = b
-    return (a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0)
-
-
-def _add(a, b):
-    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
 
 
 def _quat_matrix(w, x, y, z, sqrt):
@@ -140,8 +115,8 @@ def positions(steps, q, fns):
             links.append(R)
             continue
         R_P, p_P = poses[st.parent]
-        R_WJp = R_P if st.R_PJ is None else _mat(R_P, st.R_PJ)
-        r_PJ = _rot(R_P, st.p_PJ)  # parent COM -> (parent's) joint point
+        R_WJp = R_P if st.R_PJ is None else mat(R_P, st.R_PJ)
+        r_PJ = rot(R_P, st.p_PJ)  # parent COM -> (parent's) joint point
         x = None
         if kind == "revolute":
             th, K, K2 = q[st.iq], st.K, st.K2
@@ -151,29 +126,29 @@ def positions(steps, q, fns):
                 s = h = math.nan
             c = 2.0 * h * h  # 1 - cos(th), without its cancellation at small angles
             # R_J = exp(th skew(axis)) = I + sin(th) K + (1 - cos(th)) K^2 (Rodrigues; K's diagonal is zero)
-            R_WJc = _mat(R_WJp, (1.0 + c * K2[0], s * K[1] + c * K2[1], s * K[2] + c * K2[2],
+            R_WJc = mat(R_WJp, (1.0 + c * K2[0], s * K[1] + c * K2[1], s * K[2] + c * K2[2],
                                  s * K[3] + c * K2[3], 1.0 + c * K2[4], s * K[5] + c * K2[5],
                                  s * K[6] + c * K2[6], s * K[7] + c * K2[7], 1.0 + c * K2[8]))
-            x = _rot(R_WJp, st.axis)
-            motions.append((x, _O3, _add(p_P, r_PJ)))
+            x = rot(R_WJp, st.axis)
+            motions.append((x, _O3, add(p_P, r_PJ)))
         elif kind == "ball":
             iq = st.iq
-            R_WJc = x = _mat(R_WJp, _quat_matrix(q[iq], q[iq + 1], q[iq + 2], q[iq + 3], sqrt))
-            o = _add(p_P, r_PJ)
+            R_WJc = x = mat(R_WJp, _quat_matrix(q[iq], q[iq + 1], q[iq + 2], q[iq + 3], sqrt))
+            o = add(p_P, r_PJ)
             motions += [((R_WJc[0], R_WJc[3], R_WJc[6]), _O3, o), ((R_WJc[1], R_WJc[4], R_WJc[7]), _O3, o),
                         ((R_WJc[2], R_WJc[5], R_WJc[8]), _O3, o)]
         elif kind == "prismatic":
             # the child joint frame slides by d along a_W, fixed in the parent joint frame (the module docstring of
             # generalized): the lever gains the slide
             R_WJc = R_WJp
-            x, d = _rot(R_WJp, st.axis), q[st.iq]
+            x, d = rot(R_WJp, st.axis), q[st.iq]
             r_PJ = (r_PJ[0] + x[0] * d, r_PJ[1] + x[1] * d, r_PJ[2] + x[2] * d)
-            motions.append((_O3, x, _add(p_P, r_PJ)))
+            motions.append((_O3, x, add(p_P, r_PJ)))
         else:  # weld
             R_WJc = R_WJp
-        R = R_WJc if st.R_CJt is None else _mat(R_WJc, st.R_CJt)
-        r_JC = _rot(R_WJc, st.d_C)  # joint point -> child COM
-        poses.append((R, _add(_add(p_P, r_PJ), r_JC)))
+        R = R_WJc if st.R_CJt is None else mat(R_WJc, st.R_CJt)
+        r_JC = rot(R_WJc, st.d_C)  # joint point -> child COM
+        poses.append((R, add(add(p_P, r_PJ), r_JC)))
         links.append((x, r_PJ, r_JC))
     return poses[1:], motions, links
 
@@ -196,7 +171,7 @@ def velocities(steps, links, u):
         kind = st.kind
         if kind == "free":
             iv = st.iv
-            states.append((_rot(link, (u[iv + 3], u[iv + 4], u[iv + 5])), (u[iv], u[iv + 1], u[iv + 2]), _O3, _O3))
+            states.append((rot(link, (u[iv + 3], u[iv + 4], u[iv + 5])), (u[iv], u[iv + 1], u[iv + 2]), _O3, _O3))
             continue
         w_P, v_P, a_P, al_P = states[st.parent]
         x, r_PJ, r_JC = link
@@ -204,25 +179,25 @@ def velocities(steps, links, u):
         if kind == "revolute":
             ud = u[st.iv]
             w_rel = (x[0] * ud, x[1] * ud, x[2] * ud)
-            w = _add(w_P, w_rel)
-            al = _add(al_P, _cross(w_P, w_rel))
+            w = add(w_P, w_rel)
+            al = add(al_P, cross(w_P, w_rel))
         elif kind == "ball":
             iv = st.iv
-            w_rel = _rot(x, (u[iv], u[iv + 1], u[iv + 2]))  # u in the child joint frame
-            w = _add(w_P, w_rel)
-            al = _add(al_P, _cross(w, w_rel))
+            w_rel = rot(x, (u[iv], u[iv + 1], u[iv + 2]))  # u in the child joint frame
+            w = add(w_P, w_rel)
+            al = add(al_P, cross(w, w_rel))
         elif kind == "prismatic":
             # the velocity d' a_W, the bias the Coriolis 2 w_P x (d' a_W) (the module docstring of generalized)
             dd = u[st.iv]
             v_sl = (x[0] * dd, x[1] * dd, x[2] * dd)
-            cw = _cross(w_P, v_sl)
+            cw = cross(w_P, v_sl)
             slide = (v_sl, (2.0 * cw[0], 2.0 * cw[1], 2.0 * cw[2]))
-        v = _add(v_P, _cross(w_P, r_PJ))
-        a = _add(_add(a_P, _cross(al_P, r_PJ)), _cross(w_P, _cross(w_P, r_PJ)))
+        v = add(v_P, cross(w_P, r_PJ))
+        a = add(add(a_P, cross(al_P, r_PJ)), cross(w_P, cross(w_P, r_PJ)))
         if slide is not None:
-            v, a = _add(v, slide[0]), _add(a, slide[1])
-        v = _add(v, _cross(w, r_JC))
-        a = _add(_add(a, _cross(al, r_JC)), _cross(w, _cross(w, r_JC)))
+            v, a = add(v, slide[0]), add(a, slide[1])
+        v = add(v, cross(w, r_JC))
+        a = add(add(a, cross(al, r_JC)), cross(w, cross(w, r_JC)))
         states.append((w, v, a, al))
     return states[1:]
 
